@@ -1,0 +1,114 @@
+"""Command line interface: ``robodesign robot | run | ...``.
+
+Exit codes: 0 success, 1 a negative verdict (e.g. an invalid solution), 2 bad input.
+Bad input never prints a traceback: an :class:`InputError` is one line on stderr.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import List, Optional
+
+import numpy as np
+
+from .errors import InputError, RobodesignError
+
+
+def _fmt_matrix(T) -> str:
+    return "\n".join("    " + " ".join(f"{x:9.4f}" for x in row) for row in np.asarray(T))
+
+
+def cmd_robot(args) -> int:
+    from .cli_args import parse_base_pose, parse_floats, parse_order
+    from .module_io import load_module_set
+    from .robot import Robot
+    ms = load_module_set(args.modules)
+    robot = Robot.from_order(ms, parse_order(args.order),
+                             base_pose=parse_base_pose(args.base_pose) if args.base_pose else None)
+    q = np.zeros(robot.dof)
+    if args.q:
+        qv = parse_floats(args.q, "--q")
+        if len(qv) != robot.dof:
+            raise InputError(f"--q: the robot has {robot.dof} joints, got {len(qv)} values")
+        q = np.array(qv)
+    s = robot.summary(q)
+    s["module_set"] = ms.name
+    if args.urdf:
+        from .urdf import export_urdf
+        s["urdf"] = str(export_urdf(robot, args.urdf))
+    if args.json:
+        print(json.dumps(s))
+        return 0
+    _print_summary(s)
+    return 0
+
+
+def _print_summary(s: dict) -> None:
+    lim = s["joint_limits"]
+    print(f"robot     {s['module_set']}: {','.join(s['modules'])}")
+    print(f"dof       {s['dof']}")
+    print(f"mass      {s['mass']:.3f} kg")
+    print(f"q         {np.round(s['q'], 4).tolist()}")
+    print("TCP pose")
+    print(_fmt_matrix(s["tcp_pose"]))
+    print(f"gravity τ {np.round(s['gravity_torque'], 3).tolist()} Nm")
+    print("joint limits")
+    for k, name in enumerate(s["joint_names"]):
+        print(f"    {name:24s} q [{lim['lower'][k]:7.3f}, {lim['upper'][k]:7.3f}]  dq {lim['velocity'][k]:.3f}  "
+              f"ddq {lim['acceleration'][k]:.3f}  τ {lim['torque'][k]:.1f}")
+    print(f"collision geometries {s['n_collision_geometries']}, self-collision pairs {s['n_self_collision_pairs']}")
+    print(f"self-collision at q: {'YES' if s['self_collision'] else 'no'}")
+    if s.get("urdf"):
+        print(f"URDF written to {s['urdf']}")
+
+
+def cmd_run(args) -> int:
+    from .paths import DEFAULT_MODULE_SET
+    from .module_io import load_module_set
+    from .robot import Robot
+    ms = load_module_set(DEFAULT_MODULE_SET)
+    from .defaults import DEFAULT_ORDER
+    robot = Robot.from_order(ms, DEFAULT_ORDER)
+    s = robot.summary()
+    s["module_set"] = ms.name
+    _print_summary(s)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="robodesign", description="Find the best modular robot for a task.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("robot", help="assemble a robot from a module order and print its summary")
+    r.add_argument("modules", help="module set: a folder with modules.json or a built-in name")
+    r.add_argument("--order", required=True, help="comma-separated module IDs, base first")
+    r.add_argument("--q", help="joint values (comma-separated); default zeros")
+    r.add_argument("--base-pose", help="x,y,z[,roll,pitch,yaw] or 16 numbers (row-major 4x4)")
+    r.add_argument("--json", action="store_true", help="print one JSON object")
+    r.add_argument("--urdf", help="also write the robot as URDF to this file")
+    r.set_defaults(func=cmd_robot)
+
+    run = sub.add_parser("run", help="run an experiment (default: the built-in demo)")
+    run.set_defaults(func=cmd_run)
+    return p
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except InputError as e:
+        print(f"robodesign: error: {e}", file=sys.stderr)
+        return 2
+    except RobodesignError as e:
+        print(f"robodesign: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("robodesign: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,461 @@
+"""Exact robot models: a pinocchio ``Model`` plus coal collision geometry, built from an assembly.
+
+``Robot`` keeps what the robot *is* (pinocchio model, geometry model, limits, drivetrain
+parameters, base pose) apart from scratch space (``pin.Data``/``pin.GeometryData``), as in
+Pinocchio. It is built once per assembly (~1 ms) and is not meant to be pickled: ship the
+(module set, assembly) specs to other processes and rebuild there.
+
+Conventions (docs/formats.md):
+* The base frame is the base connector flipped about x; ``base_pose`` is its world pose.
+* Revolute joints rotate about the joint frame's z axis, prismatic ones translate along it. A
+  module mounted "backwards" (entered through its child body) gets the same joint about −z so q
+  keeps its meaning.
+* The TCP is the free ``eef`` connector (or the last free connector in breadth-first order).
+* Drivetrain torque τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
+  (the smooth sign of the reference, so costs are comparable); k²·I_m is pinocchio's ``armature``.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from .assembly import Assembly
+from .errors import AssemblyError, InputError
+from .geometry import GeometrySpec, coal_shapes
+from .module_spec import ModuleSet
+from .spatial import RX_PI, inv
+
+COULOMB_SMOOTHING = 100.0
+
+
+def smooth_sign(x: np.ndarray) -> np.ndarray:
+    return np.sin(np.arctan(COULOMB_SMOOTHING * np.asarray(x)))
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    name: str
+    module_index: int
+    module_id: str
+    joint_id: str
+    type: str
+    reversed: bool
+
+
+@dataclass
+class Obstacle:
+    """A collision object of the environment: shape + world pose (world-fixed unless moved)."""
+    name: str
+    shape: object  # coal CollisionGeometry
+    pose: np.ndarray  # 4x4 world
+
+
+class Robot:
+    def __init__(self, module_set: ModuleSet, assembly: Assembly, base_pose: Optional[np.ndarray] = None,
+                 convex_meshes: bool = False, gravity: Sequence[float] = (0.0, 0.0, -9.81)):
+        self.module_set = module_set
+        self.assembly = assembly
+        self._build(convex_meshes)
+        self.model.gravity = pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
+        self.base_pose = np.eye(4)
+        self.data = self.model.createData()
+        self._n_self_pairs = len(self.geom_model.collisionPairs)
+        self.geom_data = pin.GeometryData(self.geom_model)
+        self._apply_margins()
+        self.obstacles: List[Obstacle] = []
+        if base_pose is not None:
+            self.set_base_pose(base_pose)
+
+    # ------------------------------------------------------------------------------------------
+    @classmethod
+    def from_order(cls, module_set: ModuleSet, order: Sequence, **kw) -> "Robot":
+        return cls(module_set, Assembly.from_order(module_set, order), **kw)
+
+    def _build(self, convex_meshes: bool) -> None:
+        ms, asm = self.module_set, self.assembly
+        model = pin.Model()
+        model.name = "robodesign:" + ",".join(asm.module_ids)
+        geom = pin.GeometryModel()
+        counts: Dict[str, int] = {}
+        labels = []
+        for mid in asm.module_ids:
+            k = counts.get(mid, 0)
+            labels.append(mid if k == 0 else f"{mid}-{k}")
+            counts[mid] = k + 1
+        self.instance_labels = tuple(labels)
+        conn: Dict[Tuple[int, str], Tuple[int, str]] = {}
+        for a, ca, b, cb in asm.connections:
+            conn[(a, ca)] = (b, cb)
+            conn[(b, cb)] = (a, ca)
+        bi, bcon = asm.base
+        base_mod = ms[asm.module_ids[bi]]
+        base_con = base_mod.connector(bcon)
+        # base body pose in the base frame: the base connector's world pose is Rx(π)
+        start = (bi, base_con.body_id, 0, RX_PI @ inv(base_con.pose))
+        visited = set()
+        queue = deque([start])
+        body_joint: Dict[Tuple[int, str], int] = {}
+        self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
+        self.joint_infos: List[JointInfo] = []
+        lower, upper, vel, acc, eff, gear, im, fc, fv = ([] for _ in range(9))
+        free_connectors: List[Tuple[int, str, int]] = []  # (instance, connector id, frame id)
+        total_mass = 0.0
+        geom_body: List[Tuple[int, str]] = []
+        direct_joint_pairs = set()
+        while queue:
+            i, body_id, jid, M = queue.popleft()
+            if (i, body_id) in visited:
+                continue
+            visited.add((i, body_id))
+            body_joint[(i, body_id)] = jid
+            mod = ms[asm.module_ids[i]]
+            body = mod.body(body_id)
+            label = labels[i]
+            total_mass += body.mass
+            if body.mass > 0:
+                Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+                model.appendBodyToJoint(jid, Y, pin.SE3(M))
+            parent_frame = model.getFrameId(model.names[jid]) if jid > 0 else 0
+            fid = model.addFrame(pin.Frame(f"{label}.{body_id}", jid, parent_frame, pin.SE3(M), pin.FrameType.BODY))
+            if jid == 0:
+                self._root_items.append(("frame", fid, M.copy()))
+            for ci, c in enumerate(body.connectors):
+                Mc = M @ c.pose
+                cf = model.addFrame(pin.Frame(f"{label}.{body_id}.{c.id}", jid, fid, pin.SE3(Mc), pin.FrameType.OP_FRAME))
+                if jid == 0:
+                    self._root_items.append(("frame", cf, Mc.copy()))
+                other = conn.get((i, c.id))
+                if other is not None:
+                    j2, c2id = other
+                    c2 = ms[asm.module_ids[j2]].connector(c2id)
+                    queue.append((j2, c2.body_id, jid, Mc @ RX_PI @ inv(c2.pose)))
+                elif (i, c.id) != asm.base:
+                    free_connectors.append((i, c, cf))
+            for gi, g in enumerate(body.collision):
+                P = M @ g.pose
+                for si, shape in enumerate(coal_shapes(g, convex_meshes)):
+                    go = pin.GeometryObject(f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid,
+                                            pin.SE3(P), shape)
+                    k = geom.addGeometryObject(go)
+                    geom_body.append((i, body_id))
+                    if jid == 0:
+                        self._root_items.append(("geom", k, P.copy()))
+            for jt in mod.joints:
+                if jt.parent == body_id:
+                    other_body, rev = jt.child, False
+                    P, Q = jt.pose_parent, jt.pose_child
+                elif jt.child == body_id:
+                    other_body, rev = jt.parent, True
+                    P, Q = inv(jt.pose_child), inv(jt.pose_parent)
+                else:
+                    continue
+                if (i, other_body) in visited:
+                    continue
+                direct_joint_pairs.add(frozenset(((i, body_id), (i, other_body))))
+                placement = M @ P
+                if jt.type == "fixed":
+                    queue.append((i, other_body, jid, placement @ Q))
+                    continue
+                sign = -1.0 if rev else 1.0
+                if jt.type == "revolute":
+                    jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
+                else:
+                    jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
+                name = f"{label}.{jt.id}"
+                new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
+                model.addJointFrame(new_jid, -1)
+                if jid == 0:
+                    self._root_items.append(("joint", new_jid, placement.copy()))
+                self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
+                L = jt.limits
+                lower.append(L.lower)
+                upper.append(L.upper)
+                vel.append(L.velocity)
+                acc.append(L.acceleration)
+                eff.append(L.torque)
+                gear.append(jt.gear_ratio)
+                im.append(jt.motor_inertia)
+                fc.append(jt.friction_coulomb)
+                fv.append(jt.friction_viscous)
+                queue.append((i, other_body, new_jid, Q))
+                del sign
+        missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
+        if missing:
+            raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+        nq = model.nq
+        if nq != len(self.joint_infos):
+            raise AssemblyError("only 1-DoF joints are supported")
+        self.dof = nq
+        self.mass = total_mass
+        model.lowerPositionLimit = np.array(lower, dtype=float)
+        model.upperPositionLimit = np.array(upper, dtype=float)
+        model.velocityLimit = np.array(vel, dtype=float)
+        model.effortLimit = np.array(eff, dtype=float)
+        self.q_lower = np.array(lower, dtype=float)
+        self.q_upper = np.array(upper, dtype=float)
+        self.dq_max = np.array(vel, dtype=float)
+        self.ddq_max = np.array(acc, dtype=float)
+        self.tau_max = np.array(eff, dtype=float)
+        self.gear_ratio = np.array(gear, dtype=float)
+        self.motor_inertia = np.array(im, dtype=float)
+        self.friction_coulomb = np.array(fc, dtype=float)
+        self.friction_viscous = np.array(fv, dtype=float)
+        model.armature = self.gear_ratio ** 2 * self.motor_inertia
+        # TCP: the free eef connector; else the last free connector in BFS order
+        eefs = [f for f in free_connectors if f[1].type == "eef"]
+        if len(eefs) == 1:
+            tcp = eefs[0]
+        elif free_connectors:
+            tcp = free_connectors[-1]
+        else:
+            tcp = None
+        if tcp is not None:
+            fr = model.frames[tcp[2]]
+            self.tcp_frame = model.addFrame(pin.Frame("TCP", fr.parentJoint, tcp[2], fr.placement, pin.FrameType.OP_FRAME))
+            if fr.parentJoint == 0:
+                self._root_items.append(("frame", self.tcp_frame, fr.placement.homogeneous.copy()))
+        else:
+            self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+            self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
+        self.model = model
+        self.geom_model = geom
+        self._geom_body = geom_body
+        self._add_self_collision_pairs(direct_joint_pairs)
+
+    def _add_self_collision_pairs(self, direct_joint_pairs) -> None:
+        geom, model = self.geom_model, self.model
+        mode = self.module_set.ignore_collisions
+        parents = model.parents
+        objs = geom.geometryObjects
+        n = len(objs)
+        for a in range(n):
+            ja = objs[a].parentJoint
+            for b in range(a + 1, n):
+                jb = objs[b].parentJoint
+                if ja == jb:
+                    continue  # rigidly connected
+                if mode == "rigid_via_joint" and (parents[ja] == jb or parents[jb] == ja):
+                    continue
+                if mode == "via_joint" and frozenset((self._geom_body[a], self._geom_body[b])) in direct_joint_pairs:
+                    continue
+                geom.addCollisionPair(pin.CollisionPair(a, b))
+
+    # ------------------------------------------------------------------------------------------
+    # configuration of the robot in its cell
+    def set_base_pose(self, T: np.ndarray) -> None:
+        T = np.asarray(T, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            raise InputError("base pose must be a finite 4x4 matrix")
+        self.base_pose = T.copy()
+        for kind, idx, M in self._root_items:
+            P = pin.SE3(T @ M)
+            if kind == "joint":
+                self.model.jointPlacements[idx] = P
+            elif kind == "frame":
+                self.model.frames[idx].placement = P
+            else:
+                self.geom_model.geometryObjects[idx].placement = P
+        self.data = self.model.createData()
+        self.geom_data = pin.GeometryData(self.geom_model)
+        self._apply_margins()
+
+    def set_gravity(self, g: Sequence[float]) -> None:
+        self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+
+    def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
+        """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
+        geom = self.geom_model
+        # drop previous obstacles (they sit after the robot's own objects)
+        n_robot = len(self._geom_body)
+        if len(geom.geometryObjects) > n_robot:
+            self.geom_model = geom = self._robot_only_geom()
+        self.obstacles = list(obstacles)
+        self._obstacle_ids = []
+        for ob in self.obstacles:
+            k = geom.addGeometryObject(pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape))
+            self._obstacle_ids.append(k)
+        for k in self._obstacle_ids:
+            for a in range(n_robot):
+                geom.addCollisionPair(pin.CollisionPair(a, k))
+        self.safety_margin = float(safety_margin)
+        self.geom_data = pin.GeometryData(geom)
+        self._apply_margins()
+
+    def move_obstacle(self, index: int, pose: np.ndarray) -> None:
+        self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
+
+    def _robot_only_geom(self):
+        g = pin.GeometryModel()
+        for k in range(len(self._geom_body)):
+            g.addGeometryObject(self.geom_model.geometryObjects[k])
+        for cp in list(self.geom_model.collisionPairs)[: self._n_self_pairs]:
+            g.addCollisionPair(cp)
+        return g
+
+    def _apply_margins(self) -> None:
+        # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
+        # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
+        margin = getattr(self, "safety_margin", 0.0)
+        for k, req in enumerate(self.geom_data.collisionRequests):
+            req.enable_contact = True
+            if k >= self._n_self_pairs:
+                req.security_margin = margin
+
+    # ------------------------------------------------------------------------------------------
+    # kinematics
+    def _q(self, q) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        if q.shape != (self.dof,):
+            raise InputError(f"expected {self.dof} joint values, got shape {q.shape}")
+        return q
+
+    def fk(self, q, frame: Optional[int] = None) -> np.ndarray:
+        """World pose (4x4) of a frame (default: TCP)."""
+        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        return self.data.oMf[self.tcp_frame if frame is None else frame].homogeneous
+
+    def fk_all(self, q) -> Dict[str, np.ndarray]:
+        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        return {f.name: self.data.oMf[i].homogeneous for i, f in enumerate(self.model.frames)}
+
+    def frame_id(self, name: str) -> int:
+        if not self.model.existFrame(name):
+            raise KeyError(name)
+        return self.model.getFrameId(name)
+
+    def jacobian(self, q, frame: Optional[int] = None, reference=pin.LOCAL_WORLD_ALIGNED) -> np.ndarray:
+        """6×dof frame Jacobian (linear rows first), world-aligned at the frame origin by default."""
+        f = self.tcp_frame if frame is None else frame
+        return pin.computeFrameJacobian(self.model, self.data, self._q(q), f, reference)
+
+    def tcp_velocity(self, q, dq) -> np.ndarray:
+        """TCP twist [v; ω] in world-aligned axes at the TCP."""
+        pin.forwardKinematics(self.model, self.data, self._q(q), np.asarray(dq, float))
+        pin.updateFramePlacements(self.model, self.data)
+        return pin.getFrameVelocity(self.model, self.data, self.tcp_frame, pin.LOCAL_WORLD_ALIGNED).vector.copy()
+
+    # ------------------------------------------------------------------------------------------
+    # dynamics
+    def rnea(self, q, dq, ddq, f_ext=None) -> np.ndarray:
+        """Link-side inverse dynamics (no motor inertia, no friction)."""
+        q, dq, ddq = self._q(q), np.asarray(dq, float), np.asarray(ddq, float)
+        if f_ext is None:
+            tau = pin.rnea(self.model, self.data, q, dq, ddq)
+        else:
+            tau = pin.rnea(self.model, self.data, q, dq, ddq, f_ext)
+        return tau - self.model.armature * ddq
+
+    def gravity_torque(self, q) -> np.ndarray:
+        return pin.computeGeneralizedGravity(self.model, self.data, self._q(q)).copy()
+
+    def drivetrain_torque(self, q, dq, ddq, f_ext=None) -> np.ndarray:
+        """τ = RNEA + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇) (motor-side torque, what peakTorque limits)."""
+        dq = np.asarray(dq, float)
+        ddq = np.asarray(ddq, float)
+        return (self.rnea(q, dq, ddq, f_ext) + self.model.armature * ddq + self.friction_viscous * dq
+                + self.friction_coulomb * smooth_sign(dq))
+
+    def drivetrain_torques(self, Q, DQ, DDQ) -> np.ndarray:
+        """Vectorised over samples: arrays (N, dof) → (N, dof)."""
+        out = np.empty_like(np.asarray(Q, float))
+        m, d = self.model, self.data
+        for k in range(len(out)):
+            out[k] = pin.rnea(m, d, Q[k], DQ[k], DDQ[k])
+        DQ = np.asarray(DQ)
+        return out + self.friction_viscous * DQ + self.friction_coulomb * smooth_sign(DQ)
+
+    def mass_matrix(self, q) -> np.ndarray:
+        """Joint-space inertia incl. reflected motor inertia (armature)."""
+        M = pin.crba(self.model, self.data, self._q(q))
+        return np.triu(M) + np.triu(M, 1).T
+
+    def forward_dynamics(self, q, dq, tau) -> np.ndarray:
+        """q̈ from drivetrain torque (inverse of :meth:`drivetrain_torque`)."""
+        dq = np.asarray(dq, float)
+        tau_link = np.asarray(tau, float) - self.friction_viscous * dq - self.friction_coulomb * smooth_sign(dq)
+        return pin.aba(self.model, self.data, self._q(q), dq, tau_link).copy()
+
+    # ------------------------------------------------------------------------------------------
+    # collision
+    @property
+    def n_collision_geometries(self) -> int:
+        return len(self._geom_body)
+
+    @property
+    def n_self_collision_pairs(self) -> int:
+        return self._n_self_pairs
+
+    def _update_geometry(self, q) -> None:
+        pin.updateGeometryPlacements(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+
+    def _check_pairs(self, start: int, stop: int, first: bool = True) -> List[int]:
+        hits = []
+        for k in range(start, stop):
+            if pin.computeCollision(self.geom_model, self.geom_data, k):
+                hits.append(k)
+                if first:
+                    break
+        return hits
+
+    def in_self_collision(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(0, self._n_self_pairs))
+
+    def in_collision(self, q) -> bool:
+        """Self-collision or contact with an obstacle (within the safety margin)."""
+        pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q), True)
+        return any(r.isCollision() for r in self.geom_data.collisionResults)
+
+    def collides_with_obstacles(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(self._n_self_pairs, len(self.geom_model.collisionPairs)))
+
+    def colliding_pairs(self, q) -> List[Tuple[str, str]]:
+        self._update_geometry(q)
+        hits = self._check_pairs(0, len(self.geom_model.collisionPairs), first=False)
+        objs = self.geom_model.geometryObjects
+        out = []
+        for k in hits:
+            cp = self.geom_model.collisionPairs[k]
+            out.append((objs[cp.first].name, objs[cp.second].name))
+        return out
+
+    def min_distances(self, q) -> Tuple[float, float]:
+        """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
+        pin.computeDistances(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+        d = [r.min_distance for r in self.geom_data.distanceResults]
+        s = min(d[: self._n_self_pairs], default=math.inf)
+        o = min(d[self._n_self_pairs:], default=math.inf)
+        return float(s), float(o)
+
+    # ------------------------------------------------------------------------------------------
+    def joint_limits(self) -> Dict[str, list]:
+        return {"lower": self.q_lower.tolist(), "upper": self.q_upper.tolist(), "velocity": self.dq_max.tolist(),
+                "acceleration": self.ddq_max.tolist(), "torque": self.tau_max.tolist()}
+
+    def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
+        lo = np.where(np.isfinite(self.q_lower), self.q_lower, -math.pi)
+        hi = np.where(np.isfinite(self.q_upper), self.q_upper, math.pi)
+        return rng.uniform(lo, hi)
+
+    def summary(self, q=None) -> dict:
+        q = np.zeros(self.dof) if q is None else self._q(q)
+        return {
+            "modules": list(self.assembly.module_ids),
+            "dof": self.dof,
+            "mass": self.mass,
+            "q": q.tolist(),
+            "tcp_pose": self.fk(q).tolist(),
+            "base_pose": self.base_pose.tolist(),
+            "gravity_torque": self.gravity_torque(q).tolist(),
+            "joint_limits": self.joint_limits(),
+            "joint_names": [j.name for j in self.joint_infos],
+            "n_collision_geometries": self.n_collision_geometries,
+            "n_self_collision_pairs": self.n_self_collision_pairs,
+            "self_collision": self.in_self_collision(q),
+        }

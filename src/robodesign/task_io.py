@@ -1,0 +1,321 @@
+"""Read and write CoBRA task files (``<package>/<task ID>.json``) into :mod:`robodesign.task_spec`.
+
+Errors name the file and the JSON path. A missing *collision* mesh is an error; a missing
+*visual* mesh is a warning (kept in ``Task.warnings`` and printed by the CLI). Asset paths are
+resolved relative to the task *package* folder (the folder the task ID's namespace starts in:
+``simple/PTP_2`` at ``tasks/simple/PTP_2.json`` → package ``tasks/``) and may not escape it.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Dict, List, Optional, Union
+
+import numpy as np
+
+from .errors import InputError, describe_value
+from .geometry import parse_geometries
+from .jsonio import check_finite, load_json
+from .paths import builtin_tasks_dir
+from .schema import validate
+from .spatial import inv, parse_pose
+from .task_spec import (GLOBAL_ONLY, AllGoalsFulfilled, AlwaysTrue, At, BasePlacement, CollisionFree, Constraint,
+                        EndEffectorConstraint, Follow, Goal, GoalsInOrder, JointLimitsConstraint, Leave,
+                        ObstacleSpec, Pause, Reach, ReturnTo, SelfCollisionFree, Task, TaskHeader, ValidAssembly,
+                        default_constraints)
+from .tolerance import ToleratedPose
+
+RESERVED_FRAMES = ("world", "nominal")
+
+
+def resolve_task_path(name_or_path: Union[str, Path]) -> Path:
+    p = Path(name_or_path)
+    if p.is_file():
+        return p
+    if p.suffix != ".json" and Path(str(p) + ".json").is_file():
+        return Path(str(p) + ".json")
+    cand = builtin_tasks_dir() / (str(name_or_path) + ("" if str(name_or_path).endswith(".json") else ".json"))
+    if cand.is_file():
+        return cand
+    raise InputError("no such task file or built-in task", file=str(name_or_path))
+
+
+def _package_root(file: Path, task_id: str) -> Path:
+    """``<package>/<ID>.json``: strip one folder per ``/`` in the task ID."""
+    root = file.resolve().parent
+    for _ in range(task_id.count("/")):
+        root = root.parent
+    return root
+
+
+def load_task(name_or_path: Union[str, Path]) -> Task:
+    f = resolve_task_path(name_or_path)
+    data = load_json(f, display_name=f.name)
+    return parse_task(data, f)
+
+
+def parse_task(data, file: Path) -> Task:
+    fname = file.name
+    if not isinstance(data, dict):
+        raise InputError("a task file must hold a JSON object", file=fname)
+    if "Constraints" in data and "constraints" not in data:
+        data = dict(data)
+        data["constraints"] = data.pop("Constraints")
+    validate(data, "task", fname)
+    h = data["header"]
+    tid = str(h["ID"])
+    root = _package_root(file, tid)
+    ts = check_finite(h.get("timeStepSize", 0.01), fname, ["header", "timeStepSize"])
+    if ts <= 0:
+        raise InputError(f"must be positive, got {ts}", file=fname, path=["header", "timeStepSize"])
+    grav = h.get("gravity", [0, 0, -9.81])
+    if not isinstance(grav, list) or len(grav) != 3:
+        raise InputError(f"expected 3 numbers, got {describe_value(grav)}", file=fname, path=["header", "gravity"])
+    grav_t = tuple(check_finite(g, fname, ["header", "gravity", k]) for k, g in enumerate(grav))
+    header = TaskHeader(id=tid, version=str(h.get("version", "2023")), name=str(h.get("taskName", "")),
+                        tags=tuple(h.get("tags", [])), date=str(h.get("date", "")), time_step=ts, gravity=grav_t,
+                        author=tuple(_as_list(h.get("author"))), email=tuple(_as_list(h.get("email"))),
+                        affiliation=tuple(_as_list(h.get("affiliation"))))
+    warnings: List[str] = []
+    frames = _parse_frames(data.get("frames", {}), fname)
+
+    def resolver(name: str) -> np.ndarray:
+        if name == "world":
+            return np.eye(4)
+        if name not in frames:
+            raise KeyError(name)
+        return frames[name]
+
+    obstacles = []
+    seen = set()
+    for i, o in enumerate(data.get("obstacles", [])):
+        op = ["obstacles", i]
+        oid = str(o["ID"])
+        if oid in seen:
+            raise InputError(f"duplicate obstacle ID {oid!r}", file=fname, path=op + ["ID"])
+        seen.add(oid)
+        col = parse_geometries(o.get("collision"), root, fname, op + ["collision"], required_files=True)
+        vis = parse_geometries(o["visual"], root, fname, op + ["visual"], required_files=False,
+                               warnings=warnings) if "visual" in o else col
+        mt = mp = None
+        if "trajectory" in o:
+            mt, mp = _parse_motion(o["trajectory"], ts, fname, op + ["trajectory"])
+        obstacles.append(ObstacleSpec(oid, str(o.get("name", oid)), col, vis, mt, mp))
+    goals = []
+    gseen = set()
+    for i, g in enumerate(data.get("goals", [])):
+        goal = _parse_goal(g, fname, ["goals", i], resolver)
+        if goal.id in gseen:
+            raise InputError(f"duplicate goal ID {goal.id!r}", file=fname, path=["goals", i, "ID"])
+        gseen.add(goal.id)
+        goals.append(goal)
+    if "constraints" in data:
+        constraints = tuple(_parse_constraint(c, fname, ["constraints", i], resolver, True)
+                            for i, c in enumerate(data["constraints"]))
+    else:
+        constraints = default_constraints()
+    for i, c in enumerate(constraints):
+        if isinstance(c, GoalsInOrder):
+            for k, gid in enumerate(c.order):
+                if gid not in gseen:
+                    raise InputError(f"unknown goal ID {gid!r}", file=fname, path=["constraints", i, "order", k])
+    for i, g in enumerate(goals):
+        if isinstance(g, ReturnTo) and g.return_to is not None and g.return_to not in gseen:
+            raise InputError(f"unknown goal ID {g.return_to!r}", file=fname, path=["goals", i, "returnToGoal"])
+    return Task(header=header, obstacles=tuple(obstacles), goals=tuple(goals), constraints=constraints,
+                frames=frames, root=root, source=str(file), warnings=tuple(warnings))
+
+
+def _as_list(v):
+    if v is None:
+        return []
+    return v if isinstance(v, list) else [v]
+
+
+def _parse_frames(raw, fname) -> Dict[str, np.ndarray]:
+    if not isinstance(raw, dict):
+        raise InputError("expected an object {name: {parent, transformation}}", file=fname, path=["frames"])
+    local = {}
+    for name, f in raw.items():
+        fp = ["frames", name]
+        if "." in name or name in RESERVED_FRAMES:
+            raise InputError(f"invalid frame name {name!r} (no '.', not 'world' or 'nominal')", file=fname, path=fp)
+        if not isinstance(f, dict) or "transformation" not in f:
+            raise InputError("a frame needs 'transformation' (and optional 'parent')", file=fname, path=fp)
+        local[name] = (str(f.get("parent", "world")), parse_pose(f["transformation"], fname, fp + ["transformation"]))
+    out: Dict[str, np.ndarray] = {}
+
+    def world(name, stack):
+        if name == "world":
+            return np.eye(4)
+        if name in out:
+            return out[name]
+        if name not in local:
+            raise InputError(f"unknown parent frame {name!r}", file=fname, path=["frames", stack[-1], "parent"])
+        if name in stack:
+            raise InputError(f"frame cycle: {' → '.join(stack + [name])}", file=fname, path=["frames", name])
+        parent, T = local[name]
+        out[name] = world(parent, stack + [name]) @ T
+        return out[name]
+    for name in local:
+        world(name, [])
+    return out
+
+
+def _parse_motion(raw, dt, fname, path):
+    if not isinstance(raw, dict) or "pose" not in raw:
+        raise InputError("a moving obstacle's trajectory needs 'pose' (list of 4x4) and 't'", file=fname, path=path)
+    poses = np.array([parse_pose(p, fname, path + ["pose", k]) for k, p in enumerate(raw["pose"])])
+    t = raw.get("t", dt)
+    if isinstance(t, (int, float)) and not isinstance(t, bool):
+        step = check_finite(t, fname, path + ["t"])
+        tt = np.arange(len(poses)) * step
+    else:
+        tt = np.array([check_finite(x, fname, path + ["t", k]) for k, x in enumerate(t)])
+        if len(tt) != len(poses):
+            raise InputError(f"{len(tt)} times for {len(poses)} poses", file=fname, path=path + ["t"])
+        if np.any(np.diff(tt) <= 0):
+            raise InputError("times must be strictly increasing", file=fname, path=path + ["t"])
+    return tt, poses
+
+
+def _tolerated(obj, fname, path, resolver, empty_means_any=False) -> ToleratedPose:
+    return ToleratedPose.from_json(obj, file=fname, path=path, frame_resolver=resolver,
+                                   empty_means_any=empty_means_any)
+
+
+def _ci(d: dict) -> dict:
+    return {k.lower(): (k, v) for k, v in d.items()}
+
+
+def _parse_constraint(c, fname, path, resolver, task_level) -> Constraint:
+    t = c.get("type")
+    ci = _ci(c)
+    if t == "joint":
+        parts = c.get("parts", ["q", "dq", "ddq", "tau"])
+        if isinstance(parts, str):
+            parts = [p.strip() for p in parts.split(",") if p.strip()]
+        norm = set()
+        for k, p in enumerate(parts):
+            pl = str(p).lower()
+            if pl not in ("q", "dq", "ddq", "tau"):
+                raise InputError(f"unknown joint constraint part {p!r} (q, dq, ddq, tau)", file=fname,
+                                 path=path + ["parts", k])
+            norm.add(pl)
+        out = JointLimitsConstraint(frozenset(norm))
+    elif t == "collisionFree":
+        m = check_finite(c.get("safety_margin", c.get("safetyMargin", 0.0)), fname, path + ["safety_margin"])
+        if m < 0:
+            raise InputError(f"must be >= 0, got {m}", file=fname, path=path + ["safety_margin"])
+        out = CollisionFree(m)
+    elif t == "selfCollisionFree":
+        out = SelfCollisionFree()
+    elif t == "basePlacement":
+        if "pose" not in c:
+            raise InputError("basePlacement needs a 'pose'", file=fname, path=path)
+        out = BasePlacement(_tolerated(c["pose"], fname, path + ["pose"], resolver, empty_means_any=True))
+    elif t == "endEffector":
+        pose = _tolerated(c["pose"], fname, path + ["pose"], resolver) if "pose" in c else None
+        vals = {}
+        for k, d in (("v_min", 0.0), ("v_max", math.inf), ("o_min", 0.0), ("o_max", math.inf)):
+            vals[k] = check_finite(c.get(k, d), fname, path + [k], allow_inf=True)
+        out = EndEffectorConstraint(pose, **vals)
+    elif t == "allGoalsFulfilled":
+        out = AllGoalsFulfilled()
+    elif t == "allGoalsFulfilledInOrder":
+        order = c.get("order")
+        if not isinstance(order, list):
+            raise InputError("expected a list of goal IDs", file=fname, path=path + ["order"])
+        out = GoalsInOrder(tuple(str(x) for x in order))
+    elif t in ("validAssembly",):
+        out = ValidAssembly()
+    elif t in ("alwaysTrue", None):
+        out = AlwaysTrue()
+    elif t == "goalsBySameRobot":
+        raise InputError("goalsBySameRobot is not supported (multi-robot tasks)", file=fname, path=path + ["type"])
+    else:
+        raise InputError(f"unknown constraint type {describe_value(t)}", file=fname, path=path + ["type"])
+    del ci
+    if not task_level and isinstance(out, GLOBAL_ONLY):
+        raise InputError(f"{t} is a task-level constraint and cannot be used inside a goal", file=fname,
+                         path=path + ["type"])
+    return out
+
+
+def _parse_goal(g, fname, path, resolver) -> Goal:
+    if not isinstance(g, dict):
+        raise InputError("expected a goal object", file=fname, path=path)
+    ci = _ci(g)
+    t = str(g.get("type", "")).lower()
+    gid = str(g.get("ID", ci.get("id", (None, None))[1]))
+    if gid == "None":
+        raise InputError("goal needs an 'ID'", file=fname, path=path)
+    cons = tuple(_parse_constraint(c, fname, path + ["constraints", k], resolver, False)
+                 for k, c in enumerate(g.get("constraints", [])))
+
+    def key(name):
+        return ci.get(name.lower(), (name, None))
+
+    if t in ("at", "reach"):
+        k, v = key("goalPose")
+        if v is None:
+            raise InputError(f"a {t} goal needs 'goalPose'", file=fname, path=path)
+        pose = _tolerated(v, fname, path + [k], resolver)
+        return At(gid, cons, pose) if t == "at" else Reach(gid, cons, pose)
+    if t == "returnto":
+        k, v = key("returnToGoal")
+        return ReturnTo(gid, cons, None if v is None else str(v))
+    if t == "pause":
+        k, v = key("duration")
+        if v is None:
+            raise InputError("a pause goal needs 'duration'", file=fname, path=path)
+        d = check_finite(v, fname, path + [k])
+        if d < 0:
+            raise InputError(f"must be >= 0, got {d}", file=fname, path=path + [k])
+        return Pause(gid, cons, d)
+    if t == "follow":
+        k, traj = key("trajectory")
+        if not isinstance(traj, dict) or "pose" not in traj:
+            raise InputError("a follow goal needs 'trajectory': {pose: [...], t?: [...]}", file=fname, path=path)
+        poses = tuple(_tolerated(p, fname, path + [k, "pose", i], resolver) for i, p in enumerate(traj["pose"]))
+        if not poses:
+            raise InputError("trajectory has no poses", file=fname, path=path + [k, "pose"])
+        tt = None
+        if "t" in traj and traj["t"] is not None:
+            tv = traj["t"]
+            if isinstance(tv, (int, float)) and not isinstance(tv, bool):
+                tt = np.arange(len(poses)) * check_finite(tv, fname, path + [k, "t"])
+            else:
+                tt = np.array([check_finite(x, fname, path + [k, "t", i]) for i, x in enumerate(tv)])
+            if len(tt) != len(poses):
+                raise InputError(f"{len(tt)} times for {len(poses)} poses", file=fname, path=path + [k, "t"])
+            if np.any(np.diff(tt) <= 0):
+                raise InputError("times must be strictly increasing", file=fname, path=path + [k, "t"])
+        fr = key("forceTorqueReferenceFrame")[1]
+        if fr not in (None, "world"):
+            raise InputError("only 'world' is supported", file=fname, path=path + ["forceTorqueReferenceFrame"])
+        force = _vec3(key("externalForce"), fname, path)
+        torque = _vec3(key("externalTorque"), fname, path)
+        return Follow(gid, cons, poses, tt, force, torque)
+    if t == "leave":
+        k, v = key("region")
+        if v is None:
+            raise InputError("a leave goal needs 'region' (a tolerated pose: the TCP poses to leave)", file=fname,
+                             path=path)
+        region = _tolerated(v, fname, path + [k], resolver)
+        kd, d = key("duration")
+        dur = check_finite(d if d is not None else 0.0, fname, path + [kd])
+        if dur < 0:
+            raise InputError(f"must be >= 0, got {dur}", file=fname, path=path + [kd])
+        return Leave(gid, cons, region, dur)
+    raise InputError(f"unknown goal type {describe_value(g.get('type'))} (at, reach, returnTo, pause, follow, leave)",
+                     file=fname, path=path + ["type"])
+
+
+def _vec3(kv, fname, path):
+    k, v = kv
+    if v is None:
+        return np.zeros(3)
+    if not isinstance(v, list) or len(v) != 3:
+        raise InputError(f"expected 3 numbers, got {describe_value(v)}", file=fname, path=path + [k])
+    return np.array([check_finite(x, fname, path + [k, i]) for i, x in enumerate(v)])

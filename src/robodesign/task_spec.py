@@ -1,0 +1,236 @@
+"""Typed, immutable description of a CoBRA task: workcell, goals and constraints.
+
+See docs/formats.md for the JSON format and where robodesign's semantics deliberately differ
+from the reference implementation (gravity is honoured, follow-goal wrenches are honoured, a task
+file without a ``constraints`` key gets the default constraint set).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, FrozenSet, Optional, Tuple
+
+import numpy as np
+
+from .geometry import GeometrySpec
+from .tolerance import ToleratedPose
+
+
+@dataclass(frozen=True)
+class TaskHeader:
+    id: str
+    version: str = "2023"
+    name: str = ""
+    tags: Tuple[str, ...] = ()
+    date: str = ""
+    time_step: float = 0.01
+    gravity: Tuple[float, float, float] = (0.0, 0.0, -9.81)
+    author: Tuple[str, ...] = ()
+    email: Tuple[str, ...] = ()
+    affiliation: Tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class ObstacleSpec:
+    id: str
+    name: str
+    collision: Tuple[GeometrySpec, ...]  # world poses (at t=0 for moving obstacles)
+    visual: Tuple[GeometrySpec, ...] = ()
+    # moving obstacle: the pose of the obstacle's frame over time; geometry poses are relative to
+    # the pose at index 0, i.e. world(t) = motion[k] · motion[0]⁻¹ · geometry pose
+    motion_t: Optional[np.ndarray] = None  # (K,)
+    motion_poses: Optional[np.ndarray] = None  # (K,4,4)
+
+    @property
+    def moving(self) -> bool:
+        return self.motion_poses is not None
+
+    def transform_at(self, t: float) -> np.ndarray:
+        """World transform applied to the t=0 geometry at time t (zero-order hold between poses)."""
+        if self.motion_poses is None:
+            return np.eye(4)
+        k = int(np.searchsorted(self.motion_t, t + 1e-12, side="right") - 1)
+        k = min(max(k, 0), len(self.motion_t) - 1)
+        from .spatial import inv
+        return self.motion_poses[k] @ inv(self.motion_poses[0])
+
+
+# ---------------------------------------------------------------------------------------------
+# Constraints (paper Table III)
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Constraint:
+    @property
+    def type(self) -> str:
+        return _CONSTRAINT_TYPE_NAMES[type(self)]
+
+
+@dataclass(frozen=True)
+class JointLimitsConstraint(Constraint):
+    parts: FrozenSet[str] = frozenset({"q", "dq", "tau"})
+
+
+@dataclass(frozen=True)
+class CollisionFree(Constraint):
+    safety_margin: float = 0.0
+
+
+@dataclass(frozen=True)
+class SelfCollisionFree(Constraint):
+    pass
+
+
+@dataclass(frozen=True, eq=False)
+class BasePlacement(Constraint):
+    pose: ToleratedPose = None
+
+
+@dataclass(frozen=True, eq=False)
+class EndEffectorConstraint(Constraint):
+    pose: Optional[ToleratedPose] = None
+    v_min: float = 0.0
+    v_max: float = float("inf")
+    o_min: float = 0.0
+    o_max: float = float("inf")
+
+
+@dataclass(frozen=True)
+class AllGoalsFulfilled(Constraint):
+    pass
+
+
+@dataclass(frozen=True)
+class GoalsInOrder(Constraint):
+    order: Tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class ValidAssembly(Constraint):
+    pass
+
+
+@dataclass(frozen=True)
+class AlwaysTrue(Constraint):
+    pass
+
+
+_CONSTRAINT_TYPE_NAMES = {JointLimitsConstraint: "joint", CollisionFree: "collisionFree",
+                          SelfCollisionFree: "selfCollisionFree", BasePlacement: "basePlacement",
+                          EndEffectorConstraint: "endEffector", AllGoalsFulfilled: "allGoalsFulfilled",
+                          GoalsInOrder: "allGoalsFulfilledInOrder", ValidAssembly: "validAssembly",
+                          AlwaysTrue: "alwaysTrue"}
+GLOBAL_ONLY = (BasePlacement, AllGoalsFulfilled, GoalsInOrder, ValidAssembly)
+
+
+def default_constraints() -> Tuple[Constraint, ...]:
+    return (JointLimitsConstraint(frozenset({"q", "dq", "tau"})), CollisionFree(0.0), AllGoalsFulfilled())
+
+
+# ---------------------------------------------------------------------------------------------
+# Goals (paper Table IV)
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Goal:
+    id: str
+    constraints: Tuple[Constraint, ...] = ()
+
+    @property
+    def type(self) -> str:
+        return _GOAL_TYPE_NAMES[type(self)]
+
+
+@dataclass(frozen=True, eq=False)
+class At(Goal):
+    pose: ToleratedPose = None
+
+
+@dataclass(frozen=True, eq=False)
+class Reach(Goal):
+    pose: ToleratedPose = None
+    velocity_tolerance: float = 1e-3  # every component of the TCP twist at t_g
+
+
+@dataclass(frozen=True, eq=False)
+class ReturnTo(Goal):
+    return_to: Optional[str] = None  # goal ID; None = the start (t = 0)
+    epsilon: float = 1e-4
+
+
+@dataclass(frozen=True, eq=False)
+class Pause(Goal):
+    duration: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Follow(Goal):
+    poses: Tuple[ToleratedPose, ...] = ()
+    t: Optional[np.ndarray] = None  # timed trajectory (relative times), None = untimed
+    external_force: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world frame, at the TCP
+    external_torque: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass(frozen=True, eq=False)
+class Leave(Goal):
+    """At t_g the TCP is outside ``region`` and stays outside for ``duration`` seconds."""
+    region: ToleratedPose = None
+    duration: float = 0.0
+
+
+_GOAL_TYPE_NAMES = {At: "at", Reach: "reach", ReturnTo: "returnTo", Pause: "pause", Follow: "follow",
+                    Leave: "leave"}
+
+
+@dataclass(frozen=True, eq=False)
+class Task:
+    header: TaskHeader
+    obstacles: Tuple[ObstacleSpec, ...]
+    goals: Tuple[Goal, ...]
+    constraints: Tuple[Constraint, ...]
+    frames: Dict[str, np.ndarray] = field(default_factory=dict)  # name → world pose
+    root: Optional[Path] = None  # package folder (assets resolve against it)
+    source: Optional[str] = None
+    warnings: Tuple[str, ...] = ()
+
+    @property
+    def id(self) -> str:
+        return self.header.id
+
+    @property
+    def dt(self) -> float:
+        return self.header.time_step
+
+    def goal(self, goal_id: str) -> Goal:
+        for g in self.goals:
+            if g.id == goal_id:
+                return g
+        raise KeyError(goal_id)
+
+    def constraint(self, cls) -> Optional[Constraint]:
+        for c in self.constraints:
+            if isinstance(c, cls):
+                return c
+        return None
+
+    @property
+    def base_placement(self) -> Optional[ToleratedPose]:
+        c = self.constraint(BasePlacement)
+        return c.pose if c is not None else None
+
+    @property
+    def nominal_base_pose(self) -> np.ndarray:
+        bp = self.base_placement
+        return np.array(bp.nominal, dtype=float) if bp is not None else np.eye(4)
+
+    @property
+    def goal_order(self) -> Tuple[str, ...]:
+        """Goal IDs in the order they must be (or naturally are) achieved."""
+        c = self.constraint(GoalsInOrder)
+        ids = [g.id for g in self.goals]
+        if c is None:
+            return tuple(ids)
+        rest = [i for i in ids if i not in c.order]
+        # listed goals keep their relative order; unlisted goals keep file order around them
+        out, it = [], iter(c.order)
+        for i in ids:
+            out.append(next(it) if i in c.order else i)
+        return tuple(out) if len(out) == len(ids) else tuple(list(c.order) + rest)

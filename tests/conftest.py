@@ -1,0 +1,66 @@
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+
+ROOT = Path(__file__).resolve().parents[1]
+COBRA = ROOT.parent / "shared" / "cobra"
+IMPROV = COBRA / "modules" / "IMPROV"
+PRIMITIVES = COBRA / "modules" / "geometric_primitive_modules"
+TASKS = COBRA / "tasks"
+
+
+def _eye():
+    return np.eye(4).tolist()
+
+
+def _T(x=0.0, y=0.0, z=0.0, rx=0.0):
+    c, s = np.cos(rx), np.sin(rx)
+    T = np.array([[1, 0, 0, x], [0, c, -s, y], [0, s, c, z], [0, 0, 0, 1.0]])
+    return np.round(T, 15).tolist()
+
+
+def toy_module_set(folder: Path) -> Path:
+    """A tiny hand-computable module set: base B (connector at z=0.1), revolute joint module J (joint
+    0.05 above its flange, axis = -y of the flange, a 0.2 m link of 2 kg with its CoM 0.1 up) and an
+    end effector E (TCP 0.1 above its flange)."""
+    prox = {"pose": _T(rx=np.pi), "gender": "f", "type": "t", "size": [1]}
+    cyl = lambda r, z, zc: {"type": "cylinder", "parameters": {"r": r, "z": z}, "pose": _T(z=zc)}
+    data = {"ignore_collisions": "rigid_via_joint", "modules": [
+        {"header": {"ID": "B", "name": "base"}, "bodies": [{
+            "ID": "b", "mass": 1.0, "r_com": [0, 0, 0.05], "inertia": np.diag([0.01, 0.01, 0.01]).tolist(),
+            "connectors": [{"ID": "base", "pose": _T(rx=np.pi), "gender": "f", "type": "base", "size": []},
+                           {"ID": "out", "pose": _T(z=0.1), "gender": "m", "type": "t", "size": [1]}],
+            "collision": [cyl(0.05, 0.1, 0.05)]}], "joints": []},
+        {"header": {"ID": "J", "name": "joint"}, "bodies": [
+            {"ID": "p", "mass": 0.0, "r_com": [0, 0, 0], "inertia": np.zeros((3, 3)).tolist(),
+             "connectors": [dict(prox, ID="in")], "collision": [cyl(0.03, 0.05, 0.025)]},
+            {"ID": "c", "mass": 2.0, "r_com": [0, 0, 0.1], "inertia": np.diag([0.02, 0.02, 0.001]).tolist(),
+             "connectors": [{"ID": "out", "pose": _T(z=0.2), "gender": "m", "type": "t", "size": [1]}],
+             "collision": [cyl(0.03, 0.2, 0.1)]}],
+         "joints": [{"ID": "j", "parent": "p", "child": "c", "type": "revolute", "poseParent": _T(z=0.05, rx=np.pi / 2),
+                     "poseChild": _T(rx=-np.pi / 2),
+                     "limits": {"positionLower": -3.2, "positionUpper": 3.2, "peakTorque": 50, "velocity": 2,
+                                "acceleration": 5},
+                     "gearRatio": 100, "motorInertia": 1e-5, "frictionCoulomb": 2.0, "frictionViscous": 3.0}]},
+        {"header": {"ID": "E", "name": "eef"}, "bodies": [{
+            "ID": "e", "mass": 0.5, "r_com": [0, 0, 0.05], "inertia": np.diag([1e-3, 1e-3, 1e-3]).tolist(),
+            "connectors": [dict(prox, ID="in"), {"ID": "tcp", "pose": _T(z=0.1), "gender": "m", "type": "eef",
+                                                 "size": []}],
+            "collision": [cyl(0.02, 0.1, 0.05)]}], "joints": []},
+    ]}
+    d = folder / "toy"
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "modules.json").write_text(json.dumps(data, indent=1))
+    return d
+
+
+@pytest.fixture
+def toy_set(tmp_path):
+    from robodesign import load_module_set
+    return load_module_set(toy_module_set(tmp_path))
