@@ -36,8 +36,8 @@ class ObstacleSpec:
     name: str
     collision: Tuple[GeometrySpec, ...]  # world poses (at t=0 for moving obstacles)
     visual: Tuple[GeometrySpec, ...] = ()
-    # moving obstacle: the pose of the obstacle's frame over time; geometry poses are relative to
-    # the pose at index 0, i.e. world(t) = motion[k] · motion[0]⁻¹ · geometry pose
+    # moving obstacle: at time motion_t[k] the transform motion_poses[k] is applied on the left of
+    # the geometry's world pose: world(t) = motion_poses[k] · geometry pose (zero-order hold)
     motion_t: Optional[np.ndarray] = None  # (K,)
     motion_poses: Optional[np.ndarray] = None  # (K,4,4)
 
@@ -51,8 +51,7 @@ class ObstacleSpec:
             return np.eye(4)
         k = int(np.searchsorted(self.motion_t, t + 1e-12, side="right") - 1)
         k = min(max(k, 0), len(self.motion_t) - 1)
-        from .spatial import inv
-        return self.motion_poses[k] @ inv(self.motion_poses[0])
+        return self.motion_poses[k]
 
 
 # ---------------------------------------------------------------------------------------------
