@@ -46,7 +46,7 @@ def toy_module_set(folder: Path) -> Path:
          "joints": [{"ID": "j", "parent": "p", "child": "c", "type": "revolute", "poseParent": _T(z=0.05, rx=np.pi / 2),
                      "poseChild": _T(rx=-np.pi / 2),
                      "limits": {"positionLower": -3.2, "positionUpper": 3.2, "peakTorque": 50, "velocity": 2,
-                                "acceleration": 5},
+                                "acceleration": 10},
                      "gearRatio": 100, "motorInertia": 1e-5, "frictionCoulomb": 2.0, "frictionViscous": 3.0}]},
         {"header": {"ID": "E", "name": "eef"}, "bodies": [{
             "ID": "e", "mass": 0.5, "r_com": [0, 0, 0.05], "inertia": np.diag([1e-3, 1e-3, 1e-3]).tolist(),

@@ -76,6 +76,33 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_check(args) -> int:
+    from .checker import check
+    from .solution import load_solution
+    from .task_io import load_task
+    task = load_task(args.task)
+    sol = load_solution(args.solution)
+    for w in task.warnings:
+        print(f"robodesign: warning: {w}", file=sys.stderr)
+    verdict = check(task, sol, module_set=args.modules)
+    if args.json:
+        print(json.dumps(verdict.to_json()))
+    else:
+        print(f"task      {task.id}")
+        print(f"solution  {args.solution}")
+        print(f"verdict   {'VALID' if verdict.valid else 'INVALID'} ({verdict.samples} samples, "
+              f"{verdict.timings.get('total', 0) * 1e3:.0f} ms)")
+        if verdict.cost is not None:
+            print(f"cost      {verdict.cost_function} = {verdict.cost:.6g}")
+        if verdict.goals:
+            print("goals     " + ", ".join(f"{g}: {'ok' if ok else 'MISSED'}" for g, ok in verdict.goals.items()))
+        for v in verdict.violations:
+            print(f"  - {v}")
+        if verdict.costs:
+            print("costs     " + ", ".join(f"{k}={v:.6g}" for k, v in verdict.costs.items()))
+    return 0 if verdict.valid else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="robodesign", description="Find the best modular robot for a task.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -88,6 +115,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--json", action="store_true", help="print one JSON object")
     r.add_argument("--urdf", help="also write the robot as URDF to this file")
     r.set_defaults(func=cmd_robot)
+
+    c = sub.add_parser("check", help="check a CoBRA solution against a task (exit 0 valid, 1 invalid, 2 bad input)")
+    c.add_argument("task", help="task JSON file (or a built-in task name)")
+    c.add_argument("solution", help="solution JSON file")
+    c.add_argument("--modules", help="module set folder or built-in name (default: the solution's moduleSet)")
+    c.add_argument("--json", action="store_true", help="print {valid, violations, costs, cost} as JSON")
+    c.set_defaults(func=cmd_check)
 
     run = sub.add_parser("run", help="run an experiment (default: the built-in demo)")
     run.set_defaults(func=cmd_run)

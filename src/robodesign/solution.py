@@ -79,6 +79,9 @@ class Solution:
             "trajectory": {"t": tr.t.tolist(), "q": tr.q.tolist(), "dq": tr.dq.tolist(), "ddq": tr.ddq.tolist(),
                            "goal2time": {k: float(v) for k, v in tr.goal2time.items()}},
         }
+        for key in ("publication", "date", "processorName", "notes"):
+            if out[key] == "":
+                del out[key]
         if self.cost is not None:
             out["cost"] = float(self.cost)
         if self.module_connection is not None:
