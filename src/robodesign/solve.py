@@ -1,0 +1,502 @@
+"""From a robot (assembly + base pose) and a task to a checked CoBRA solution.
+
+The pipeline runs stages from cheap to expensive and stops at the first failure (the paper's
+hierarchical elimination); every stage records pass/fail and time:
+
+  assembly → base → reach → ik → static_torque → plan → timing → [trajopt] → check
+
+Goals are handled in the task's goal order: ``at``/``reach`` and ``returnTo`` move to a configuration
+and stop; ``pause`` holds still; ``follow`` visits the IK solutions of its poses one after the other
+(stopping at each; timed trajectories with exactly the given timing); ``leave`` retreats to a
+configuration whose TCP is outside the region and holds it for the duration. The trajectory starts
+at the configuration of the first pose goal (or a collision-free configuration if there is none).
+The returned cost is the checker's: one judge.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .assembly import Assembly
+from .checker import Verdict, build_robot, check
+from .errors import AssemblyError, InputError, RobodesignError
+from .module_spec import ModuleSet
+from .solution import Solution, Trajectory as SolutionTrajectory
+from .task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
+from .tolerance import ToleratedPose
+
+STAGES = ("assembly", "base", "reach", "ik", "static_torque", "plan", "timing", "trajopt", "check")
+
+
+@dataclass
+class SolveSettings:
+    planner: str = "rrtconnect"
+    plan_time: float = 1.0
+    timing: str = "toppra"
+    optimize_trajectory: bool = False
+    trajopt_nodes: int = 30
+    ik_restarts: int = 200
+    ik_solutions: int = 4  # distinct IK solutions per goal to choose from
+    resolution: float = 0.01  # rad: dense collision-check step of planned paths
+    seed: int = 0
+    check: bool = True
+
+
+@dataclass
+class StageRecord:
+    name: str
+    passed: bool
+    seconds: float
+    message: str = ""
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "passed": self.passed, "seconds": round(self.seconds, 6), "message": self.message}
+
+
+@dataclass
+class SolveResult:
+    stages: List[StageRecord] = field(default_factory=list)
+    solution: Optional[Solution] = None
+    verdict: Optional[Verdict] = None
+    goals_reached: int = 0
+    num_goals: int = 0
+
+    @property
+    def feasible(self) -> bool:
+        return self.verdict is not None and self.verdict.valid
+
+    @property
+    def stage(self) -> str:
+        """Name of the first failed stage, or 'done'."""
+        for s in self.stages:
+            if not s.passed:
+                return s.name
+        return "done"
+
+    @property
+    def stage_index(self) -> int:
+        """How far the candidate got: index in STAGES of the failed stage (len(STAGES) when done)."""
+        st = self.stage
+        return len(STAGES) if st == "done" else STAGES.index(st)
+
+    @property
+    def cost(self) -> Optional[float]:
+        return self.verdict.cost if self.verdict is not None else None
+
+    @property
+    def message(self) -> str:
+        for s in self.stages:
+            if not s.passed:
+                return s.message
+        return ""
+
+
+class _Stage:
+    def __init__(self, result: SolveResult, name: str):
+        self.result, self.name = result, name
+
+    def __enter__(self):
+        self.t0 = time.perf_counter()
+        return self
+
+    def __exit__(self, et, ev, tb):
+        dt = time.perf_counter() - self.t0
+        if et is None:
+            self.result.stages.append(StageRecord(self.name, True, dt))
+            return False
+        if issubclass(et, _Fail) or issubclass(et, (RobodesignError,)):
+            self.result.stages.append(StageRecord(self.name, False, dt, str(ev)))
+            return True  # swallowed: the caller checks result.stage
+        return False
+
+
+class _Fail(Exception):
+    pass
+
+
+def _pose_goals(task: Task):
+    return [g for g in task.goals if isinstance(g, (At, Reach))]
+
+
+def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
+          cost: str = "cyc", settings: Optional[SolveSettings] = None) -> SolveResult:
+    """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
+    robot: the failing stage and its reason are in the result."""
+    settings = settings or SolveSettings()
+    res = SolveResult(num_goals=len(task.goals))
+    rng = np.random.default_rng(settings.seed)
+    base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
+    robot = None
+    with _Stage(res, "assembly"):
+        asm = (order_or_assembly if isinstance(order_or_assembly, Assembly)
+               else Assembly.from_order(module_set, order_or_assembly))
+        robot = build_robot(task, module_set, asm, base_pose)
+    if res.stage != "done":
+        return res
+    with _Stage(res, "base"):
+        bp = task.base_placement
+        if bp is not None and not bp.valid(base_pose):
+            raise _Fail("base pose outside the base-placement tolerance")
+    if res.stage != "done":
+        return res
+    with _Stage(res, "reach"):
+        from .solvers.ik import reach_bound
+        o, R = reach_bound(robot)
+        for g in task.goals:
+            for pose in _goal_poses(g):
+                d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
+                slack = _position_slack(pose)
+                if d > R + slack:
+                    raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
+    if res.stage != "done":
+        return res
+    plan = _GoalPlanner(task, robot, settings, rng, res)
+    with _Stage(res, "ik"):
+        plan.solve_ik()
+    if res.stage != "done":
+        return res
+    with _Stage(res, "static_torque"):
+        plan.filter_static_torque()
+    if res.stage != "done":
+        return res
+    with _Stage(res, "plan"):
+        plan.choose_and_plan()
+    if res.stage != "done":
+        return res
+    with _Stage(res, "timing"):
+        motion, g2t = plan.time_parameterize()
+    if res.stage != "done":
+        return res
+    if settings.optimize_trajectory:
+        with _Stage(res, "trajopt"):
+            motion, g2t = plan.optimize(motion, g2t, cost)
+        if res.stage != "done":
+            return res
+    sol = Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
+                   module_order=tuple(asm.module_ids), base_pose=base_pose,
+                   trajectory=SolutionTrajectory(motion.t, motion.q, motion.dq, motion.ddq, g2t),
+                   module_connection=None if asm.is_serial() else asm.connections,
+                   base_connection=None if asm.is_serial() else asm.base,
+                   computation_time=sum(s.seconds for s in res.stages), notes="robodesign solve")
+    res.solution = sol
+    if settings.check:
+        with _Stage(res, "check"):
+            v = check(task, sol, module_set)
+            res.verdict = v
+            res.solution = sol.with_(cost=v.cost)
+            if not v.valid:
+                raise _Fail("; ".join(str(x) for x in v.violations[:3]))
+    return res
+
+
+def _goal_poses(g) -> List[ToleratedPose]:
+    if isinstance(g, (At, Reach)):
+        return [g.pose]
+    if isinstance(g, Follow):
+        return list(g.poses)
+    return []
+
+
+def _position_slack(pose: ToleratedPose) -> float:
+    s = 0.0
+    for name, (lo, hi), _ in pose.entries:
+        if name in ("r_sph", "r_cyl"):
+            s = max(s, hi)
+        elif name in ("x", "y", "z"):
+            s = max(s, max(abs(lo), abs(hi)))
+    return s if math.isfinite(s) else 1e9
+
+
+class _GoalPlanner:
+    """Holds the per-goal IK solutions and turns the goal sequence into a motion."""
+
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult):
+        self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
+        self.order = [task.goal(gid) for gid in task.goal_order]
+        self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
+        self.follow_ik: Dict[str, List[np.ndarray]] = {}
+
+    # -- IK ------------------------------------------------------------------------------------
+    def solve_ik(self) -> None:
+        from .solvers.ik import solve_ik
+        reached = 0
+        for g in self.order:
+            if isinstance(g, (At, Reach)):
+                r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
+                             n_solutions=self.settings.ik_solutions)
+                if not r:
+                    self.res.goals_reached = reached
+                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({r.stats.get('reason')})")
+                self.ik[g.id] = r.solutions
+                reached += 1
+            elif isinstance(g, Follow):
+                sols = []
+                seed = None
+                for i, pose in enumerate(g.poses):
+                    r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
+                    if not r:
+                        self.res.goals_reached = reached
+                        raise _Fail(f"no IK solution for pose {i} of follow goal {g.id}")
+                    seed = r.q
+                    sols.append(r.q)
+                self.follow_ik[g.id] = sols
+                reached += 1
+            else:
+                reached += 1
+        self.res.goals_reached = reached
+
+    def filter_static_torque(self) -> None:
+        r = self.robot
+        limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
+        for gid, sols in self.ik.items():
+            ok = [q for q in sols if np.all(np.abs(r.gravity_torque(q)) <= limit)]
+            if not ok:
+                tau = np.abs(r.gravity_torque(sols[0]))
+                j = int(np.argmax(tau / limit))
+                raise _Fail(f"goal {gid}: holding the pose needs {tau[j]:.1f} Nm at joint {j} (limit {limit[j]:.1f})")
+            self.ik[gid] = ok
+        for gid, sols in self.follow_ik.items():
+            for i, q in enumerate(sols):
+                tau = np.abs(r.gravity_torque(q))
+                if np.any(tau > limit):
+                    j = int(np.argmax(tau / limit))
+                    raise _Fail(f"follow goal {gid}, pose {i}: static torque {tau[j]:.1f} Nm > {limit[j]:.1f} at joint {j}")
+
+    # -- sequencing ------------------------------------------------------------------------------
+    def _cost(self, qa, qb) -> float:
+        from .solvers.timing import time_optimal_bound
+        return time_optimal_bound(self.robot, qa, qb)
+
+    def choose_and_plan(self) -> None:
+        """Choose one IK solution per pose goal (dynamic programming over the goal sequence, minimising
+        the sum of time-optimal bounds), then plan collision-free paths between the stops."""
+        from .solvers.planning import plan_path
+        seq = [g for g in self.order if isinstance(g, (At, Reach))]
+        choice: Dict[str, np.ndarray] = {}
+        if seq:
+            layers = [self.ik[g.id] for g in seq]
+            best = [np.zeros(len(layers[0]))]
+            back = []
+            for a, b in zip(layers, layers[1:]):
+                prev = best[-1]
+                cur = np.full(len(b), np.inf)
+                arg = np.zeros(len(b), dtype=int)
+                for j, qb in enumerate(b):
+                    for i, qa in enumerate(a):
+                        c = prev[i] + self._cost(qa, qb)
+                        if c < cur[j]:
+                            cur[j], arg[j] = c, i
+                best.append(cur)
+                back.append(arg)
+            # a returnTo the start at the end: add the closing move to the objective
+            k = int(np.argmin(best[-1]))
+            idx = [k]
+            for arg in reversed(back):
+                k = int(arg[k])
+                idx.append(k)
+            idx.reverse()
+            for g, i in zip(seq, idx):
+                choice[g.id] = layers[seq.index(g)][i]
+        self.choice = choice
+        # the start configuration
+        first_pose = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
+        if first_pose is None:
+            q0 = self._free_configuration()
+        elif isinstance(first_pose, Follow):
+            q0 = self.follow_ik[first_pose.id][0]
+        else:
+            q0 = choice[first_pose.id]
+        self.q0 = q0
+        # build the list of actions: ("move", q_target, goal or None) | ("hold", duration, goal) | ...
+        actions = []
+        q = q0
+        at_config: Dict[str, np.ndarray] = {}
+        for g in self.order:
+            if isinstance(g, (At, Reach)):
+                actions.append(("move", choice[g.id], g))
+                q = choice[g.id]
+            elif isinstance(g, Pause):
+                actions.append(("hold", g.duration, g))
+            elif isinstance(g, ReturnTo):
+                target = q0 if g.return_to is None else at_config.get(g.return_to)
+                if target is None:
+                    raise _Fail(f"returnTo goal {g.id}: goal {g.return_to!r} has no configuration before it")
+                actions.append(("move", target, g))
+                q = target
+            elif isinstance(g, Follow):
+                pts = self.follow_ik[g.id]
+                actions.append(("move", pts[0], None))
+                actions.append(("follow", pts, g))
+                q = pts[-1]
+            elif isinstance(g, Leave):
+                q_out = self._leave_configuration(q, g)
+                actions.append(("move", q_out, None))
+                actions.append(("hold", g.duration, g))
+                q = q_out
+            at_config[g.id] = q
+        self.actions = actions
+        # plan every move
+        self.paths = []
+        q = q0
+        for kind, arg, g in actions:
+            if kind == "move":
+                if np.allclose(arg, q, atol=1e-12):
+                    self.paths.append(None)
+                    continue
+                r = plan_path(self.robot, q, arg, planner=self.settings.planner, time_limit=self.settings.plan_time,
+                              seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution)
+                if not r:
+                    raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
+                                f"({r.stats.get('reason')})")
+                self.paths.append(r.path)
+                q = arg
+            elif kind == "follow":
+                from .solvers.planning import check_path
+                P = np.vstack(arg)
+                ok, bad = check_path(self.robot, P, self.settings.resolution)
+                if not ok:
+                    raise _Fail(f"follow goal {g.id}: the motion between poses {bad} and {bad + 1} collides")
+                self.paths.append(P)
+                q = arg[-1]
+            else:
+                self.paths.append(None)
+
+    def _free_configuration(self) -> np.ndarray:
+        q = np.clip(np.zeros(self.robot.dof), self.robot.q_lower, self.robot.q_upper)
+        for _ in range(200):
+            if not self.robot.in_collision(q):
+                return q
+            q = self.robot.random_configuration(self.rng)
+        raise _Fail("no collision-free start configuration found")
+
+    def _leave_configuration(self, q: np.ndarray, g: Leave) -> np.ndarray:
+        """A nearby configuration whose TCP is outside the region: step the joints away from the region
+        centre along the Jacobian's pseudo-inverse until out (+2 cm), collision-free."""
+        r = self.robot
+        center = g.region.nominal[:3, 3]
+        qc = q.copy()
+        for _ in range(200):
+            T = r.fk(qc)
+            if not g.region.valid(T):
+                # margin: keep going a little further
+                d = T[:3, 3] - center
+                n = np.linalg.norm(d)
+                if n > 0 and not g.region.valid(_translate(T, 0.02 * d / n)) and not g.region.valid(_translate(T, -0.0)):
+                    if not r.in_collision(qc):
+                        return qc
+            d = T[:3, 3] - center
+            if np.linalg.norm(d) < 1e-6:
+                d = np.array([0.0, 0.0, 1.0])
+            step = 0.02 * d / np.linalg.norm(d)
+            J = r.jacobian(qc)[:3]
+            dq = np.linalg.lstsq(J, step, rcond=None)[0]
+            qc = np.clip(qc + dq, r.q_lower, r.q_upper)
+        raise _Fail(f"leave goal {g.id}: could not move the TCP out of the region")
+
+    # -- timing ----------------------------------------------------------------------------------
+    def time_parameterize(self):
+        from .solvers.timing import Trajectory, time_parameterize
+        dt = self.task.dt
+        traj = Trajectory.at_rest(self.q0)
+        g2t: Dict[str, float] = {}
+        # a pose goal reached at t = 0 (the start configuration)
+        for (kind, arg, g), path in zip(self.actions, self.paths):
+            if kind == "move":
+                if path is not None:
+                    seg = time_parameterize(self.robot, path, dt=dt, method=self.settings.timing)
+                    traj = traj.concatenate(seg)
+                if g is not None:
+                    g2t[g.id] = float(traj.t[-1])
+            elif kind == "hold":
+                if arg > 0:
+                    traj = traj.hold(arg, dt)
+                g2t[g.id] = float(traj.t[-1])
+                if isinstance(g, Leave):
+                    g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
+            elif kind == "follow":
+                if g.t is None:
+                    seg = time_parameterize(self.robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
+                                            stop_at=list(range(len(path))))
+                else:
+                    seg = _timed_follow(path, g.t, dt)
+                traj = traj.concatenate(seg)
+                g2t[g.id] = float(traj.t[-1])
+        return traj, g2t
+
+    def optimize(self, motion, g2t, cost: str):
+        """Re-time every rest-to-rest move with trajectory optimization (CasADi/ipopt) for ``cost``."""
+        from .solvers.timing import Trajectory
+        from .solvers.trajopt import optimize_trajectory
+        stops = [0] + [k for k in range(1, len(motion.t) - 1)
+                       if np.all(motion.dq[k] == 0) and not np.all(motion.dq[k - 1] == 0)] + [len(motion.t) - 1]
+        # split at rest samples; holds (consecutive rest samples) are kept as they are
+        times = {gid: t for gid, t in g2t.items()}
+        out = None
+        k = 0
+        goal_at = {int(round(t / motion.t[1])) if len(motion.t) > 1 else 0: gid for gid, t in times.items()}
+        new_g2t: Dict[str, float] = {}
+        n = len(motion.t)
+        while k < n - 1:
+            # find the end of this segment: next sample at rest after a moving sample
+            j = k + 1
+            if np.all(motion.dq[j] == 0) and np.all(motion.ddq[k] == 0):
+                # holding still: copy sample by sample
+                seg = motion.slice(k, j)
+            else:
+                while j < n - 1 and not (np.all(motion.dq[j] == 0)):
+                    j += 1
+                part = motion.slice(k, j).shifted(0.0)
+                try:
+                    seg = optimize_trajectory(self.robot, part, cost=_trajopt_cost(cost), n_nodes=self.settings.trajopt_nodes,
+                                              dt_out=self.task.dt)
+                except Exception:
+                    seg = part
+            seg = seg.shifted(0.0)
+            out = seg if out is None else out.concatenate(seg)
+            for kk in range(k, j + 1):
+                if kk in goal_at:
+                    # the goal happens at the end of its segment (arrival) or at a hold sample
+                    new_g2t[goal_at[kk]] = float(out.t[-1] - (seg.t[-1] - seg.t[kk - k]) if kk - k < len(seg.t) else out.t[-1])
+            k = j
+        for gid in g2t:
+            new_g2t.setdefault(gid, float(out.t[-1]))
+        return out, new_g2t
+
+
+def _trajopt_cost(cost: str) -> str:
+    from .costs import parse_cost
+    cf = parse_cost(cost)
+    terms = {n: w for n, w in cf.terms if n in ("cyc", "mechEnergy", "effort")}
+    if not terms:
+        return "cyc"
+    return ",".join(f"{n}_{w}" for n, w in terms.items())
+
+
+def _ceil_to(x: float, dt: float) -> float:
+    return math.ceil(x / dt - 1e-9) * dt
+
+
+def _translate(T: np.ndarray, d: np.ndarray) -> np.ndarray:
+    T2 = T.copy()
+    T2[:3, 3] += d
+    return T2
+
+
+def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
+    """Quintic rest-to-rest moves between consecutive follow poses with exactly the given timing."""
+    from .solvers.timing import Trajectory
+    out = Trajectory.at_rest(path[0])
+    for a, b, T in zip(path, path[1:], np.diff(t_rel)):
+        n = max(1, int(round(T / dt)))
+        s = np.linspace(0, 1, n + 1)[:, None]
+        d = b - a
+        q = a + d * (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)
+        dq = d * (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / T
+        ddq = d * (60 * s - 180 * s ** 2 + 120 * s ** 3) / T ** 2
+        ddq[-1] = 0.0
+        out = out.concatenate(Trajectory(np.arange(n + 1) * dt, q, dq, ddq))
+    return out

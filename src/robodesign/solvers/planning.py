@@ -1,0 +1,357 @@
+"""Collision-free joint-space path planning with OMPL 2.x, plus a dense path checker.
+
+:func:`plan_path` plans from ``q_start`` to ``q_goal`` for a :class:`~robodesign.robot.Robot` (with the
+obstacles already set on it) and returns joint waypoints whose straight interpolation is collision-free.
+
+Decisions:
+
+* **Validity** of a configuration: within the joint limits and ``not robot.in_collision(q)`` (self +
+  obstacles, with the robot's safety margin).
+* **Resolution** is an absolute joint step (rad, or m for prismatic joints): no two consecutive checked
+  states differ by more than ``resolution`` in any joint. OMPL's discrete motion validator steps by the
+  *Euclidean* distance ``fraction × maximum extent``, so the fraction is ``resolution / extent``; its
+  steps are then ≤ ``resolution`` in every joint (conservative by up to √dof). :func:`check_path` steps
+  by the largest joint difference directly (``ceil(max|Δq| / resolution)`` sub-steps per segment).
+* **Straight line first**: if the direct segment passes the dense check, no planner is called.
+* **Post-processing**: OMPL's ``PathSimplifier.simplify`` (shortcutting, vertex reduction, B-spline
+  smoothing, all checked by OMPL at the same resolution), then a greedy shortcut of our own (keep the
+  farthest directly reachable waypoint), then a dense re-check with :func:`check_path`. A path that
+  fails the re-check is never returned: the un-simplified path is tried, else the result is a failure.
+* **Determinism**: ``ou.RNG.setSeed(seed + 1)`` before anything that samples is created (OMPL seeds
+  each RNG instance from that generator; seed 0 is reserved by OMPL). Deterministic for a given seed
+  as long as the planner stops on a solution rather than on the time limit (``optimize=False``).
+* **Anytime planners** (rrtstar, prmstar, bitstar, informedrrtstar, sorrtstar, ...): by default the
+  path-length objective gets an infinite cost threshold, so every planner returns its first solution;
+  ``optimize=True`` lets them refine until ``time_limit``.
+* Every OMPL object is local to the call (nanobind reports leaks for objects that outlive the module).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "PLANNERS"]
+
+# name → OMPL class name (only the classes present in the installed OMPL are offered)
+PLANNERS: Dict[str, str] = {
+    "rrtconnect": "RRTConnect", "rrt": "RRT", "rrtstar": "RRTstar", "prm": "PRM", "prmstar": "PRMstar",
+    "bitstar": "BITstar", "kpiece": "KPIECE1", "bkpiece": "BKPIECE1", "lbkpiece": "LBKPIECE1",
+    "fmt": "FMT", "bfmt": "BFMT", "informedrrtstar": "InformedRRTstar", "sorrtstar": "SORRTstar",
+    "aorrtc": "AORRTC",
+}
+_LIMIT_SLACK = 1e-9
+_SHORTCUT_TRIES = 40
+
+
+@dataclass
+class PlanResult:
+    """``path``: (K, dof) waypoints from q_start to q_goal (exactly), empty (0, dof) on failure."""
+    path: np.ndarray
+    success: bool
+    stats: Dict[str, object] = field(default_factory=dict)
+
+    def __bool__(self) -> bool:
+        return self.success
+
+
+def available_planners() -> List[str]:
+    """Planner names :func:`plan_path` accepts with the installed OMPL."""
+    try:
+        from ompl import geometric as og
+    except ImportError:  # pragma: no cover - OMPL is a hard dependency of planning
+        return []
+    return [k for k, v in PLANNERS.items() if hasattr(og, v)]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Dense checking
+# ---------------------------------------------------------------------------------------------------------
+def _config_validator(robot):
+    lo = np.asarray(robot.q_lower, dtype=float) - _LIMIT_SLACK
+    hi = np.asarray(robot.q_upper, dtype=float) + _LIMIT_SLACK
+    in_collision = robot.in_collision
+
+    def valid(q: np.ndarray) -> bool:
+        if (q < lo).any() or (q > hi).any():
+            return False
+        return not in_collision(q)
+    return valid
+
+
+def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter: Optional[List[int]] = None,
+                include_start: bool = False) -> bool:
+    """Check the states of a→b at steps of at most ``resolution`` per joint (end included).
+
+    The sub-states are checked in a coarse-to-fine (van der Corput) order, so a collision in the
+    middle is found after few checks; the set of checked states is the same as a sequential sweep.
+    """
+    d = b - a
+    n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12))) if d.size else 1
+    if include_start:
+        if counter is not None:
+            counter[0] += 1
+        if not valid(a):
+            return False
+    if counter is not None:
+        counter[0] += 1
+    if not valid(b):
+        return False
+    if n == 1:
+        return True
+    # interior points k/n, k = 1..n-1, in bisection order
+    for k in _bisection_order(n):
+        if counter is not None:
+            counter[0] += 1
+        if not valid(a + d * (k / n)):
+            return False
+    return True
+
+
+def _bisection_order(n: int) -> List[int]:
+    """1..n-1 ordered coarse to fine (midpoints first)."""
+    out: List[int] = []
+    seen = set()
+    step = 1
+    while step < n:
+        step *= 2
+    while step >= 1:
+        for k in range(step, n, step):
+            if k not in seen:
+                seen.add(k)
+                out.append(k)
+        step //= 2
+    return out
+
+
+def check_path(robot, path, resolution: float = 0.01) -> Tuple[bool, int]:
+    """Dense check of a joint path (K×dof waypoints, linearly interpolated).
+
+    Returns ``(True, -1)`` if every waypoint and every interpolated state (steps of at most
+    ``resolution`` in each joint) is within the joint limits and collision-free; otherwise
+    ``(False, i)`` where ``i`` is the first waypoint that is invalid itself or whose segment to
+    waypoint ``i + 1`` contains an invalid state.
+    """
+    P = np.asarray(path, dtype=float)
+    if P.ndim != 2 or P.shape[1] != robot.dof:
+        raise InputError(f"path must be a (K, {robot.dof}) array, got shape {P.shape}")
+    if not (resolution > 0 and math.isfinite(resolution)):
+        raise InputError(f"resolution must be a positive number, got {resolution!r}")
+    if len(P) == 0:
+        return True, -1
+    if not np.all(np.isfinite(P)):
+        bad = int(np.nonzero(~np.all(np.isfinite(P), axis=1))[0][0])
+        return False, bad
+    valid = _config_validator(robot)
+    if not valid(P[0]):
+        return False, 0
+    for i in range(len(P) - 1):
+        a, b = P[i], P[i + 1]
+        if not _interior_ok(valid, a, b, resolution):
+            return False, i
+        if not valid(b):
+            return False, i + 1
+    return True, -1
+
+
+def _interior_ok(valid, a, b, resolution) -> bool:
+    d = b - a
+    n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12)))
+    for k in range(1, n):          # sequential: the first bad state is the one nearest to a
+        if not valid(a + d * (k / n)):
+            return False
+    return True
+
+
+def _shortcut(valid, P: np.ndarray, resolution: float, counter: List[int]) -> np.ndarray:
+    """Greedy shortcutting: from each kept waypoint jump to the farthest directly reachable one."""
+    if len(P) <= 2:
+        return P
+    out = [P[0]]
+    i = 0
+    K = len(P)
+    while i < K - 1:
+        j = K - 1
+        while j > i + 1 and not _segment_ok(valid, P[i], P[j], resolution, counter):
+            j -= 1
+        out.append(P[j])
+        i = j
+    return np.array(out)
+
+
+def _partial_shortcuts(valid, P: np.ndarray, resolution: float, counter: List[int], rng: np.random.Generator,
+                       tries: int, deadline: float) -> np.ndarray:
+    """Random shortcuts between points *on* two different segments (not only waypoints)."""
+    P = [np.asarray(p, dtype=float) for p in P]
+    for _ in range(tries):
+        if len(P) < 3 or time.perf_counter() > deadline:
+            break
+        i, j = sorted(rng.choice(len(P) - 1, size=2, replace=False))
+        if j == i:
+            continue
+        ta, tb = rng.uniform(), rng.uniform()
+        a = P[i] + ta * (P[i + 1] - P[i])
+        b = P[j] + tb * (P[j + 1] - P[j])
+        old = sum(float(np.linalg.norm(P[k + 1] - P[k])) for k in range(i + 1, j)) \
+            + float(np.linalg.norm(P[i + 1] - a)) + float(np.linalg.norm(b - P[j]))
+        if float(np.linalg.norm(b - a)) >= old - 1e-9:
+            continue
+        if _segment_ok(valid, a, b, resolution, counter, include_start=True):
+            P = P[:i + 1] + [a, b] + P[j + 1:]
+    # drop waypoints that lie on the straight line between their neighbours
+    out = [P[0]]
+    for k in range(1, len(P) - 1):
+        u, v = P[k] - out[-1], P[k + 1] - P[k]
+        nu, nv = float(np.linalg.norm(u)), float(np.linalg.norm(v))
+        if nu < 1e-12 or (nv > 1e-12 and float(u @ v) > (1 - 1e-12) * nu * nv):
+            continue
+        out.append(P[k])
+    out.append(P[-1])
+    return np.array(out)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Planning
+# ---------------------------------------------------------------------------------------------------------
+def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: float = 1.0, seed: int = 0,
+              resolution: float = 0.01, simplify: bool = True, optimize: bool = False) -> PlanResult:
+    """A collision-free joint path from ``q_start`` to ``q_goal`` (both kept exactly).
+
+    ``planner``: one of :func:`available_planners` (case-insensitive). ``time_limit`` (s) bounds the
+    OMPL solve; simplification gets at most half of it again (min 0.05 s). ``resolution``: largest joint
+    step between checked states. ``stats``: planner, straight_line, time, plan_time, simplify_time,
+    checks, raw_waypoints, waypoints, length (Euclidean joint-space length), reason
+    ("straight_line" | "planned" | "invalid_start" | "invalid_goal" | "no_solution" | "final_check_failed").
+    """
+    t0 = time.perf_counter()
+    name = str(planner).lower()
+    avail = available_planners()
+    if name not in avail:
+        raise InputError(f"unknown planner {planner!r}; available: {', '.join(avail)}")
+    if not (resolution > 0 and math.isfinite(resolution)):
+        raise InputError(f"resolution must be a positive number, got {resolution!r}")
+    if not (time_limit > 0 and math.isfinite(time_limit)):
+        raise InputError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+    n = robot.dof
+    qs = np.asarray(q_start, dtype=float).reshape(-1)
+    qg = np.asarray(q_goal, dtype=float).reshape(-1)
+    for label, q in (("q_start", qs), ("q_goal", qg)):
+        if q.shape != (n,) or not np.all(np.isfinite(q)):
+            raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
+    counter = [0]
+    valid = _config_validator(robot)
+    stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
+                                "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
+                                "length": 0.0, "reason": ""}
+
+    def done(path: Optional[np.ndarray], reason: str) -> PlanResult:
+        stats["reason"] = reason
+        stats["checks"] = counter[0]
+        stats["time"] = time.perf_counter() - t0
+        if path is None:
+            return PlanResult(np.zeros((0, n)), False, stats)
+        stats["waypoints"] = len(path)
+        stats["length"] = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) if len(path) > 1 else 0.0
+        return PlanResult(path, True, stats)
+
+    counter[0] += 1
+    if not valid(qs):
+        return done(None, "invalid_start")
+    counter[0] += 1
+    if not valid(qg):
+        return done(None, "invalid_goal")
+    direct = np.array([qs, qg])
+    if _segment_ok(valid, qs, qg, resolution, counter):
+        stats["straight_line"] = True
+        stats["raw_waypoints"] = 2
+        if np.array_equal(qs, qg):
+            return done(direct[:1].copy(), "straight_line")
+        return done(direct, "straight_line")
+
+    deadline = t0 + float(time_limit)
+    raw = _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats)
+    if raw is None:
+        return done(None, "no_solution")
+    raw[0], raw[-1] = qs, qg
+    candidates = [raw]
+    if simplify:
+        ts = time.perf_counter()
+        P = _shortcut(valid, raw, resolution, counter)
+        rng = np.random.default_rng(seed)
+        # a fixed number of tries keeps the result deterministic; the time cap is only a safety net
+        P = _partial_shortcuts(valid, P, resolution, counter, rng, _SHORTCUT_TRIES,
+                               ts + max(1.0, float(time_limit)))
+        stats["simplify_time"] = time.perf_counter() - ts
+        candidates.insert(0, P)
+    for P in candidates:
+        ok, _ = check_path(robot, P, resolution)
+        if ok:
+            return done(P, "planned")
+    return done(None, "final_check_failed")
+
+
+def _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats):
+    from ompl import base as ob, geometric as og, util as ou
+
+    n = robot.dof
+    lo = np.asarray(robot.q_lower, dtype=float).copy()
+    hi = np.asarray(robot.q_upper, dtype=float).copy()
+    lo = np.where(np.isfinite(lo), lo, np.minimum(-math.pi, np.minimum(qs, qg)))
+    hi = np.where(np.isfinite(hi), hi, np.maximum(math.pi, np.maximum(qs, qg)))
+    hi = np.where(hi > lo, hi, lo + 1e-9)
+
+    level = ou.getLogLevel()
+    ou.setLogLevel(ou.LOG_NONE)  # setSeed logs an error once sampling has started; the reseed still works
+    try:
+        ou.RNG.setSeed(int(seed) % 2147483646 + 1)
+        space = ob.RealVectorStateSpace(n)
+        bounds = ob.RealVectorBounds(n)
+        for i in range(n):
+            bounds.setLow(i, float(lo[i]))
+            bounds.setHigh(i, float(hi[i]))
+        space.setBounds(bounds)
+        ss = og.SimpleSetup(space)
+        in_collision = robot.in_collision
+        rng_idx = range(n)
+
+        hard_deadline = [math.inf]   # set when solving starts
+
+        def is_valid(s) -> bool:
+            counter[0] += 1
+            if time.perf_counter() > hard_deadline[0]:
+                return False         # past the time limit: make planners that ignore it (FMT) stop soon
+            q = np.array([s[i] for i in rng_idx])
+            if (q < lo - _LIMIT_SLACK).any() or (q > hi + _LIMIT_SLACK).any():
+                return False
+            return not in_collision(q)
+
+        ss.setStateValidityChecker(is_valid)
+        si = ss.getSpaceInformation()
+        si.setStateValidityCheckingResolution(min(1.0, resolution / space.getMaximumExtent()))
+        start, goal = space.allocState(), space.allocState()
+        for i in range(n):
+            start[i] = float(qs[i])
+            goal[i] = float(qg[i])
+        ss.setStartAndGoalStates(start, goal, 1e-9)
+        obj = ob.PathLengthOptimizationObjective(si)
+        if not optimize:
+            obj.setCostThreshold(obj.infiniteCost())
+        ss.setOptimizationObjective(obj)
+        ss.setPlanner(getattr(og, PLANNERS[name])(si))
+        ss.setup()
+        hard_deadline[0] = time.perf_counter() + 1.1 * float(time_limit) + 0.05
+        ss.solve(float(time_limit))
+        stats["plan_time"] = ss.getLastPlanComputationTime()
+        if not ss.haveExactSolutionPath():
+            return None
+        path = ss.getSolutionPath()
+        raw = np.array([[s[i] for i in rng_idx] for s in path.getStates()], dtype=float)
+        stats["raw_waypoints"] = len(raw)
+        return raw
+    finally:
+        ou.setLogLevel(level)

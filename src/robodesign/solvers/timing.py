@@ -1,0 +1,836 @@
+"""Time parameterization of joint-space paths, and the project's trajectory type.
+
+:class:`Trajectory` holds samples ``t (N,)``, ``q, dq, ddq (N, dof)``.
+
+Integration rule (guaranteed by every trajectory this module and :mod:`.trajopt` produce)
+-----------------------------------------------------------------------------------------
+Piecewise-constant acceleration ("zero-order hold" on ``ddq``): ``ddq[k]`` is the acceleration on
+``[t_k, t_{k+1})`` and, for every ``k < N-1`` with ``h = t_{k+1} - t_k``::
+
+    q[k+1]  = q[k] + dq[k]·h + ½·ddq[k]·h²
+    dq[k+1] = dq[k] + ddq[k]·h
+
+both up to floating-point rounding (measured ≤ 1e-12; :meth:`Trajectory.consistency_residual`).
+The sampled trajectory therefore *is* a continuous, exactly integrated C¹ trajectory, and
+:meth:`Trajectory.interpolate` evaluates it between samples. ``ddq`` of the last sample is the
+acceleration after the motion: 0 for every trajectory that ends at rest.
+
+Rest samples: every rest-to-rest motion starts with one step of zero acceleration (a "pre-roll" of one
+``dt``: samples 0 and 1 both have q = q_start, dq = 0, and sample 0 has ddq = 0), so that the first and
+the last sample of every motion have dq = ddq = 0 *exactly* while the rule above still holds exactly.
+CoBRA needs this: ``returnTo`` compares ddq with the sample at t = 0, and a ``pause`` window that ends
+where the next motion starts requires ddq = 0 at that sample. The price is one dt per motion.
+
+How the samples are made from a continuous time-optimal profile ``v(t)`` of duration ``T = n·dt``
+(:func:`resample_velocity_profile`): ``dq[k] = v(t_k)`` exactly (so velocity limits of the profile
+carry over; the first and last samples are exactly 0), ``ddq[k] = (dq[k+1] − dq[k])/dt`` (the *mean*
+acceleration over the step, never larger than the profile's largest acceleration on that step),
+``q`` from the rule above. The trapezoid-integrated end point misses the goal by O(dt²·∫|jerk|)
+(~1e-5 rad); that residual r is removed by adding ``r·w(t)`` to the velocity with a bump
+``w ∝ ‖v(t)‖`` of unit integral (zero at rest), so ``q[-1]`` is the goal exactly. The reported
+``info["max_path_error"]`` is the largest distance between the samples and the continuous profile.
+Finally every sample is checked against |dq| ≤ dq_max (to 1e-9 relative), |ddq| ≤ ddq_max and the
+drivetrain torque |τ(q, dq, ddq)| ≤ τ_max (to 1e-12 relative, ``Robot.drivetrain_torques``); if
+anything is exceeded, the profile is slowed down uniformly (t → λ·t: v/λ, a/λ²; λ chosen from the
+violation ratios, at least one more sample) and resampled. Position limits are not enforced here: the
+path is assumed to lie within them (blends stay in the convex hull of the waypoints).
+
+toppra path: parabolic blends (decision)
+----------------------------------------
+A cubic spline through the planner's waypoints can bulge out of the collision-checked corridor.
+:class:`BlendedPolyline` keeps the piecewise-linear path and replaces each corner by a parabolic
+blend (a quadratic Bézier from ``W − r·u_in`` via the corner ``W`` to ``W + r·u_out``), so the path
+is C¹ with unit speed in joint-space arc length on the straight parts. The blend lies in the triangle
+(W − r·u_in, W, W + r·u_out). For a corner of turning angle θ:
+
+* largest distance from the piecewise-linear path: ``r·sin θ / 4`` (≤ r/4),
+* distance from the waypoint itself: ``r·sin(θ/2) / 2`` (≤ r/2),
+
+with ``r = min(blend_radius, ½·adjacent segment lengths)``; default ``blend_radius = 0.05`` rad, i.e.
+at most 0.0125 rad (≈ 0.7°) away from the checked polyline and 0.025 rad from a waypoint.
+``blend_radius = 0`` stops exactly at every waypoint. Corners turning by more than 175° (reversals)
+are always stops. Stopping waypoints (``stop_at``) are passed exactly, at rest, at a sample.
+
+toppra torque constraint (decision)
+-----------------------------------
+τ = a(s)·s̈ + b(s)·ṡ² + c(s) + f_v·q'(s)·ṡ + f_c·σ(q'(s)·ṡ), with a, b, c from pinocchio RNEA
+(armature included). Friction is not linear in (s̈, ṡ²); it is bounded *conservatively*, one side at a
+time, using that ṡ ≥ 0 fixes the sign of each joint's velocity:
+
+* Coulomb: |σ| < 1 and sign(σ) = sign(q'_j), so it only tightens the bound on that side, by f_c
+  (also at ṡ ≈ 0, where the true term vanishes: a path that starts with gravity within f_c of the limit
+  is rejected by toppra and falls back to ruckig).
+* viscous: ṡ = √x ≤ √x₀/2 + x/(2√x₀) for any x₀ > 0 (tangent of the concave √), which is linear
+  in x = ṡ² and exact at x = x₀. Pass 1 uses x₀ = ¼ of the velocity-limit curve (divided by 16 while
+  toppra finds it infeasible); every further pass uses x₀ = the previous solution, which keeps that
+  solution feasible, so passes never get slower (``torque_passes``, default 3; measured on a
+  6-DoF IMPROV move with halved torque limits: 2.70 s → 2.20 s → 2.16 s; without friction 1.62 s).
+
+Constraints are enforced at both ends of every grid interval ("interpolation" discretization, with
+the left/right limits of q''(s) at blend boundaries); what remains between grid points is caught by the
+sample check above.
+
+ruckig
+------
+Each segment between consecutive waypoints is a straight line q = q_a + d·s, timed by a 1-DoF ruckig
+profile on s with the tightest limits along d (jerk = ``jerk_factor``·acceleration, default 10×), with
+``DurationDiscretization.Discrete`` so the duration is a multiple of dt; the robot stops at every
+waypoint. (ruckig's ``intermediate_positions`` needs the cloud API, so it is not used.) Torques are
+then checked on the samples as above.
+
+Non-finite velocity/acceleration limits (e.g. geometric_primitive_modules) are replaced by
+:data:`UNBOUNDED_LIMIT`; non-finite torque limits are simply not constrained.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..errors import RobodesignError
+
+UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
+REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
+
+
+class TimingError(RobodesignError):
+    """No time parameterization was found (e.g. the path is statically infeasible for the torques)."""
+
+
+# ==============================================================================================
+# trajectory type
+# ==============================================================================================
+@dataclass
+class Trajectory:
+    """Sampled joint trajectory: ``t (N,)``, ``q, dq, ddq (N, dof)``; see the module docstring for the
+    integration rule. ``info`` carries solver metadata (not compared)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    info: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self):
+        self.t = np.asarray(self.t, dtype=float).reshape(-1)
+        n = len(self.t)
+        self.q = np.asarray(self.q, dtype=float).reshape(n, -1)
+        dof = self.q.shape[1]
+        self.dq = np.asarray(self.dq, dtype=float).reshape(n, dof)
+        self.ddq = np.asarray(self.ddq, dtype=float).reshape(n, dof)
+        if n == 0:
+            raise ValueError("a trajectory needs at least one sample")
+        if n > 1 and not np.all(np.diff(self.t) > 0):
+            raise ValueError("trajectory times must be strictly increasing")
+
+    # -- basic properties ---------------------------------------------------------------------
+    @property
+    def n_samples(self) -> int:
+        return len(self.t)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def dof(self) -> int:
+        return self.q.shape[1]
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    @property
+    def dt(self) -> Optional[float]:
+        """The (first) sample step, or None for a single sample."""
+        return float(self.t[1] - self.t[0]) if len(self.t) > 1 else None
+
+    @classmethod
+    def at_rest(cls, q, t0: float = 0.0) -> "Trajectory":
+        q = np.asarray(q, dtype=float).reshape(1, -1)
+        return cls(np.array([t0]), q.copy(), np.zeros_like(q), np.zeros_like(q))
+
+    def copy(self) -> "Trajectory":
+        return Trajectory(self.t.copy(), self.q.copy(), self.dq.copy(), self.ddq.copy(), dict(self.info))
+
+    def shifted(self, t0: float) -> "Trajectory":
+        """The same trajectory starting at time ``t0``."""
+        out = self.copy()
+        out.t = self.t - self.t[0] + t0
+        return out
+
+    def slice(self, k0: int, k1: int) -> "Trajectory":
+        """Samples k0..k1 (inclusive), times kept; e.g. one rest-to-rest part between two
+        ``info["stop_samples"]`` entries."""
+        k0, k1 = int(k0) % len(self.t), int(k1) % len(self.t)
+        if k1 < k0:
+            raise ValueError("slice end before start")
+        sl = slice(k0, k1 + 1)
+        return Trajectory(self.t[sl].copy(), self.q[sl].copy(), self.dq[sl].copy(), self.ddq[sl].copy())
+
+    # -- composition ----------------------------------------------------------------------------
+    def concatenate(self, other: "Trajectory", tol: float = 1e-9) -> "Trajectory":
+        """``self`` followed by ``other`` shifted in time to start at ``self.t[-1]``.
+
+        The junction sample appears once: it keeps ``self.q[-1]`` and takes ``other``'s dq and ddq
+        (``ddq`` of a sample is the acceleration *after* it). Positions and velocities must agree at
+        the junction within ``tol``.
+        """
+        if other.dof != self.dof:
+            raise ValueError(f"cannot concatenate trajectories with {self.dof} and {other.dof} joints")
+        if np.max(np.abs(self.q[-1] - other.q[0])) > tol:
+            raise ValueError(f"positions differ at the junction by {np.max(np.abs(self.q[-1] - other.q[0])):.3g}")
+        if np.max(np.abs(self.dq[-1] - other.dq[0])) > tol:
+            raise ValueError(f"velocities differ at the junction by {np.max(np.abs(self.dq[-1] - other.dq[0])):.3g}")
+        t_other = other.t[1:] - other.t[0] + self.t[-1]
+        q = np.vstack([self.q, other.q[1:]])
+        dq = np.vstack([self.dq[:-1], other.dq])
+        ddq = np.vstack([self.ddq[:-1], other.ddq])
+        return Trajectory(np.concatenate([self.t, t_other]), q, dq, ddq)
+
+    def hold(self, duration: float, dt: Optional[float] = None) -> "Trajectory":
+        """Append a pause: samples every ``dt`` covering at least ``duration`` with q bit-identical to
+        the last sample and dq = ddq = 0 exactly. The trajectory must end at rest (dq = 0 exactly); its
+        last ddq is set to 0 as well (the CoBRA pause window starts at that sample)."""
+        if dt is None:
+            dt = self.dt
+            if dt is None:
+                raise ValueError("hold() on a single sample needs dt")
+        if dt <= 0:
+            raise ValueError("dt must be positive")
+        if np.any(self.dq[-1] != 0.0):
+            raise ValueError("hold() needs a trajectory that ends at rest (dq == 0 exactly)")
+        n = max(0, int(math.ceil(duration / dt - 1e-9)))
+        out = self.copy()
+        out.ddq[-1] = 0.0
+        if n == 0:
+            return out
+        t_new = self.t[-1] + dt * np.arange(1, n + 1)
+        q_new = np.repeat(self.q[-1:], n, axis=0)
+        z = np.zeros((n, self.dof))
+        return Trajectory(np.concatenate([self.t, t_new]), np.vstack([out.q, q_new]), np.vstack([out.dq, z]),
+                          np.vstack([out.ddq, z]), out.info)
+
+    # -- evaluation -----------------------------------------------------------------------------
+    def interpolate(self, t) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q, dq, ddq) at arbitrary times by the integration rule (piecewise-quadratic q)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        k = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
+        tau = (t - self.t[k])[:, None]
+        a = self.ddq[k]
+        return self.q[k] + self.dq[k] * tau + 0.5 * a * tau ** 2, self.dq[k] + a * tau, a.copy()
+
+    def consistency_residual(self) -> Tuple[float, float]:
+        """Largest violation of the two integration rules (q rule, dq rule)."""
+        if len(self.t) < 2:
+            return 0.0, 0.0
+        h = np.diff(self.t)[:, None]
+        rq = self.q[1:] - (self.q[:-1] + self.dq[:-1] * h + 0.5 * self.ddq[:-1] * h ** 2)
+        rv = self.dq[1:] - (self.dq[:-1] + self.ddq[:-1] * h)
+        return float(np.max(np.abs(rq))), float(np.max(np.abs(rv)))
+
+    def torques(self, robot) -> np.ndarray:
+        """Drivetrain torques at every sample (RNEA + armature + friction)."""
+        return robot.drivetrain_torques(self.q, self.dq, self.ddq)
+
+    def to_dict(self) -> dict:
+        """JSON-ready ``t, q, dq, ddq`` lists (the CoBRA solution ``trajectory`` fields, without goal2time)."""
+        return {"t": self.t.tolist(), "q": self.q.tolist(), "dq": self.dq.tolist(), "ddq": self.ddq.tolist()}
+
+
+# ==============================================================================================
+# limits, bounds, checks
+# ==============================================================================================
+def _finite(x, fallback: float = UNBOUNDED_LIMIT) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    return np.where(np.isfinite(x) & (x > 0), x, fallback)
+
+
+def limit_ratios(robot, traj: Trajectory, torque: bool = True) -> Dict[str, float]:
+    """Largest |value|/limit over all samples for dq, ddq and τ (infinite limits ignored), and the
+    largest position-limit excess ``q`` (rad or m; 0 when inside)."""
+    out = {}
+    lo, hi = np.asarray(robot.q_lower, float), np.asarray(robot.q_upper, float)
+    out["q"] = float(max(0.0, np.max(lo - traj.q), np.max(traj.q - hi)))
+    for key, arr, lim in (("dq", traj.dq, robot.dq_max), ("ddq", traj.ddq, robot.ddq_max)):
+        lim = np.asarray(lim, float)
+        m = np.isfinite(lim)
+        out[key] = float(np.max(np.abs(arr[:, m]) / lim[m])) if m.any() else 0.0
+    if torque:
+        lim = np.asarray(robot.tau_max, float)
+        m = np.isfinite(lim)
+        if m.any():
+            tau = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq)
+            out["tau"] = float(np.max(np.abs(tau[:, m]) / lim[m]))
+        else:
+            out["tau"] = 0.0
+    return out
+
+
+def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
+    """Minimum rest-to-rest time over ``distance`` with |v| ≤ v_max, |a| ≤ a_max (trapezoid or bang-bang)."""
+    d = abs(float(distance))
+    if d == 0.0:
+        return 0.0
+    v_inf, a_inf = not math.isfinite(v_max), not math.isfinite(a_max)
+    if a_inf:
+        return 0.0 if v_inf else d / v_max
+    if v_inf or d <= v_max ** 2 / a_max:
+        return 2.0 * math.sqrt(d / a_max)
+    return d / v_max + v_max / a_max
+
+
+def time_optimal_bound(robot, q_a, q_b) -> float:
+    """Lower bound on the duration of a rest-to-rest move q_a → q_b: the slowest joint's optimal
+    trapezoid/bang-bang time under its own velocity and acceleration limits (torques, jerk, paths and
+    coordination ignored)."""
+    d = np.abs(np.asarray(q_b, float) - np.asarray(q_a, float))
+    return max((trapezoid_time(d[j], robot.dq_max[j], robot.ddq_max[j]) for j in range(len(d))), default=0.0)
+
+
+def jerk_limited_time(distance: float, v_max: float, a_max: float, j_max: float) -> float:
+    """Minimum rest-to-rest time of a 1-DoF move with velocity, acceleration and jerk limits (the
+    7-segment profile ruckig computes; used by tests and to report bounds)."""
+    d = abs(float(distance))
+    if d == 0.0:
+        return 0.0
+    v, a, j = float(v_max), float(a_max), float(j_max)
+    # acceleration phase to speed w: duration and distance
+    def acc_phase(w):
+        if w >= a * a / j:  # reaches a
+            ta = w / a + a / j
+        else:
+            ta = 2.0 * math.sqrt(w / j)
+        return ta, 0.5 * w * ta
+    ta, da = acc_phase(v)
+    if 2 * da <= d:
+        return 2 * ta + (d - 2 * da) / v
+    lo, hi = 0.0, v  # peak speed w < v: solve 2·dist(w) = d by bisection
+    for _ in range(200):
+        w = 0.5 * (lo + hi)
+        if 2 * acc_phase(w)[1] < d:
+            lo = w
+        else:
+            hi = w
+    return 2 * acc_phase(0.5 * (lo + hi))[0]
+
+
+# ==============================================================================================
+# sampling a continuous profile
+# ==============================================================================================
+def _zoh_from_velocity(q0: np.ndarray, q1: np.ndarray, V: np.ndarray, h: float):
+    """Samples (q, dq, ddq) obeying the integration rule with dq ≈ V, q[0]=q0 and q[-1]=q1 exactly."""
+    V = np.array(V, dtype=float)
+    n = len(V) - 1
+    dof = len(q0)
+    if n <= 0:
+        return q0.reshape(1, dof).copy(), np.zeros((1, dof)), np.zeros((1, dof))
+    V[0] = 0.0
+    V[-1] = 0.0
+    inc = 0.5 * h * (V[:-1] + V[1:])
+    r = (q1 - q0) - inc.sum(axis=0)
+    w = np.linalg.norm(V, axis=1)
+    W = float(np.sum(0.5 * h * (w[:-1] + w[1:])))
+    if W > 0:
+        V += np.outer(w / W, r)
+    A = np.zeros_like(V)
+    A[:-1] = np.diff(V, axis=0) / h
+    steps = V[:-1] * h + 0.5 * A[:-1] * h * h
+    Q = np.empty_like(V)
+    Q[0] = q0
+    Q[1:] = q0 + np.cumsum(steps, axis=0)
+    Q[-1] = q1
+    return Q, V, A
+
+
+@dataclass
+class _Profile:
+    """A continuous rest-to-rest profile: velocity(t) for t in [0, duration], from q_start to q_goal."""
+    duration: float
+    velocity: Callable[[np.ndarray], np.ndarray]  # (n,) times → (n, dof)
+    q_start: np.ndarray
+    q_goal: np.ndarray
+    position: Optional[Callable[[np.ndarray], np.ndarray]] = None  # optional, for the path-error report
+
+
+def resample_velocity_profile(robot, velocity: Callable[[np.ndarray], np.ndarray], duration: float,
+                              q_start, q_goal, dt: float, torque_limits: bool = True,
+                              position: Optional[Callable] = None, max_iter: int = 60) -> Trajectory:
+    """Sample a continuous rest-to-rest velocity profile at ``dt`` (duration rounded up to a multiple
+    of dt) obeying the integration rule, and slow it down uniformly until every sample satisfies the
+    velocity, acceleration and (optionally) drivetrain-torque limits."""
+    prof = _Profile(float(duration), velocity, np.asarray(q_start, float), np.asarray(q_goal, float), position)
+    return _fit_limits(robot, prof, dt, torque_limits, max_iter)
+
+
+def _sample(prof: _Profile, n: int, h: float) -> Tuple[Trajectory, float]:
+    """n steps of the (stretched) profile after one step of rest (the pre-roll; module docstring)."""
+    T_new = n * h
+    lam = T_new / prof.duration
+    tp = h * np.arange(n + 1)
+    V = np.zeros((n + 2, len(prof.q_start)))
+    V[1:] = prof.velocity(np.minimum(tp / lam, prof.duration)) / lam
+    Q, V, A = _zoh_from_velocity(prof.q_start, prof.q_goal, V, h)
+    return Trajectory(h * np.arange(n + 2), Q, V, A), lam
+
+
+def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> Trajectory:
+    if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
+        tr = Trajectory.at_rest(prof.q_goal)
+        tr.info.update(stretch=1.0, max_path_error=0.0)
+        return tr
+    vmax = np.asarray(robot.dq_max, float)
+    amax = np.asarray(robot.ddq_max, float)
+    tmax = np.asarray(robot.tau_max, float)
+    n = max(1, int(math.ceil(prof.duration / h - 1e-9)))
+    for it in range(max_iter):
+        tr, lam = _sample(prof, n, h)
+        m = np.isfinite(vmax)
+        rv = float(np.max(np.abs(tr.dq[:, m]) / vmax[m])) if m.any() else 0.0
+        m = np.isfinite(amax)
+        ra = float(np.max(np.abs(tr.ddq[:, m]) / amax[m])) if m.any() else 0.0
+        rt = 0.0
+        if torque_limits:
+            m = np.isfinite(tmax)
+            if m.any():
+                tau = robot.drivetrain_torques(tr.q, tr.dq, tr.ddq)
+                rt = float(np.max(np.abs(tau[:, m]) / tmax[m]))
+        if rv <= 1.0 + 1e-9 and ra <= 1.0 + 1e-12 and rt <= 1.0 + 1e-12:
+            err = 0.0
+            if prof.position is not None:
+                tq = np.maximum(tr.t[1:] - h, 0.0) / lam
+                err = float(np.max(np.abs(prof.position(np.minimum(tq, prof.duration)) - tr.q[1:])))
+            tr.info.update(stretch=lam, max_path_error=err, limit_ratios={"dq": rv, "ddq": ra, "tau": rt},
+                           stretch_iterations=it)
+            return tr
+        if torque_limits and rt > 1.0 and it == 0:
+            # statically infeasible? then no slow-down helps
+            g = robot.drivetrain_torques(tr.q, np.zeros_like(tr.q), np.zeros_like(tr.q))
+            m = np.isfinite(tmax)
+            if np.any(np.abs(g[:, m]) > tmax[m]):
+                raise TimingError("the path passes configurations where gravity alone exceeds the torque limit")
+        grow = max(1.0, rv, math.sqrt(max(ra, 0.0)), math.sqrt(max(rt, 0.0)) if rt > 1 else 1.0) * (1.0 + 1e-4)
+        n = max(n + 1, int(math.ceil(n * grow - 1e-9)))
+    raise TimingError(f"could not satisfy the limits after {max_iter} slow-downs (stretch {lam:.3f})")
+
+
+# ==============================================================================================
+# toppra: blended polyline path and dynamics constraint
+# ==============================================================================================
+def _toppra():
+    import toppra  # noqa: F401  (slow import: 1.3 s, only when needed)
+    import toppra.algorithm  # noqa: F401
+    import toppra.constraint  # noqa: F401
+    return toppra
+
+
+class BlendedPolyline:
+    """Piecewise-linear joint path with parabolic corner blends (see module docstring).
+
+    Pieces are ``q(s) = p0 + d0·σ + ½·c·σ²`` with σ = s − s_start; straight pieces have c = 0 and
+    |d0| = 1. Implements toppra's ``AbstractGeometricPath`` interface (``__call__(s, order)``,
+    ``dof``, ``path_interval``) plus left limits (:meth:`eval_left`).
+    """
+
+    def __init__(self, waypoints: np.ndarray, blend_radius: float = 0.05):
+        W = np.asarray(waypoints, dtype=float)
+        keep = [0]
+        for i in range(1, len(W)):
+            if np.linalg.norm(W[i] - W[keep[-1]]) > 1e-12:
+                keep.append(i)
+        W = W[keep]
+        self.points = W
+        self._dof = W.shape[1]
+        if len(W) < 2:
+            raise ValueError("a path needs two distinct waypoints")
+        D = np.diff(W, axis=0)
+        L = np.linalg.norm(D, axis=1)
+        U = D / L[:, None]
+        K = len(W)
+        r = np.zeros(K)
+        theta = np.zeros(K)
+        for i in range(1, K - 1):
+            c = float(np.clip(U[i - 1] @ U[i], -1.0, 1.0))
+            theta[i] = math.acos(c)
+            if theta[i] > 1e-9:
+                r[i] = min(blend_radius, 0.5 * L[i - 1], 0.5 * L[i])
+        self.radii, self.angles = r, theta
+        s0, p0, d0, cc, kind = [], [], [], [], []
+        s = 0.0
+        for i in range(K - 1):
+            a = W[i] + r[i] * U[i]
+            length = L[i] - r[i] - r[i + 1]
+            if length > 1e-12:
+                s0.append(s); p0.append(a); d0.append(U[i]); cc.append(np.zeros(self._dof)); kind.append(0)
+                s += length
+            if i + 1 < K - 1 and r[i + 1] > 0:
+                s0.append(s); p0.append(W[i + 1] - r[i + 1] * U[i]); d0.append(U[i])
+                cc.append((U[i + 1] - U[i]) / (2 * r[i + 1])); kind.append(1)
+                s += 2 * r[i + 1]
+        self.breaks = np.array(s0 + [s])
+        self.p0, self.d0, self.c = np.array(p0), np.array(d0), np.array(cc)
+        self.is_blend = np.array(kind, dtype=bool)
+        self.length = s
+        self._end = W[-1]
+        self.max_deviation = float(np.max(r * np.sin(theta) / 4.0, initial=0.0))
+        self.max_waypoint_distance = float(np.max(r * np.sin(theta / 2.0) / 2.0, initial=0.0))
+
+    @property
+    def dof(self) -> int:
+        return self._dof
+
+    @property
+    def path_interval(self) -> np.ndarray:
+        return np.array([0.0, self.length])
+
+    @property
+    def waypoints(self):
+        return None
+
+    def _eval(self, s, order: int, left: bool) -> np.ndarray:
+        scalar = np.ndim(s) == 0
+        s = np.clip(np.atleast_1d(np.asarray(s, float)), 0.0, self.length)
+        side = "left" if left else "right"
+        k = np.clip(np.searchsorted(self.breaks, s, side=side) - 1, 0, len(self.p0) - 1)
+        sig = (s - self.breaks[k])[:, None]
+        if order == 0:
+            out = self.p0[k] + self.d0[k] * sig + 0.5 * self.c[k] * sig ** 2
+            out[s >= self.length] = self._end
+        elif order == 1:
+            out = self.d0[k] + self.c[k] * sig
+        elif order == 2:
+            out = self.c[k].copy()
+        else:
+            out = np.zeros((len(s), self._dof))
+        return out[0] if scalar else out
+
+    def __call__(self, s, order: int = 0) -> np.ndarray:
+        return self._eval(s, order, left=False)
+
+    def eval(self, s):
+        return self._eval(s, 0, False)
+
+    def evald(self, s):
+        return self._eval(s, 1, False)
+
+    def evaldd(self, s):
+        return self._eval(s, 2, False)
+
+    def eval_left(self, s, order: int) -> np.ndarray:
+        return self._eval(s, order, left=True)
+
+    def gridpoints(self, step: float, min_per_blend: int = 4, min_total: int = 100) -> np.ndarray:
+        """Grid including every piece boundary; ≥ ``min_per_blend`` intervals per blend."""
+        step = min(step, self.length / min_total)
+        pts = [0.0]
+        for k in range(len(self.p0)):
+            a, b = self.breaks[k], self.breaks[k + 1]
+            m = max(int(math.ceil((b - a) / step - 1e-9)), min_per_blend if self.is_blend[k] else 1)
+            pts.extend(a + (b - a) * np.arange(1, m + 1) / m)
+        g = np.array(pts)
+        g[-1] = self.length
+        return g
+
+
+def _dynamics_constraint_class():
+    _toppra()
+    from toppra.constraint import LinearConstraint
+
+    class DynamicsConstraint(LinearConstraint):
+        """Joint acceleration + (conservative) drivetrain torque limits, interpolation discretization."""
+
+        def __init__(self, robot, amax, tau_max, x0: Optional[np.ndarray], use_torque: bool):
+            super().__init__()
+            self.robot, self.amax, self.tau_max, self.x0, self.use_torque = robot, amax, tau_max, x0, use_torque
+            self.identical = True
+
+        def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
+            import pinocchio as pin
+            robot = self.robot
+            model, data = robot.model, robot.model.createData()
+            N1 = len(gridpoints)
+            dof = path.dof
+            q = path(gridpoints, 0)
+            qs = path(gridpoints, 1)
+            qss_r = path(gridpoints, 2)
+            qss_l = path.eval_left(gridpoints, 2) if hasattr(path, "eval_left") else qss_r
+            nb = 3 if self.use_torque else 1
+            a = np.zeros((N1, nb * dof))
+            bR = np.zeros((N1, nb * dof))
+            bL = np.zeros((N1, nb * dof))
+            cc = np.zeros((N1, nb * dof))
+            a[:, :dof] = qs
+            bR[:, :dof] = qss_r
+            bL[:, :dof] = qss_l
+            g_lim = [self.amax, self.amax]
+            if self.use_torque:
+                tmax = self.tau_max
+                finite = np.isfinite(tmax)
+                fv, fc = robot.friction_viscous, robot.friction_coulomb
+                zero = np.zeros(dof)
+                x0 = np.maximum(self.x0, 1e-8)
+                for i in range(N1):
+                    g = pin.rnea(model, data, q[i], zero, zero).copy()
+                    ai = pin.rnea(model, data, q[i], zero, qs[i]) - g
+                    bri = pin.rnea(model, data, q[i], qs[i], qss_r[i]) - g
+                    if qss_l is qss_r or np.array_equal(qss_l[i], qss_r[i]):
+                        bli = bri
+                    else:
+                        bli = pin.rnea(model, data, q[i], qs[i], qss_l[i]) - g
+                    sq = math.sqrt(x0[i])
+                    pos, neg = qs[i] > 0, qs[i] < 0
+                    beta_up = np.where(pos, fv * qs[i] / (2 * sq), 0.0)
+                    gam_up = np.where(pos, fc + fv * qs[i] * sq / 2, 0.0)
+                    beta_lo = np.where(neg, fv * -qs[i] / (2 * sq), 0.0)
+                    gam_lo = np.where(neg, fc + fv * -qs[i] * sq / 2, 0.0)
+                    sl_up, sl_lo = slice(dof, 2 * dof), slice(2 * dof, 3 * dof)
+                    a[i, sl_up] = np.where(finite, ai, 0.0)
+                    a[i, sl_lo] = np.where(finite, ai, 0.0)
+                    bR[i, sl_up] = np.where(finite, bri + beta_up, 0.0)
+                    bR[i, sl_lo] = np.where(finite, bri - beta_lo, 0.0)
+                    bL[i, sl_up] = np.where(finite, bli + beta_up, 0.0)
+                    bL[i, sl_lo] = np.where(finite, bli - beta_lo, 0.0)
+                    cc[i, sl_up] = np.where(finite, g + gam_up, 0.0)
+                    cc[i, sl_lo] = np.where(finite, g - gam_lo, 0.0)
+                tl = np.where(finite, tmax, 1.0)
+                g_lim += [tl, tl]
+            m = nb * dof
+            # F v ≤ g with v = [acc; τ_up; τ_lo]: acc ≤ amax, −acc ≤ amax, τ_up ≤ τmax, −τ_lo ≤ τmax
+            F = np.zeros((2 * dof + (2 * dof if self.use_torque else 0), m))
+            I = np.eye(dof)
+            F[:dof, :dof] = I
+            F[dof:2 * dof, :dof] = -I
+            if self.use_torque:
+                F[2 * dof:3 * dof, dof:2 * dof] = I
+                F[3 * dof:, 2 * dof:] = -I
+            g = np.concatenate(g_lim)
+            # interpolation scheme: stage i constrains (u_i, x_i) at s_i⁺ and (u_i, x_i + 2Δ_i u_i) at s_{i+1}⁻
+            deltas = np.diff(gridpoints)
+            A2 = np.zeros((N1, 2 * m))
+            B2 = np.zeros((N1, 2 * m))
+            C2 = np.zeros((N1, 2 * m))
+            A2[:, :m], B2[:, :m], C2[:, :m] = a, bR, cc
+            A2[:-1, m:] = a[1:] + 2 * deltas[:, None] * bL[1:]
+            B2[:-1, m:] = bL[1:]
+            C2[:-1, m:] = cc[1:]
+            A2[-1, m:], B2[-1, m:], C2[-1, m:] = a[-1], bL[-1], cc[-1]
+            k = F.shape[0]
+            F2 = np.zeros((2 * k, 2 * m))
+            F2[:k, :m] = F
+            F2[k:, m:] = F
+            return A2, B2, C2, F2, np.concatenate([g, g]), None, None
+
+    return DynamicsConstraint
+
+
+_DYN_CLS = None
+
+
+def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: bool, grid_step: float,
+                    torque_passes: int) -> Tuple[_Profile, dict]:
+    global _DYN_CLS
+    tp = _toppra()
+    if _DYN_CLS is None:
+        _DYN_CLS = _dynamics_constraint_class()
+    grid = path.gridpoints(grid_step)
+    vel = tp.constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    tau = np.asarray(robot.tau_max, float)
+    use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
+    qs = np.abs(path(grid, 1))
+    with np.errstate(divide="ignore"):
+        x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
+    x_vel = np.minimum(x_vel, 1e6)
+    sd = None
+    passes = max(1, torque_passes) if use_torque else 1
+    # viscous tangent points: pass 1 at a quarter of the velocity-limit curve (halving it on failure),
+    # later passes at the previous solution (which stays feasible, so they never get slower)
+    x0 = x_vel / 4.0
+    p = 0
+    while p < passes:
+        dyn = _DYN_CLS(robot, amax, tau, x0, use_torque)
+        algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
+        algo.compute_parameterization(0.0, 0.0)
+        pd = algo.problem_data
+        if pd.return_code != tp.algorithm.ParameterizationReturnCode.Ok or pd.sd_vec is None:
+            if sd is not None:
+                break  # keep the previous (feasible) pass
+            if use_torque and np.max(x0 / x_vel) > 1e-4:
+                x0 = x0 / 16.0
+                continue
+            raise TimingError(f"toppra failed: {pd.return_code}")
+        sd = np.maximum(np.asarray(pd.sd_vec, float), 0.0)
+        x0 = np.maximum(sd ** 2, 1e-4 * x_vel)
+        p += 1
+    sd[0] = sd[-1] = 0.0
+    ds = np.diff(grid)
+    denom = sd[:-1] + sd[1:]
+    if np.any(denom <= 0):
+        raise TimingError("toppra returned a zero-velocity interval")
+    dt_i = 2 * ds / denom
+    u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2 * ds)
+    T_grid = np.concatenate([[0.0], np.cumsum(dt_i)])
+
+    def s_of_t(t):
+        i = np.clip(np.searchsorted(T_grid, t, side="right") - 1, 0, len(ds) - 1)
+        tau_ = np.clip(t - T_grid[i], 0.0, dt_i[i])
+        sdot = np.maximum(sd[i] + u[i] * tau_, 0.0)
+        s = np.minimum(grid[i] + sd[i] * tau_ + 0.5 * u[i] * tau_ ** 2, grid[i + 1])
+        return s, sdot
+
+    def velocity(t):
+        s, sdot = s_of_t(np.asarray(t, float))
+        return path(s, 1) * sdot[:, None]
+
+    def position(t):
+        return path(s_of_t(np.asarray(t, float))[0], 0)
+
+    prof = _Profile(float(T_grid[-1]), velocity, path.points[0].copy(), path.points[-1].copy(), position)
+    return prof, {"gridpoints": len(grid), "toppra_duration": float(T_grid[-1]), "torque_passes": passes}
+
+
+# ==============================================================================================
+# ruckig
+# ==============================================================================================
+def _ruckig_profile(q_a, q_b, vmax, amax, jmax, dt) -> _Profile:
+    import ruckig
+    d = np.asarray(q_b, float) - np.asarray(q_a, float)
+    L = float(np.linalg.norm(d))
+    if L == 0.0:
+        return _Profile(0.0, lambda t: np.zeros((len(np.atleast_1d(t)), len(d))), q_a, q_b)
+    u = d / L
+    au = np.abs(u)
+    m = au > 1e-15
+    v_s = float(np.min(vmax[m] / au[m]))
+    a_s = float(np.min(amax[m] / au[m]))
+    j_s = float(np.min(jmax[m] / au[m]))
+    otg = ruckig.Ruckig(1, dt)
+    inp = ruckig.InputParameter(1)
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [0.0], [0.0]
+    inp.target_position, inp.target_velocity, inp.target_acceleration = [L], [0.0], [0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [v_s], [a_s], [j_s]
+    inp.duration_discretization = ruckig.DurationDiscretization.Discrete
+    tr = ruckig.Trajectory(1)
+    res = otg.calculate(inp, tr)
+    if res not in (ruckig.Result.Working, ruckig.Result.Finished):
+        raise TimingError(f"ruckig failed: {res}")
+    T = float(tr.duration)
+
+    def sdot(t):
+        return np.array([tr.at_time(float(x))[1][0] for x in np.atleast_1d(t)])
+
+    def velocity(t):
+        return np.outer(sdot(t), u)
+
+    def position(t):
+        return np.asarray(q_a, float) + np.outer([tr.at_time(float(x))[0][0] for x in np.atleast_1d(t)], u)
+
+    return _Profile(T, velocity, np.asarray(q_a, float), np.asarray(q_b, float), position)
+
+
+# ==============================================================================================
+# public entry point
+# ==============================================================================================
+def _split(K: int, stops: Sequence[int]) -> List[Tuple[int, int]]:
+    idx = sorted({0, K - 1, *[int(i) for i in stops]})
+    return [(a, b) for a, b in zip(idx[:-1], idx[1:])]
+
+
+def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", torque_limits: bool = True,
+                      stop_at: Optional[Sequence[int]] = None, *, blend_radius: float = 0.05,
+                      jerk_factor: float = 10.0, grid_step: float = 0.02, torque_passes: int = 3,
+                      fallback: bool = True) -> Trajectory:
+    """Time-parameterize a joint-space path (K×dof waypoints) from rest to rest, sampled every ``dt``.
+
+    * ``method="toppra"``: time-optimal along a blended polyline (``blend_radius``; 0 = stop at every
+      waypoint), velocity, acceleration and (``torque_limits``) drivetrain-torque limits. If toppra
+      fails and ``fallback`` is set, the ruckig method is used (``info["method"]`` says which).
+    * ``method="ruckig"``: straight segments, stopping at every waypoint, jerk-limited
+      (``jerk_factor`` × acceleration limit).
+    * ``stop_at``: waypoint indices where the robot must be at rest (dq = ddq = 0 exactly at one
+      sample, q = the waypoint exactly); the first and last waypoints always are.
+
+    Returns a :class:`Trajectory` starting at t = 0 (each rest-to-rest part begins with one rest step,
+    see the module docstring) with ``info`` keys: ``method`` ("toppra", "ruckig" or "toppra+ruckig"
+    after a fallback), ``stop_samples`` ({waypoint index: index of the sample where the robot arrives
+    there at rest} for every waypoint passed at rest — use ``t[k]`` as the CoBRA goal time),
+    ``solve_time`` (s, whole call), ``toppra_time``, ``gridpoints``, ``max_path_deviation`` (bound on
+    the distance from the polyline, from the blends), ``max_path_error`` (samples vs. continuous
+    profile), ``stretch`` (largest uniform slow-down the sample check needed; 1 = none).
+    Raises :class:`TimingError` if no parameterization satisfies the limits (e.g. gravity alone
+    exceeds a torque limit on the path).
+    """
+    t_start = _time.perf_counter()
+    P = np.asarray(path, dtype=float)
+    if P.ndim == 1:
+        P = P.reshape(-1, robot.dof)
+    if P.ndim != 2 or P.shape[1] != robot.dof or len(P) == 0:
+        raise ValueError(f"path must be K×{robot.dof}, got shape {np.shape(path)}")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("path contains non-finite values")
+    if dt <= 0:
+        raise ValueError("dt must be positive")
+    if method not in ("toppra", "ruckig"):
+        raise ValueError(f"unknown method {method!r} (toppra, ruckig)")
+    K = len(P)
+    stops = list(stop_at or [])
+    for i in stops:
+        if not -K <= int(i) < K:
+            raise ValueError(f"stop_at index {i} out of range for {K} waypoints")
+    stops = [int(i) % K for i in stops]
+    vmax = _finite(robot.dq_max)
+    amax = _finite(robot.ddq_max)
+    jmax = jerk_factor * amax
+    if method == "ruckig" or blend_radius <= 0:
+        stops = list(range(K))
+    else:  # reversals are stops
+        for i in range(1, K - 1):
+            a, b = P[i] - P[i - 1], P[i + 1] - P[i]
+            na, nb = np.linalg.norm(a), np.linalg.norm(b)
+            if na > 1e-12 and nb > 1e-12 and a @ b < math.cos(REVERSAL_ANGLE) * na * nb:
+                stops.append(i)
+    used = method
+    traj: Optional[Trajectory] = None
+    stop_samples: Dict[int, int] = {0: 0}
+    max_dev, max_err, stretch, n_grid, tp_time = 0.0, 0.0, 1.0, 0, 0.0
+
+    def append(part: Trajectory, waypoint: int) -> None:
+        nonlocal traj, max_err, stretch
+        max_err = max(max_err, part.info.get("max_path_error", 0.0))
+        stretch = max(stretch, part.info.get("stretch", 1.0))
+        traj = part if traj is None else traj.concatenate(part)
+        stop_samples[waypoint] = len(traj) - 1
+
+    for a, b in _split(K, stops):
+        seg = P[a:b + 1]
+        if np.max(np.abs(seg - seg[0])) == 0.0:
+            append(Trajectory.at_rest(seg[0]), b)
+            continue
+        if method == "toppra":
+            try:
+                bp = BlendedPolyline(seg, blend_radius)
+                t0 = _time.perf_counter()
+                prof, meta = _toppra_profile(robot, bp, vmax, amax, torque_limits, grid_step, torque_passes)
+                tp_time += _time.perf_counter() - t0
+                part = _fit_limits(robot, prof, dt, torque_limits)
+                max_dev = max(max_dev, bp.max_deviation)
+                n_grid += meta["gridpoints"]
+                append(part, b)
+                continue
+            except TimingError:
+                if not fallback:
+                    raise
+                used = "toppra+ruckig"
+        # ruckig: straight lines, stopping at every waypoint of the segment
+        for i in range(len(seg) - 1):
+            prof = _ruckig_profile(seg[i], seg[i + 1], vmax, amax, jmax, dt)
+            append(_fit_limits(robot, prof, dt, torque_limits), a + i + 1)
+    if traj is None:  # a single waypoint
+        traj = Trajectory.at_rest(P[0])
+    traj.ddq[-1] = 0.0
+    traj.dq[-1] = 0.0
+    traj.info.update(method=used, stop_samples=dict(sorted(stop_samples.items())),
+                     solve_time=_time.perf_counter() - t_start, toppra_time=tp_time, max_path_deviation=max_dev,
+                     max_path_error=max_err, stretch=stretch, gridpoints=n_grid)
+    return traj
