@@ -79,12 +79,7 @@ def parse_task(data, file: Path) -> Task:
     warnings: List[str] = []
     frames = _parse_frames(data.get("frames", {}), fname)
 
-    def resolver(name: str) -> np.ndarray:
-        if name == "world":
-            return np.eye(4)
-        if name not in frames:
-            raise KeyError(name)
-        return frames[name]
+    resolver = FrameResolver(frames)
 
     obstacles = []
     seen = set()
@@ -124,6 +119,20 @@ def parse_task(data, file: Path) -> Task:
             raise InputError(f"unknown goal ID {g.return_to!r}", file=fname, path=["goals", i, "returnToGoal"])
     return Task(header=header, obstacles=tuple(obstacles), goals=tuple(goals), constraints=constraints,
                 frames=frames, root=root, source=str(file), warnings=tuple(warnings))
+
+
+class FrameResolver:
+    """name → world pose of a task frame (picklable, so tasks can be shipped to worker processes)."""
+
+    def __init__(self, frames: Dict[str, np.ndarray]):
+        self.frames = frames
+
+    def __call__(self, name: str) -> np.ndarray:
+        if name == "world":
+            return np.eye(4)
+        if name not in self.frames:
+            raise KeyError(name)
+        return self.frames[name]
 
 
 def _as_list(v):
