@@ -103,6 +103,33 @@ def cmd_check(args) -> int:
     return 0 if verdict.valid else 1
 
 
+def cmd_serve(args) -> int:
+    """Run the benchmark website (docs/website.md)."""
+    try:
+        import uvicorn
+        from .web import create_app
+    except ImportError as e:
+        raise InputError(f"the website needs fastapi, uvicorn, sqlalchemy and python-multipart ({e})") from None
+    if args.max_upload_mb <= 0:
+        raise InputError("--max-upload-mb must be positive")
+    app = create_app(db_url=args.db, data_dir=args.data, seed=args.seed or (), seed_builtin=not args.no_builtin,
+                     max_request_bytes=int(args.max_upload_mb * (1 << 20)), check_workers=args.workers)
+    for line in app.state.bench.seed_log:
+        print(f"robodesign: {line}", file=sys.stderr)
+    uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+    return 0
+
+
+def cmd_view(args) -> int:
+    """Write a self-contained HTML page of a solution, a task or a robot (docs/viewer.md)."""
+    from .viewer.cli import describe, run_view
+    path = run_view(args.solution, task=args.task, modules=args.modules, order=args.order, q=args.q,
+                    base_pose=args.base_pose, out=args.out, check=args.check, plots=not args.no_plots,
+                    collision=args.collision, fps=args.fps)
+    print(describe(path))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="robodesign", description="Find the best modular robot for a task.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -125,6 +152,38 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="run an experiment (default: the built-in demo)")
     run.set_defaults(func=cmd_run)
+
+    sv = sub.add_parser("serve", help="run the benchmark website (upload, check and rank solutions)")
+    sv.add_argument("--db", help="SQLAlchemy database URL (default: SQLite <data>/bench.db; "
+                                 "e.g. postgresql://user:pw@host/bench)")
+    sv.add_argument("--data", default="robodesign_data", help="data folder: database, task and module set files "
+                                                               "(default: ./robodesign_data)")
+    sv.add_argument("--seed", action="append", metavar="DIR",
+                    help="also register the tasks/ and modules/ of this folder at startup (repeatable)")
+    sv.add_argument("--no-builtin", action="store_true", help="do not register the built-in assets/ at startup")
+    sv.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    sv.add_argument("--port", type=int, default=8000, help="port (default 8000)")
+    sv.add_argument("--max-upload-mb", type=float, default=20.0, help="request size limit in MiB (default 20)")
+    sv.add_argument("--workers", type=int, default=None, help="checker threads (default: number of CPUs, 2..8)")
+    sv.set_defaults(func=cmd_serve)
+
+    vw = sub.add_parser("view", help="write one self-contained HTML page that shows a solution (animated), "
+                                     "a task or a robot")
+    vw.add_argument("solution", nargs="?", help="solution JSON file (omit it to show --task and/or a robot)")
+    vw.add_argument("--task", help="task file or built-in task (default for a solution: its taskID if found)")
+    vw.add_argument("--modules", help="module set folder or built-in name (default: the solution's moduleSet)")
+    vw.add_argument("--order", help="without a solution: comma-separated module IDs of a static robot")
+    vw.add_argument("--q", help="with --order: joint values (comma-separated); default zeros")
+    vw.add_argument("--base-pose", help="with --order: x,y,z[,roll,pitch,yaw] or 16 numbers (default: the "
+                                        "task's nominal base placement, else identity)")
+    vw.add_argument("--out", help="HTML file to write (default: <solution stem>_view.html or view.html); the "
+                                  "plots are also written next to it as <stem>_q.png, _dq, _ddq, _tau, _tcp")
+    vw.add_argument("--check", action="store_true", help="also run the checker and show the verdict on the page")
+    vw.add_argument("--no-plots", action="store_true", help="no trajectory plots (faster, smaller page)")
+    vw.add_argument("--collision", action="store_true", help="include the collision geometry (a toggle on the page)")
+    vw.add_argument("--fps", type=float, default=25.0, help="animation frames per second at most (default 25; "
+                                                            "goal instants are always kept)")
+    vw.set_defaults(func=cmd_view)
     return p
 
 

@@ -1,0 +1,86 @@
+"""See the robots move: self-contained HTML pages of tasks, robots and solutions (docs/viewer.md).
+
+* :func:`robodesign.viewer.scene.build_scene` — task/robot/trajectory → plain scene data (dict).
+* :func:`robodesign.viewer.html.render_html` — scene + PNG plots → one HTML page (three.js inlined).
+* :func:`robodesign.viewer.plots.trajectory_plots` — q, dq, ddq, τ against the limits; TCP path.
+* :func:`solution_page`, :func:`task_page`, :func:`robot_page` — the pages in one call.
+"""
+from __future__ import annotations
+
+from typing import Mapping, Optional, Sequence, Union
+
+from .html import render_html
+from .plots import trajectory_plots
+from .scene import build_scene
+
+__all__ = ["build_scene", "render_html", "trajectory_plots", "solution_page", "task_page", "robot_page"]
+
+
+def _verdict_json(verdict):
+    if verdict is None:
+        return None
+    return verdict.to_json() if hasattr(verdict, "to_json") else dict(verdict)
+
+
+def solution_page(task, solution, module_set=None, *, verdict=None, plots: Union[bool, Mapping] = True,
+                  fps: float = 25.0, include_collision: bool = False, title: Optional[str] = None) -> str:
+    """The page of a solution: workcell, goals, robot, animation and plots.
+
+    ``task``: a Task or None. ``module_set``: a ModuleSet, a built-in name or folder, or None for the
+    solution's ``moduleSet``. ``verdict``: a checker Verdict (or its ``to_json()``) to list on the page.
+    ``plots``: True (compute them), False, or a ready ``{name: png bytes}``. A solution whose robot cannot
+    be built (bad assembly, wrong number of joints, unknown module set) still gives a page: the task
+    alone with the reason as a note.
+    """
+    from ..checker import resolve_module_set
+    from ..errors import RobodesignError
+    from ..robot import Robot
+
+    info = {"solution": solution.source or "", "cost_function": solution.cost_function}
+    if solution.cost is not None:
+        info["cost"] = float(solution.cost)
+    v = _verdict_json(verdict)
+    if v is not None:
+        info["verdict"] = v
+    notes = []
+    robot = None
+    try:
+        ms = resolve_module_set(solution, module_set)
+        gravity = task.header.gravity if task is not None else (0.0, 0.0, -9.81)
+        robot = Robot(ms, solution.assembly(ms), base_pose=solution.base_pose, gravity=gravity)
+        if solution.trajectory.q.shape[1] != robot.dof:
+            notes.append(f"the trajectory has {solution.trajectory.q.shape[1]} joint columns but the robot has "
+                         f"{robot.dof} joints: the robot is not shown")
+            robot = None
+    except RobodesignError as e:
+        notes.append(f"the robot cannot be built: {e}")
+        robot = None
+    if task is not None and solution.task_id != task.id:
+        notes.append(f"the solution is for task {solution.task_id!r}, shown in task {task.id!r}")
+    scene = build_scene(task, robot, solution.trajectory if robot is not None else None, fps=fps,
+                        include_collision=include_collision, info=info)
+    scene["messages"].extend(notes)
+    images = None
+    if robot is not None:
+        if isinstance(plots, Mapping):
+            images = dict(plots)
+        elif plots:
+            try:
+                images = trajectory_plots(task, solution, ms)
+            except Exception as e:  # plots are an extra: never lose the page for them
+                scene["messages"].append(f"plots failed: {e}")
+    name = task.id if task is not None else solution.task_id
+    return render_html(scene, images, title or f"{name}: {','.join(solution.module_order)}")
+
+
+def task_page(task, *, include_collision: bool = False, title: Optional[str] = None) -> str:
+    """The page of a task alone: workcell, goals with their tolerances, base placement."""
+    scene = build_scene(task, None, None, include_collision=include_collision)
+    return render_html(scene, None, title or f"task {task.id}")
+
+
+def robot_page(robot, q: Optional[Sequence[float]] = None, task=None, *, include_collision: bool = False,
+               title: Optional[str] = None) -> str:
+    """The page of a static robot (at ``q``, default zeros), optionally in a task's cell."""
+    scene = build_scene(task, robot, None, q=q, include_collision=include_collision)
+    return render_html(scene, None, title or f"robot {','.join(robot.assembly.module_ids)}")

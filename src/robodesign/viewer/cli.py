@@ -1,0 +1,102 @@
+"""What ``robodesign view`` does (the argparse part lives in :mod:`robodesign.cli`)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def _note(msg: str) -> None:
+    print(f"robodesign: note: {msg}", file=sys.stderr)
+
+
+def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules: Optional[str] = None,
+             order: Optional[str] = None, q: Optional[str] = None, base_pose: Optional[str] = None,
+             out: Optional[str] = None, check: bool = False, plots: bool = True, collision: bool = False,
+             fps: float = 25.0) -> Path:
+    """Write the page; returns its path. See ``robodesign view --help`` and docs/viewer.md."""
+    from ..task_io import load_task
+    from . import render_html, solution_page
+    from .scene import build_scene
+
+    if fps <= 0:
+        raise InputError("--fps must be positive")
+    if solution is None and task is None and order is None:
+        raise InputError("give a SOLUTION file, --task, or --modules with --order")
+    if solution is not None and order is not None:
+        raise InputError("--order is for a bare robot; a solution brings its own module order")
+    task_obj = load_task(task) if task else None
+    for w in (task_obj.warnings if task_obj is not None else ()):
+        _note(w)
+
+    if solution is not None:
+        from ..checker import resolve_module_set
+        from ..solution import load_solution
+        from .plots import trajectory_plots
+        sol = load_solution(solution)
+        if task_obj is None:
+            try:
+                task_obj = load_task(sol.task_id)
+            except InputError:
+                _note(f"task {sol.task_id!r} not found; showing the robot without its cell (use --task)")
+        ms = resolve_module_set(sol, modules)
+        path = Path(out) if out else Path(Path(solution).stem + "_view.html")
+        verdict = None
+        if check:
+            if task_obj is None:
+                _note("--check needs the task; skipped")
+            else:
+                from ..checker import check as run_check
+                verdict = run_check(task_obj, sol, ms)
+        images = False
+        if plots:
+            try:
+                images = trajectory_plots(task_obj, sol, ms, out_dir=path.parent if out else None, stem=path.stem)
+            except Exception as e:  # the page still shows the motion
+                _note(f"plots failed: {e}")
+        page = solution_page(task_obj, sol, ms, verdict=verdict, plots=images, fps=fps, include_collision=collision)
+    else:
+        robot = None
+        if order is not None:
+            from ..cli_args import parse_base_pose, parse_order
+            from ..module_io import load_module_set
+            from ..robot import Robot
+            if not modules:
+                raise InputError("--order needs --modules")
+            ms = load_module_set(modules)
+            bp = parse_base_pose(base_pose) if base_pose else (
+                task_obj.nominal_base_pose if task_obj is not None else None)
+            robot = Robot.from_order(ms, parse_order(order), base_pose=bp)
+        qv = None
+        if q is not None:
+            if robot is None:
+                raise InputError("--q needs --modules and --order")
+            from ..cli_args import parse_floats
+            qv = np.array(parse_floats(q, "--q"), dtype=float)
+            if len(qv) != robot.dof:
+                raise InputError(f"--q: the robot has {robot.dof} joints, got {len(qv)} values")
+        scene = build_scene(task_obj, robot, None, q=qv, include_collision=collision)
+        if robot is not None:
+            name = "robot " + ",".join(robot.assembly.module_ids) + (f" in {task_obj.id}" if task_obj else "")
+        else:
+            name = f"task {task_obj.id}"
+        path = Path(out) if out else Path("view.html")
+        page = render_html(scene, None, name)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(page, encoding="utf-8")
+    return path
+
+
+def describe(path: Path) -> str:
+    from .html import decode_page_data
+    page = path.read_text(encoding="utf-8")
+    data = decode_page_data(page)
+    anim = data.get("animation")
+    parts = [f"{len(page) / 1e6:.2f} MB", f"{len(data.get('meshes') or {})} meshes"]
+    if anim:
+        parts.append(f"{anim['shape'][0]} frames × {anim['shape'][1]} moving parts")
+    return f"wrote {path} ({', '.join(parts)})"
