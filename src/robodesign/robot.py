@@ -34,7 +34,9 @@ COULOMB_SMOOTHING = 100.0
 
 
 def smooth_sign(x: np.ndarray) -> np.ndarray:
-    return np.sin(np.arctan(COULOMB_SMOOTHING * np.asarray(x)))
+    """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
+    s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
+    return s / np.sqrt(1.0 + s * s)
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,7 @@ class Robot:
         self.model.gravity = pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
         self.base_pose = np.eye(4)
         self.data = self.model.createData()
+        self._sync_link_model()
         self._n_self_pairs = len(self.geom_model.collisionPairs)
         self.geom_data = pin.GeometryData(self.geom_model)
         self._apply_margins()
@@ -261,11 +264,17 @@ class Robot:
             else:
                 self.geom_model.geometryObjects[idx].placement = P
         self.data = self.model.createData()
+        self._sync_link_model()
         self.geom_data = pin.GeometryData(self.geom_model)
         self._apply_margins()
 
     def set_gravity(self, g: Sequence[float]) -> None:
         self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+        self._sync_link_model()
+
+    def _sync_link_model(self) -> None:
+        """Invalidate the armature-free model copy (rebuilt lazily by :meth:`rnea`)."""
+        self._link_model = None
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
@@ -310,7 +319,7 @@ class Robot:
     # kinematics
     def _q(self, q) -> np.ndarray:
         q = np.asarray(q, dtype=float)
-        if q.shape != (self.dof,):
+        if q.shape[0] != self.dof or q.ndim != 1:
             raise InputError(f"expected {self.dof} joint values, got shape {q.shape}")
         return q
 
@@ -343,22 +352,27 @@ class Robot:
     # dynamics
     def rnea(self, q, dq, ddq, f_ext=None) -> np.ndarray:
         """Link-side inverse dynamics (no motor inertia, no friction)."""
-        q, dq, ddq = self._q(q), np.asarray(dq, float), np.asarray(ddq, float)
+        if self._link_model is None:  # a copy without armature: link-side RNEA in one pinocchio call
+            self._link_model = pin.Model(self.model)
+            self._link_model.armature = np.zeros(self.model.nv)
+            self._link_data = self._link_model.createData()
+        m, d = self._link_model, self._link_data
         if f_ext is None:
-            tau = pin.rnea(self.model, self.data, q, dq, ddq)
-        else:
-            tau = pin.rnea(self.model, self.data, q, dq, ddq, f_ext)
-        return tau - self.model.armature * ddq
+            return pin.rnea(m, d, self._q(q), np.asarray(dq, dtype=float), np.asarray(ddq, dtype=float))
+        return pin.rnea(m, d, self._q(q), np.asarray(dq, dtype=float), np.asarray(ddq, dtype=float), f_ext)
 
     def gravity_torque(self, q) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self._q(q)).copy()
 
     def drivetrain_torque(self, q, dq, ddq, f_ext=None) -> np.ndarray:
         """τ = RNEA + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇) (motor-side torque, what peakTorque limits)."""
-        dq = np.asarray(dq, float)
-        ddq = np.asarray(ddq, float)
-        return (self.rnea(q, dq, ddq, f_ext) + self.model.armature * ddq + self.friction_viscous * dq
-                + self.friction_coulomb * smooth_sign(dq))
+        dq = np.asarray(dq, dtype=float)
+        if f_ext is None:  # pinocchio 4's RNEA already adds armature·q̈ (= k²·I_m·q̈)
+            tau = pin.rnea(self.model, self.data, self._q(q), dq, np.asarray(ddq, dtype=float))
+        else:
+            tau = pin.rnea(self.model, self.data, self._q(q), dq, np.asarray(ddq, dtype=float), f_ext)
+        s = COULOMB_SMOOTHING * dq
+        return tau + self.friction_viscous * dq + self.friction_coulomb * (s / np.sqrt(1.0 + s * s))
 
     def drivetrain_torques(self, Q, DQ, DDQ) -> np.ndarray:
         """Vectorised over samples: arrays (N, dof) → (N, dof)."""

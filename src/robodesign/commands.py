@@ -1,0 +1,177 @@
+"""Implementations of the ``solve``, ``optimize`` and ``optimizers`` CLI commands."""
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from .errors import InputError
+
+
+def _parse_options(items: List[str]) -> Dict[str, object]:
+    """``key=value`` pairs; values parsed as JSON when possible (numbers, booleans, lists)."""
+    out: Dict[str, object] = {}
+    for it in items or []:
+        k, sep, v = it.partition("=")
+        if not sep or not k:
+            raise InputError(f"--opt {it!r}: expected key=value")
+        try:
+            out[k] = json.loads(v)
+        except json.JSONDecodeError:
+            out[k] = v
+    return out
+
+
+def _base_pose(text, task):
+    from .cli_args import parse_base_pose
+    return parse_base_pose(text) if text else task.nominal_base_pose
+
+
+def cmd_solve(args) -> int:
+    from .cli_args import parse_order
+    from .costs import parse_cost
+    from .module_io import load_module_set
+    from .solve import SolveSettings, solve
+    from .solvers.planning import available_planners
+    from .task_io import load_task
+    task = load_task(args.task)
+    ms = load_module_set(args.modules)
+    parse_cost(args.cost, path="--cost")
+    if args.planner.lower() not in [p.lower() for p in available_planners()]:
+        raise InputError(f"--planner: unknown planner {args.planner!r} (available: {', '.join(available_planners())})")
+    settings = SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing,
+                             optimize_trajectory=args.optimize_trajectory, seed=args.seed)
+    t0 = time.perf_counter()
+    res = solve(task, ms, parse_order(args.order), _base_pose(args.base_pose, task), cost=args.cost, settings=settings)
+    elapsed = time.perf_counter() - t0
+    out = None
+    if res.solution is not None and args.out:
+        out = res.solution.write(args.out)
+    if args.json:
+        print(json.dumps({"feasible": res.feasible, "stage": res.stage, "message": res.message,
+                          "stages": [s.to_json() for s in res.stages], "cost": res.cost,
+                          "costs": res.verdict.costs if res.verdict else {},
+                          "solution": str(out) if out else None, "seconds": elapsed}))
+    else:
+        for s in res.stages:
+            print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {s.message[:150]}")
+        if res.feasible:
+            print(f"VALID solution of {task.id}: {res.verdict.cost_function} = {res.cost:.6g}  ({elapsed:.2f} s)")
+            print("costs  " + ", ".join(f"{k}={v:.6g}" for k, v in res.verdict.costs.items()))
+        else:
+            print(f"no valid solution: stage '{res.stage}' failed: {res.message}")
+        if out:
+            print(f"solution written to {out}")
+    return 0 if res.feasible else 1
+
+
+def cmd_optimizers(args) -> int:
+    from .optimize import available_optimizers
+    eps = available_optimizers()
+    if args.json:
+        print(json.dumps({n: ep.value for n, ep in sorted(eps.items())}))
+        return 0
+    if not eps:
+        print("no optimizer plugins installed (pip install -e ./optimizers)")
+        return 0
+    for name, ep in sorted(eps.items()):
+        try:
+            cls = ep.load()
+            desc = getattr(cls, "description", "") or (cls.__doc__ or "").strip().splitlines()[0]
+        except Exception as e:  # a broken third-party plugin must not break the listing
+            desc = f"(cannot be loaded: {e})"
+        print(f"{name:12s} {ep.value:55s} {desc}")
+    return 0
+
+
+def cmd_optimize(args) -> int:
+    from .costs import parse_cost
+    from .evaluator import Evaluator, EvaluatorSpec
+    from .optimize import Budget, SerialExecutor, Study, load_optimizer
+    from .solve import SolveSettings
+    from .task_io import load_task, resolve_task_path
+    parse_cost(args.cost, path="--cost")
+    budget = Budget.parse(args.budget)
+    task_path = str(resolve_task_path(args.task))
+    load_task(task_path)  # validate early
+    spec = EvaluatorSpec(task=task_path, module_set=args.modules, cost=args.cost,
+                         settings=SolveSettings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
+                         seed=args.seed)
+    ev = Evaluator(spec)
+    rules = {}
+    if args.dof:
+        lo, _, hi = args.dof.partition("-")
+        rules["min_dof"], rules["max_dof"] = int(lo), int(hi or lo)
+    if args.max_links is not None:
+        rules["max_links_between"] = args.max_links
+    space = ev.search_space(**rules)
+    if args.fixed_base:
+        from .search_space import BaseBounds
+        from dataclasses import replace
+        space = replace(space, base_bounds=BaseBounds(nominal=space.base_bounds.nominal))
+    opt = load_optimizer(args.optimizer)(space, seed=args.seed, **_parse_options(args.opt))
+    progress = _Progress(budget, quiet=args.json)
+    study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=progress)
+    res = study.run()
+    progress.close()
+    best = res.best
+    out = None
+    if best is not None and best.feasible and best.solution is not None:
+        from .solution import parse_solution
+        sol = parse_solution(best.solution, "best")
+        out = sol.write(args.out or "best_solution.json")
+    summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
+               "stopped": res.stopped, "feasible": bool(best and best.feasible),
+               "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
+                                                  "base_pose": space.base_pose(best.candidate).tolist(),
+                                                  "cost": best.cost, "stage": best.stage, "costs": best.costs},
+               "solution": str(out) if out else None}
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}); "
+              f"{sum(e.feasible for e in res.history)} feasible")
+        if best is not None and best.feasible:
+            bp = space.base_pose(best.candidate)
+            print(f"best robot   {','.join(best.candidate.order)}")
+            print(f"base pose    xyz {np.round(bp[:3, 3], 4).tolist()}  yaw {np.degrees(np.arctan2(bp[1, 0], bp[0, 0])):.1f}°")
+            print(f"cost         {args.cost} = {best.cost:.6g}")
+            print(f"solution     {out} (checked valid)")
+        else:
+            print("no feasible robot found within the budget"
+                  + (f"; the best candidate failed at stage '{best.stage}': {best.message}" if best else ""))
+    return 0 if best is not None and best.feasible else 1
+
+
+class _Progress:
+    """A rich progress bar on a terminal, one line per evaluation otherwise."""
+
+    def __init__(self, budget, quiet=False):
+        self.quiet = quiet
+        self.t0 = time.perf_counter()
+        self.bar = None
+        if not quiet and sys.stderr.isatty():
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed} evals"),
+                                TimeElapsedColumn(), transient=True)
+            self.bar.start()
+            self.task = self.bar.add_task("optimizing", total=budget.evaluations)
+
+    def __call__(self, i, ev, best):
+        if self.quiet:
+            return
+        b = f"{best.cost:.4g}" if best is not None and best.feasible else "—"
+        if self.bar is not None:
+            self.bar.update(self.task, advance=1, description=f"best {b}")
+        else:
+            state = f"cost {ev.cost:.4g}" if ev.feasible else f"failed at {ev.stage}"
+            print(f"[{i + 1:4d}] {time.perf_counter() - self.t0:7.1f}s  {ev.candidate.key():40s} {state:24s} best {b}",
+                  file=sys.stderr, flush=True)
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.stop()

@@ -1,0 +1,118 @@
+"""Database schema and engine of the benchmark website (SQLAlchemy 2; SQLite by default, PostgreSQL by URL).
+
+Tables: ``tasks``, ``module_sets``, ``cost_functions``, ``solutions``. Task and module-set *files* (JSON and
+meshes) live in the data folder; the rows hold the JSON text, the folder (relative to the data folder) and a
+list of the stored assets with their SHA-256.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+from typing import Optional
+
+from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, Index)
+from sqlalchemy.engine import Engine, make_url
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
+
+
+def utcnow() -> _dt.datetime:
+    return _dt.datetime.now(_dt.timezone.utc).replace(tzinfo=None)
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+class TaskRow(Base):
+    __tablename__ = "tasks"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    task_id: Mapped[str] = mapped_column(String(200), unique=True, index=True)  # CoBRA ID, e.g. simple/PTP_1
+    name: Mapped[str] = mapped_column(String(200), default="")
+    tags: Mapped[str] = mapped_column(Text, default="[]")  # JSON list
+    json: Mapped[str] = mapped_column(Text)  # the task file as uploaded
+    folder: Mapped[str] = mapped_column(String(300))  # package folder, relative to the data folder
+    assets: Mapped[str] = mapped_column(Text, default="[]")  # JSON [{path, size, sha256}]
+    n_goals: Mapped[int] = mapped_column(Integer, default=0)
+    n_obstacles: Mapped[int] = mapped_column(Integer, default=0)
+    origin: Mapped[str] = mapped_column(String(20), default="upload")  # seed | upload
+    created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class ModuleSetRow(Base):
+    __tablename__ = "module_sets"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True, index=True)
+    json: Mapped[str] = mapped_column(Text)  # modules.json as uploaded
+    folder: Mapped[str] = mapped_column(String(300))
+    assets: Mapped[str] = mapped_column(Text, default="[]")
+    module_ids: Mapped[str] = mapped_column(Text, default="[]")  # JSON list
+    origin: Mapped[str] = mapped_column(String(20), default="upload")
+    created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class CostFunctionRow(Base):
+    __tablename__ = "cost_functions"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True)
+    descriptor: Mapped[str] = mapped_column(String(300))  # canonical CoBRA descriptor, e.g. cyc_0.2,mechEnergy
+    description: Mapped[str] = mapped_column(Text, default="")
+    created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+
+
+class SolutionRow(Base):
+    __tablename__ = "solutions"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    benchmark_id: Mapped[str] = mapped_column(String(600), index=True)  # canonical M-<set>:<cost>:<task>
+    task_id: Mapped[str] = mapped_column(String(200), index=True)
+    module_set: Mapped[str] = mapped_column(String(100))
+    cost_function: Mapped[str] = mapped_column(String(300))  # as written in the solution
+    cost_key: Mapped[str] = mapped_column(String(300))  # canonical descriptor (matching key)
+    author_name: Mapped[str] = mapped_column(String(200))
+    author_email: Mapped[str] = mapped_column(String(200), default="")
+    author_affiliation: Mapped[str] = mapped_column(String(300), default="")
+    token_hash: Mapped[str] = mapped_column(String(200))
+    valid: Mapped[bool] = mapped_column(Boolean, default=True)
+    cost: Mapped[Optional[float]] = mapped_column(Float, nullable=True)
+    costs_json: Mapped[str] = mapped_column(Text, default="{}")
+    verdict_json: Mapped[str] = mapped_column(Text, default="{}")
+    solution_json: Mapped[str] = mapped_column(Text)
+    n_modules: Mapped[int] = mapped_column(Integer, default=0)
+    dof: Mapped[int] = mapped_column(Integer, default=0)
+    created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    withdrawn: Mapped[bool] = mapped_column(Boolean, default=False)
+    withdrawn_at: Mapped[Optional[_dt.datetime]] = mapped_column(DateTime, nullable=True)
+
+
+Index("ix_solutions_board", SolutionRow.task_id, SolutionRow.module_set, SolutionRow.cost_key, SolutionRow.cost)
+
+
+def normalize_url(db_url: Optional[str], data_dir: Path) -> str:
+    """Default: ``sqlite:///<data>/bench.db``. ``postgresql://`` / ``postgres://`` use the psycopg 3 driver."""
+    if not db_url:
+        return f"sqlite:///{(Path(data_dir) / 'bench.db').resolve()}"
+    if db_url.startswith("postgres://"):
+        db_url = "postgresql://" + db_url[len("postgres://"):]
+    if db_url.startswith("postgresql://"):
+        db_url = "postgresql+psycopg://" + db_url[len("postgresql://"):]
+    return db_url
+
+
+def make_engine(url: str) -> Engine:
+    u = make_url(url)
+    if u.get_backend_name() == "sqlite":
+        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30}, pool_pre_ping=True)
+
+        @event.listens_for(engine, "connect")
+        def _sqlite_pragmas(dbapi_conn, _record):  # WAL: readers never block the (single) writer
+            cur = dbapi_conn.cursor()
+            cur.execute("PRAGMA journal_mode=WAL")
+            cur.execute("PRAGMA synchronous=NORMAL")
+            cur.execute("PRAGMA busy_timeout=30000")
+            cur.close()
+        return engine
+    return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
+
+
+def make_sessionmaker(engine: Engine) -> sessionmaker:
+    Base.metadata.create_all(engine)
+    return sessionmaker(engine, expire_on_commit=False)
