@@ -154,7 +154,7 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
                     raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
     if res.stage != "done":
         return res
-    plan = _GoalPlanner(task, robot, settings, rng, res)
+    plan = _GoalPlanner(task, robot, settings, rng, res, cost)
     with _Stage(res, "ik"):
         plan.solve_ik()
     if res.stage != "done":
@@ -173,7 +173,7 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
         return res
     if settings.optimize_trajectory:
         with _Stage(res, "trajopt"):
-            motion, g2t = plan.optimize(motion, g2t, cost)
+            motion, g2t = plan.time_parameterize(cost)
         if res.stage != "done":
             return res
     sol = Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
@@ -214,8 +214,16 @@ def _position_slack(pose: ToleratedPose) -> float:
 class _GoalPlanner:
     """Holds the per-goal IK solutions and turns the goal sequence into a motion."""
 
-    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult):
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc"):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
+        from .costs import parse_cost
+        terms = dict(parse_cost(cost).terms)
+        # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
+        # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move)
+        self.w_time = terms.get("cyc", 0.0)
+        self.w_energy = terms.get("mechEnergy", 0.0) + terms.get("linkMechEnergy", 0.0) + terms.get("effort", 0.0)
+        if self.w_time == 0.0 and self.w_energy == 0.0:
+            self.w_time = 1.0
         self.order = [task.goal(gid) for gid in task.goal_order]
         self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
         self.follow_ik: Dict[str, List[np.ndarray]] = {}
@@ -269,7 +277,12 @@ class _GoalPlanner:
     # -- sequencing ------------------------------------------------------------------------------
     def _cost(self, qa, qb) -> float:
         from .solvers.timing import time_optimal_bound
-        return time_optimal_bound(self.robot, qa, qb)
+        c = 0.0
+        if self.w_time:
+            c += self.w_time * time_optimal_bound(self.robot, qa, qb)
+        if self.w_energy:
+            c += self.w_energy * float(np.sum((self.robot.friction_coulomb + 1e-3) * np.abs(qb - qa)))
+        return c
 
     def choose_and_plan(self) -> None:
         """Choose one IK solution per pose goal (dynamic programming over the goal sequence, minimising
@@ -398,16 +411,20 @@ class _GoalPlanner:
         raise _Fail(f"leave goal {g.id}: could not move the TCP out of the region")
 
     # -- timing ----------------------------------------------------------------------------------
-    def time_parameterize(self):
+    def time_parameterize(self, cost: Optional[str] = None):
+        """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
+        optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
+        whose optimization fails keeps its time-optimal TOPP-RA timing."""
         from .solvers.timing import Trajectory, time_parameterize
         dt = self.task.dt
         traj = Trajectory.at_rest(self.q0)
         g2t: Dict[str, float] = {}
-        # a pose goal reached at t = 0 (the start configuration)
         for (kind, arg, g), path in zip(self.actions, self.paths):
             if kind == "move":
                 if path is not None:
                     seg = time_parameterize(self.robot, path, dt=dt, method=self.settings.timing)
+                    if cost is not None:
+                        seg = self._optimize_move(seg, cost)
                     traj = traj.concatenate(seg)
                 if g is not None:
                     g2t[g.id] = float(traj.t[-1])
@@ -427,44 +444,19 @@ class _GoalPlanner:
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
 
-    def optimize(self, motion, g2t, cost: str):
-        """Re-time every rest-to-rest move with trajectory optimization (CasADi/ipopt) for ``cost``."""
-        from .solvers.timing import Trajectory
+    def _optimize_move(self, seg, cost: str):
         from .solvers.trajopt import optimize_trajectory
-        stops = [0] + [k for k in range(1, len(motion.t) - 1)
-                       if np.all(motion.dq[k] == 0) and not np.all(motion.dq[k - 1] == 0)] + [len(motion.t) - 1]
-        # split at rest samples; holds (consecutive rest samples) are kept as they are
-        times = {gid: t for gid, t in g2t.items()}
-        out = None
-        k = 0
-        goal_at = {int(round(t / motion.t[1])) if len(motion.t) > 1 else 0: gid for gid, t in times.items()}
-        new_g2t: Dict[str, float] = {}
-        n = len(motion.t)
-        while k < n - 1:
-            # find the end of this segment: next sample at rest after a moving sample
-            j = k + 1
-            if np.all(motion.dq[j] == 0) and np.all(motion.ddq[k] == 0):
-                # holding still: copy sample by sample
-                seg = motion.slice(k, j)
-            else:
-                while j < n - 1 and not (np.all(motion.dq[j] == 0)):
-                    j += 1
-                part = motion.slice(k, j).shifted(0.0)
-                try:
-                    seg = optimize_trajectory(self.robot, part, cost=_trajopt_cost(cost), n_nodes=self.settings.trajopt_nodes,
-                                              dt_out=self.task.dt)
-                except Exception:
-                    seg = part
-            seg = seg.shifted(0.0)
-            out = seg if out is None else out.concatenate(seg)
-            for kk in range(k, j + 1):
-                if kk in goal_at:
-                    # the goal happens at the end of its segment (arrival) or at a hold sample
-                    new_g2t[goal_at[kk]] = float(out.t[-1] - (seg.t[-1] - seg.t[kk - k]) if kk - k < len(seg.t) else out.t[-1])
-            k = j
-        for gid in g2t:
-            new_g2t.setdefault(gid, float(out.t[-1]))
-        return out, new_g2t
+        oc = _trajopt_cost(cost)
+        if "cyc" not in oc:
+            # energy only: slower is always cheaper (viscous losses), so the optimum is an endless move;
+            # a tiny time weight (1 % of the energy weight) makes the duration finite
+            oc += ",cyc_0.01"
+        try:
+            out = optimize_trajectory(self.robot, seg, cost=oc, n_nodes=self.settings.trajopt_nodes,
+                                      dt_out=self.task.dt)
+        except Exception:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
+            return seg
+        return out if np.allclose(out.q[-1], seg.q[-1], atol=1e-9) and np.all(out.dq[-1] == 0) else seg
 
 
 def _trajopt_cost(cost: str) -> str:
