@@ -11,9 +11,12 @@ judges uploads, solver output and optimizer candidates. Semantics (docs/checker.
   with the wrench of a follow goal applied at the TCP during that goal.
 * Goal-level constraints hold over the goal's own window (pause/follow: [t_g − duration, t_g];
   leave: [t_g, t_g + duration]; at/reach/returnTo: the instant t_g), not from t = 0 as in the reference.
+* Moving obstacles (task extension): at each sample an obstacle is at its pose in effect at that time
+  (zero-order hold) and stays there over the motion to the next sample.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -356,12 +359,18 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
         if not env:
             saved = r.safety_margin if hasattr(r, "safety_margin") else 0.0
         checker = SweepChecker(r, check_self=True, check_env=env)
+        moving = _moving_obstacle_pairs(r, ctx.task, checker) if env else None
+        if moving is not None:  # pairs with moving obstacles are checked piecewise below
+            _restrict_pairs(checker, ~moving)
         if settings.between_samples:
             events = checker.check(Q, first_only=False)
         else:
             hits = np.nonzero(checker.sample_collisions(Q))[0]
             from .sweep import CollisionEvent
             events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in hits]
+        if moving is not None:
+            events = sorted(events + _moving_obstacle_events(r, ctx, k0, k1, moving, settings),
+                            key=lambda e: (e.sample, e.s))
         out = []
         for e in events[:limit]:
             k = e.sample + k0
@@ -369,7 +378,7 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
             kind = "robot–obstacle" if e.environment else "self"
             between = f" between samples {k} and {k + 1}" if e.s > 0 else ""
             out.append(Violation(c.type, f"{kind} collision {e.first} ↔ {e.second}{between} "
-                                         f"(distance {e.distance:.4g} m, margin {checker.margins.max() if e.environment else 0:.3g})",
+                                         f"(distance {e.distance:.4g} m, margin {getattr(r, 'safety_margin', 0.0) if e.environment else 0:.3g})",
                                  sample=k, time=tt, value=e.distance))
         if len(events) > limit:
             out.append(Violation(c.type, f"... and {len(events) - limit} more collisions"))
@@ -405,6 +414,81 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
         return out
     # allGoalsFulfilled, order, validAssembly, alwaysTrue are handled elsewhere / always true
     return []
+
+
+def _moving_obstacle_pairs(robot: Robot, task: Task, checker: SweepChecker) -> Optional[np.ndarray]:
+    """Mask over ``checker.pairs``: robot–obstacle pairs whose obstacle moves (None if nothing moves)."""
+    if not any(ob.moving for ob in task.obstacles):
+        return None
+    moving_ids = {ob.id for ob in task.obstacles if ob.moving}
+    n_robot = robot.n_collision_geometries
+    geom_to_ob = {gk: robot.obstacles[i].name.rsplit(".", 2)[0] for i, gk in enumerate(robot._obstacle_ids)}
+    mask = np.zeros(len(checker.pairs), dtype=bool)
+    for c, k in enumerate(checker.pairs):
+        b = robot.geom_model.collisionPairs[k].second
+        mask[c] = b >= n_robot and geom_to_ob.get(b) in moving_ids
+    return mask if mask.any() else None
+
+
+def _restrict_pairs(checker: SweepChecker, keep: np.ndarray) -> None:
+    idx = np.nonzero(keep)[0]
+    checker.pairs = [checker.pairs[i] for i in idx]
+    checker.W = checker.W[:, idx]
+    checker.margins = checker.margins[idx]
+    checker.is_env = checker.is_env[idx]
+    checker._names = [checker._names[i] for i in idx]
+
+
+def _moving_obstacle_events(robot: Robot, ctx: "_Context", k0: int, k1: int, moving: np.ndarray,
+                            settings: CheckSettings):
+    """Collisions with moving obstacles over samples k0..k1. An obstacle's pose is the one in effect at a
+    sample's time (zero-order hold, ``ObstacleSpec.transform_at``) and is kept over the motion to the next
+    sample; runs of samples with unchanged obstacle poses are certified together."""
+    specs = {ob.id: ob for ob in ctx.task.obstacles if ob.moving}
+    movers = []  # (robot obstacle index, spec, t=0 world pose of the geometry)
+    for i, ob in enumerate(robot.obstacles):
+        sid = ob.name.rsplit(".", 2)[0]
+        if sid in specs:
+            movers.append((i, specs[sid], np.array(ob.pose, dtype=float)))
+    chk = SweepChecker(robot, check_self=False, check_env=True)
+    _restrict_pairs(chk, moving[len(moving) - len(chk.pairs):])  # chk holds the env pairs (the tail)
+    t = ctx.t
+    keys = [tuple(int(np.searchsorted(sp.motion_t, t[k] + 1e-12, side="right")) for sp in specs.values())
+            for k in range(k0, k1 + 1)]
+    events = []
+    last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
+    a = 0
+    try:
+        while a < len(keys):
+            b = a
+            while b + 1 < len(keys) and keys[b + 1] == keys[a]:
+                b += 1
+            for i, sp, pose0 in movers:
+                robot.move_obstacle(i, sp.transform_at(float(t[k0 + a])) @ pose0)
+            if not settings.between_samples:
+                from .sweep import CollisionEvent
+                hits = np.nonzero(chk.sample_collisions(ctx.q[k0 + a:k0 + b + 1]))[0]
+                events += [CollisionEvent(int(k + a), 0.0, "", "", 0.0, True) for k in hits]
+                a = b + 1
+                continue
+            end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
+            Q = ctx.q[k0 + a:k0 + end + 1]
+            evs = chk.check(Q, first_only=False)
+            for e in evs:
+                e = dataclasses.replace(e, sample=e.sample + a)
+                pair = (e.first, e.second)
+                if pair not in last or e.sample > last[pair] + 1:  # else: the episode of the previous run
+                    events.append(e)
+                last[pair] = e.sample
+            for pair in {(e.first, e.second) for e in evs}:
+                c = chk._names.index(pair)
+                if chk._distances_at(Q[-1], [c])[0] <= chk.margins[c]:
+                    last[pair] = end  # still in contact at the end of this run
+            a = b + 1
+    finally:
+        for i, _, pose0 in movers:
+            robot.move_obstacle(i, pose0)
+    return events
 
 
 def _check_order(c: GoalsInOrder, g2t: Dict[str, float]) -> List[Violation]:
