@@ -73,7 +73,7 @@ class EvaluatorSpec:
     task: Union[str, Task]
     module_set: Union[str, ModuleSet]
     cost: str = "cyc"
-    settings: SolveSettings = field(default_factory=SolveSettings)
+    settings: SolveSettings = field(default_factory=lambda: SolveSettings(ik_restarts=30))
     seed: int = 0
     keep_solutions: bool = True
 

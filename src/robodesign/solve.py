@@ -39,11 +39,13 @@ class SolveSettings:
     timing: str = "toppra"
     optimize_trajectory: bool = False
     trajopt_nodes: int = 30
-    ik_restarts: int = 200
+    ik_batch_seeds: int = 64  # seeds of the batched (vectorised) IK tried first; 0 disables it
+    ik_restarts: int = 200  # sequential LM restarts when the batched IK found nothing
     ik_solutions: int = 4  # distinct IK solutions per goal to choose from
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
     seed: int = 0
     check: bool = True
+    stop_after: Optional[str] = None  # stop after this stage (screening, e.g. "ik"); no solution is produced
 
 
 @dataclass
@@ -135,13 +137,13 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
         asm = (order_or_assembly if isinstance(order_or_assembly, Assembly)
                else Assembly.from_order(module_set, order_or_assembly))
         robot = build_robot(task, module_set, asm, base_pose)
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     with _Stage(res, "base"):
         bp = task.base_placement
         if bp is not None and not bp.valid(base_pose):
             raise _Fail("base pose outside the base-placement tolerance")
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     with _Stage(res, "reach"):
         from .solvers.ik import reach_bound
@@ -152,29 +154,29 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
                 slack = _position_slack(pose)
                 if d > R + slack:
                     raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     plan = _GoalPlanner(task, robot, settings, rng, res, cost)
     with _Stage(res, "ik"):
         plan.solve_ik()
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     with _Stage(res, "static_torque"):
         plan.filter_static_torque()
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     with _Stage(res, "plan"):
         plan.choose_and_plan()
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     with _Stage(res, "timing"):
         motion, g2t = plan.time_parameterize()
-    if res.stage != "done":
+    if res.stage != "done" or _stop(res, settings):
         return res
     if settings.optimize_trajectory:
         with _Stage(res, "trajopt"):
             motion, g2t = plan.time_parameterize(cost)
-        if res.stage != "done":
+        if res.stage != "done" or _stop(res, settings):
             return res
     sol = Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
                    module_order=tuple(asm.module_ids), base_pose=base_pose,
@@ -191,6 +193,10 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
             if not v.valid:
                 raise _Fail("; ".join(str(x) for x in v.violations[:3]))
     return res
+
+
+def _stop(res: SolveResult, settings: SolveSettings) -> bool:
+    return settings.stop_after is not None and bool(res.stages) and res.stages[-1].name == settings.stop_after
 
 
 def _goal_poses(g) -> List[ToleratedPose]:
@@ -226,6 +232,7 @@ class _GoalPlanner:
             self.w_time = 1.0
         self.order = [task.goal(gid) for gid in task.goal_order]
         self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
+        self._chain = None  # batched-IK kinematics (False: not a serial chain)
         self.follow_ik: Dict[str, List[np.ndarray]] = {}
 
     # -- IK ------------------------------------------------------------------------------------
@@ -234,12 +241,27 @@ class _GoalPlanner:
         reached = 0
         for g in self.order:
             if isinstance(g, (At, Reach)):
-                r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
-                             n_solutions=self.settings.ik_solutions)
-                if not r:
+                sols = []
+                reason = "no restarts"
+                if self.settings.ik_batch_seeds > 0 and self._chain is not False:
+                    from .solvers.batch_ik import ChainKinematics, batch_ik
+                    if self._chain is None:
+                        try:
+                            self._chain = ChainKinematics(self.robot)
+                        except ValueError:  # not a serial chain: sequential IK only
+                            self._chain = False
+                    if self._chain is not False:
+                        sols = batch_ik(self.robot, g.pose, self.rng, n_seeds=self.settings.ik_batch_seeds,
+                                        n_solutions=self.settings.ik_solutions, chain=self._chain).solutions
+                        reason = "batched IK found nothing"
+                if not sols and self.settings.ik_restarts > 0:
+                    r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
+                                 n_solutions=self.settings.ik_solutions)
+                    sols, reason = r.solutions, str(r.stats.get("reason"))
+                if not sols:
                     self.res.goals_reached = reached
-                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({r.stats.get('reason')})")
-                self.ik[g.id] = r.solutions
+                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
+                self.ik[g.id] = sols
                 reached += 1
             elif isinstance(g, Follow):
                 sols = []

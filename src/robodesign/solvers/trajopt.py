@@ -72,17 +72,16 @@ _KNOWN = ("cyc", "mechEnergy", "effort")
 
 
 def parse_cost(cost) -> Dict[str, float]:
-    """``"cyc"``, ``"mechEnergy"``, ``"cyc_0.2,mechEnergy_0.5"`` or a dict → {term: weight}."""
+    """Trajectory-optimization weights {term: weight} from a CoBRA cost (either notation, compounds such as
+    ``Liu2`` expand) or a dict; only the trajectory-dependent terms ``cyc``, ``mechEnergy``, ``effort``
+    are supported."""
     if isinstance(cost, dict):
         out = {str(k): float(v) for k, v in cost.items()}
     else:
+        from ..costs import parse_cost as parse_cobra_cost
         out = {}
-        for term in str(cost).split(","):
-            term = term.strip()
-            if not term:
-                continue
-            name, _, w = term.partition("_")
-            out[name] = out.get(name, 0.0) + (float(w) if w else 1.0)
+        for name, w in parse_cobra_cost(str(cost)).terms:
+            out[name] = out.get(name, 0.0) + float(w)
     bad = [k for k in out if k not in _KNOWN]
     if bad:
         raise ValueError(f"unsupported cost term(s) {bad} for trajectory optimization (supported: {', '.join(_KNOWN)})")
