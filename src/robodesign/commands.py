@@ -113,7 +113,9 @@ def cmd_optimize(args) -> int:
         from .search_space import BaseBounds
         from dataclasses import replace
         space = replace(space, base_bounds=BaseBounds(nominal=space.base_bounds.nominal))
-    opt = load_optimizer(args.optimizer)(space, seed=args.seed, **_parse_options(args.opt))
+    options = _parse_options(args.opt)
+    options.setdefault("cost", args.cost)  # bound-based plugins (elimination, heuristic) use the study's cost
+    opt = load_optimizer(args.optimizer)(space, seed=args.seed, **options)
     progress = _Progress(budget, quiet=args.json)
     study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=progress)
     res = study.run()

@@ -54,7 +54,19 @@ _CACHE: Dict[str, ModuleSet] = {}
 
 
 def load_module_set(name_or_path: Union[str, Path], use_cache: bool = True) -> ModuleSet:
-    """Load (and validate) a module set by folder, file or built-in name. Cached per process."""
+    """Load (and validate) a module set by folder, file or built-in name. Cached per process.
+
+    A ``.urdf`` file is imported as a one-module set (a monolithic robot, :func:`robodesign.urdf.import_urdf`).
+    """
+    if str(name_or_path).lower().endswith(".urdf"):
+        p = Path(name_or_path)
+        if not p.is_file():
+            raise InputError("file not found", file=str(p))
+        key = f"{p.resolve()}:{p.stat().st_mtime_ns}"
+        if not (use_cache and key in _CACHE):
+            from .urdf import import_urdf
+            _CACHE[key] = import_urdf(p)
+        return _CACHE[key]
     f = resolve_module_set_path(name_or_path).resolve()
     key = f"{f}:{f.stat().st_mtime_ns}"
     if use_cache and key in _CACHE:

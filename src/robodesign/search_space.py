@@ -4,7 +4,15 @@ A :class:`SearchSpace` knows the module set, the rules (DoF range, at most ``max
 passive link modules between two joint modules, allowed bases/end effectors) and the base-pose
 bounds derived from the task's base-placement tolerance. It offers what optimizer plugins need:
 validity checks with reasons, successors of a partial order (for tree search), random candidates,
-exhaustive enumeration and base-pose parameters ↔ 4x4 poses.
+exhaustive enumeration and base-pose parameters ↔ 4x4 poses. For informed search it also offers
+per-module data (:meth:`SearchSpace.module_info`), counts and lightest completions of partial orders,
+an admissible lower bound of a cost for every completion of a partial order
+(:meth:`SearchSpace.cost_lower_bound`) and the reach stage's reach bound of a candidate
+(:meth:`SearchSpace.reach_bound`).
+
+Chaining: a serial order attaches each module to a *free* connector of the previous one (the one not
+used by its own attachment), exactly as :meth:`Assembly.from_order` does; ``successors`` follows
+that rule, so every order it generates assembles.
 
 A :class:`Candidate` is plain data: ``order`` (module IDs, base first) and ``base`` (offsets
 x, y, z [m], yaw [rad] relative to the nominal base pose; empty when the base is fixed).
@@ -24,6 +32,21 @@ from .module_spec import ModuleSet
 from .spatial import homogeneous, rot_z
 
 BASE_PARAMS = ("x", "y", "z", "yaw")
+
+#: cost terms whose value is never negative (a positive weight contributes ≥ 0 to a lower bound)
+_NONNEGATIVE_TERMS = ("cyc", "mechEnergy", "linkMechEnergy", "qDist", "effort", "mass", "numJ", "fulfillN",
+                      "fulfillP")
+
+
+@dataclass(frozen=True)
+class ModuleInfo:
+    """What an optimizer may know about one module: ``kind`` ('base', 'joint', 'link' or 'eef'), ``dof``
+    (actuated joints) and ``mass`` [kg] (sum of its bodies, as in the checker's ``mass`` cost)."""
+    id: str
+    name: str
+    kind: str
+    dof: int
+    mass: float
 
 
 @dataclass(frozen=True)
@@ -151,25 +174,158 @@ class SearchSpace:
         return dof, links, complete
 
     def successors(self, prefix: Sequence[str]) -> List[str]:
-        """Modules that may follow ``prefix`` (a valid partial order) under the rules."""
+        """Modules that may follow ``prefix`` (a valid partial order) under the rules: the next module
+        must mate (exactly one connector pair) with a free connector of the last module."""
         if not prefix:
             return list(self.base_modules)
         dof, links, complete = self._state(prefix)
-        if complete or len(prefix) >= self.max_modules:
+        if complete:
+            return []
+        free = self._chain_free(prefix)
+        if free is None:
+            return []
+        return [nxt for nxt, _ in self._next((str(prefix[-1]), free, dof, links, len(prefix)))]
+
+    # -- chaining (internal) -------------------------------------------------------------------------
+    def _chain_free(self, prefix: Sequence[str]) -> Optional[Tuple[str, ...]]:
+        """IDs of the free connectors of ``prefix[-1]`` after chaining ``prefix`` serially (None if a step
+        does not mate with exactly one connector pair)."""
+        ms = self.module_set
+        free = _base_free(ms, str(prefix[0]))
+        for prev, mid in zip(prefix, prefix[1:]):
+            free = _mate_step(ms, str(prev), free, str(mid))
+            if free is None:
+                return None
+        return free
+
+    def _next(self, state) -> List[Tuple[str, Optional[tuple]]]:
+        """(module, state after appending it or None when it completes the order) for every module that may
+        follow a partial order in ``state`` = (last module, its free connectors, dof, links since the last
+        joint, number of modules)."""
+        last, free, dof, links, n = state
+        if n >= self.max_modules:
             return []
         out = []
-        for nxt in self._followers(prefix[-1]):
+        for nxt in self._followers(last):
+            nfree = _mate_step(self.module_set, last, free, nxt)
+            if nfree is None:
+                continue
             m = self.module_set[nxt]
             if m.kind == "eef":
                 if self.min_dof <= dof <= self.max_dof:
-                    out.append(nxt)
+                    out.append((nxt, None))
             elif m.kind == "joint":
                 if dof + m.dof <= self.max_dof:
-                    out.append(nxt)
+                    out.append((nxt, (nxt, nfree, dof + m.dof, 0, n + 1)))
             elif m.kind == "link":
-                if links < self.max_links_between and len(prefix) + 2 <= self.max_modules:
-                    out.append(nxt)
+                if links < self.max_links_between and n + 2 <= self.max_modules:
+                    out.append((nxt, (nxt, nfree, dof, links + 1, n + 1)))
         return out
+
+    def _memo(self) -> dict:
+        memo = self.__dict__.get("_memo_cache")
+        if memo is None:
+            memo = {}
+            object.__setattr__(self, "_memo_cache", memo)
+        return memo
+
+    def _completion(self, state) -> Tuple[int, float]:
+        """(number of completions, mass of the lightest completion) of a partial order in ``state``."""
+        memo = self._memo()
+        hit = memo.get(state)
+        if hit is not None:
+            return hit
+        count, lightest = 0, math.inf
+        for nxt, st in self._next(state):
+            mass = self.module_info(nxt).mass
+            if st is None:
+                count += 1
+                lightest = min(lightest, mass)
+            else:
+                c, l = self._completion(st)
+                count += c
+                lightest = min(lightest, mass + l)
+        memo[state] = (count, lightest)
+        return count, lightest
+
+    def _prefix_completion(self, prefix: Sequence[str]) -> Tuple[int, float]:
+        prefix = tuple(str(x) for x in prefix)
+        if not prefix:
+            out = [self._prefix_completion((b,)) for b in self.base_modules]
+            return (sum(c for c, _ in out),
+                    min((self.module_info(b).mass + l for b, (_, l) in zip(self.base_modules, out)), default=math.inf))
+        for i, mid in enumerate(prefix):
+            if mid not in self.module_set or mid not in self.successors(prefix[:i]):
+                return 0, math.inf
+        dof, links, complete = self._state(prefix)
+        if complete:
+            return 1, 0.0
+        free = self._chain_free(prefix)
+        if free is None:
+            return 0, math.inf
+        return self._completion((prefix[-1], free, dof, links, len(prefix)))
+
+    # -- informed search ---------------------------------------------------------------------------
+    def module_info(self, mid: str) -> ModuleInfo:
+        """Kind, DoF and mass of module ``mid``."""
+        m = self.module_set[str(mid)]
+        return ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass)
+
+    def count_completions(self, prefix: Sequence[str]) -> int:
+        """Number of valid complete orders that start with ``prefix`` (1 for a complete order, 0 for a dead
+        end or an invalid prefix; ``count_completions(())`` == :meth:`count_orders`)."""
+        return self._prefix_completion(prefix)[0]
+
+    def lightest_completion(self, prefix: Sequence[str]) -> float:
+        """Smallest total mass [kg] of the modules that must be appended to ``prefix`` to make a valid
+        complete order (0 for a complete order, ``inf`` when there is none). For ``()`` it is the mass of
+        the lightest valid order."""
+        return self._prefix_completion(prefix)[1]
+
+    def cost_lower_bound(self, prefix: Sequence[str], cost: str) -> float:
+        """A lower bound of cost ``cost`` (a cost descriptor such as ``"Whit2"``, ``"mass"``, ``"cyc"``) of
+        every feasible design whose order starts with ``prefix`` (any base pose; ``inf`` if ``prefix`` has no
+        valid completion).
+
+        Only quantities fixed by the order are bounded: ``mass`` by the prefix mass plus
+        :meth:`lightest_completion` (exact for a complete order), ``numJ`` by max(DoF so far, ``min_dof``).
+        The other built-in terms are ≥ 0 and contribute 0 (``fulfillP`` ≤ 1 contributes its weight when the
+        weight is negative). A negative weight on an unbounded term, or an unknown (custom) term, makes
+        the bound ``-inf``. So for ``mass``, ``numJ`` and ``Whit2`` the bound of a complete order *is* its cost.
+        """
+        prefix = tuple(str(x) for x in prefix)
+        terms = _cost_terms(str(cost))
+        count, lightest = self._prefix_completion(prefix)
+        if count == 0:
+            return math.inf
+        mass = sum(self.module_info(m).mass for m in prefix)
+        dof = self._state(prefix)[0] if prefix else 0
+        lb = 0.0
+        for name, w in terms:
+            if w == 0:
+                continue
+            if name == "mass" and w > 0:
+                lb += w * (mass + lightest)
+            elif name == "numJ":
+                lb += w * (max(dof, self.min_dof) if w > 0 else self.max_dof)
+            elif name == "fulfillP" and w < 0:
+                lb += w
+            elif name in _NONNEGATIVE_TERMS and w > 0:
+                pass
+            else:
+                return -math.inf
+        return lb
+
+    def reach_bound(self, candidate: "Candidate") -> Tuple[np.ndarray, float]:
+        """(o, R) exactly as the pipeline's ``reach`` stage computes them for ``candidate``: o is the world
+        position of the first joint (it depends on the base pose and on the modules up to the first joint),
+        R bounds the distance of every reachable TCP position from o. The reach stage fails iff some goal
+        position is farther than R + (its position tolerance) from o. Costs one robot build (~ms)."""
+        from .robot import Robot
+        from .solvers.ik import reach_bound
+        robot = Robot.from_order(self.module_set, tuple(candidate.order), base_pose=self.base_pose(candidate))
+        o, R = reach_bound(robot)
+        return np.asarray(o, dtype=float), float(R)
 
     def is_complete(self, order: Sequence[str]) -> bool:
         return self.validate_order(order) is None
@@ -228,40 +384,9 @@ class SearchSpace:
                 stack.append(prefix + (s,))
 
     def count_orders(self, limit: int = 10 ** 7) -> int:
-        """Number of valid orders (dynamic programming over (last module, dof, links))."""
-        ms = self.module_set
-
-        @lru_cache(maxsize=None)
-        def count(last: str, dof: int, links: int, n: int) -> int:
-            total = 0
-            for nxt in self.successors(_fake_prefix(last, dof, links, n)):
-                m = ms[nxt]
-                if m.kind == "eef":
-                    total += 1
-                elif m.kind == "joint":
-                    total += count(nxt, dof + m.dof, 0, n + 1)
-                else:
-                    total += count(nxt, dof, links + 1, n + 1)
-            return total
-
-        def _fake_prefix(last, dof, links, n):
-            return _Prefix(last, dof, links, n)
-
-        self_state = self._state
-
-        class _Prefix(tuple):
-            def __new__(cls, last, dof, links, n):
-                obj = super().__new__(cls, ("?",) * (n - 1) + (last,))
-                obj.state = (dof, links, False)
-                return obj
-
-        def patched(prefix):
-            return prefix.state if isinstance(prefix, _Prefix) else self_state(prefix)
-        object.__setattr__(self, "_state", patched)
-        try:
-            return sum(count(b, 0, 0, 1) for b in self.base_modules)
-        finally:
-            object.__delattr__(self, "_state")
+        """Number of valid orders (dynamic programming over (last module, free connectors, dof, links, length)).
+        ``limit`` is accepted for compatibility and ignored (counting is exact and cheap)."""
+        return self.count_completions(())
 
     # -- candidates ----------------------------------------------------------------------------
     def validate(self, c: Candidate) -> Optional[str]:
@@ -304,3 +429,32 @@ def _followers_cached(ms_id: int, mid: str, exclude, bases, eefs, ms_ref) -> Tup
 def _followers(ms: ModuleSet, mid: str, exclude, bases, eefs) -> Tuple[str, ...]:
     import weakref
     return _followers_cached(id(ms), mid, tuple(exclude), bases, eefs, weakref.ref(ms))
+
+
+def _base_free(ms: ModuleSet, mid: str) -> Tuple[str, ...]:
+    """Connectors of a base module that later modules may attach to (all but its base connector)."""
+    return tuple(c.id for c in ms[mid].connectors if c.type != "base")
+
+
+@lru_cache(maxsize=65536)
+def _mate_step_cached(ms_id: int, prev: str, free: Tuple[str, ...], mid: str, ms_ref) -> Optional[Tuple[str, ...]]:
+    ms = ms_ref()
+    old = [c for c in ms[prev].connectors if c.id in free and c.type != "base"]
+    pairs = [(c_old, c_new) for c_old in old for c_new in ms[mid].connectors if c_new.mates_with(c_old)[0]]
+    if len(pairs) != 1:  # none: does not connect; several: ambiguous (Assembly.from_order rejects it)
+        return None
+    used = pairs[0][1].id
+    return tuple(c.id for c in ms[mid].connectors if c.id != used and c.type != "base")
+
+
+def _mate_step(ms: ModuleSet, prev: str, free: Tuple[str, ...], mid: str) -> Optional[Tuple[str, ...]]:
+    """Free connectors of ``mid`` after attaching it to one of the ``free`` connectors of ``prev`` (None if
+    that does not work with exactly one connector pair)."""
+    import weakref
+    return _mate_step_cached(id(ms), prev, tuple(free), mid, weakref.ref(ms))
+
+
+@lru_cache(maxsize=256)
+def _cost_terms(cost: str) -> Tuple[Tuple[str, float], ...]:
+    from .costs import parse_cost
+    return tuple(parse_cost(cost).terms)

@@ -1,0 +1,311 @@
+"""The first-party optimizer plugins (optimizers/robodesign_optimizers) on a small enumerable search space
+with a known optimum, plus the search-space methods they use.
+
+The space: the built-in ``robodesign_arm`` set restricted to base 1, tool 12, no links except the adapter
+3 and 3 DoF: 32 orders (``1,{L joints}…,3,{S joints}…,12``). The task (written to a tmp dir): two
+position-only ``reach`` goals, no obstacles, fixed base. Cost ``Whit2`` (= 0.025·numJ + 0.1·mass), which
+is deterministic and differs between designs. The optimum is computed by evaluating every candidate with
+one shared ``Evaluator``; its cache makes the plugin runs afterwards cheap.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from robodesign.evaluator import Evaluation, Evaluator, EvaluatorSpec, score_of
+from robodesign.module_io import load_module_set
+from robodesign.optimize import Budget, SerialExecutor, Study, available_optimizers, load_optimizer
+from robodesign.search_space import BaseBounds, Candidate, SearchSpace
+from robodesign.solve import STAGES
+
+PLUGINS = ("random", "genetic", "elimination", "heuristic", "optuna")
+LINKS_OUT = ("4", "5", "6", "7", "8", "9", "10", "11", "15")  # every passive module except the adapter 3
+RULES = dict(min_dof=3, max_dof=3, bases=("1",), end_effectors=("12",), exclude=LINKS_OUT, max_links_between=1)
+COST = "Whit2"
+OPTIONS = {  # per plugin, for the small space
+    "random": {"max_duplicates": 2000},
+    "genetic": {"population_size": 8},
+    "elimination": {"cost": COST},
+    "heuristic": {"cost": COST, "beam_width": 4},
+    "optuna": {"n_startup_trials": 8},
+}
+
+
+def _T(x, y, z):
+    return [[1, 0, 0, x], [0, 1, 0, y], [0, 0, 1, z], [0, 0, 0, 1]]
+
+
+def write_task(path: Path, goals) -> Path:
+    """A task with position-only reach goals (r_sph ≤ 2 cm), no obstacles, a fixed base at the origin."""
+    task = {
+        "header": {"ID": f"test/{path.stem}", "version": "2022", "taskName": path.stem, "author": ["robodesign tests"],
+                   "affiliation": ["robodesign"], "email": ["tests@robodesign.invalid"], "tags": ["test"],
+                   "date": "2024-01-01", "timeStepSize": 0.01, "gravity": [0, 0, -9.81]},
+        "obstacles": [],
+        "constraints": [{"type": "joint", "parts": ["q", "dq", "tau"]}, {"type": "selfCollisionFree"},
+                        {"type": "allGoalsFulfilled"}, {"type": "basePlacement", "pose": {"nominal": _T(0, 0, 0)}}],
+        "goals": [{"ID": str(i + 1), "type": "reach",
+                   "goalPose": {"nominal": _T(*g), "toleranceProjection": ["r_sph"], "tolerance": [[0.0, 0.02]]}}
+                  for i, g in enumerate(goals)],
+    }
+    path.write_text(json.dumps(task, indent=1))
+    return path
+
+
+def _bench(folder: Path, goals):
+    ev = Evaluator(EvaluatorSpec(task=str(write_task(folder / "task.json", goals)), module_set="robodesign_arm",
+                                 cost=COST, seed=0))
+    space = ev.search_space(**RULES)
+    cands = [space.nominal_candidate(o) for o in space.enumerate_orders()]
+    t0 = time.perf_counter()
+    evals = {c.key(): ev(c, space.base_bounds) for c in cands}
+    best = min(evals.values(), key=lambda e: e.score)
+    return SimpleNamespace(ev=ev, space=space, cands=cands, evals=evals, best=best,
+                           seconds=time.perf_counter() - t0)
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory):
+    """Several feasible designs of different cost; the optimum is not the lightest order of the space."""
+    return _bench(tmp_path_factory.mktemp("two_reach"), [(0.3, 0.2, 0.45), (-0.2, 0.25, 0.55)])
+
+
+@pytest.fixture(scope="module")
+def far_bench(tmp_path_factory):
+    """Farther goals: many orders fail at the reach stage (for the reach-pruning rule)."""
+    return _bench(tmp_path_factory.mktemp("far_reach"), [(0.3, 0.2, 0.5), (-0.2, 0.3, 0.6)])
+
+
+def run(bench, name, seed=0, budget=None, **options):
+    opts = {**OPTIONS.get(name, {}), **options}
+    opt = load_optimizer(name)(bench.space, seed=seed, **opts)
+    study = Study(opt, SerialExecutor(lambda c: bench.ev(c, bench.space.base_bounds)),
+                  Budget(evaluations=budget or len(bench.cands)))
+    return opt, study.run()
+
+
+# -- the benchmark space ---------------------------------------------------------------------------------
+def test_space_has_a_known_optimum(bench):
+    sp = bench.space
+    assert sp.base_dims == 0
+    assert len(bench.cands) == sp.count_orders() == 32
+    assert all(sp.validate_order(c.order) is None for c in bench.cands)
+    feasible = sorted(e.score for e in bench.evals.values() if e.feasible)
+    assert len(feasible) >= 3 and feasible[0] < feasible[1]  # several feasible designs, a unique optimum
+    assert bench.best.feasible
+    # Whit2 = 0.025·numJ + 0.1·mass: the cost of a feasible design is fixed by its order
+    mass = sum(sp.module_info(m).mass for m in bench.best.candidate.order)
+    assert bench.best.cost == pytest.approx(0.025 * 3 + 0.1 * mass)
+    assert bench.best.costs["mass"] == pytest.approx(mass)
+    # the lightest order of the space is infeasible: a search must learn from failures
+    lightest = min(bench.cands, key=lambda c: sp.cost_lower_bound(c.order, COST))
+    assert not bench.evals[lightest.key()].feasible
+
+
+def test_all_plugins_are_installed():
+    assert set(PLUGINS) <= set(available_optimizers())
+
+
+# -- every plugin finds the optimum, deterministically ------------------------------------------------------
+@pytest.mark.parametrize("name", PLUGINS)
+def test_plugin_finds_the_optimum_deterministically(bench, name):
+    opt, res = run(bench, name)
+    keys = [e.candidate.key() for e in res.history]
+    assert res.best.score == bench.best.score
+    assert res.best.candidate == bench.best.candidate
+    assert len(keys) == len(set(keys)), "a candidate was asked twice"
+    assert all(bench.space.validate(e.candidate) is None for e in res.history)
+    opt2, res2 = run(bench, name)
+    assert [e.candidate.key() for e in res2.history] == keys  # same seed → same sequence
+    if name in ("elimination", "heuristic"):  # informed: fewer evaluations than the space size
+        assert res.stopped == "exhausted" and len(keys) < len(bench.cands)
+
+
+@pytest.mark.parametrize("name", ["genetic", "heuristic", "optuna"])
+def test_seed_changes_the_sequence(bench, name):
+    _, a = run(bench, name, seed=0, budget=10)
+    _, b = run(bench, name, seed=1, budget=10)
+    assert [e.candidate.key() for e in a.history] != [e.candidate.key() for e in b.history]
+
+
+# -- elimination ------------------------------------------------------------------------------------------------
+def test_elimination_exhausts_and_returns_none(bench):
+    for opts in ({"cost": COST}, {"cost": None}, {"cost": COST, "order_by": "enumeration"}):
+        opt, res = run(bench, "elimination", budget=10 * len(bench.cands), **opts)
+        assert res.stopped == "exhausted"
+        assert res.best.candidate == bench.best.candidate
+        assert opt.ask() is None and opt.ask() is None
+        if opts["cost"] is None:  # no bound: every order is evaluated, once
+            assert len(res.history) == len(bench.cands)
+
+
+def test_elimination_bound_order(bench):
+    """In bound order the orders come lightest first; the first feasible one is the optimum and ends the run."""
+    opt, res = run(bench, "elimination")
+    lbs = [bench.space.cost_lower_bound(e.candidate.order, COST) for e in res.history]
+    assert lbs == sorted(lbs)
+    assert [e.feasible for e in res.history].index(True) == len(res.history) - 1
+    assert opt.pruned["bound"] >= 1
+
+
+def test_elimination_reach_pruning_is_sound(far_bench):
+    """Every candidate skipped by the reach rule does fail at the reach stage; the optimum is still found."""
+    b = far_bench
+    assert sum(e.stage == "reach" for e in b.evals.values()) >= 8
+    for opts in ({"cost": COST}, {"cost": None}):
+        opt, res = run(b, "elimination", budget=100, keep_pruned=True, **opts)
+        assert res.stopped == "exhausted" and res.best.candidate == b.best.candidate
+        reach = [k for k, rule in opt.pruned_candidates if rule == "reach"]
+        assert len(reach) >= 3
+        assert all(b.evals[k].stage == "reach" for k in reach)
+        if opts["cost"] is None:  # without the bound every order is either evaluated or pruned
+            assert len(res.history) + len(opt.pruned_candidates) == len(b.cands)
+    _, res = run(b, "elimination", budget=100, cost=None, reach_pruning=False)
+    assert len(res.history) == len(b.cands)
+
+
+def test_elimination_base_grid():
+    """base_grid=k: the nominal base first, then the k^d grid over the free base dims (valid points only)."""
+    ms = load_module_set("robodesign_arm")
+    bb = BaseBounds(lower=(-0.2, -0.1, 0.0, 0.0), upper=(0.2, 0.1, 0.0, 0.0))
+    sp = SearchSpace(ms, base_bounds=bb, **RULES)
+    opt = load_optimizer("elimination")(sp, seed=0, base_grid=3)
+    first = [opt.ask() for _ in range(10)]
+    assert first[0].order == first[8].order and first[9].order != first[0].order
+    assert first[0].base == (0.0, 0.0)
+    assert {c.base for c in first[:9]} == {(x, y) for x in (-0.2, 0.0, 0.2) for y in (-0.1, 0.0, 0.1)}
+
+
+# -- heuristic ----------------------------------------------------------------------------------------------------
+def test_heuristic_without_cost_is_complete(bench):
+    """Without a cost bound (f = 0) the learned ranking drives the beam; widening makes it exhaustive."""
+    opt, res = run(bench, "heuristic", budget=100, cost=None, beam_width=2)
+    assert res.stopped == "exhausted" and len(res.history) == len(bench.cands)
+    assert res.best.candidate == bench.best.candidate
+    assert opt.ask() is None
+
+
+# -- optuna -------------------------------------------------------------------------------------------------------
+def test_optuna_nsga2_multi_objective(bench):
+    opt, res = run(bench, "optuna", multi_objective=True, population_size=8)
+    assert res.best.score == bench.best.score
+    front = opt.study.best_trials
+    assert front and all(len(t.values) == 2 for t in front)
+    assert all(t.constraints["infeasibility"] == 0 for t in front)  # infeasible designs never make the front
+    assert all(t.values[0] == bench.best.score for t in front)       # here Whit2 grows with the mass
+    _, res2 = run(bench, "optuna", multi_objective=True, population_size=8)
+    assert [e.candidate.key() for e in res2.history] == [e.candidate.key() for e in res.history]
+    # conditional encoding: one categorical parameter per position, named m0, m1, … (m{i}.{k} for other choice sets)
+    names = {n for t in opt.study.trials for n in t.params}
+    assert {"m0", "m1", "m2"} <= names and all(n.startswith("m") for n in names)
+
+
+# -- orders and base poses together (synthetic evaluations: fast, free base dims) -----------------------------------
+def _synthetic(space):
+    """Feasible iff the order holds a pitch joint (22 or 24); cost = mass/10 + distance of (x, y) to (0.1, -0.05)
+    (the distance is 0 only off the nominal base and off the elimination grid)."""
+    def evaluate(c: Candidate) -> Evaluation:
+        feasible = any(m in ("22", "24") for m in c.order)
+        x, y = c.base
+        cost = 0.1 * sum(space.module_info(m).mass for m in c.order) + math.hypot(x - 0.1, y + 0.05)
+        si = len(STAGES) if feasible else STAGES.index("ik")
+        return Evaluation(candidate=c, feasible=feasible, cost=cost if feasible else None,
+                          score=score_of(feasible, cost, si, 0), stage="done" if feasible else "ik", stage_index=si,
+                          goals_reached=0, seconds=0.0, seed=0)
+    return evaluate
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_orders_and_base_poses_together(name):
+    ms = load_module_set("robodesign_arm")
+    bb = BaseBounds(lower=(-0.2, -0.2, 0.0, 0.0), upper=(0.2, 0.2, 0.0, 0.0))
+    sp = SearchSpace(ms, base_bounds=bb, **RULES)
+    assert sp.base_dims == 2
+    opts = {**OPTIONS[name], **({"base_grid": 3} if name == "elimination" else {})}
+    if "cost" in opts:
+        opts["cost"] = "mass_0.1"  # a valid lower bound of the synthetic cost (the cost option must bound the study's cost)
+
+    def go():
+        opt = load_optimizer(name)(sp, seed=3, **opts)
+        return Study(opt, SerialExecutor(_synthetic(sp)), Budget(evaluations=60)).run()
+
+    res = go()
+    keys = [e.candidate.key() for e in res.history]
+    assert len(set(keys)) == len(keys) and (len(keys) == 60 or res.stopped == "exhausted")
+    assert all(sp.validate(e.candidate) is None for e in res.history)
+    assert len({e.candidate.base for e in res.history}) > 3 and len({e.candidate.order for e in res.history}) > 3
+    assert res.best.feasible
+    assert [e.candidate.key() for e in go().history] == keys
+
+
+# -- the search-space methods the plugins use -----------------------------------------------------------------------
+def test_successors_follow_free_connectors():
+    """After the L→S adapter only size-S modules may follow (the adapter's free connector is its S flange)."""
+    ms = load_module_set("robodesign_arm")
+    sp = SearchSpace(ms)
+    after = set(sp.successors(("1", "21", "3")))
+    assert after and all(ms[m].connectors[0].size == (0.075,) or "S" in ms[m].name for m in after)
+    assert "21" not in after and "22" not in after and "23" in after
+    assert sp.count_orders() == 87495424  # the number in assets/modules/robodesign_arm/README.md
+    rng = np.random.default_rng(0)
+    for order in [sp.random_order(rng) for _ in range(20)]:
+        assert sp.validate_order(order) is None
+
+
+def test_counts_and_bounds_match_brute_force(bench):
+    sp = bench.space
+    orders = [c.order for c in bench.cands]
+    mass = {o: sum(sp.module_info(m).mass for m in o) for o in orders}
+    for prefix in [(), ("1",), ("1", "21"), ("1", "21", "3"), ("1", "3", "24"), ("1", "22", "22", "22", "3")]:
+        below = [o for o in orders if o[:len(prefix)] == prefix]
+        assert sp.count_completions(prefix) == len(below)
+        pm = sum(sp.module_info(m).mass for m in prefix)
+        assert sp.lightest_completion(prefix) == pytest.approx(min(mass[o] for o in below) - pm)
+        assert sp.cost_lower_bound(prefix, COST) == pytest.approx(min(0.075 + 0.1 * mass[o] for o in below))
+    assert sp.count_completions(("1", "21", "21", "21", "21")) == 0 and sp.cost_lower_bound(("1", "23"), COST) == math.inf
+    for o in orders:  # for Whit2 the bound of a complete order is the cost of the design
+        e = bench.evals[sp.nominal_candidate(o).key()]
+        if e.feasible:
+            assert sp.cost_lower_bound(o, COST) == pytest.approx(e.cost)
+    assert sp.cost_lower_bound(orders[0], "cyc") == 0.0
+    assert sp.cost_lower_bound(orders[0], "fulfillN_-1") == -math.inf
+
+
+def test_reach_bound_matches_the_reach_stage(far_bench):
+    b = far_bench
+    for e in b.evals.values():
+        if e.stage == "reach":
+            _, R = b.space.reach_bound(e.candidate)
+            assert f"reaches at most {R:.3f} m" in e.message
+
+
+@pytest.mark.parametrize("name", PLUGINS)
+def test_batches(bench, name):
+    """batch_size > 1 (asks before tells): still valid, never repeated, deterministic, and the optimum is found
+    (the genetic algorithm fills a batch that outruns its generation with random immigrants)."""
+    def go():
+        opt = load_optimizer(name)(bench.space, seed=0, **OPTIONS[name])
+        return Study(opt, SerialExecutor(lambda c: bench.ev(c, bench.space.base_bounds)),
+                     Budget(evaluations=len(bench.cands)), batch_size=5).run()
+    res = go()
+    keys = [e.candidate.key() for e in res.history]
+    assert len(keys) == len(set(keys))
+    assert res.best.candidate == bench.best.candidate
+    assert [e.candidate.key() for e in go().history] == keys
+
+
+def test_genetic_generations_limit(bench):
+    opt, res = run(bench, "genetic", budget=100, population_size=6, generations=2)
+    assert res.stopped == "exhausted" and opt.generation == 1 and len(res.history) <= 12
+    assert opt.ask() is None
+
+
+def test_optuna_rejects_bad_objectives(bench):
+    with pytest.raises(ValueError):
+        load_optimizer("optuna")(bench.space, multi_objective=True, objectives="score,speed")
