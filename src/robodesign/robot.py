@@ -422,8 +422,7 @@ class Robot:
 
     def in_collision(self, q) -> bool:
         """Self-collision or contact with an obstacle (within the safety margin)."""
-        pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q), True)
-        return any(r.isCollision() for r in self.geom_data.collisionResults)
+        return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q), True))
 
     def collides_with_obstacles(self, q) -> bool:
         self._update_geometry(q)

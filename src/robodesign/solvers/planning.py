@@ -13,13 +13,22 @@ Decisions:
   steps are then ≤ ``resolution`` in every joint (conservative by up to √dof). :func:`check_path` steps
   by the largest joint difference directly (``ceil(max|Δq| / resolution)`` sub-steps per segment).
 * **Straight line first**: if the direct segment passes the dense check, no planner is called.
-* **Post-processing**: OMPL's ``PathSimplifier.simplify`` (shortcutting, vertex reduction, B-spline
-  smoothing, all checked by OMPL at the same resolution), then a greedy shortcut of our own (keep the
-  farthest directly reachable waypoint), then a dense re-check with :func:`check_path`. A path that
-  fails the re-check is never returned: the un-simplified path is tried, else the result is a failure.
-* **Determinism**: ``ou.RNG.setSeed(seed + 1)`` before anything that samples is created (OMPL seeds
-  each RNG instance from that generator; seed 0 is reserved by OMPL). Deterministic for a given seed
-  as long as the planner stops on a solution rather than on the time limit (``optimize=False``).
+* **Post-processing** (``simplify=True``): a greedy shortcut (from each kept waypoint jump to the
+  farthest one reachable in a straight line), then 40 random partial shortcuts between points on two
+  segments (seeded from ``seed``; a fixed count keeps the result deterministic), then collinear
+  waypoints are dropped. OMPL's ``PathSimplifier.simplify`` was not used: with a Python validity
+  checker its B-spline smoothing and Euclidean-resolution checks took 0.3–1.5 s per path. Finally the
+  path is re-checked densely with :func:`check_path`; a path that fails is never returned (the raw
+  planner path is tried next, else the result is a failure).
+* **Time limit**: ``time_limit`` bounds OMPL's solve; planners that overrun it (FMT/BFMT sample a fixed
+  number of states) are stopped by the validity checker, which reports every state invalid from
+  1.1·time_limit + 50 ms after the start of the solve. The straight-line check and post-processing
+  come on top.
+* **Determinism**: ``ou.RNG.setSeed(seed % (2³¹−2) + 1)`` before anything that samples is created
+  (OMPL seeds each RNG instance from that generator; seed 0 is reserved by OMPL). The result is
+  deterministic for a given seed as long as the planner stops on a solution rather than on the time
+  limit (``optimize=False``); PRM/PRM* grow their roadmap in a second thread, so their check counts
+  (not their paths, in our tests) vary.
 * **Anytime planners** (rrtstar, prmstar, bitstar, informedrrtstar, sorrtstar, ...): by default the
   path-length objective gets an infinite cost threshold, so every planner returns its first solution;
   ``optimize=True`` lets them refine until ``time_limit``.
@@ -30,7 +39,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -47,6 +56,7 @@ PLANNERS: Dict[str, str] = {
 }
 _LIMIT_SLACK = 1e-9
 _SHORTCUT_TRIES = 40
+_GOAL_TOL = 1e-9            # OMPL goal threshold (the last waypoint is then set to q_goal exactly)
 
 
 @dataclass
@@ -223,8 +233,9 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     """A collision-free joint path from ``q_start`` to ``q_goal`` (both kept exactly).
 
     ``planner``: one of :func:`available_planners` (case-insensitive). ``time_limit`` (s) bounds the
-    OMPL solve; simplification gets at most half of it again (min 0.05 s). ``resolution``: largest joint
-    step between checked states. ``stats``: planner, straight_line, time, plan_time, simplify_time,
+    OMPL solve. ``seed``: OMPL's and the shortcutting RNG seed. ``resolution``: largest joint step (rad
+    or m) between checked states. ``simplify``: shortcut the planner's path. ``optimize``: let anytime
+    planners refine the path length until ``time_limit`` instead of returning their first solution. ``stats``: planner, straight_line, time, plan_time, simplify_time,
     checks, raw_waypoints, waypoints, length (Euclidean joint-space length), reason
     ("straight_line" | "planned" | "invalid_start" | "invalid_goal" | "no_solution" | "final_check_failed").
     """
@@ -269,11 +280,8 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     if _segment_ok(valid, qs, qg, resolution, counter):
         stats["straight_line"] = True
         stats["raw_waypoints"] = 2
-        if np.array_equal(qs, qg):
-            return done(direct[:1].copy(), "straight_line")
-        return done(direct, "straight_line")
+        return done(direct, "straight_line")      # also for q_start == q_goal: always [start, goal]
 
-    deadline = t0 + float(time_limit)
     raw = _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats)
     if raw is None:
         return done(None, "no_solution")
@@ -337,7 +345,7 @@ def _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, coun
         for i in range(n):
             start[i] = float(qs[i])
             goal[i] = float(qg[i])
-        ss.setStartAndGoalStates(start, goal, 1e-9)
+        ss.setStartAndGoalStates(start, goal, _GOAL_TOL)
         obj = ob.PathLengthOptimizationObjective(si)
         if not optimize:
             obj.setCostThreshold(obj.infiniteCost())

@@ -1,0 +1,108 @@
+"""plan_path / check_path: collision-free joint paths around an obstacle that blocks the straight line."""
+import math
+
+import coal
+import numpy as np
+import pytest
+
+from robodesign.errors import InputError
+from robodesign.module_io import load_module_set
+from robodesign.robot import Obstacle, Robot
+from robodesign.solvers.planning import available_planners, check_path, plan_path
+
+from conftest import IMPROV
+
+ORDER = ["1", "21", "4", "22", "5", "23", "12"]
+QA = np.array([1.2, 0.6, 0.3, 0.8, 0.0, 0.5])
+QB = np.array([-1.2, 0.6, -0.3, 0.8, 0.0, 0.5])
+
+
+@pytest.fixture(scope="module")
+def robot():
+    r = Robot.from_order(load_module_set(IMPROV), ORDER)
+    # a 15 cm box around the TCP of the midpoint of the straight line QA→QB
+    mid = 0.5 * (QA + QB)
+    P = np.eye(4)
+    P[:3, 3] = r.fk(mid)[:3, 3]
+    r.set_obstacles([Obstacle("box", coal.Box(0.15, 0.15, 0.15), P)])
+    return r
+
+
+def dense_ok(robot, path, step):
+    """Independent dense check: every state at most ``step`` apart (per joint) is collision-free."""
+    for a, b in zip(path[:-1], path[1:]):
+        n = max(1, math.ceil(np.max(np.abs(b - a)) / step))
+        for k in range(n + 1):
+            q = a + (b - a) * (k / n)
+            if robot.in_collision(q) or np.any(q < robot.q_lower) or np.any(q > robot.q_upper):
+                return False
+    return True
+
+
+def test_setup_blocks_the_straight_line(robot):
+    assert not robot.in_collision(QA) and not robot.in_collision(QB)
+    assert robot.in_collision(0.5 * (QA + QB))
+    ok, bad = check_path(robot, np.array([QA, QB]), 0.01)
+    assert not ok and bad == 0
+
+
+def test_plan_around_the_box(robot):
+    res = plan_path(robot, QA, QB, time_limit=5.0, seed=1)
+    assert res.success and res.stats["reason"] == "planned" and not res.stats["straight_line"]
+    P = res.path
+    assert P.ndim == 2 and P.shape[1] == robot.dof and len(P) >= 3
+    assert np.array_equal(P[0], QA) and np.array_equal(P[-1], QB)      # start and goal exact
+    assert check_path(robot, P, 0.005) == (True, -1)
+    assert dense_ok(robot, P, 0.005)
+    assert res.stats["length"] == pytest.approx(float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1))))
+
+
+def test_same_seed_same_path(robot):
+    a = plan_path(robot, QA, QB, seed=7, time_limit=5.0)
+    b = plan_path(robot, QA, QB, seed=7, time_limit=5.0)
+    assert a.success and b.success
+    assert np.array_equal(a.path, b.path)
+
+
+@pytest.mark.parametrize("planner", ["bitstar", "prm"])
+def test_other_planners(robot, planner):
+    res = plan_path(robot, QA, QB, planner=planner, time_limit=5.0, seed=0)
+    assert res.success and res.stats["planner"] == planner
+    assert np.array_equal(res.path[0], QA) and np.array_equal(res.path[-1], QB)
+    assert dense_ok(robot, res.path, 0.005)
+
+
+def test_straight_line_first(robot):
+    q1 = QA + np.array([0.0, 0.0, 0.0, 0.0, 0.2, 0.0])
+    res = plan_path(robot, QA, q1)
+    assert res.success and res.stats["straight_line"] and res.stats["reason"] == "straight_line"
+    assert np.array_equal(res.path, np.array([QA, q1]))
+    same = plan_path(robot, QA, QA)
+    assert same.success and np.array_equal(same.path, np.array([QA, QA]))
+
+
+def test_invalid_requests(robot):
+    with pytest.raises(InputError) as e:
+        plan_path(robot, QA, QB, planner="nosuchplanner")
+    assert "rrtconnect" in str(e.value) and "bitstar" in str(e.value)
+    assert "rrtconnect" in available_planners() and "ait*" not in available_planners()
+    with pytest.raises(InputError):
+        plan_path(robot, QA[:3], QB)
+    mid = 0.5 * (QA + QB)                      # colliding start / goal: a clean failure, no exception
+    res = plan_path(robot, mid, QB)
+    assert not res.success and res.stats["reason"] == "invalid_start" and res.path.shape == (0, robot.dof)
+    res = plan_path(robot, QA, mid)
+    assert not res.success and res.stats["reason"] == "invalid_goal"
+    outside = QA.copy()
+    outside[0] = robot.q_upper[0] + 0.1
+    assert not plan_path(robot, outside, QB).success
+
+
+def test_check_path_reports_the_first_bad_segment(robot):
+    mid = 0.5 * (QA + QB)
+    q1 = QA + np.array([0.0, 0.0, 0.0, 0.0, 0.2, 0.0])
+    assert check_path(robot, np.array([q1, QA]), 0.01) == (True, -1)
+    assert check_path(robot, np.array([q1, QA, QB]), 0.01) == (False, 1)     # segment QA→QB hits the box
+    assert check_path(robot, np.array([q1, QA, mid]), 5.0) == (False, 2)     # the waypoint itself collides
+    assert check_path(robot, np.array([mid, QA]), 0.01) == (False, 0)
+    assert check_path(robot, np.zeros((0, robot.dof)), 0.01) == (True, -1)
