@@ -39,8 +39,7 @@ class SolveSettings:
     timing: str = "toppra"
     optimize_trajectory: bool = False
     trajopt_nodes: int = 30
-    ik_batch_seeds: int = 64  # seeds of the batched (vectorised) IK tried first; 0 disables it
-    ik_restarts: int = 200  # sequential LM restarts when the batched IK found nothing
+    ik_restarts: int = 300  # LM restarts per goal before the goal counts as unreachable
     ik_solutions: int = 4  # distinct IK solutions per goal to choose from
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
     seed: int = 0
@@ -232,7 +231,6 @@ class _GoalPlanner:
             self.w_time = 1.0
         self.order = [task.goal(gid) for gid in task.goal_order]
         self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
-        self._chain = None  # batched-IK kinematics (False: not a serial chain)
         self.follow_ik: Dict[str, List[np.ndarray]] = {}
 
     # -- IK ------------------------------------------------------------------------------------
@@ -241,23 +239,9 @@ class _GoalPlanner:
         reached = 0
         for g in self.order:
             if isinstance(g, (At, Reach)):
-                sols = []
-                reason = "no restarts"
-                if self.settings.ik_batch_seeds > 0 and self._chain is not False:
-                    from .solvers.batch_ik import ChainKinematics, batch_ik
-                    if self._chain is None:
-                        try:
-                            self._chain = ChainKinematics(self.robot)
-                        except ValueError:  # not a serial chain: sequential IK only
-                            self._chain = False
-                    if self._chain is not False:
-                        sols = batch_ik(self.robot, g.pose, self.rng, n_seeds=self.settings.ik_batch_seeds,
-                                        n_solutions=self.settings.ik_solutions, chain=self._chain).solutions
-                        reason = "batched IK found nothing"
-                if not sols and self.settings.ik_restarts > 0:
-                    r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
-                                 n_solutions=self.settings.ik_solutions)
-                    sols, reason = r.solutions, str(r.stats.get("reason"))
+                r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
+                             n_solutions=self.settings.ik_solutions)
+                sols, reason = r.solutions, str(r.stats.get("reason"))
                 if not sols:
                     self.res.goals_reached = reached
                     raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
