@@ -54,14 +54,20 @@ def load_task(name_or_path: Union[str, Path]) -> Task:
     return parse_task(data, f)
 
 
-def parse_task(data, file: Path) -> Task:
-    fname = file.name
+def validate_task_json(data, fname: str) -> dict:
+    """Schema-validate task JSON (``Constraints`` is accepted as ``constraints``, as the reference does)."""
     if not isinstance(data, dict):
         raise InputError("a task file must hold a JSON object", file=fname)
     if "Constraints" in data and "constraints" not in data:
         data = dict(data)
         data["constraints"] = data.pop("Constraints")
     validate(data, "task", fname)
+    return data
+
+
+def parse_task(data, file: Path) -> Task:
+    fname = file.name
+    data = validate_task_json(data, fname)
     h = data["header"]
     tid = str(h["ID"])
     root = _package_root(file, tid)

@@ -33,7 +33,7 @@ from ..module_io import parse_module_set
 from ..module_spec import ModuleSet
 from ..schema import validate
 from ..solution import Solution, parse_solution
-from ..task_io import parse_task
+from ..task_io import parse_task, validate_task_json
 from ..task_spec import Task
 from . import db
 from .safefiles import (_dangerous, DictSource, FileSource, FolderSource, TooLarge, ZipSource, assert_no_symlinks,
@@ -271,13 +271,7 @@ class Bench:
 
     def add_task(self, text: str, source: FileSource, fname: str = "task.json", origin: str = "upload") -> dict:
         """Validate (schema first), store the task file and its referenced meshes, register it."""
-        data = loads_json(text, fname)
-        if not isinstance(data, dict):
-            raise InputError("a task file must hold a JSON object", file=fname)
-        if "Constraints" in data and "constraints" not in data:
-            data = dict(data)
-            data["constraints"] = data.pop("Constraints")
-        validate(data, "task", fname)
+        data = validate_task_json(loads_json(text, fname), fname)
         tid = str(data["header"]["ID"])
         segs = task_id_segments(tid, fname)
         if self._has_task(tid):
