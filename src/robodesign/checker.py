@@ -92,6 +92,11 @@ class Verdict:
                 "timings": self.timings}
 
 
+def _describe(violations) -> str:
+    """``[(projection, value, lo, hi)]`` of a tolerated pose → readable text."""
+    return "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in violations)
+
+
 def _num(v):
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return None
@@ -388,7 +393,7 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
             return []
         v = c.pose.violations(r.base_pose)
         return [Violation("basePlacement", "base pose outside its tolerance: " +
-                          "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in v))]
+                          _describe(v))]
     if isinstance(c, EndEffectorConstraint):
         out = []
         if math.isfinite(c.v_max) or c.v_min > 0 or math.isfinite(c.o_max) or c.o_min > 0:
@@ -409,7 +414,7 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
             for k in bad[:limit]:
                 vv = c.pose.violations(T[k])
                 out.append(Violation("endEffector.pose", "TCP pose outside the tolerance: " +
-                                     "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in vv),
+                                     _describe(vv),
                                      sample=k, time=float(ctx.t[k])))
         return out
     # allGoalsFulfilled, order, validAssembly, alwaysTrue are handled elsewhere / always true
@@ -519,7 +524,7 @@ def _check_goal(g: Goal, ctx: _Context, g2t: Dict[str, float]):
         if not g.pose.valid(T):
             vv = g.pose.violations(T)
             out.append(V(f"{g.type}: TCP pose outside the goal tolerance: " +
-                         "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in vv),
+                         _describe(vv),
                          sample=k))
         if isinstance(g, Reach):
             tw = ctx.twist()[k]
@@ -591,7 +596,7 @@ def _check_follow(g: Follow, ctx: _Context, k: int, tg: float, V):
             if not pose.valid(Ti):
                 vv = pose.violations(Ti)
                 out.append(V(f"follow: pose {i} not met at t={ti:.4f}: " +
-                             "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in vv),
+                             _describe(vv),
                              time=ti))
         k0 = int(np.searchsorted(ctx.t, t_start - 1e-9, side="left"))
     else:
