@@ -64,16 +64,9 @@ def _print_summary(s: dict) -> None:
 
 
 def cmd_run(args) -> int:
-    from .paths import DEFAULT_MODULE_SET
-    from .module_io import load_module_set
-    from .robot import Robot
-    ms = load_module_set(DEFAULT_MODULE_SET)
-    from .defaults import DEFAULT_ORDER
-    robot = Robot.from_order(ms, DEFAULT_ORDER)
-    s = robot.summary()
-    s["module_set"] = ms.name
-    _print_summary(s)
-    return 0
+    """Run an experiment config (default: the bundled configs/default.yaml); docs/experiments.md."""
+    from .experiment.cli import cmd_run as _cmd_run
+    return _cmd_run(args)
 
 
 def cmd_check(args) -> int:
@@ -187,7 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
     ol.add_argument("--json", action="store_true")
     ol.set_defaults(func=commands.cmd_optimizers)
 
-    run = sub.add_parser("run", help="run an experiment (default: the built-in demo)")
+    run = sub.add_parser("run", help="run an experiment config (default: the built-in demo); resumable")
+    from .experiment.cli import add_run_arguments
+    add_run_arguments(run)
     run.set_defaults(func=cmd_run)
 
     sv = sub.add_parser("serve", help="run the benchmark website (upload, check and rank solutions)")

@@ -1,0 +1,85 @@
+"""``robodesign run [CONFIG] [--out DIR] [--resume DIR] [--executor serial|process|ray] [--workers N]
+[--address ADDR]`` (the ``run`` subcommand; ``robodesign.cli`` delegates here)."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..errors import InputError
+
+DEFAULT_CONFIG = "configs/default.yaml"
+
+
+def add_run_arguments(run: argparse.ArgumentParser) -> None:
+    run.add_argument("config", nargs="?", help=f"experiment config (YAML); default: the bundled {DEFAULT_CONFIG} "
+                                               "(the built-in pick-and-place demo)")
+    run.add_argument("--out", metavar="DIR", help="results folder (default: results/<config name>-<timestamp>/)")
+    run.add_argument("--resume", metavar="DIR", help="continue the experiment in this results folder (after a "
+                                                     "crash or kill); finished runs are skipped")
+    run.add_argument("--executor", choices=("serial", "process", "ray"), help="override the config's executor")
+    run.add_argument("--workers", type=int, help="worker processes / Ray actors (default: the config's, else "
+                                                 "the number of CPUs)")
+    run.add_argument("--address", help="Ray cluster address HOST:PORT (with --executor ray; default: start a "
+                                        "private local Ray instance)")
+    run.add_argument("--progress", choices=("auto", "bar", "lines", "none"), default="auto",
+                     help="progress display (default: a bar on a terminal, one line per evaluation otherwise)")
+    run.add_argument("--no-report", action="store_true", help="do not write the report (CSV, plots, HTML)")
+
+
+def default_config_path() -> Path:
+    from ..paths import project_root
+    return project_root() / DEFAULT_CONFIG
+
+
+def cmd_run(args) -> int:
+    from .config import load_experiment
+    from .report import base_pose_text
+    from .runner import default_out_dir, load_resume, make_progress, run_experiment
+
+    if args.workers is not None and args.workers < 1:
+        raise InputError("--workers must be at least 1")
+    if args.address and (args.executor or "ray") != "ray":
+        raise InputError("--address needs --executor ray")
+    executor = args.executor or ("ray" if args.address else None)
+    if args.resume:
+        if args.config:
+            raise InputError("give either a CONFIG or --resume DIR, not both (a resumed experiment uses the "
+                             "config.yaml saved in its folder)")
+        if args.out:
+            raise InputError("--out cannot be combined with --resume")
+        out = Path(args.resume)
+        exp, text, _meta = load_resume(out)
+        cfg_path = None
+    else:
+        cfg_path = Path(args.config) if args.config else default_config_path()
+        exp, text = load_experiment(cfg_path, display=args.config or str(cfg_path))
+        out = Path(args.out) if args.out else default_out_dir(exp.name)
+    progress = make_progress(args.progress)
+    n_runs = len(list(exp.runs()))
+    progress.message(f"experiment {exp.name}: {len(exp.problems)} task(s) × {len(exp.optimizers)} optimizer(s) × "
+                     f"{len(exp.seeds)} seed(s) = {n_runs} runs → {out}")
+    try:
+        outcome = run_experiment(exp, out, config_text=text, config_path=cfg_path, resume=bool(args.resume),
+                                 executor=executor, workers=args.workers, address=args.address, progress=progress,
+                                 report=not args.no_report)
+    finally:
+        progress.close()
+    print(f"\n{outcome.evaluations} evaluations ({outcome.new_evaluations} new) in {outcome.runs} runs, "
+          f"{outcome.seconds:.1f} s")
+    for task, b in outcome.best.items():
+        if b is None:
+            print(f"best robot for {task}: none feasible found")
+            continue
+        import json
+        sol = json.loads(b["solution"]) if b.get("solution") else {}
+        bp = (sol.get("basePose") or [None])[0]
+        params = json.loads(b["base"])
+        print(f"best robot for {task}: {b['optimizer']} seed {b['run_seed']}, cost {sol.get('costFunction', '')} = "
+              f"{b['cost']:.6g}")
+        print(f"  module order  {','.join(json.loads(b['module_order']))}")
+        print(f"  base pose     {base_pose_text(bp)}" + (f"  (search parameters {[round(x, 4) for x in params]})"
+                                                       if params else ""))
+    print(f"results: {outcome.out_dir}")
+    if outcome.report:
+        print(f"report:  {outcome.report}")
+    return 0

@@ -1,0 +1,707 @@
+"""Experiment configs: YAML → validated :class:`ExperimentConfig` → :class:`ResolvedExperiment`.
+
+Two steps, both with errors that name the file and the field (``configs/x.yaml: optimizers[1].budget:
+budget '5x': use e.g. 500evals, ...``), raised as :class:`robodesign.errors.InputError` (CLI exit code 2):
+
+1. :func:`load_config` reads the YAML (syntax errors with line/column, duplicate keys rejected) and
+   validates its *shape* with pydantic (unknown fields, types, ranges, budgets, costs, benchmark IDs).
+2. :func:`resolve_config` resolves what the config names: task files, module sets, optimizer plugins
+   (loaded and instantiated once with their options), rules against the module set. Relative paths are
+   relative to the folder of the config file.
+
+The reference of every field is docs/experiments.md.
+"""
+from __future__ import annotations
+
+import dataclasses
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
+
+from ..errors import InputError, format_json_path
+from ..optimize import Budget
+from ..solve import SolveSettings
+
+DEFAULT_BUDGET = "50evals"
+EXECUTORS = ("serial", "process", "ray")
+
+
+# ------------------------------------------------------------------------------------------------
+# YAML
+# ------------------------------------------------------------------------------------------------
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that rejects duplicate mapping keys (PyYAML silently keeps the last one)."""
+
+
+def _construct_mapping(loader, node, deep=False):
+    loader.flatten_mapping(node)
+    seen = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in seen:
+            m = key_node.start_mark
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key {key!r} (first at line {seen[key] + 1})", m)
+        seen[key] = key_node.start_mark.line
+    return yaml.SafeLoader.construct_mapping(loader, node, deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def read_yaml(text: str, display: str) -> Any:
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+        what = " ".join(x for x in (e.context, e.problem) if x) or str(e)
+        raise InputError(f"{where}invalid YAML: {what}", file=display) from None
+    except yaml.YAMLError as e:
+        raise InputError(f"invalid YAML: {e}", file=display) from None
+
+
+# ------------------------------------------------------------------------------------------------
+# schema
+# ------------------------------------------------------------------------------------------------
+_STRICT = ConfigDict(extra="forbid", str_strip_whitespace=True)
+
+
+def _budget_text(v):
+    if v is None:
+        return v
+    if isinstance(v, bool):
+        raise ValueError(f"expected a budget such as 500evals or 60s, got {v!r}")
+    if isinstance(v, (int, float)):
+        v = str(v)
+    if not isinstance(v, str):
+        raise ValueError(f"expected a budget such as 500evals, 60s or 500evals,60s, got {v!r}")
+    Budget.parse(v)  # raises InputError (a ValueError) with the reason
+    return v
+
+
+def _str_list(v, what="name"):
+    if v is None:
+        return v
+    if isinstance(v, (str, int)) and not isinstance(v, bool):
+        return [str(v)]
+    if isinstance(v, list):
+        return [str(x) if isinstance(x, int) and not isinstance(x, bool) else x for x in v]
+    return v
+
+
+def _check_cost(v: str) -> str:
+    from ..costs import parse_cost
+    c = parse_cost(v)
+    if c.is_empty:
+        raise ValueError("empty cost function")
+    return v
+
+
+class Rules(BaseModel):
+    """Search-space rules (``SearchSpace``): DoF range, passive links between joints, allowed modules."""
+    model_config = _STRICT
+    min_dof: int = Field(6, ge=1)
+    max_dof: int = Field(6, ge=1)
+    max_links_between: int = Field(1, ge=0)
+    max_modules: int = Field(16, ge=2)
+    bases: Optional[List[str]] = None
+    end_effectors: Optional[List[str]] = None
+    exclude: List[str] = Field(default_factory=list)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _dof(cls, data):
+        if isinstance(data, dict) and "dof" in data:
+            data = dict(data)
+            d = data.pop("dof")
+            if isinstance(d, list) and len(d) == 2:
+                data.setdefault("min_dof", d[0])
+                data.setdefault("max_dof", d[1])
+            elif isinstance(d, int) and not isinstance(d, bool):
+                data.setdefault("min_dof", d)
+                data.setdefault("max_dof", d)
+            else:
+                raise ValueError(f"dof: expected a number or [min, max], got {d!r}")
+        return data
+
+    _lists = field_validator("bases", "end_effectors", "exclude", mode="before")(classmethod(
+        lambda cls, v: _str_list(v)))
+
+    @model_validator(mode="after")
+    def _range(self):
+        if self.min_dof > self.max_dof:
+            raise ValueError(f"min_dof ({self.min_dof}) is larger than max_dof ({self.max_dof})")
+        return self
+
+    def merged(self, override: Optional["Rules"]) -> "Rules":
+        if override is None:
+            return self
+        return self.model_copy(update={k: getattr(override, k) for k in override.model_fields_set})
+
+
+class TaskEntry(BaseModel):
+    """One task: a task ID (searched in ``task_dirs`` then the built-in tasks) or a task file."""
+    model_config = _STRICT
+    task: str
+    name: Optional[str] = None
+    modules: Optional[str] = None
+    cost: Optional[List[str]] = None
+    rules: Optional[Rules] = None
+    base_search: Optional[bool] = None
+
+    _c = field_validator("cost", mode="before")(classmethod(lambda cls, v: _str_list(v)))
+
+    @field_validator("cost")
+    @classmethod
+    def _costs(cls, v):
+        if v is not None:
+            if not v:
+                raise ValueError("give at least one cost")
+            for c in v:
+                _check_cost(c)
+        return v
+
+
+class BenchmarkEntry(BaseModel):
+    """A CoBRA benchmark ID ``Robot:Cost:Task`` (robot = the module set to optimise)."""
+    model_config = _STRICT
+    id: str
+    name: Optional[str] = None
+    rules: Optional[Rules] = None
+    base_search: Optional[bool] = None
+
+    @field_validator("id")
+    @classmethod
+    def _bid(cls, v):
+        from ..benchmark_id import BenchmarkID
+        bid = BenchmarkID.parse(v)
+        if bid.is_collaborative or bid.robot.robots[0].kind != "module_set":
+            raise ValueError(f"benchmark ID {v!r}: only module-set robots (Name or M-Name) can be optimised")
+        return v
+
+
+class OptimizerEntry(BaseModel):
+    model_config = _STRICT
+    name: str
+    label: Optional[str] = None
+    options: Dict[str, Any] = Field(default_factory=dict)
+    budget: Optional[str] = None
+    batch_size: Optional[int] = Field(None, ge=1)
+
+    _b = field_validator("budget", mode="before")(classmethod(lambda cls, v: _budget_text(v)))
+
+    @field_validator("label")
+    @classmethod
+    def _label(cls, v):
+        if v is not None and not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
+            raise ValueError(f"label {v!r}: use letters, digits, '_', '.', '+', '-' only")
+        return v
+
+    @property
+    def key(self) -> str:
+        return self.label or self.name
+
+
+class ExecutorConfig(BaseModel):
+    model_config = _STRICT
+    kind: Literal["serial", "process", "ray"] = "serial"
+    workers: Optional[int] = Field(None, ge=1)
+    address: Optional[str] = None
+
+
+def _solve_model():
+    fields = {}
+    for f in dataclasses.fields(SolveSettings):
+        if f.name == "seed":
+            continue  # per-candidate seeds are derived by the evaluator
+        fields[f.name] = (type(f.default) if f.default is not None else Any, f.default)
+    return create_model("SolveConfig", __config__=_STRICT, **fields)
+
+
+SolveConfig = _solve_model()
+
+
+class ExperimentConfig(BaseModel):
+    """The whole config file (docs/experiments.md)."""
+    model_config = _STRICT
+    name: Optional[str] = None
+    description: str = ""
+    task_dirs: List[str] = Field(default_factory=list)
+    module_dirs: List[str] = Field(default_factory=list)
+    modules: Optional[str] = None
+    cost: List[str] = Field(default_factory=lambda: ["cyc"])
+    rules: Rules = Field(default_factory=Rules)
+    base_search: bool = True
+    tasks: List[TaskEntry] = Field(default_factory=list)
+    benchmarks: List[BenchmarkEntry] = Field(default_factory=list)
+    optimizers: List[OptimizerEntry] = Field(min_length=1)
+    budget: str = DEFAULT_BUDGET
+    seeds: List[int] = Field(default_factory=lambda: [0], min_length=1)
+    eval_seed: Optional[int] = Field(None, ge=0)
+    batch_size: int = Field(1, ge=1)
+    executor: ExecutorConfig = Field(default_factory=ExecutorConfig)
+    solve: SolveConfig = Field(default_factory=SolveConfig)  # type: ignore[valid-type]
+
+    _b = field_validator("budget", mode="before")(classmethod(lambda cls, v: _budget_text(v)))
+    _c = field_validator("cost", "task_dirs", "module_dirs", mode="before")(classmethod(lambda cls, v: _str_list(v)))
+
+    @field_validator("cost")
+    @classmethod
+    def _costs(cls, v):
+        if not v:
+            raise ValueError("give at least one cost")
+        for c in v:
+            _check_cost(c)
+        return v
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v):
+        if v is not None and not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
+            raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it names the results folder)")
+        return v
+
+    @field_validator("tasks", mode="before")
+    @classmethod
+    def _tasks(cls, v):
+        if isinstance(v, str):
+            v = [v]
+        if isinstance(v, list):
+            return [{"task": x} if isinstance(x, str) else x for x in v]
+        return v
+
+    @field_validator("benchmarks", mode="before")
+    @classmethod
+    def _benchmarks(cls, v):
+        if isinstance(v, str):
+            v = [v]
+        if isinstance(v, list):
+            return [{"id": x} if isinstance(x, str) else x for x in v]
+        return v
+
+    @field_validator("optimizers", mode="before")
+    @classmethod
+    def _optimizers(cls, v):
+        if isinstance(v, str):
+            v = [v]
+        if isinstance(v, list):
+            return [{"name": x} if isinstance(x, str) else x for x in v]
+        return v
+
+    @field_validator("executor", mode="before")
+    @classmethod
+    def _executor(cls, v):
+        return {"kind": v} if isinstance(v, str) else v
+
+    @field_validator("seeds", mode="before")
+    @classmethod
+    def _seeds(cls, v):
+        if isinstance(v, int) and not isinstance(v, bool):
+            return [v]
+        return v
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds_unique(cls, v):
+        if any(s < 0 for s in v):
+            raise ValueError("seeds must be non-negative integers")
+        if len(set(v)) != len(v):
+            raise ValueError(f"seeds must be distinct, got {v}")
+        return v
+
+    @model_validator(mode="after")
+    def _something_to_do(self):
+        if not self.tasks and not self.benchmarks:
+            raise ValueError("give at least one entry in 'tasks' or 'benchmarks'")
+        keys = [o.key for o in self.optimizers]
+        dup = sorted({k for k in keys if keys.count(k) > 1})
+        if dup:
+            raise ValueError(f"optimizer {dup[0]!r} is listed twice: give the entries distinct 'label's")
+        return self
+
+
+# ------------------------------------------------------------------------------------------------
+# loading
+# ------------------------------------------------------------------------------------------------
+def _format_pydantic(e: ValidationError, display: str) -> InputError:
+    msgs = []
+    for err in e.errors():
+        loc = [p for p in err.get("loc", ()) if isinstance(p, (str, int))]
+        msg = str(err.get("msg", ""))
+        for prefix in ("Value error, ", "Assertion failed, "):
+            if msg.startswith(prefix):
+                msg = msg[len(prefix):]
+        typ = err.get("type", "")
+        if typ == "extra_forbidden":
+            parent = loc[:-1]
+            msg = f"unknown field {loc[-1]!r}" + _known_fields_hint(parent)
+        elif typ == "missing":
+            msg = "required field is missing"
+        elif "input" in err and typ not in ("value_error", "assertion_error") and not isinstance(err["input"], dict):
+            msg += f" (got {err['input']!r})"
+        msgs.append((format_json_path(loc), msg))
+    path, msg = msgs[0]
+    extra = "".join(f"\n  {display}: {p + ': ' if p else ''}{m}" for p, m in msgs[1:])
+    return InputError(msg + extra, file=display, path=path or None)
+
+
+def _known_fields_hint(parent: Sequence) -> str:
+    model: Any = ExperimentConfig
+    for p in parent:
+        if isinstance(p, int):
+            continue
+        f = getattr(model, "model_fields", {}).get(p)
+        if f is None:
+            return ""
+        ann = f.annotation
+        args = getattr(ann, "__args__", ()) or ()
+        cand = [ann, *args, *[a2 for a in args for a2 in (getattr(a, "__args__", ()) or ())]]
+        model = next((c for c in cand if isinstance(c, type) and issubclass(c, BaseModel)), None)
+        if model is None:
+            return ""
+    names = list(getattr(model, "model_fields", {}))
+    return f" (known: {', '.join(names)})" if names else ""
+
+
+def parse_config(data: Any, display: str) -> ExperimentConfig:
+    if data is None:
+        raise InputError("the config is empty", file=display)
+    if not isinstance(data, dict):
+        raise InputError(f"a config must be a YAML mapping (key: value), got {type(data).__name__}", file=display)
+    try:
+        return ExperimentConfig.model_validate(data)
+    except ValidationError as e:
+        raise _format_pydantic(e, display) from None
+
+
+def load_config(path, display: Optional[str] = None) -> Tuple[ExperimentConfig, str]:
+    """Read and validate a config file. Returns (config, the YAML text)."""
+    p = Path(path)
+    display = display or str(path)
+    if not p.is_file():
+        raise InputError("no such config file", file=display)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"cannot read the config: {e}", file=display) from None
+    return parse_config(read_yaml(text, display), display), text
+
+
+# ------------------------------------------------------------------------------------------------
+# resolution
+# ------------------------------------------------------------------------------------------------
+@dataclass
+class Problem:
+    """One (task, module set, cost, rules, base search) combination: the 'task' of a run."""
+    name: str
+    task_id: str
+    task_ref: str          # what Evaluator/load_task gets: a built-in task ID or an absolute path
+    modules_ref: str       # a built-in module set name or an absolute folder
+    module_set_name: str
+    cost: str
+    rules: Dict[str, Any]
+    base_search: bool
+    where: str             # config path of the entry, for messages
+    _space: Any = field(default=None, repr=False)
+    _models: Any = field(default=None, repr=False)  # (Task, ModuleSet) loaded in this process
+
+    def task_and_modules(self):
+        if self._models is None:
+            from ..module_io import load_module_set
+            from ..task_io import load_task
+            self._models = (load_task(self.task_ref), load_module_set(self.modules_ref))
+        return self._models
+
+    def evaluator_spec(self, seed: int, solve: SolveSettings):
+        from ..evaluator import EvaluatorSpec
+        return EvaluatorSpec(task=self.task_ref, module_set=self.modules_ref, cost=self.cost, settings=solve,
+                             seed=int(seed))
+
+    def search_space(self, evaluator=None):
+        """The search space (built once; loads the task and module set in this process)."""
+        if self._space is None:
+            from ..evaluator import Evaluator, EvaluatorSpec
+            from ..search_space import BaseBounds, SearchSpace
+            ev = evaluator or Evaluator(EvaluatorSpec(task=self.task_ref, module_set=self.modules_ref))
+            if evaluator is None:
+                ev._task, ev._ms = self.task_and_modules()
+            rules = dict(self.rules)
+            for k in ("bases", "end_effectors"):
+                if rules.get(k) is not None:
+                    rules[k] = tuple(rules[k])
+            rules["exclude"] = tuple(rules.get("exclude") or ())
+            if self.base_search:
+                self._space = ev.search_space(**rules)
+            else:
+                bb = BaseBounds.from_tolerance(ev.task.base_placement)
+                self._space = SearchSpace(ev.module_set, base_bounds=BaseBounds(nominal=bb.nominal), **rules)
+        return self._space
+
+    def to_json(self) -> dict:
+        return {"name": self.name, "task_id": self.task_id, "task": self.task_ref, "modules": self.modules_ref,
+                "module_set": self.module_set_name, "cost": self.cost, "rules": self.rules,
+                "base_search": self.base_search}
+
+
+@dataclass
+class OptimizerRun:
+    label: str
+    name: str
+    options: Dict[str, Any]
+    budget: Budget
+    budget_text: str
+    batch_size: int
+
+
+@dataclass
+class RunSpec:
+    problem: Problem
+    optimizer: OptimizerRun
+    seed: int
+
+    @property
+    def run_id(self) -> str:
+        return run_id(self.problem.name, self.optimizer.label, self.seed)
+
+
+def run_id(problem: str, optimizer: str, seed: int) -> str:
+    return f"{problem}|{optimizer}|{seed}"
+
+
+@dataclass
+class ResolvedExperiment:
+    config: ExperimentConfig
+    name: str
+    file: str               # display name of the config file
+    base_dir: Path          # relative paths were resolved against this folder
+    problems: List[Problem]
+    optimizers: List[OptimizerRun]
+    seeds: List[int]
+    solve: SolveSettings
+    executor: ExecutorConfig
+
+    def runs(self) -> Iterator[RunSpec]:
+        """Every run, in a fixed order: problem, then optimizer, then seed."""
+        for p in self.problems:
+            for o in self.optimizers:
+                for s in self.seeds:
+                    yield RunSpec(p, o, s)
+
+    def eval_seed(self, run_seed: int) -> int:
+        return self.config.eval_seed if self.config.eval_seed is not None else int(run_seed)
+
+    def spec_id(self, problem: Problem, run_seed: int) -> str:
+        return f"{problem.name}#{self.eval_seed(run_seed)}"
+
+    def evaluator_specs(self) -> Dict[str, Any]:
+        """spec id → EvaluatorSpec of every (problem, evaluation seed) the runs need."""
+        out = {}
+        for r in self.runs():
+            sid = self.spec_id(r.problem, r.seed)
+            if sid not in out:
+                out[sid] = r.problem.evaluator_spec(self.eval_seed(r.seed), self.solve)
+        return out
+
+
+def _search_dirs(dirs: List[str], base: Path, display: str, key: str) -> List[Path]:
+    out = []
+    for i, d in enumerate(dirs):
+        p = (base / d).resolve() if not Path(d).is_absolute() else Path(d)
+        if not p.is_dir():
+            raise InputError(f"no such folder {d!r} (resolved to {p})", file=display, path=[key, i])
+        out.append(p)
+    return out
+
+
+def _find_task(ref: str, base: Path, task_dirs: List[Path], display: str, path) -> Tuple[str, Path]:
+    """→ (reference for load_task, file). Order: a path relative to the config folder, task_dirs, built-in."""
+    from ..paths import builtin_tasks_dir
+    cand = Path(ref)
+    tried = []
+    if cand.is_absolute() or ref.endswith(".json") or ref.startswith("."):
+        p = cand if cand.is_absolute() else (base / cand)
+        for q in (p, Path(str(p) + ".json")):
+            if q.is_file():
+                return str(q.resolve()), q.resolve()
+        tried.append(str(p))
+    name = ref[:-5] if ref.endswith(".json") else ref
+    for d in task_dirs:
+        q = d / f"{name}.json"
+        if q.is_file():
+            return str(q.resolve()), q.resolve()
+        tried.append(str(q))
+    q = builtin_tasks_dir() / f"{name}.json"
+    if q.is_file():
+        return name, q  # built-in: pass the ID (portable to other machines)
+    tried.append(f"built-in {q}")
+    raise InputError(f"no such task file or task ID {ref!r} (looked for: {', '.join(tried)})",
+                     file=display, path=path)
+
+
+def _find_modules(ref: str, base: Path, module_dirs: List[Path], display: str, path) -> str:
+    from ..paths import builtin_module_sets
+    cand = Path(ref)
+    tried = []
+    if cand.is_absolute() or "/" in ref or ref.startswith("."):
+        p = cand if cand.is_absolute() else (base / cand).resolve()
+        if (p / "modules.json").is_file() or (p.is_file() and p.suffix == ".json"):
+            return str(p)
+        tried.append(str(p))
+    for d in module_dirs:
+        q = d / ref
+        if (q / "modules.json").is_file():
+            return str(q.resolve())
+        tried.append(str(q))
+    if ref in builtin_module_sets():
+        return ref
+    tried.append(f"built-in ({', '.join(builtin_module_sets()) or 'none'})")
+    raise InputError(f"no such module set {ref!r} (looked for: {', '.join(tried)})", file=display, path=path)
+
+
+def _slug(s: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_./+\-]+", "_", s)
+
+
+def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_optimizers: bool = True,
+                   default_name: Optional[str] = None) -> ResolvedExperiment:
+    """Resolve tasks, module sets and optimizers; load each task and module set once (parse errors
+    surface here) and instantiate each optimizer with its options on the first problem's search space."""
+    from ..evaluator import Evaluator, EvaluatorSpec
+    from ..module_io import load_module_set
+    from ..paths import DEFAULT_MODULE_SET
+    from ..task_io import load_task
+
+    base_dir = Path(base_dir)
+    task_dirs = _search_dirs(cfg.task_dirs, base_dir, display, "task_dirs")
+    module_dirs = _search_dirs(cfg.module_dirs, base_dir, display, "module_dirs")
+    default_modules = cfg.modules or DEFAULT_MODULE_SET
+
+    raw: List[dict] = []
+    for i, t in enumerate(cfg.tasks):
+        where = ["tasks", i]
+        task_ref, _ = _find_task(t.task, base_dir, task_dirs, display, where + ["task"])
+        mod_path = where + ["modules"] if t.modules else ["modules"]
+        modules_ref = _find_modules(t.modules or default_modules, base_dir, module_dirs, display, mod_path)
+        for cost in (t.cost or cfg.cost):
+            raw.append(dict(entry=t, where=where, task_ref=task_ref, modules_ref=modules_ref, cost=cost,
+                            rules=cfg.rules.merged(t.rules), base_search=cfg.base_search if t.base_search is None
+                            else t.base_search, name=t.name, n_costs=len(t.cost or cfg.cost)))
+    for i, b in enumerate(cfg.benchmarks):
+        from ..benchmark_id import BenchmarkID
+        where = ["benchmarks", i]
+        bid = BenchmarkID.parse(b.id)
+        task_ref, _ = _find_task(bid.task, base_dir, task_dirs, display, where + ["id"])
+        modules_ref = _find_modules(bid.robot.robots[0].name, base_dir, module_dirs, display, where + ["id"])
+        cost = b.id.split(":")[1].strip()
+        raw.append(dict(entry=b, where=where, task_ref=task_ref, modules_ref=modules_ref, cost=cost,
+                        rules=cfg.rules.merged(b.rules), base_search=cfg.base_search if b.base_search is None
+                        else b.base_search, name=b.name, n_costs=1))
+
+    # load every task and module set once: file errors name the file and field
+    tasks: Dict[str, Any] = {}
+    sets: Dict[str, Any] = {}
+    for r in raw:
+        try:
+            if r["task_ref"] not in tasks:
+                tasks[r["task_ref"]] = load_task(r["task_ref"])
+            if r["modules_ref"] not in sets:
+                sets[r["modules_ref"]] = load_module_set(r["modules_ref"])
+        except InputError as e:
+            raise InputError(f"{e}", file=display, path=r["where"]) from None
+
+    # names: the task ID; disambiguated by cost / module set / base search when several entries share it
+    problems: List[Problem] = []
+    for r in raw:
+        task = tasks[r["task_ref"]]
+        ms = sets[r["modules_ref"]]
+        r["task_id"] = task.id
+        r["ms_name"] = ms.name
+    for r in raw:
+        if r["name"]:
+            name = r["name"] if r["n_costs"] == 1 else f"{r['name']}-{r['cost']}"
+        else:
+            same = [o for o in raw if o["task_id"] == r["task_id"]]
+            name = r["task_id"]
+            if len({o["cost"] for o in same}) > 1:
+                name += f"-{r['cost']}"
+            if len({o["modules_ref"] for o in same}) > 1:
+                name += f"-{r['ms_name']}"
+            if len({o["base_search"] for o in same}) > 1 and not r["base_search"]:
+                name += "-fixed_base"
+        name = _slug(name).strip("/")
+        rules = r["rules"].model_dump()
+        problems.append(Problem(name=name, task_id=r["task_id"], task_ref=r["task_ref"], modules_ref=r["modules_ref"],
+                                module_set_name=r["ms_name"], cost=r["cost"], rules=rules,
+                                base_search=bool(r["base_search"]), where=format_json_path(r["where"])))
+    seen: Dict[str, Problem] = {}
+    for p in problems:
+        if p.name in seen:
+            raise InputError(f"two entries resolve to the same run name {p.name!r} ({seen[p.name].where} and "
+                             f"{p.where}): give one of them a distinct 'name'", file=display, path=p.where)
+        seen[p.name] = p
+
+    # rules against the module set
+    for p, r in zip(problems, raw):
+        ms = sets[p.modules_ref]
+        rpath = list(r["where"]) + ["rules"] if r["entry"].rules is not None else ["rules"]
+        for key, kind in (("bases", "base"), ("end_effectors", "eef"), ("exclude", None)):
+            for j, mid in enumerate(p.rules.get(key) or ()):
+                if mid not in ms:
+                    raise InputError(f"module {mid!r} is not in module set {ms.name!r}", file=display,
+                                     path=rpath + [key, j])
+                if kind and ms[mid].kind != kind:
+                    raise InputError(f"module {mid!r} is a {ms[mid].kind} module, not a {kind} module",
+                                     file=display, path=rpath + [key, j])
+        ev = Evaluator(EvaluatorSpec(task=p.task_ref, module_set=p.modules_ref))
+        ev._task, ev._ms = tasks[p.task_ref], ms
+        p._models = (tasks[p.task_ref], ms)
+        p.search_space(ev)
+
+    # optimizers
+    opts: List[OptimizerRun] = []
+    for i, o in enumerate(cfg.optimizers):
+        budget_text = o.budget or cfg.budget
+        opts.append(OptimizerRun(label=o.key, name=o.name, options=dict(o.options), budget=Budget.parse(budget_text),
+                                 budget_text=budget_text, batch_size=o.batch_size or cfg.batch_size))
+        if check_optimizers:
+            check_optimizer(o.name, o.options, problems[0].search_space(), display, ["optimizers", i])
+
+    solve = SolveSettings(**cfg.solve.model_dump())
+    name = cfg.name or default_name or Path(display).stem
+    return ResolvedExperiment(config=cfg, name=name, file=display, base_dir=base_dir, problems=problems,
+                              optimizers=opts, seeds=list(cfg.seeds), solve=solve, executor=cfg.executor)
+
+
+def check_optimizer(name: str, options: dict, space, display: str, path: list) -> None:
+    from ..optimize import available_optimizers, load_optimizer
+    if name not in available_optimizers():
+        known = ", ".join(sorted(available_optimizers())) or "none installed"
+        raise InputError(f"unknown optimizer {name!r} (installed: {known})", file=display, path=path + ["name"])
+    try:
+        cls = load_optimizer(name)
+    except InputError as e:
+        raise InputError(e.reason, file=display, path=path + ["name"]) from None
+    except Exception as e:  # a registered plugin that fails to import
+        raise InputError(f"optimizer {name!r} is registered but cannot be loaded: {type(e).__name__}: {e}",
+                         file=display, path=path + ["name"]) from None
+    try:
+        cls(space, seed=0, **options)
+    except TypeError as e:
+        raise InputError(f"optimizer {name!r} does not accept these options: {e}", file=display,
+                         path=path + ["options"]) from None
+    except (ValueError, KeyError) as e:
+        raise InputError(f"optimizer {name!r}: bad option: {e}", file=display, path=path + ["options"]) from None
+
+
+def load_experiment(path, display: Optional[str] = None, base_dir: Optional[Path] = None,
+                    default_name: Optional[str] = None) -> Tuple[ResolvedExperiment, str]:
+    """load_config + resolve_config. Returns (experiment, YAML text)."""
+    cfg, text = load_config(path, display)
+    disp = display or str(path)
+    exp = resolve_config(cfg, disp, base_dir or Path(path).resolve().parent, default_name=default_name)
+    return exp, text
