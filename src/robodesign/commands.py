@@ -90,7 +90,7 @@ def cmd_optimizers(args) -> int:
 
 def cmd_optimize(args) -> int:
     from .costs import parse_cost
-    from .evaluator import Evaluator, EvaluatorSpec
+    from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from .optimize import Budget, SerialExecutor, Study, load_optimizer
     from .solve import SolveSettings
     from .task_io import load_task, resolve_task_path
@@ -99,7 +99,7 @@ def cmd_optimize(args) -> int:
     task_path = str(resolve_task_path(args.task))
     load_task(task_path)  # validate early
     spec = EvaluatorSpec(task=task_path, module_set=args.modules, cost=args.cost,
-                         settings=SolveSettings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
+                         settings=evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
                          seed=args.seed)
     ev = Evaluator(spec)
     rules = {}

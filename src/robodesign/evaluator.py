@@ -67,15 +67,20 @@ def candidate_seed(study_seed: int, key: str) -> int:
     return int.from_bytes(h[:4], "little")
 
 
+def evaluation_settings(**overrides) -> SolveSettings:
+    """Solve settings for optimizer evaluations: 60 IK restarts per goal (``solve`` uses 300) — 4.5× faster
+    screening on PTP_3 for ~1 in 11 marginal feasible candidates lost (docs/benchmarks.md); optimizers see
+    many candidates, so throughput wins."""
+    return SolveSettings(**{"ik_restarts": 60, **overrides})
+
+
 @dataclass
 class EvaluatorSpec:
     """Everything an evaluator needs, as plain data (picklable; heavy objects are rebuilt per process)."""
     task: Union[str, Task]
     module_set: Union[str, ModuleSet]
     cost: str = "cyc"
-    # 60 IK restarts per goal: 4.5x faster than 300 on PTP_3 screening, losing ~1 in 11 feasible candidates
-    # (docs/benchmarks.md); optimizers see many candidates, so throughput wins
-    settings: SolveSettings = field(default_factory=lambda: SolveSettings(ik_restarts=60))
+    settings: SolveSettings = field(default_factory=evaluation_settings)
     seed: int = 0
     keep_solutions: bool = True
 

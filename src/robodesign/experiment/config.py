@@ -215,11 +215,13 @@ class ExecutorConfig(BaseModel):
 
 
 def _solve_model():
+    from ..evaluator import evaluation_settings
+    defaults = dataclasses.asdict(evaluation_settings())  # the same defaults as the optimize CLI and the API
     fields = {}
     for f in dataclasses.fields(SolveSettings):
         if f.name == "seed":
             continue  # per-candidate seeds are derived by the evaluator
-        fields[f.name] = (type(f.default) if f.default is not None else Any, f.default)
+        fields[f.name] = (type(f.default) if f.default is not None else Any, defaults[f.name])
     return create_model("SolveConfig", __config__=_STRICT, **fields)
 
 

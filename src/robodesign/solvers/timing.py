@@ -640,7 +640,8 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
     qs = np.abs(path(grid, 1))
     with np.errstate(divide="ignore"):
-        x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
+        with np.errstate(over="ignore"):  # tiny path derivatives: the bound is +inf anyway
+            x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
     x_vel = np.minimum(x_vel, 1e6)
     sd = None
     passes = max(1, torque_passes) if use_torque else 1
