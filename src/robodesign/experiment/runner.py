@@ -342,6 +342,13 @@ def load_resume(folder: Path):
         raise InputError(f"unreadable meta.json: {e}", file=str(folder)) from None
     exp, text = load_experiment(cfg_p, display=str(cfg_p), base_dir=Path(meta.get("config_dir") or folder),
                                 default_name=meta.get("name"))
+    if isinstance(meta.get("solve"), dict):
+        # the solve settings the evaluations were made with, not today's defaults: a resume stays exact
+        # even if robodesign's defaults changed in between
+        import dataclasses
+        from ..solve import SolveSettings
+        known = {f.name for f in dataclasses.fields(SolveSettings)}
+        exp.solve = SolveSettings(**{k: v for k, v in meta["solve"].items() if k in known})
     return exp, text, meta
 
 
