@@ -3,6 +3,8 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+from conftest import assert_within_limits as check_limits
 import pytest
 
 from robodesign import Robot, load_module_set
@@ -41,19 +43,6 @@ PATH = np.array([[0.0, -0.5, 1.0, 0.0, 0.5, 0.0],
                  [1.0, 0.3, 0.2, 0.6, -0.3, 0.8],
                  [0.7, 0.6, -0.4, 0.8, -0.6, 1.0],
                  [0.2, 0.4, -0.1, 0.3, -0.2, 0.4]])
-
-
-def check_limits(robot, tr):
-    """Independent check of every sample with Robot.drivetrain_torque (one call per sample)."""
-    assert np.all(tr.q >= robot.q_lower - 1e-12) and np.all(tr.q <= robot.q_upper + 1e-12)
-    assert np.all(np.abs(tr.dq) <= robot.dq_max * (1 + 1e-6))
-    assert np.all(np.abs(tr.ddq) <= robot.ddq_max * (1 + 1e-9))
-    worst = 0.0
-    for q, dq, ddq in zip(tr.q, tr.dq, tr.ddq):
-        tau = robot.drivetrain_torque(q, dq, ddq)
-        assert np.all(np.abs(tau) <= robot.tau_max * (1 + 1e-9))
-        worst = max(worst, float(np.max(np.abs(tau) / robot.tau_max)))
-    return worst
 
 
 def check_sampling(tr, dt=DT):

@@ -2,6 +2,8 @@
 from pathlib import Path
 
 import numpy as np
+
+from conftest import assert_within_limits as check_all_samples
 import pytest
 
 from robodesign import Robot, load_module_set
@@ -35,19 +37,6 @@ def min_time(arm, straight):
 @pytest.fixture(scope="module")
 def min_energy(arm, straight):
     return optimize_trajectory(arm, straight, cost="mechEnergy", n_nodes=30, dt_out=DT)
-
-
-def check_all_samples(robot, tr):
-    """Every limit at every output sample, torques computed independently per sample."""
-    assert np.all(tr.q >= robot.q_lower) and np.all(tr.q <= robot.q_upper)
-    assert np.all(np.abs(tr.dq) <= robot.dq_max * (1 + 1e-6))
-    assert np.all(np.abs(tr.ddq) <= robot.ddq_max * (1 + 1e-9))
-    worst = 0.0
-    for q, dq, ddq in zip(tr.q, tr.dq, tr.ddq):
-        tau = robot.drivetrain_torque(q, dq, ddq)
-        assert np.all(np.abs(tau) <= robot.tau_max * (1 + 1e-9))
-        worst = max(worst, float(np.max(np.abs(tau) / robot.tau_max)))
-    return worst
 
 
 def check_rest_to_rest(tr, qa, qb):
