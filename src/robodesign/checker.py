@@ -202,16 +202,15 @@ class _Context:
         jid = fr.parentJoint
         oMi = r.data.oMi[jid]
         p_tcp = r.data.oMf[r.tcp_frame].translation
-        f_world = pin.Force(np.asarray(w[:3]), np.asarray(w[3:]) + np.cross(p_tcp - oMi.translation, w[:3]) * 0)
-        # express the force (applied at the TCP point) in the joint frame: move reference to joint origin
-        f_at_joint_world = pin.Force(f_world.linear, f_world.angular + np.cross(p_tcp - oMi.translation, f_world.linear))
-        f_local = pin.Force(oMi.rotation.T @ f_at_joint_world.linear, oMi.rotation.T @ f_at_joint_world.angular)
+        f, tau = np.asarray(w[:3], dtype=float), np.asarray(w[3:], dtype=float)
+        # the force acts at the TCP point: about the joint origin it adds the moment (p_tcp − p_joint) × f;
+        # then both are expressed in the joint frame, as pinocchio's external forces are
+        moment = tau + np.cross(p_tcp - oMi.translation, f)
         fext = pin.StdVec_Force()
-        for j in range(r.model.njoints):
+        for _ in range(r.model.njoints):
             fext.append(pin.Force.Zero())
-        # pinocchio's RNEA subtracts f_ext: the environment pushes on the robot with w, the robot must
-        # resist it → the joint torque sees −w; we pass w as an external force acting on the body.
-        fext[jid] = f_local
+        # an external force on the body: RNEA subtracts it, so the joints see −Jᵀw (they resist the push)
+        fext[jid] = pin.Force(oMi.rotation.T @ f, oMi.rotation.T @ moment)
         return fext
 
     def taus(self) -> Tuple[np.ndarray, np.ndarray]:
