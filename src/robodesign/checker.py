@@ -20,13 +20,13 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
 
 from .assembly import Assembly
-from .costs import CostContext, known_costs, parse_cost
+from .costs import CostContext, parse_cost
 from .errors import AssemblyError, InputError
 from .geometry import coal_shapes
 from .module_io import load_module_set
@@ -34,9 +34,9 @@ from .module_spec import ModuleSet
 from .robot import Obstacle, Robot
 from .solution import Solution
 from .sweep import SweepChecker
-from .task_spec import (AllGoalsFulfilled, AlwaysTrue, At, BasePlacement, CollisionFree, Constraint,
-                        EndEffectorConstraint, Follow, Goal, GoalsInOrder, JointLimitsConstraint, Leave, Pause, Reach,
-                        ReturnTo, SelfCollisionFree, Task, ValidAssembly)
+from .task_spec import (AllGoalsFulfilled, At, BasePlacement, CollisionFree, Constraint, EndEffectorConstraint,
+                        Follow, Goal, GoalsInOrder, JointLimitsConstraint, Leave, Pause, Reach, ReturnTo,
+                        SelfCollisionFree, Task)
 
 LIMIT_RTOL = 1e-9  # relative slack on velocity/acceleration/torque limits (float round-off)
 Q_ATOL = 1e-9  # absolute slack on position limits [rad or m]
@@ -360,8 +360,6 @@ def _check_constraint(c: Constraint, ctx: _Context, window, settings: CheckSetti
     if isinstance(c, (CollisionFree, SelfCollisionFree)):
         env = isinstance(c, CollisionFree)
         Q = ctx.q[sl]
-        if not env:
-            saved = r.safety_margin if hasattr(r, "safety_margin") else 0.0
         checker = SweepChecker(r, check_self=True, check_env=env)
         moving = _moving_obstacle_pairs(r, ctx.task, checker) if env else None
         if moving is not None:  # pairs with moving obstacles are checked piecewise below

@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import sys
 import time
-from pathlib import Path
 from typing import Dict, List
 
 import numpy as np
@@ -92,7 +91,6 @@ def cmd_optimize(args) -> int:
     from .costs import parse_cost
     from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from .optimize import Budget, SerialExecutor, Study, load_optimizer
-    from .solve import SolveSettings
     from .task_io import load_task, resolve_task_path
     parse_cost(args.cost, path="--cost")
     budget = Budget.parse(args.budget)

@@ -14,10 +14,8 @@ from __future__ import annotations
 import hashlib
 import time
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Dict, List, Optional, Union
 
-import numpy as np
 
 from .module_spec import ModuleSet
 from .search_space import Candidate, SearchSpace

@@ -15,8 +15,8 @@ import numpy as np
 from .errors import InputError, describe_value
 from .geometry import parse_geometries
 from .jsonio import check_finite, dumps_json, load_json
-from .module_spec import (GENDERS, IGNORE_COLLISIONS, Body, Connector, Joint, JointLimits, Module,
-                          ModuleHeader, ModuleSet)
+from .module_spec import (IGNORE_COLLISIONS, Body, Connector, Joint, JointLimits, Module, ModuleHeader,
+                          ModuleSet)
 from .paths import builtin_module_sets
 from .schema import validate
 from .spatial import parse_pose, pose_to_list
@@ -41,7 +41,7 @@ def resolve_module_set_path(name_or_path: Union[str, Path]) -> Path:
     if p.is_dir():
         f = p / "modules.json"
         if not f.is_file():
-            raise InputError(f"folder has no modules.json", file=str(p))
+            raise InputError("folder has no modules.json", file=str(p))
         return f
     builtin = builtin_module_sets()
     if str(name_or_path) in builtin:
@@ -85,7 +85,7 @@ def parse_module_set(data, file: Path, name: Optional[str] = None) -> ModuleSet:
     root = file.parent
     validate(data, "modules", fname)
     modules: Dict[str, Module] = {}
-    body_ids, joint_ids, names = set(), set(), {}
+    names = {}
     for i, m in enumerate(data["modules"]):
         mod = _parse_module(m, root, fname, ["modules", i])
         if mod.id in modules:

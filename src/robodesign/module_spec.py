@@ -7,7 +7,7 @@ Specs are plain dataclasses: cheap to pickle to worker processes.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Iterator, Optional, Tuple
 

@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from .assembly import Assembly
 from .errors import AssemblyError, InputError
-from .geometry import GeometrySpec, coal_shapes
+from .geometry import coal_shapes
 from .module_spec import ModuleSet
 from .spatial import RX_PI, inv
 
@@ -164,7 +164,6 @@ class Robot:
                 if jt.type == "fixed":
                     queue.append((i, other_body, jid, placement @ Q))
                     continue
-                sign = -1.0 if rev else 1.0
                 if jt.type == "revolute":
                     jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
                 else:
@@ -186,7 +185,6 @@ class Robot:
                 fc.append(jt.friction_coulomb)
                 fv.append(jt.friction_viscous)
                 queue.append((i, other_body, new_jid, Q))
-                del sign
         missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
         if missing:
             raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")

@@ -17,13 +17,13 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional
 
 import numpy as np
 
 from .assembly import Assembly
 from .checker import Verdict, build_robot, check
-from .errors import AssemblyError, InputError, RobodesignError
+from .errors import RobodesignError
 from .module_spec import ModuleSet
 from .solution import Solution, Trajectory as SolutionTrajectory
 from .task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task

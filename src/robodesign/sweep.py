@@ -13,7 +13,6 @@ lasts less than that is not reported.
 from __future__ import annotations
 
 import heapq
-import math
 from dataclasses import dataclass
 from typing import List, Optional, Sequence
 
@@ -152,7 +151,6 @@ class SweepChecker:
         # priority queue of (sample index where the pair must be re-checked, pair)
         heap = [(0, c) for c in range(P)]
         heapq.heapify(heap)
-        tol = self.tolerance
         while heap:
             k = heap[0][0]
             due = []
@@ -222,7 +220,6 @@ class SweepChecker:
 
     def sample_collisions(self, Q) -> np.ndarray:
         """Boolean per sample: in collision at the sample itself (no in-between reasoning)."""
-        r = self.robot
         out = np.zeros(len(Q), dtype=bool)
         for k, q in enumerate(np.asarray(Q, dtype=float)):
             d = self._distances_at(q, range(len(self.pairs)))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, List, Union
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from .geometry import parse_geometries
 from .jsonio import check_finite, load_json
 from .paths import builtin_tasks_dir
 from .schema import validate
-from .spatial import inv, parse_pose
+from .spatial import parse_pose
 from .task_spec import (GLOBAL_ONLY, AllGoalsFulfilled, AlwaysTrue, At, BasePlacement, CollisionFree, Constraint,
                         EndEffectorConstraint, Follow, Goal, GoalsInOrder, JointLimitsConstraint, Leave,
                         ObstacleSpec, Pause, Reach, ReturnTo, SelfCollisionFree, Task, TaskHeader, ValidAssembly,

@@ -245,7 +245,12 @@ class RayPool(EvaluatorPool):
         self._owns = False
         if not ray.is_initialized():
             if address:
-                ray.init(address=address, logging_level=logging.WARNING, log_to_driver=True)
+                host = address.rsplit(":", 1)[0]
+                # a cluster on this machine's loopback: the driver must present itself with the same
+                # address, or Ray looks for a local node under the machine's external IP and fails
+                local = host in ("127.0.0.1", "localhost") or host.startswith("127.")
+                ray.init(address=address, logging_level=logging.WARNING, log_to_driver=True,
+                         **({"_node_ip_address": "127.0.0.1"} if local else {}))
             else:
                 ray.init(address="local", num_cpus=workers or max(1, os.cpu_count() or 1), include_dashboard=False,
                          _node_ip_address="127.0.0.1", logging_level=logging.WARNING, log_to_driver=True)

@@ -19,7 +19,7 @@ import math
 import sqlite3
 import time
 from pathlib import Path
-from typing import Any, Dict, Iterable, List, Optional
+from typing import List, Optional
 
 from ..evaluator import Evaluation
 from ..search_space import Candidate
