@@ -11,6 +11,9 @@ and stop; ``pause`` holds still; ``follow`` visits the IK solutions of its poses
 configuration whose TCP is outside the region and holds it for the duration. The trajectory starts
 at the configuration of the first pose goal (or a collision-free configuration if there is none).
 The returned cost is the checker's: one judge.
+
+Limitation: moving obstacles are planned around at their t = 0 pose only; the checker then judges the
+timed motion against the moving obstacles, so a collision with one fails the ``check`` stage.
 """
 from __future__ import annotations
 
