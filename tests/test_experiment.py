@@ -142,3 +142,75 @@ def test_serial_and_process_executors_give_identical_results(tmp_path):
         assert code == 0
         outs[ex] = rows(out / "evaluations.sqlite")
     assert outs["serial"] == outs["process"] and len(outs["serial"]) == 12
+
+
+def _pool_workers(parent: int):
+    """PIDs of the process-pool workers (spawn children) of ``parent``, from /proc."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except (OSError, IndexError, ValueError):
+            continue
+        if ppid == parent and "spawn_main" in cmd:
+            out.append(int(d.name))
+    return sorted(out)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_process_executor_survives_a_killed_worker_and_a_killed_driver(tmp_path):
+    """A pool worker killed mid-run is replaced (its candidate re-run); the driver killed later leaves no
+    orphan workers behind; the resumed experiment equals a serial run."""
+    cfg = write(tmp_path, SMALL.format(budget=14, executor="process"))
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    ref = tmp_path / "ref"
+    subprocess.run(RD + ["run", str(cfg), "--out", str(ref), "--executor", "serial", "--progress", "none"],
+                   check=True, env=env, capture_output=True, timeout=600)
+    out = tmp_path / "proc"
+    log = open(tmp_path / "proc.log", "w")
+    p = subprocess.Popen(RD + ["run", str(cfg), "--out", str(out), "--workers", "2", "--progress", "lines"], env=env,
+                         stdout=log, stderr=subprocess.STDOUT)
+    try:
+        killed_worker, workers = None, []
+        deadline = time.time() + 300
+        while time.time() < deadline and p.poll() is None:
+            try:
+                n = len(rows(out / "evaluations.sqlite"))
+            except sqlite3.Error:
+                n = 0
+            if killed_worker is None and n >= 3:
+                ws = _pool_workers(p.pid)
+                if ws:
+                    killed_worker = ws[0]
+                    os.kill(killed_worker, signal.SIGKILL)
+            elif killed_worker is not None and n >= 12:
+                workers = _pool_workers(p.pid)
+                p.send_signal(signal.SIGKILL)
+                break
+            time.sleep(0.05)
+        p.wait(timeout=60)
+        assert killed_worker is not None and workers, (tmp_path / "proc.log").read_text()[-3000:]
+        assert killed_worker not in workers  # the pool was restarted with new workers
+        t0 = time.time()
+        while any(_alive(w) for w in workers) and time.time() - t0 < 10:
+            time.sleep(0.1)
+        assert not any(_alive(w) for w in workers), "pool workers outlived the killed driver"
+    finally:
+        if p.poll() is None:
+            p.kill()
+    r = subprocess.run(RD + ["run", "--resume", str(out), "--workers", "2", "--progress", "none"], env=env,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert rows(out / "evaluations.sqlite") == rows(ref / "evaluations.sqlite")
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["sessions"][0]["executor"]["kind"] == "process" and len(meta["sessions"]) == 2

@@ -129,7 +129,23 @@ class SerialPool(EvaluatorPool):
 _WORKER: Dict[str, Evaluator] = {}
 
 
-def _init_worker(specs: Dict[str, EvaluatorSpec]) -> None:
+def _watch_parent(parent_pid: int, interval: float = 0.5) -> None:
+    """Exit when the driver is gone. A spawn worker of ``ProcessPoolExecutor`` holds both ends of its call
+    queue's pipe, so it never sees EOF: after a ``kill -9`` of the driver it would wait forever (an orphan
+    holding its models in memory)."""
+    import threading
+
+    def watch():
+        while True:
+            time.sleep(interval)
+            if os.getppid() != parent_pid:
+                os._exit(0)
+    threading.Thread(target=watch, name="robodesign-parent-watch", daemon=True).start()
+
+
+def _init_worker(specs: Dict[str, EvaluatorSpec], parent_pid: Optional[int] = None) -> None:
+    if parent_pid is not None:
+        _watch_parent(parent_pid)
     _WORKER.clear()
     _WORKER.update(build_evaluators(specs))
 
@@ -159,7 +175,7 @@ class ProcessPool(EvaluatorPool):
     def _start(self) -> None:
         ctx = multiprocessing.get_context("spawn")
         self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
-                                         initargs=(self.specs,))
+                                         initargs=(self.specs, os.getpid()))
         # start every worker now (and surface initializer errors before the first run)
         futs = [self._pool.submit(_ping) for _ in range(self.workers)]
         self.pids = sorted({f.result() for f in futs})
@@ -260,7 +276,6 @@ class RayPool(EvaluatorPool):
         super().__init__(specs, workers)
         self.address = address
         self.max_restarts = int(max_restarts)
-        self._specs_ref = ray.put(self.specs)
         self._actor_cls = ray.remote(EvaluatorActor).options(num_cpus=1, max_restarts=self.max_restarts,
                                                               max_task_retries=-1)
         self.actors = [self._new_actor() for _ in range(self.workers)]
@@ -274,7 +289,8 @@ class RayPool(EvaluatorPool):
         self.startup_seconds = time.perf_counter() - t0
 
     def _new_actor(self):
-        return self._actor_cls.remote(self._specs_ref)
+        # the specs are small plain data, passed inline: a restarted actor never depends on the object store
+        return self._actor_cls.remote(self.specs)
 
     def map(self, spec_id, candidates):
         import ray

@@ -382,6 +382,9 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
             pool = make_pool(kind, exp.evaluator_specs(), workers or exp.executor.workers,
                              address or exp.executor.address)
             session["executor"] = pool.info()
+            meta = json.loads((out / "meta.json").read_text())
+            meta["sessions"][-1] = session  # recorded now: a killed session keeps its executor in meta.json
+            _write_json(out / "meta.json", meta)
             progress.message(f"executor: {pool.kind}, {pool.workers} worker(s), ready in {pool.startup_seconds:.1f} s")
         for k, r in enumerate(runs, 1):
             if db.run_status(r.run_id) == "done":
