@@ -68,8 +68,7 @@ class Robot:
         self.data = self.model.createData()
         self._sync_link_model()
         self._n_self_pairs = len(self.geom_model.collisionPairs)
-        self.geom_data = pin.GeometryData(self.geom_model)
-        self._apply_margins()
+        self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self.obstacles: List[Obstacle] = []
         if base_pose is not None:
             self.set_base_pose(base_pose)
@@ -263,8 +262,7 @@ class Robot:
                 self.geom_model.geometryObjects[idx].placement = P
         self.data = self.model.createData()
         self._sync_link_model()
-        self.geom_data = pin.GeometryData(self.geom_model)
-        self._apply_margins()
+        self._geom_data = None
 
     def set_gravity(self, g: Sequence[float]) -> None:
         self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
@@ -290,8 +288,7 @@ class Robot:
             for a in range(n_robot):
                 geom.addCollisionPair(pin.CollisionPair(a, k))
         self.safety_margin = float(safety_margin)
-        self.geom_data = pin.GeometryData(geom)
-        self._apply_margins()
+        self._geom_data = None
 
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
@@ -304,11 +301,20 @@ class Robot:
             g.addCollisionPair(cp)
         return g
 
-    def _apply_margins(self) -> None:
+    @property
+    def geom_data(self) -> "pin.GeometryData":
+        """Scratch space of the collision queries (built lazily, after the last change of the geometry)."""
+        gd = self._geom_data
+        if gd is None:
+            gd = self._geom_data = pin.GeometryData(self.geom_model)
+            self._apply_margins(gd)
+        return gd
+
+    def _apply_margins(self, gd) -> None:
         # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
         # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
         margin = getattr(self, "safety_margin", 0.0)
-        for k, req in enumerate(self.geom_data.collisionRequests):
+        for k, req in enumerate(gd.collisionRequests):
             req.enable_contact = True
             if k >= self._n_self_pairs:
                 req.security_margin = margin

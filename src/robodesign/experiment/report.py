@@ -30,10 +30,12 @@ TIME_POINTS = 200
 
 
 def _f(v, nd=6) -> str:
+    """A cell: ``nd`` significant digits, or with ``nd=None`` the shortest text that reads back as the same
+    float (costs in evaluations.csv equal the database's exactly)."""
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return ""
     if isinstance(v, float):
-        return f"{v:.{nd}g}"
+        return repr(v) if nd is None else f"{v:.{nd}g}"
     return str(v)
 
 
@@ -124,7 +126,7 @@ def write_evaluations_csv(out: Path, runs: List[RunData]) -> Path:
         for rd in runs:
             for k, r in enumerate(rd.rows):
                 yield (rd.task, rd.optimizer, rd.seed, k + 1, r["candidate_key"], int(r["feasible"]), r["stage"],
-                       _f(r["cost"], 10), _f(rd.best_curve[k], 10), f"{r['wall']:.4f}", f"{r['eval_seconds']:.4f}")
+                       _f(r["cost"], None), _f(rd.best_curve[k], None), f"{r['wall']:.4f}", f"{r['eval_seconds']:.4f}")
     _write_csv(p, ("task", "optimizer", "seed", "evaluation", "candidate", "feasible", "stage", "cost", "best_cost",
                    "wall_s", "eval_s"), rows())
     return p

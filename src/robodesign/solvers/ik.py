@@ -316,6 +316,7 @@ class GoalModel:
         self.fallback: List = []          # constraints without an analytic row (rpy, euler, quat)
         self.boxes: Dict[str, Dict[str, Tuple[float, float]]] = {}
         self.sphere_hi = math.inf
+        self.term_specs: List[tuple] = []  # (projection, Q, pieces, target, periodic): the compiled kernel's input
         Rn = N[:3, :3]
         Qs: Dict[str, Optional[np.ndarray]] = {}
         for c in goal.constraints:
@@ -333,6 +334,7 @@ class GoalModel:
             else:
                 target = [_shrunk(a, b, info.lo, info.hi) for a, b in pieces]
             self.factories.append(_make_term(c.projection, Qs[c.frame], pieces, target, info.periodic))
+            self.term_specs.append((c.projection, Qs[c.frame], pieces, target, info.periodic))
             self.names.append(c.projection)
             if c.projection == "r_sph":
                 self.sphere_hi = min(self.sphere_hi, max(b for _, b in pieces))
@@ -350,6 +352,17 @@ class GoalModel:
                 T = goal.sample(np.random.default_rng(0))
             self.R_anchor_T = np.ascontiguousarray(goal.delta(T)[:3, :3].T)
         self.n_rows = sum(k for _, k in self.factories) + (3 if self.fallback else 0)
+        self._program = None          # the goal as compiled-kernel arrays (built on first use)
+
+    def program(self):
+        """``(tkind, tvec)`` for :mod:`.ik_kernel`, or None when a constraint has no kernel row."""
+        if self._program is None:
+            prog = None
+            if not self.fallback and not self.unconstrained:
+                from . import ik_kernel
+                prog = ik_kernel.compile_goal(self.term_specs)
+            self._program = prog if prog is not None else False
+        return self._program or None
 
     @staticmethod
     def _frame_Q(goal, frame: str, Rn) -> Optional[np.ndarray]:
@@ -584,6 +597,58 @@ except Exception:  # pragma: no cover - other numpy layouts
 # ---------------------------------------------------------------------------------------------------------
 # The solver
 # ---------------------------------------------------------------------------------------------------------
+class _Kernel:
+    """The compiled LM descent (:mod:`.ik_kernel`) bound to one robot, goal and buffers."""
+
+    def __init__(self, ck, prog, n, lo, hi, valid, max_iter, kmod):
+        tkind, tvec = prog
+        m = kmod.rows_of(tkind)
+        self.E, self.JJ, self.T = np.zeros(m), np.zeros((m, n)), np.zeros((4, 4))
+        self.q = np.zeros(n)
+        self.params = np.array([_LAMBDA_FACTOR, _LAMBDA_BIAS, _MAX_STEP, _STALL_RATIO, _STALL_WINDOW], dtype=float)
+        self.lo = np.ascontiguousarray(lo, dtype=float)
+        self.hi = np.ascontiguousarray(hi, dtype=float)
+        self.args = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp)
+        self.goal = (prog[0], prog[1])
+        self.valid, self.max_iter = valid, int(max_iter)
+        self._descend, self._batch = kmod.lm_descend, kmod.lm_batch
+        self.Ninv = None
+
+    def descend(self, q: np.ndarray, iters: int):
+        """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result."""
+        q = np.array(q, dtype=float)     # the kernel works in place
+        status, its = self._descend(q, iters, self.lo, self.hi, *self.args, self.Ninv, *self.goal, self.E, self.JJ,
+                                    self.T, self.params)
+        return (q if status == 1 and self.valid(self.T) else None), its
+
+    def batch(self, starts: np.ndarray, a: int, stop: int):
+        """(index, q or None, iterations): descents from starts[a:stop] until one lands in the goal."""
+        idx, its = self._batch(starts, a, stop, self.max_iter, self.lo, self.hi, *self.args, self.Ninv, *self.goal,
+                               self.E, self.JJ, self.T, self.params, self.q)
+        if idx < stop and self.valid(self.T):
+            return idx, self.q.copy(), its
+        return idx, None, its
+
+
+def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray, valid, max_iter: int):
+    """The compiled descent for this robot and goal (:class:`_Kernel`), or None when :mod:`.ik_kernel`
+    does not cover them (the Python loop then runs)."""
+    if gm.unconstrained:
+        return None
+    from . import ik_kernel
+    if not ik_kernel.available():
+        return None
+    prog = gm.program()
+    if prog is None:
+        return None
+    ck = ik_kernel.chain_kernel(robot)
+    if ck is None:
+        return None
+    k = _Kernel(ck, prog, n, lo, hi, valid, max_iter, ik_kernel)
+    k.Ninv = gm.N_inv
+    return k
+
+
 def _as_rng(rng) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
@@ -658,9 +723,9 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     # restarts draw exactly what robot.random_configuration(rng) draws, without its per-call set-up
     r_lo = np.where(np.isfinite(lo), lo, -math.pi)
     r_hi = np.where(np.isfinite(hi), hi, math.pi)
-    uniform, normal = rng.uniform, rng.normal
+    normal = rng.normal
 
-    def descend(q: np.ndarray, iters: int):
+    def py_descend(q: np.ndarray, iters: int):
         """LM from q; the accepted configuration or None. Counts iterations in ``total_iter``."""
         nonlocal total_iter
         best = math.inf
@@ -709,6 +774,16 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             trace.append((found is not None, it + 1, hist))
         return found
 
+    def kernel_descend(q: np.ndarray, iters: int):
+        """The same descent in the compiled loop."""
+        nonlocal total_iter
+        found, its = kernel.descend(q, iters)
+        total_iter += its
+        return found
+
+    kernel = _kernel_descend(robot, gm, n, lo, hi, valid, max_iter) if trace is None else None
+    descend = py_descend if kernel is None else kernel_descend
+
     def accept(q: np.ndarray) -> str:
         """Check limits, collision and distinctness of a converged configuration; add it if it passes."""
         if not ((q >= lo).all() and (q <= hi).all()):   # guaranteed by the clamping; kept as a guard
@@ -723,15 +798,27 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         sols.append(q.copy())
         return "added"
 
-    for attempt in range(max_restarts):
+    # every attempt's start at once: the same numbers as one uniform draw (random_configuration) per attempt
+    starts = r_lo + (r_hi - r_lo) * rng.random((max_restarts, n))
+    if q_seed is not None:
+        starts[0] = np.clip(q_seed, lo, hi)
+    attempt = 0
+    while attempt < max_restarts:
         if deadline is not None and attempt > 0 and time.perf_counter() > deadline:
             return finish("time_limit")
-        stats["attempts"] = attempt + 1
-        if attempt == 0 and q_seed is not None:
-            q = np.clip(q_seed, lo, hi)
+        if gm.unconstrained:
+            found = starts[attempt].copy()
+            attempt += 1
+        elif kernel is not None:
+            # descents in the compiled loop until one lands in the goal (one at a time under a time limit)
+            stop = max_restarts if deadline is None else attempt + 1
+            idx, found, its = kernel.batch(starts, attempt, stop)
+            total_iter += its
+            attempt = min(idx + 1, stop)
         else:
-            q = uniform(r_lo, r_hi)
-        found = q if gm.unconstrained else descend(q, max_iter)
+            found = descend(starts[attempt].copy(), max_iter)
+            attempt += 1
+        stats["attempts"] = attempt
         if found is None:
             continue
         stats["converged"] += 1
