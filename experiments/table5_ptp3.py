@@ -31,7 +31,7 @@ SHARED = HERE.parents[1] / "shared" / "cobra"
 PAPER = {"cyc": 5.47, "mechEnergy": 100.4, "Whit2": 1.62, "Liu2": 101.5}
 PAPER_BEST_CYC = 4.77
 # arms found by robodesign's optimizers on PTP_3 (experiments/optimize_ptp3.py; docs/benchmarks.md)
-DEFAULT_ORDERS = ["1,21,4,22,5,23,12", "1,29,4,29,5,23,12", "1,8,23,5,23,4,23,16", "1,6,23,5,23,4,23,101"]
+DEFAULT_ORDERS = ["1,15,21,4,22,5,22,12", "1,8,22,5,21,5,29,5,13", "1,21,4,22,5,23,12", "1,29,4,29,5,23,12", "1,8,23,5,23,4,23,16", "1,6,23,5,23,4,23,101"]
 
 
 def cycle_bound(robot, sol) -> float:

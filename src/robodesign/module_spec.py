@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Dict, Iterator, Optional, Tuple
 
 import numpy as np
 
 from .geometry import GeometrySpec
+from .spatial import RX_PI, inv
 
 GENDERS = ("f", "m", "h")
 JOINT_TYPES = ("revolute", "prismatic", "fixed")
@@ -28,6 +30,12 @@ class Connector:
     gender: str = "h"  # 'f', 'm' or 'h'
     type: str = ""
     size: Tuple[float, ...] = ()
+
+    @cached_property
+    def entry_pose(self) -> np.ndarray:
+        """Rx(π)·pose⁻¹: the pose of this connector's body in the frame of the connector it is mounted on
+        (mated connectors face each other: one frame is the other flipped about x). Computed once."""
+        return RX_PI @ inv(self.pose)
 
     def mates_with(self, other: "Connector") -> Tuple[bool, str]:
         """The paper's connector rule. Returns (ok, reason-if-not)."""

@@ -28,7 +28,7 @@ from .assembly import Assembly
 from .errors import AssemblyError, InputError
 from .geometry import coal_shapes
 from .module_spec import ModuleSet
-from .spatial import RX_PI, inv
+from .spatial import inv
 
 COULOMB_SMOOTHING = 100.0
 
@@ -98,7 +98,7 @@ class Robot:
         base_mod = ms[asm.module_ids[bi]]
         base_con = base_mod.connector(bcon)
         # base body pose in the base frame: the base connector's world pose is Rx(π)
-        start = (bi, base_con.body_id, 0, RX_PI @ inv(base_con.pose))
+        start = (bi, base_con.body_id, 0, base_con.entry_pose)
         visited = set()
         queue = deque([start])
         body_joint: Dict[Tuple[int, str], int] = {}
@@ -135,7 +135,8 @@ class Robot:
                 if other is not None:
                     j2, c2id = other
                     c2 = ms[asm.module_ids[j2]].connector(c2id)
-                    queue.append((j2, c2.body_id, jid, Mc @ RX_PI @ inv(c2.pose)))
+                    if (j2, c2.body_id) not in visited:
+                        queue.append((j2, c2.body_id, jid, Mc @ c2.entry_pose))
                 elif (i, c.id) != asm.base:
                     free_connectors.append((i, c, cf))
             for gi, g in enumerate(body.collision):

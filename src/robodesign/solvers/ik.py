@@ -29,13 +29,20 @@ How the tolerance is used (robodesign's decisions; projections as in :mod:`robod
   (distances between consecutive joint origins + prismatic strokes + TCP offset) fails at once
   (``reason="out_of_reach"``); only ``r_sph`` and complete x/y/z boxes are used for this bound.
 
-Inner loop (about 15 µs per iteration on the development machine): ``pin.computeJointJacobians`` +
-``updateFramePlacement`` + ``getFrameJacobian(LOCAL)`` (= ``robot.jacobian(q, reference=pin.LOCAL)``
-without the per-call input checks), damping ``λ = 0.02·‖e‖² + 1e-6`` (Sugihara's LM: damped far from
-the goal, Gauss–Newton close to it), the step capped at 1 (Euclidean, rad), clamping to the joint limits.
-An attempt ends on acceptance, after ``max_iter`` iterations or when the squared error has not dropped
-below 0.9× its best for 3 iterations (tuned on PTP_3: fewest iterations per success). The compiled goal
-model and the reach bound are cached per goal / robot (weak references).
+Inner loop: damping ``λ = 0.02·‖e‖² + 1e-6`` (Sugihara's LM: damped far from the goal, Gauss–Newton close
+to it), the step capped at 1 (Euclidean, rad), clamping to the joint limits. An attempt ends on acceptance,
+after ``max_iter`` iterations or when the squared error has not dropped below 0.9× its best for 3
+iterations (tuned on PTP_3: fewest iterations per success). The compiled goal model and the reach bound are
+cached per goal / robot (weak references). The starts of all attempts are drawn at once (uniform within
+the joint limits, ±π where a limit is infinite).
+
+Two implementations of the loop do the same arithmetic: the compiled one of :mod:`.ik_kernel` (numba,
+about 1 µs per iteration; it runs the descents of consecutive attempts in one call until one lands in the
+goal) for robots whose TCP chain has revolute/prismatic joints about ±z (every robodesign robot) and goals
+whose constraints have one interval each among x/y/z/N_x/N_y/N_z/r_sph/Theta_R/r_cyl; and the Python one
+(about 15 µs per iteration: ``pin.computeJointJacobians`` + ``updateFramePlacement`` +
+``getFrameJacobian(LOCAL)``) for everything else, for ``ROBODESIGN_JIT=0`` and under the ``_trace`` hook.
+Same seed, same solutions (tests/test_ik_kernel.py).
 
 Collision repair: once more than 2 converged configurations were rejected for collision (collisions are
 then the bottleneck, e.g. a branch whose collision-free part is a sliver of the tolerated set), each
