@@ -34,430 +34,407 @@ __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacob
 K_P_ROW, K_R_ROW, K_SPH, K_THETA, K_CYL = 0, 1, 2, 3, 4
 _ROWS = {K_P_ROW: 1, K_R_ROW: 1, K_SPH: 3, K_THETA: 3, K_CYL: 2}
 
-_numba = None
-_FAILED = False
+try:
+    from numba import njit
+    _IMPORTED = True
+except Exception:  # pragma: no cover - numba is a dependency; without it the Python loop runs
+    _IMPORTED = False
+
+    def njit(*args, **kwargs):
+        return (lambda f: f) if not args or not callable(args[0]) else args[0]
 
 
 def available() -> bool:
     """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
-    global _numba, _FAILED
-    if os.environ.get("ROBODESIGN_JIT", "1").strip() in ("0", "false", "no", "off"):
+    if os.environ.get("ROBODESIGN_JIT", "1").strip().lower() in ("0", "false", "no", "off"):
         return False
-    if _numba is None and not _FAILED:
-        try:
-            import numba
-            _numba = numba
-        except Exception:  # pragma: no cover - numba is a dependency; keep the solver usable without it
-            _FAILED = True
-    return _numba is not None
+    return _IMPORTED
 
 
 # ---------------------------------------------------------------------------------------------------------
-# kernels (compiled on first use)
+# kernels (module level, so that numba's on-disk cache finds them again in a new process)
 # ---------------------------------------------------------------------------------------------------------
-_K = {}
+@njit(cache=True, nogil=True)
+def fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw):
+    """T (4×4 world pose of the TCP) and its world-frame Jacobian (Jv linear, Jw angular; columns by
+    joint index). ``chain[k]`` is the 4×4 placement of chain joint k in its parent (the previous
+    chain joint, the world for k = 0); ``kind`` 0 revolute / 1 prismatic about ``sign``·z."""
+    nk = chain.shape[0]
+    n = q.shape[0]
+    M = np.eye(4)
+    tmp = np.empty((4, 4))
+    origins = np.empty((nk, 3))
+    axes = np.empty((nk, 3))
+    for j in range(n):
+        for r in range(3):
+            Jv[r, j] = 0.0
+            Jw[r, j] = 0.0
+    for k in range(nk):
+        P = chain[k]
+        # tmp = M @ P
+        for r in range(3):
+            for c in range(4):
+                s = M[r, 0] * P[0, c] + M[r, 1] * P[1, c] + M[r, 2] * P[2, c]
+                if c == 3:
+                    s += M[r, 3]
+                tmp[r, c] = s
+        v = q[iq[k]] * sign[k]
+        if kind[k] == 0:
+            ca, sa = math.cos(v), math.sin(v)
+            for r in range(3):
+                a, b = tmp[r, 0], tmp[r, 1]
+                M[r, 0] = a * ca + b * sa
+                M[r, 1] = -a * sa + b * ca
+                M[r, 2] = tmp[r, 2]
+                M[r, 3] = tmp[r, 3]
+        else:
+            for r in range(3):
+                M[r, 0] = tmp[r, 0]
+                M[r, 1] = tmp[r, 1]
+                M[r, 2] = tmp[r, 2]
+                M[r, 3] = tmp[r, 3] + tmp[r, 2] * v
+        for r in range(3):
+            origins[k, r] = M[r, 3]
+            axes[k, r] = M[r, 2] * sign[k]
+    for r in range(3):
+        for c in range(4):
+            s = M[r, 0] * tcp[0, c] + M[r, 1] * tcp[1, c] + M[r, 2] * tcp[2, c]
+            if c == 3:
+                s += M[r, 3]
+            T[r, c] = s
+    T[3, 0] = 0.0
+    T[3, 1] = 0.0
+    T[3, 2] = 0.0
+    T[3, 3] = 1.0
+    px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+    for k in range(nk):
+        j = iq[k]
+        zx, zy, zz = axes[k, 0], axes[k, 1], axes[k, 2]
+        if kind[k] == 0:
+            dx, dy, dz = px - origins[k, 0], py - origins[k, 1], pz - origins[k, 2]
+            Jv[0, j] += zy * dz - zz * dy
+            Jv[1, j] += zz * dx - zx * dz
+            Jv[2, j] += zx * dy - zy * dx
+            Jw[0, j] += zx
+            Jw[1, j] += zy
+            Jw[2, j] += zz
+        else:
+            Jv[0, j] += zx
+            Jv[1, j] += zy
+            Jv[2, j] += zz
+
+@njit(cache=True, nogil=True)
+def log3(R, out):
+    """pinocchio.log3 (rotation vector of R, angle in [0, π]); returns the angle."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    c = 0.5 * (tr - 1.0)
+    wx = 0.5 * (R[2, 1] - R[1, 2])
+    wy = 0.5 * (R[0, 2] - R[2, 0])
+    wz = 0.5 * (R[1, 0] - R[0, 1])
+    s = math.sqrt(wx * wx + wy * wy + wz * wz)
+    th = math.atan2(s, c)
+    if th < 1e-4:
+        f = 1.0 + th * th / 6.0            # θ / sin θ
+        out[0], out[1], out[2] = wx * f, wy * f, wz * f
+    elif th < math.pi - 1e-3:
+        f = th / s
+        out[0], out[1], out[2] = wx * f, wy * f, wz * f
+    else:
+        # near π: the axis from the symmetric part, R + Rᵀ = 2cI + 2(1 − c) a aᵀ
+        d = 1.0 - c
+        ax = math.sqrt(max(0.0, (R[0, 0] - c) / d))
+        ay = math.sqrt(max(0.0, (R[1, 1] - c) / d))
+        az = math.sqrt(max(0.0, (R[2, 2] - c) / d))
+        if ax >= ay and ax >= az:
+            ay = (R[0, 1] + R[1, 0]) / (2.0 * d * ax)
+            az = (R[0, 2] + R[2, 0]) / (2.0 * d * ax)
+            if wx < 0.0:
+                ax, ay, az = -ax, -ay, -az
+        elif ay >= az:
+            ax = (R[0, 1] + R[1, 0]) / (2.0 * d * ay)
+            az = (R[1, 2] + R[2, 1]) / (2.0 * d * ay)
+            if wy < 0.0:
+                ax, ay, az = -ax, -ay, -az
+        else:
+            ax = (R[0, 2] + R[2, 0]) / (2.0 * d * az)
+            ay = (R[1, 2] + R[2, 1]) / (2.0 * d * az)
+            if wz < 0.0:
+                ax, ay, az = -ax, -ay, -az
+        nrm = math.sqrt(ax * ax + ay * ay + az * az)
+        out[0], out[1], out[2] = ax / nrm * th, ay / nrm * th, az / nrm * th
+    return th
+
+@njit(cache=True, nogil=True)
+def jlog3(th, w, out):
+    """pinocchio.Jlog3: I + ½[w]× + (1/θ² − cot(θ/2)/(2θ))·[w]×²."""
+    if th < 1e-3:
+        a = 1.0 / 12.0 + th * th / 720.0
+    else:
+        a = 1.0 / (th * th) - math.cos(0.5 * th) / (2.0 * th * math.sin(0.5 * th))
+    x, y, z = w[0], w[1], w[2]
+    # [w]×² = w wᵀ − θ² I
+    out[0, 0] = 1.0 + a * (x * x - th * th)
+    out[1, 1] = 1.0 + a * (y * y - th * th)
+    out[2, 2] = 1.0 + a * (z * z - th * th)
+    out[0, 1] = -0.5 * z + a * x * y
+    out[1, 0] = 0.5 * z + a * x * y
+    out[0, 2] = 0.5 * y + a * x * z
+    out[2, 0] = -0.5 * y + a * x * z
+    out[1, 2] = -0.5 * x + a * y * z
+    out[2, 1] = 0.5 * x + a * y * z
+
+@njit(cache=True, nogil=True)
+def dead(v, ta, tb):
+    if v > tb:
+        return v - tb
+    if v < ta:
+        return v - ta
+    return 0.0
+
+@njit(cache=True, nogil=True)
+def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
+    """The residual rows E and their Jacobian JJ (rows × n) of the goal program at pose T;
+    True when every term's value lies in its exact interval. ``tvec[t]`` = (a, b, ta, tb, Q row 0..2,
+    Q row 1 0..2) — the exact interval, the target interval and the frame rows used by the term."""
+    n = Jv.shape[1]
+    pd = work[0]
+    rv = work[1]
+    Rd = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            Rd[r, c] = Ninv[r, 0] * T[0, c] + Ninv[r, 1] * T[1, c] + Ninv[r, 2] * T[2, c]
+        pd[r] = Ninv[r, 0] * T[0, 3] + Ninv[r, 1] * T[1, 3] + Ninv[r, 2] * T[2, 3] + Ninv[r, 3]
+    need_r = False
+    for t in range(tkind.shape[0]):
+        if tkind[t] == K_R_ROW or tkind[t] == K_THETA:
+            need_r = True
+    Jp = np.empty((3, n))
+    Jr = np.empty((3, n))
+    # d p_Δ/dq = R_N⁻¹ Jv ;  d log3(R_Δ)/dq = Jlog3(R_Δ) Rᵀ Jw
+    for r in range(3):
+        for j in range(n):
+            Jp[r, j] = Ninv[r, 0] * Jv[0, j] + Ninv[r, 1] * Jv[1, j] + Ninv[r, 2] * Jv[2, j]
+    th = 0.0
+    if need_r:
+        th = log3(Rd, rv)
+        JL = np.empty((3, 3))
+        jlog3(th, rv, JL)
+        G = np.empty((3, 3))      # Jlog3 · Rᵀ
+        for r in range(3):
+            for c in range(3):
+                G[r, c] = JL[r, 0] * T[c, 0] + JL[r, 1] * T[c, 1] + JL[r, 2] * T[c, 2]
+        for r in range(3):
+            for j in range(n):
+                Jr[r, j] = G[r, 0] * Jw[0, j] + G[r, 1] * Jw[1, j] + G[r, 2] * Jw[2, j]
+    ok = True
+    row = 0
+    for t in range(tkind.shape[0]):
+        k = tkind[t]
+        a, b, ta, tb = tvec[t, 0], tvec[t, 1], tvec[t, 2], tvec[t, 3]
+        if k == K_P_ROW or k == K_R_ROW:
+            X = pd if k == K_P_ROW else rv
+            JX = Jp if k == K_P_ROW else Jr
+            q0, q1, q2 = tvec[t, 4], tvec[t, 5], tvec[t, 6]
+            v = q0 * X[0] + q1 * X[1] + q2 * X[2]
+            e = dead(v, ta, tb)
+            E[row] = e
+            if e != 0.0:
+                for j in range(n):
+                    JJ[row, j] = q0 * JX[0, j] + q1 * JX[1, j] + q2 * JX[2, j]
+            else:
+                for j in range(n):
+                    JJ[row, j] = 0.0
+            if not (a <= v <= b):
+                ok = False
+            row += 1
+        elif k == K_SPH or k == K_THETA:
+            X = pd if k == K_SPH else rv
+            JX = Jp if k == K_SPH else Jr
+            v = math.sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2])
+            e = dead(v, ta, tb)
+            if e != 0.0:
+                if v > 1e-12:
+                    for r in range(3):
+                        E[row + r] = X[r] * (e / v)
+                else:
+                    E[row] = e
+                    E[row + 1] = 0.0
+                    E[row + 2] = 0.0
+                for r in range(3):
+                    for j in range(n):
+                        JJ[row + r, j] = JX[r, j]
+            else:
+                for r in range(3):
+                    E[row + r] = 0.0
+                    for j in range(n):
+                        JJ[row + r, j] = 0.0
+            if not (a <= v <= b):
+                ok = False
+            row += 3
+        else:  # K_CYL: (x, y) = Q2 · p_Δ
+            x = tvec[t, 4] * pd[0] + tvec[t, 5] * pd[1] + tvec[t, 6] * pd[2]
+            y = tvec[t, 7] * pd[0] + tvec[t, 8] * pd[1] + tvec[t, 9] * pd[2]
+            v = math.sqrt(x * x + y * y)
+            e = dead(v, ta, tb)
+            if e != 0.0:
+                if v > 1e-12:
+                    E[row] = x * (e / v)
+                    E[row + 1] = y * (e / v)
+                else:
+                    E[row] = e
+                    E[row + 1] = 0.0
+                for j in range(n):
+                    JJ[row, j] = tvec[t, 4] * Jp[0, j] + tvec[t, 5] * Jp[1, j] + tvec[t, 6] * Jp[2, j]
+                    JJ[row + 1, j] = tvec[t, 7] * Jp[0, j] + tvec[t, 8] * Jp[1, j] + tvec[t, 9] * Jp[2, j]
+            else:
+                E[row] = 0.0
+                E[row + 1] = 0.0
+                for j in range(n):
+                    JJ[row, j] = 0.0
+                    JJ[row + 1, j] = 0.0
+            if not (a <= v <= b):
+                ok = False
+            row += 2
+    return ok
+
+@njit(cache=True, nogil=True)
+def chol_solve(A, b, x):
+    """x = A⁻¹ b for a symmetric positive definite A (in place on A)."""
+    m = A.shape[0]
+    for j in range(m):
+        s = A[j, j]
+        for k in range(j):
+            s -= A[j, k] * A[j, k]
+        if s <= 0.0:
+            return False
+        d = math.sqrt(s)
+        A[j, j] = d
+        for i in range(j + 1, m):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s / d
+    for i in range(m):
+        s = b[i]
+        for k in range(i):
+            s -= A[i, k] * x[k]
+        x[i] = s / A[i, i]
+    for i in range(m - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, m):
+            s -= A[k, i] * x[k]
+        x[i] = s / A[i, i]
+    return True
+
+@njit(cache=True, nogil=True)
+def lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params):
+    """One LM descent from q (modified in place). Returns (status, iterations): status 1 = every
+    analytic constraint holds at q (T holds its TCP pose), 0 = stalled / out of iterations / zero
+    residual outside the exact set, −1 = non-finite step."""
+    n = q.shape[0]
+    m = E.shape[0]
+    lam_f, lam_b, max_step, stall_ratio, stall_window = params[0], params[1], params[2], params[3], int(params[4])
+    Jv = np.empty((3, n))
+    Jw = np.empty((3, n))
+    work = np.empty((2, 3))
+    small = m <= n
+    msz = m if small else n
+    A = np.empty((msz, msz))
+    rhs = np.empty(msz)
+    x = np.empty(msz)
+    dq = np.empty(n)
+    best = math.inf
+    since = 0
+    for it in range(iters):
+        fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw)
+        ok = goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work)
+        if ok:
+            return 1, it + 1
+        err = 0.0
+        for i in range(m):
+            err += E[i] * E[i]
+        if err == 0.0:
+            return 0, it + 1
+        if err < best * stall_ratio:
+            best = err
+            since = 0
+        else:
+            since += 1
+            if since >= stall_window:
+                return 0, it + 1
+        lam = lam_f * err + lam_b
+        if small:                 # dq = Jᵀ (J Jᵀ + λI)⁻¹ e
+            for r in range(m):
+                for c in range(r + 1):
+                    s = 0.0
+                    for j in range(n):
+                        s += JJ[r, j] * JJ[c, j]
+                    A[r, c] = s
+                    A[c, r] = s
+                A[r, r] += lam
+                rhs[r] = E[r]
+            if not chol_solve(A, rhs, x):
+                return -1, it + 1
+            for j in range(n):
+                s = 0.0
+                for r in range(m):
+                    s += JJ[r, j] * x[r]
+                dq[j] = s
+        else:                     # dq = (JᵀJ + λI)⁻¹ Jᵀ e
+            for r in range(n):
+                for c in range(r + 1):
+                    s = 0.0
+                    for i in range(m):
+                        s += JJ[i, r] * JJ[i, c]
+                    A[r, c] = s
+                    A[c, r] = s
+                A[r, r] += lam
+                s = 0.0
+                for i in range(m):
+                    s += JJ[i, r] * E[i]
+                rhs[r] = s
+            if not chol_solve(A, rhs, dq):
+                return -1, it + 1
+        s2 = 0.0
+        for j in range(n):
+            s2 += dq[j] * dq[j]
+        if not s2 <= max_step * max_step:
+            if not math.isfinite(s2):
+                return -1, it + 1
+            f = max_step / math.sqrt(s2)
+            for j in range(n):
+                dq[j] *= f
+        for j in range(n):
+            v = q[j] - dq[j]
+            if v > hi[j]:
+                v = hi[j]
+            if v < lo[j]:
+                v = lo[j]
+            q[j] = v
+    return 0, iters
+
+@njit(cache=True, nogil=True)
+def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params,
+             q_out):
+    """Descents from ``starts[a]``, ``starts[a+1]``, … up to ``stop`` (exclusive) until one satisfies the
+    analytic constraints: returns (its index or ``stop``, iterations of all descents); the configuration
+    is left in ``q_out`` and its TCP pose in T."""
+    total = 0
+    for r in range(a, stop):
+        for j in range(q_out.shape[0]):
+            q_out[j] = starts[r, j]
+        status, its = lm_descend(q_out, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T,
+                                 params)
+        total += its
+        if status == 1:
+            return r, total
+    return stop, total
 
 
 def _kernels():
-    if _K:
-        return _K
-    from numba import njit
-
-    @njit(cache=True, fastmath=False, nogil=True)
-    def fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw):
-        """T (4×4 world pose of the TCP) and its world-frame Jacobian (Jv linear, Jw angular; columns by
-        joint index). ``chain[k]`` is the 4×4 placement of chain joint k in its parent (the previous
-        chain joint, the world for k = 0); ``kind`` 0 revolute / 1 prismatic about ``sign``·z."""
-        nk = chain.shape[0]
-        n = q.shape[0]
-        M = np.eye(4)
-        tmp = np.empty((4, 4))
-        origins = np.empty((nk, 3))
-        axes = np.empty((nk, 3))
-        for j in range(n):
-            for r in range(3):
-                Jv[r, j] = 0.0
-                Jw[r, j] = 0.0
-        for k in range(nk):
-            P = chain[k]
-            # tmp = M @ P
-            for r in range(3):
-                for c in range(4):
-                    s = M[r, 0] * P[0, c] + M[r, 1] * P[1, c] + M[r, 2] * P[2, c]
-                    if c == 3:
-                        s += M[r, 3]
-                    tmp[r, c] = s
-            v = q[iq[k]] * sign[k]
-            if kind[k] == 0:
-                ca, sa = math.cos(v), math.sin(v)
-                for r in range(3):
-                    a, b = tmp[r, 0], tmp[r, 1]
-                    M[r, 0] = a * ca + b * sa
-                    M[r, 1] = -a * sa + b * ca
-                    M[r, 2] = tmp[r, 2]
-                    M[r, 3] = tmp[r, 3]
-            else:
-                for r in range(3):
-                    M[r, 0] = tmp[r, 0]
-                    M[r, 1] = tmp[r, 1]
-                    M[r, 2] = tmp[r, 2]
-                    M[r, 3] = tmp[r, 3] + tmp[r, 2] * v
-            for r in range(3):
-                origins[k, r] = M[r, 3]
-                axes[k, r] = M[r, 2] * sign[k]
-        for r in range(3):
-            for c in range(4):
-                s = M[r, 0] * tcp[0, c] + M[r, 1] * tcp[1, c] + M[r, 2] * tcp[2, c]
-                if c == 3:
-                    s += M[r, 3]
-                T[r, c] = s
-        T[3, 0] = 0.0
-        T[3, 1] = 0.0
-        T[3, 2] = 0.0
-        T[3, 3] = 1.0
-        px, py, pz = T[0, 3], T[1, 3], T[2, 3]
-        for k in range(nk):
-            j = iq[k]
-            zx, zy, zz = axes[k, 0], axes[k, 1], axes[k, 2]
-            if kind[k] == 0:
-                dx, dy, dz = px - origins[k, 0], py - origins[k, 1], pz - origins[k, 2]
-                Jv[0, j] += zy * dz - zz * dy
-                Jv[1, j] += zz * dx - zx * dz
-                Jv[2, j] += zx * dy - zy * dx
-                Jw[0, j] += zx
-                Jw[1, j] += zy
-                Jw[2, j] += zz
-            else:
-                Jv[0, j] += zx
-                Jv[1, j] += zy
-                Jv[2, j] += zz
-
-    @njit(cache=True, nogil=True)
-    def log3(R, out):
-        """pinocchio.log3 (rotation vector of R, angle in [0, π]); returns the angle."""
-        tr = R[0, 0] + R[1, 1] + R[2, 2]
-        c = 0.5 * (tr - 1.0)
-        wx = 0.5 * (R[2, 1] - R[1, 2])
-        wy = 0.5 * (R[0, 2] - R[2, 0])
-        wz = 0.5 * (R[1, 0] - R[0, 1])
-        s = math.sqrt(wx * wx + wy * wy + wz * wz)
-        th = math.atan2(s, c)
-        if th < 1e-4:
-            f = 1.0 + th * th / 6.0            # θ / sin θ
-            out[0], out[1], out[2] = wx * f, wy * f, wz * f
-        elif th < math.pi - 1e-3:
-            f = th / s
-            out[0], out[1], out[2] = wx * f, wy * f, wz * f
-        else:
-            # near π: the axis from the symmetric part, R + Rᵀ = 2cI + 2(1 − c) a aᵀ
-            d = 1.0 - c
-            ax = math.sqrt(max(0.0, (R[0, 0] - c) / d))
-            ay = math.sqrt(max(0.0, (R[1, 1] - c) / d))
-            az = math.sqrt(max(0.0, (R[2, 2] - c) / d))
-            if ax >= ay and ax >= az:
-                ay = (R[0, 1] + R[1, 0]) / (2.0 * d * ax)
-                az = (R[0, 2] + R[2, 0]) / (2.0 * d * ax)
-                if wx < 0.0:
-                    ax, ay, az = -ax, -ay, -az
-            elif ay >= az:
-                ax = (R[0, 1] + R[1, 0]) / (2.0 * d * ay)
-                az = (R[1, 2] + R[2, 1]) / (2.0 * d * ay)
-                if wy < 0.0:
-                    ax, ay, az = -ax, -ay, -az
-            else:
-                ax = (R[0, 2] + R[2, 0]) / (2.0 * d * az)
-                ay = (R[1, 2] + R[2, 1]) / (2.0 * d * az)
-                if wz < 0.0:
-                    ax, ay, az = -ax, -ay, -az
-            nrm = math.sqrt(ax * ax + ay * ay + az * az)
-            out[0], out[1], out[2] = ax / nrm * th, ay / nrm * th, az / nrm * th
-        return th
-
-    @njit(cache=True, nogil=True)
-    def jlog3(th, w, out):
-        """pinocchio.Jlog3: I + ½[w]× + (1/θ² − cot(θ/2)/(2θ))·[w]×²."""
-        if th < 1e-3:
-            a = 1.0 / 12.0 + th * th / 720.0
-        else:
-            a = 1.0 / (th * th) - math.cos(0.5 * th) / (2.0 * th * math.sin(0.5 * th))
-        x, y, z = w[0], w[1], w[2]
-        # [w]×² = w wᵀ − θ² I
-        out[0, 0] = 1.0 + a * (x * x - th * th)
-        out[1, 1] = 1.0 + a * (y * y - th * th)
-        out[2, 2] = 1.0 + a * (z * z - th * th)
-        out[0, 1] = -0.5 * z + a * x * y
-        out[1, 0] = 0.5 * z + a * x * y
-        out[0, 2] = 0.5 * y + a * x * z
-        out[2, 0] = -0.5 * y + a * x * z
-        out[1, 2] = -0.5 * x + a * y * z
-        out[2, 1] = 0.5 * x + a * y * z
-
-    @njit(cache=True, nogil=True)
-    def dead(v, ta, tb):
-        if v > tb:
-            return v - tb
-        if v < ta:
-            return v - ta
-        return 0.0
-
-    @njit(cache=True, nogil=True)
-    def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
-        """The residual rows E and their Jacobian JJ (rows × n) of the goal program at pose T;
-        True when every term's value lies in its exact interval. ``tvec[t]`` = (a, b, ta, tb, Q row 0..2,
-        Q row 1 0..2) — the exact interval, the target interval and the frame rows used by the term."""
-        n = Jv.shape[1]
-        pd = work[0]
-        rv = work[1]
-        Rd = np.empty((3, 3))
-        for r in range(3):
-            for c in range(3):
-                Rd[r, c] = Ninv[r, 0] * T[0, c] + Ninv[r, 1] * T[1, c] + Ninv[r, 2] * T[2, c]
-            pd[r] = Ninv[r, 0] * T[0, 3] + Ninv[r, 1] * T[1, 3] + Ninv[r, 2] * T[2, 3] + Ninv[r, 3]
-        need_r = False
-        for t in range(tkind.shape[0]):
-            if tkind[t] == K_R_ROW or tkind[t] == K_THETA:
-                need_r = True
-        Jp = np.empty((3, n))
-        Jr = np.empty((3, n))
-        # d p_Δ/dq = R_N⁻¹ Jv ;  d log3(R_Δ)/dq = Jlog3(R_Δ) Rᵀ Jw
-        for r in range(3):
-            for j in range(n):
-                Jp[r, j] = Ninv[r, 0] * Jv[0, j] + Ninv[r, 1] * Jv[1, j] + Ninv[r, 2] * Jv[2, j]
-        th = 0.0
-        if need_r:
-            th = log3(Rd, rv)
-            JL = np.empty((3, 3))
-            jlog3(th, rv, JL)
-            G = np.empty((3, 3))      # Jlog3 · Rᵀ
-            for r in range(3):
-                for c in range(3):
-                    G[r, c] = JL[r, 0] * T[c, 0] + JL[r, 1] * T[c, 1] + JL[r, 2] * T[c, 2]
-            for r in range(3):
-                for j in range(n):
-                    Jr[r, j] = G[r, 0] * Jw[0, j] + G[r, 1] * Jw[1, j] + G[r, 2] * Jw[2, j]
-        ok = True
-        row = 0
-        for t in range(tkind.shape[0]):
-            k = tkind[t]
-            a, b, ta, tb = tvec[t, 0], tvec[t, 1], tvec[t, 2], tvec[t, 3]
-            if k == K_P_ROW or k == K_R_ROW:
-                X = pd if k == K_P_ROW else rv
-                JX = Jp if k == K_P_ROW else Jr
-                q0, q1, q2 = tvec[t, 4], tvec[t, 5], tvec[t, 6]
-                v = q0 * X[0] + q1 * X[1] + q2 * X[2]
-                e = dead(v, ta, tb)
-                E[row] = e
-                if e != 0.0:
-                    for j in range(n):
-                        JJ[row, j] = q0 * JX[0, j] + q1 * JX[1, j] + q2 * JX[2, j]
-                else:
-                    for j in range(n):
-                        JJ[row, j] = 0.0
-                if not (a <= v <= b):
-                    ok = False
-                row += 1
-            elif k == K_SPH or k == K_THETA:
-                X = pd if k == K_SPH else rv
-                JX = Jp if k == K_SPH else Jr
-                v = math.sqrt(X[0] * X[0] + X[1] * X[1] + X[2] * X[2])
-                e = dead(v, ta, tb)
-                if e != 0.0:
-                    if v > 1e-12:
-                        for r in range(3):
-                            E[row + r] = X[r] * (e / v)
-                    else:
-                        E[row] = e
-                        E[row + 1] = 0.0
-                        E[row + 2] = 0.0
-                    for r in range(3):
-                        for j in range(n):
-                            JJ[row + r, j] = JX[r, j]
-                else:
-                    for r in range(3):
-                        E[row + r] = 0.0
-                        for j in range(n):
-                            JJ[row + r, j] = 0.0
-                if not (a <= v <= b):
-                    ok = False
-                row += 3
-            else:  # K_CYL: (x, y) = Q2 · p_Δ
-                x = tvec[t, 4] * pd[0] + tvec[t, 5] * pd[1] + tvec[t, 6] * pd[2]
-                y = tvec[t, 7] * pd[0] + tvec[t, 8] * pd[1] + tvec[t, 9] * pd[2]
-                v = math.sqrt(x * x + y * y)
-                e = dead(v, ta, tb)
-                if e != 0.0:
-                    if v > 1e-12:
-                        E[row] = x * (e / v)
-                        E[row + 1] = y * (e / v)
-                    else:
-                        E[row] = e
-                        E[row + 1] = 0.0
-                    for j in range(n):
-                        JJ[row, j] = tvec[t, 4] * Jp[0, j] + tvec[t, 5] * Jp[1, j] + tvec[t, 6] * Jp[2, j]
-                        JJ[row + 1, j] = tvec[t, 7] * Jp[0, j] + tvec[t, 8] * Jp[1, j] + tvec[t, 9] * Jp[2, j]
-                else:
-                    E[row] = 0.0
-                    E[row + 1] = 0.0
-                    for j in range(n):
-                        JJ[row, j] = 0.0
-                        JJ[row + 1, j] = 0.0
-                if not (a <= v <= b):
-                    ok = False
-                row += 2
-        return ok
-
-    @njit(cache=True, nogil=True)
-    def chol_solve(A, b, x):
-        """x = A⁻¹ b for a symmetric positive definite A (in place on A)."""
-        m = A.shape[0]
-        for j in range(m):
-            s = A[j, j]
-            for k in range(j):
-                s -= A[j, k] * A[j, k]
-            if s <= 0.0:
-                return False
-            d = math.sqrt(s)
-            A[j, j] = d
-            for i in range(j + 1, m):
-                s = A[i, j]
-                for k in range(j):
-                    s -= A[i, k] * A[j, k]
-                A[i, j] = s / d
-        for i in range(m):
-            s = b[i]
-            for k in range(i):
-                s -= A[i, k] * x[k]
-            x[i] = s / A[i, i]
-        for i in range(m - 1, -1, -1):
-            s = x[i]
-            for k in range(i + 1, m):
-                s -= A[k, i] * x[k]
-            x[i] = s / A[i, i]
-        return True
-
-    @njit(cache=True, nogil=True)
-    def lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params):
-        """One LM descent from q (modified in place). Returns (status, iterations): status 1 = every
-        analytic constraint holds at q (T holds its TCP pose), 0 = stalled / out of iterations / zero
-        residual outside the exact set, −1 = non-finite step."""
-        n = q.shape[0]
-        m = E.shape[0]
-        lam_f, lam_b, max_step, stall_ratio, stall_window = params[0], params[1], params[2], params[3], int(params[4])
-        Jv = np.empty((3, n))
-        Jw = np.empty((3, n))
-        work = np.empty((2, 3))
-        small = m <= n
-        msz = m if small else n
-        A = np.empty((msz, msz))
-        rhs = np.empty(msz)
-        x = np.empty(msz)
-        dq = np.empty(n)
-        best = math.inf
-        since = 0
-        for it in range(iters):
-            fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw)
-            ok = goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work)
-            if ok:
-                return 1, it + 1
-            err = 0.0
-            for i in range(m):
-                err += E[i] * E[i]
-            if err == 0.0:
-                return 0, it + 1
-            if err < best * stall_ratio:
-                best = err
-                since = 0
-            else:
-                since += 1
-                if since >= stall_window:
-                    return 0, it + 1
-            lam = lam_f * err + lam_b
-            if small:                 # dq = Jᵀ (J Jᵀ + λI)⁻¹ e
-                for r in range(m):
-                    for c in range(r + 1):
-                        s = 0.0
-                        for j in range(n):
-                            s += JJ[r, j] * JJ[c, j]
-                        A[r, c] = s
-                        A[c, r] = s
-                    A[r, r] += lam
-                    rhs[r] = E[r]
-                if not chol_solve(A, rhs, x):
-                    return -1, it + 1
-                for j in range(n):
-                    s = 0.0
-                    for r in range(m):
-                        s += JJ[r, j] * x[r]
-                    dq[j] = s
-            else:                     # dq = (JᵀJ + λI)⁻¹ Jᵀ e
-                for r in range(n):
-                    for c in range(r + 1):
-                        s = 0.0
-                        for i in range(m):
-                            s += JJ[i, r] * JJ[i, c]
-                        A[r, c] = s
-                        A[c, r] = s
-                    A[r, r] += lam
-                    s = 0.0
-                    for i in range(m):
-                        s += JJ[i, r] * E[i]
-                    rhs[r] = s
-                if not chol_solve(A, rhs, dq):
-                    return -1, it + 1
-            s2 = 0.0
-            for j in range(n):
-                s2 += dq[j] * dq[j]
-            if not s2 <= max_step * max_step:
-                if not math.isfinite(s2):
-                    return -1, it + 1
-                f = max_step / math.sqrt(s2)
-                for j in range(n):
-                    dq[j] *= f
-            for j in range(n):
-                v = q[j] - dq[j]
-                if v > hi[j]:
-                    v = hi[j]
-                if v < lo[j]:
-                    v = lo[j]
-                q[j] = v
-        return 0, iters
-
-    @njit(cache=True, nogil=True)
-    def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params,
-                 q_out):
-        """Descents from ``starts[a]``, ``starts[a+1]``, … up to ``stop`` (exclusive) until one satisfies the
-        analytic constraints: returns (its index or ``stop``, iterations of all descents); the configuration
-        is left in ``q_out`` and its TCP pose in T."""
-        total = 0
-        for r in range(a, stop):
-            for j in range(q_out.shape[0]):
-                q_out[j] = starts[r, j]
-            status, its = lm_descend(q_out, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T,
-                                     params)
-            total += its
-            if status == 1:
-                return r, total
-        return stop, total
-
-    _K.update(fk_jacobian=fk_jacobian, goal_rows=goal_rows, lm_descend=lm_descend, lm_batch=lm_batch, log3=log3,
-              jlog3=jlog3)
-    return _K
-
-
-def fk_jacobian(*a):
-    return _kernels()["fk_jacobian"](*a)
-
-
-def goal_rows(*a):
-    return _kernels()["goal_rows"](*a)
-
-
-def lm_descend(*a):
-    return _kernels()["lm_descend"](*a)
-
-
-def lm_batch(*a):
-    return _kernels()["lm_batch"](*a)
+    """The compiled functions by name (for tests and tools)."""
+    return {"fk_jacobian": fk_jacobian, "goal_rows": goal_rows, "lm_descend": lm_descend, "lm_batch": lm_batch,
+            "log3": log3, "jlog3": jlog3}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -570,14 +547,13 @@ def warm_up() -> bool:
     """Compile (or load from the cache) every kernel now; False when the kernel is unavailable."""
     if not available():
         return False
-    K = _kernels()
     n = 2
     chain = np.tile(np.eye(4), (2, 1, 1))
     q = np.zeros(n)
     T = np.eye(4)
     tkind = np.array([K_P_ROW, K_SPH, K_THETA, K_CYL], dtype=np.int64)
     tvec = np.zeros((4, 10))
-    K["lm_batch"](np.zeros((1, n)), 0, 1, 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
-                  np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
-                  np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
+    lm_batch(np.zeros((1, n)), 0, 1, 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
+             np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
+             np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
     return True
