@@ -43,6 +43,14 @@ def rows(db):
                          ).fetchall()
 
 
+def stored_count(out: Path) -> int:
+    """Evaluations committed so far in a (running) results folder; 0 while the database is not there yet."""
+    try:
+        return len(rows(out / "evaluations.sqlite"))
+    except sqlite3.Error:
+        return 0
+
+
 @pytest.mark.parametrize("text,msg", [
     ("name: x\ntasks: [robodesign/pick_and_place]\noptimizers: [random]\nbudget: 5x\n",
      "cfg.yaml: budget: budget '5x'"),
@@ -184,10 +192,7 @@ def test_process_executor_survives_a_killed_worker_and_a_killed_driver(tmp_path)
         killed_worker, workers = None, []
         deadline = time.time() + 300
         while time.time() < deadline and p.poll() is None:
-            try:
-                n = len(rows(out / "evaluations.sqlite"))
-            except sqlite3.Error:
-                n = 0
+            n = stored_count(out)
             if killed_worker is None and n >= 3:
                 ws = _pool_workers(p.pid)
                 if ws:

@@ -4,7 +4,6 @@ import os
 import shutil
 import signal
 import socket
-import sqlite3
 import subprocess
 import sys
 import time
@@ -12,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from test_experiment import SMALL, rows, write
+from test_experiment import SMALL, rows, stored_count, write
 
 pytestmark = pytest.mark.slow
 BIN = Path(sys.executable).parent
@@ -50,10 +49,7 @@ def test_ray_cluster_run_survives_a_killed_worker(tmp_path):
         killed = None
         deadline = time.time() + 300
         while time.time() < deadline and p.poll() is None:
-            try:
-                n = len(rows(out / "evaluations.sqlite"))
-            except sqlite3.Error:
-                n = 0
+            n = stored_count(out)
             pids = actor_pids()
             if n >= 3 and pids:
                 killed = pids[0]

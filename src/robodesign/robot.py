@@ -328,6 +328,17 @@ class Robot:
             raise InputError(f"expected {self.dof} joint values, got shape {q.shape}")
         return q
 
+    def tcp_chain(self) -> List[int]:
+        """The pinocchio joint ids from the world to the TCP's joint, in order (empty: TCP on the base)."""
+        m = self.model
+        chain = []
+        j = m.frames[self.tcp_frame].parentJoint
+        while j > 0:
+            chain.append(j)
+            j = m.parents[j]
+        chain.reverse()
+        return chain
+
     def fk(self, q, frame: Optional[int] = None) -> np.ndarray:
         """World pose (4x4) of a frame (default: TCP)."""
         pin.framesForwardKinematics(self.model, self.data, self._q(q))

@@ -547,12 +547,7 @@ def reach_bound(robot) -> Tuple[np.ndarray, float]:
         return hit[1], hit[2]
     m = robot.model
     fr = m.frames[robot.tcp_frame]
-    chain = []
-    j = fr.parentJoint
-    while j > 0:
-        chain.append(j)
-        j = m.parents[j]
-    chain.reverse()
+    chain = robot.tcp_chain()
     d = m.createData()
     pin.framesForwardKinematics(m, d, pin.neutral(m))
     if not chain:

@@ -449,12 +449,7 @@ class ChainKernel:
     def __init__(self, robot):
         m = robot.model
         fr = m.frames[robot.tcp_frame]
-        js = []
-        j = fr.parentJoint
-        while j > 0:
-            js.append(j)
-            j = m.parents[j]
-        js.reverse()
+        js = robot.tcp_chain()
         kinds, signs, iqs = [], [], []
         for j in js:
             jm = m.joints[j]
