@@ -290,6 +290,21 @@ def time_optimal_bound(robot, q_a, q_b) -> float:
     return max((trapezoid_time(d[j], robot.dq_max[j], robot.ddq_max[j]) for j in range(len(d))), default=0.0)
 
 
+def time_optimal_bounds(robot, D: np.ndarray) -> np.ndarray:
+    """``time_optimal_bound`` for many moves at once: ``D`` holds joint distances |q_b - q_a| on its last
+    axis; returns the bound of each move (the slowest joint's trapezoid/bang-bang time)."""
+    D = np.abs(np.asarray(D, dtype=float))
+    v = np.broadcast_to(np.asarray(robot.dq_max, dtype=float), D.shape)
+    a = np.broadcast_to(np.asarray(robot.ddq_max, dtype=float), D.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bang = 2.0 * np.sqrt(D / a)                      # never reaches v (a finite)
+        trap = D / v + v / a                             # reaches v
+        t = np.where(np.isinf(v) | (D <= v * v / a), bang, trap)
+        t = np.where(np.isinf(a), np.where(np.isinf(v), 0.0, D / v), t)
+    t = np.where(D == 0.0, 0.0, t)
+    return t.max(axis=-1) if t.shape[-1] else np.zeros(t.shape[:-1])
+
+
 def jerk_limited_time(distance: float, v_max: float, a_max: float, j_max: float) -> float:
     """Minimum rest-to-rest time of a 1-DoF move with velocity, acceleration and jerk limits (the
     7-segment profile ruckig computes; used by tests and to report bounds)."""
