@@ -2,7 +2,11 @@
 the cheap stages of the hierarchical elimination (assembly + model, base, reach bound, collision-checked
 IK of every goal) — on one core, for random candidates of the default search space.
 
-    .venv/bin/python experiments/bench_evaluator.py [--n 600] [--restarts 20,60,150,300,1000]
+    .venv/bin/python experiments/bench_evaluator.py [--n 600] [--restarts 20,60,150,300,1000] [--solutions 1]
+
+``--solutions``: distinct IK solutions collected per goal. 1 screens reachability only; the evaluator's
+full pipeline collects ``SolveSettings.ik_solutions`` (48) for the sequencing, which costs extra restarts
+on the candidates that reach every goal (``--solutions 48`` measures that).
 
 Also reports how many candidates each stage eliminates and whether fewer IK restarts lose any
 candidate that the largest budget finds (false negatives). ``ROBODESIGN_JIT=0`` measures the pure-Python
@@ -30,6 +34,7 @@ def main():
     ap.add_argument("--n", type=int, default=600)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--restarts", default="20,60,150,300,1000", help="IK restarts per goal to compare")
+    ap.add_argument("--solutions", type=int, default=1, help="distinct IK solutions collected per goal")
     args = ap.parse_args()
     task = load_task(SHARED / "tasks" / "simple" / "PTP_3.json")
     ms = load_module_set(SHARED / "modules" / "IMPROV")
@@ -43,7 +48,8 @@ def main():
         ok = set()
         t0 = time.perf_counter()
         for i, order in enumerate(cands):
-            res = solve(task, ms, order, settings=SolveSettings(seed=i, stop_after="ik", ik_restarts=r, ik_solutions=1))
+            res = solve(task, ms, order, settings=SolveSettings(seed=i, stop_after="ik", ik_restarts=r,
+                                                                ik_solutions=args.solutions))
             st[res.stage] += 1
             if res.stage == "done":
                 ok.add(i)

@@ -43,7 +43,7 @@ def cycle_bound(robot, sol) -> float:
 def best_solution(task, ms, order, cost, seeds):
     best = None
     for seed in range(seeds):
-        st = SolveSettings(seed=seed, optimize_trajectory=cost in ("mechEnergy", "Liu2"), ik_solutions=8)
+        st = SolveSettings(seed=seed, optimize_trajectory=cost in ("mechEnergy", "Liu2"))
         t0 = time.perf_counter()
         res = solve(task, ms, order, cost=cost, settings=st)
         dt = time.perf_counter() - t0
