@@ -5,8 +5,8 @@
 
 Reads a finished ``configs/base_pose.yaml`` run, takes the ``--designs`` best distinct module orders that
 the *modules-only* runs found (base at the task's nominal pose), and for each order searches the base pose
-alone — x, y and yaw inside the task's base-placement tolerance — with Optuna's TPE sampler for
-``--budget`` evaluations. Every evaluation is the evaluator's full pipeline with a checked solution (the
+alone — x, y and yaw inside the task's base-placement tolerance — with the ``base_pose`` optimizer plugin
+(TPE, nominal base first) for ``--budget`` evaluations. Every evaluation is the evaluator's full pipeline with a checked solution (the
 same settings as the study).
 
 Planning is randomised, so a search that evaluates a robot many times also draws many planner seeds. The
@@ -21,12 +21,13 @@ import argparse
 import json
 import sqlite3
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import optuna
 
 from robodesign.evaluator import Evaluator, EvaluatorSpec
+from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
 from robodesign.paths import project_root
 from robodesign.search_space import Candidate
 
@@ -63,11 +64,11 @@ def main():
         known = set(SolveSettings.__dataclass_fields__)
         spec.settings = SolveSettings(**{k: v for k, v in settings.items() if k in known})
     ev = Evaluator(spec)
-    bounds = ev.search_space().base_bounds
+    space = ev.search_space()
+    bounds = space.base_bounds
     free = bounds.free
     names = ["x", "y", "z", "yaw"]
     out = []
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
     for order, study_cost in best_orders(res_dir / "evaluations.sqlite", "modules_only", args.designs):
         t0 = time.perf_counter()
         # the control: nominal base, as many planner seeds as the base search has evaluations
@@ -78,23 +79,13 @@ def main():
         ev.spec.seed = args.seed
         nominal_costs = [e.cost for e in nominal_runs if e.feasible]
         nominal = min((e for e in nominal_runs if e.feasible), key=lambda e: e.cost, default=nominal_runs[0])
-        sampler = optuna.samplers.TPESampler(seed=args.seed)
-        st = optuna.create_study(direction="minimize", sampler=sampler)
-        # the nominal base (all offsets 0) is the first trial: the search starts from the study's design
-        st.enqueue_trial({names[i]: 0.0 for i in free})
-        best = None
-        feasible = 0
-        for _ in range(args.budget):
-            trial = st.ask()
-            params = tuple(trial.suggest_float(names[i], bounds.lower[i], bounds.upper[i]) for i in free)
-            if not bounds.valid(params):
-                st.tell(trial, 1e300)     # outside the tolerance (e.g. a round base area): never chosen
-                continue
-            e = ev(Candidate(tuple(order), params))
-            feasible += e.feasible
-            st.tell(trial, e.score)
-            if e.feasible and (best is None or e.cost < best.cost):
-                best = e
+        # the search: the base_pose plugin (TPE over the free base parameters, nominal base first)
+        dof = sum(space.module_info(m).dof for m in order)
+        sub = replace(space, min_dof=dof, max_dof=dof, max_links_between=space.max_modules)
+        opt = load_optimizer("base_pose")(sub, seed=args.seed, order=",".join(order))
+        hist = Study(opt, SerialExecutor(lambda c: ev(c, bounds)), Budget(evaluations=args.budget)).run().history
+        feasible = sum(e.feasible for e in hist)
+        best = min((e for e in hist if e.feasible), key=lambda e: e.cost, default=None)
         row = {"order": order, "study_best_cyc": study_cost,
                "nominal_cyc": nominal.cost if nominal.feasible else None,
                "nominal_cyc_median": float(np.median(nominal_costs)) if nominal_costs else None,

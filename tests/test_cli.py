@@ -103,4 +103,25 @@ def test_check_bad_files_exit_2(capsys, tmp_path):
 
 def test_optimizers_lists_the_five_plugins(capsys):
     code, out, _ = run(capsys, "optimizers", "--json")
-    assert code == 0 and {"random", "genetic", "elimination", "heuristic", "optuna"} <= set(json.loads(out))
+    assert code == 0 and {"random", "genetic", "elimination", "heuristic", "optuna", "base_pose"} <= set(json.loads(out))
+
+
+def test_optimize_base_pose_cli(capsys, tmp_path):
+    """The base of a fixed design on robodesign/base_placement: the best of 6 evaluations (the nominal base
+    first) is reported with its checked solution; bad plugin options are one-line errors with exit code 2."""
+    order = "2,7,22,3,23,15,24,10,23,15,23,10,24,10,12"
+    out_file = tmp_path / "best.json"
+    code, out, _ = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
+                       "--optimizer", "base_pose", "--opt", f"order={order}", "--budget", "6evals",
+                       "--out", out_file, "--json")
+    d = json.loads(out)
+    assert code == 0 and d["evaluations"] == 6 and d["best"]["order"] == order.split(",")
+    assert len(d["best"]["base"]) == 3 and abs(d["best"]["base"][0]) <= 0.4 and abs(d["best"]["base"][1]) <= 0.4
+    code, out, _ = run(capsys, "check", "robodesign/base_placement", out_file, "--modules", "robodesign_arm", "--json")
+    assert code == 0 and json.loads(out)["cost"] == d["best"]["cost"]
+    code, _, err = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
+                       "--optimizer", "base_pose", "--budget", "2evals")
+    assert code == 2 and err.startswith("robodesign: error: optimizer 'base_pose': give the module order")
+    code, _, err = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
+                       "--optimizer", "base_pose", "--opt", "order=1,21,12", "--budget", "2evals")
+    assert code == 2 and "order 1,21,12: module '12' may not follow" in err and "Traceback" not in err

@@ -113,7 +113,12 @@ def cmd_optimize(args) -> int:
         space = replace(space, base_bounds=BaseBounds(nominal=space.base_bounds.nominal))
     options = _parse_options(args.opt)
     options.setdefault("cost", args.cost)  # bound-based plugins (elimination, heuristic) use the study's cost
-    opt = load_optimizer(args.optimizer)(space, seed=args.seed, **options)
+    cls = load_optimizer(args.optimizer)
+    try:
+        opt = cls(space, seed=args.seed, **options)
+    except (TypeError, ValueError) as e:  # bad --opt values: the plugin's own message, no traceback
+        msg = str(e).removeprefix(f"{args.optimizer}: ")
+        raise InputError(f"optimizer {args.optimizer!r}: {msg}") from None
     progress = _Progress(budget, quiet=args.json)
     study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=progress)
     res = study.run()
