@@ -99,7 +99,7 @@ def main():
         out.append(row)
         print(f"{','.join(order)}: nominal base {_f(row['nominal_cyc'])} s (best of {args.budget} seeds) -> "
               f"best base {_f(row['best_cyc'])} s "
-              f"({100 * row.get('saving', 0):.1f} % less) in {row['seconds']} s", flush=True)
+              f"({100 * row.get('saving', 0) + 0.0:.1f} % less) in {row['seconds']} s", flush=True)
     (res_dir / "base_refine.json").write_text(json.dumps({"designs": out, "budget": args.budget, "seed": args.seed},
                                                          indent=1))
     lines = ["# Same robot, better base", "",
@@ -111,13 +111,13 @@ def main():
              "best base offsets (m, rad) |", "|---|---|---|---|---|---|"]
     for r in out:
         bb = ", ".join(f"{k} {v:+.3f}" for k, v in r["best_base"].items()) or "nominal"
-        sav = f"{100 * r['saving']:.1f} %" if "saving" in r else "—"
+        sav = f"{100 * r['saving'] + 0.0:.1f} %" if "saving" in r else "—"
         lines.append(f"| `{','.join(r['order'])}` | {_f(r['study_best_cyc'])} | {_f(r['nominal_cyc'])} "
                      f"[{_f(r['nominal_cyc_median'])}] | {_f(r['best_cyc'])} | {sav} | {bb} |")
     savings = [r["saving"] for r in out if "saving" in r]
     if savings:
-        lines += ["", f"Median saving {100 * float(np.median(savings)):.1f} % "
-                      f"(range {100 * min(savings):.1f} % to {100 * max(savings):.1f} %)."]
+        lines += ["", f"Median saving {100 * float(np.median(savings)) + 0.0:.1f} % "
+                      f"(range {100 * min(savings) + 0.0:.1f} % to {100 * max(savings):.1f} %)."]
     (res_dir / "base_refine.md").write_text("\n".join(lines) + "\n")
 
 

@@ -1,15 +1,16 @@
 """Symbolic CasADi RNEA / drivetrain torque / FK against pinocchio and Robot, on real module sets."""
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pinocchio as pin
 import pytest
 
+from conftest import COBRA as _COBRA
+
 from robodesign import Assembly, Robot, load_module_set
 from robodesign.solvers.casadi_dynamics import (casadi_drivetrain_torque, casadi_fk, casadi_rnea)
 
-COBRA = Path("/work/shared/cobra/modules")
+COBRA = _COBRA / "modules"
 TOL = 1e-9
 
 IMPROV_ORDERS = [

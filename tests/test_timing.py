@@ -1,17 +1,18 @@
 """Time parameterization (toppra / ruckig), the Trajectory type and the analytic bounds."""
 import math
-from pathlib import Path
 
 import numpy as np
 
 from conftest import assert_within_limits as check_limits
 import pytest
 
+from conftest import COBRA as _COBRA
+
 from robodesign import Robot, load_module_set
 from robodesign.solvers.timing import (BlendedPolyline, Trajectory, TimingError, jerk_limited_time,
                                        time_optimal_bound, time_parameterize, trapezoid_time)
 
-COBRA = Path("/work/shared/cobra/modules")
+COBRA = _COBRA / "modules"
 ARM = ["1", "21", "4", "22", "5", "23", "12"]
 DT = 0.01
 

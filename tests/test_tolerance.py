@@ -1,9 +1,10 @@
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+
+from conftest import COBRA as _COBRA
 
 from robodesign.errors import InputError
 from robodesign.jsonio import dumps_json, loads_json
@@ -11,7 +12,7 @@ from robodesign.spatial import homogeneous, rot_x, rot_y, rot_z, translation
 from robodesign.tolerance import (PROJECTIONS, ToleratedPose, ToleranceSamplingError, projection_value,
                                   quaternion_to_rotation, rotation_to_quaternion)
 
-PTP_3 = Path("/work/shared/cobra/tasks/simple/PTP_3.json")
+PTP_3 = _COBRA / "tasks" / "simple" / "PTP_3.json"
 ALL = list(PROJECTIONS)
 
 

@@ -1,16 +1,14 @@
 """CasADi/ipopt trajectory optimization on a 6-DoF IMPROV arm."""
-from pathlib import Path
 
 import numpy as np
 
-from conftest import assert_within_limits as check_all_samples
+from conftest import COBRA, IMPROV, assert_within_limits as check_all_samples
 import pytest
 
 from robodesign import Robot, load_module_set
 from robodesign.solvers.timing import time_optimal_bound, time_parameterize
-from robodesign.solvers.trajopt import mechanical_energy, optimize_trajectory, parse_cost
+from robodesign.solvers.trajopt import TrajoptError, mechanical_energy, optimize_trajectory, parse_cost
 
-COBRA = Path("/work/shared/cobra/modules")
 DT = 0.01
 QA = np.array([0.0, -0.5, 1.0, 0.0, 0.5, 0.0])
 QB = np.array([1.2, 0.6, -0.4, 0.8, -0.6, 1.0])
@@ -19,7 +17,7 @@ QB = np.array([1.2, 0.6, -0.4, 0.8, -0.6, 1.0])
 @pytest.fixture(scope="module")
 def arm():
     """IMPROV 1-21-4-22-5-23-12 with halved torque limits, so that torques limit the motion."""
-    r = Robot.from_order(load_module_set(COBRA / "IMPROV"), ["1", "21", "4", "22", "5", "23", "12"])
+    r = Robot.from_order(load_module_set(IMPROV), ["1", "21", "4", "22", "5", "23", "12"])
     r.tau_max = r.tau_max * 0.5
     return r
 
@@ -90,3 +88,22 @@ def test_parse_cost():
         parse_cost("mass")
     with pytest.raises(ValueError):
         parse_cost("")
+
+
+def test_start_at_a_joint_limit_keeps_the_limits():
+    """Panda on a PTP_3 move whose start configuration (an IK solution) sits exactly at joint 1's upper
+    limit: the energy-optimal motion hugs that limit. Interior nodes keep a 1 mm rad margin, so every
+    output sample stays inside; without the margin ipopt's constraint tolerance lets a sample end 4e-5 rad
+    beyond the limit, which the output check turns into a TrajoptError (solve then keeps TOPP-RA)."""
+    from robodesign.urdf import import_urdf
+    ms = import_urdf(COBRA / "urdf" / "panda" / "urdf" / "panda.urdf")
+    r = Robot.from_order(ms, [m.id for m in ms][:1])
+    qa = np.array([1.46126, r.q_upper[1], 1.66363, -2.59881, -1.63492, 1.29217, 0.89685])
+    qb = np.array([0.15835, 1.77879, 1.70154, -2.29422, -1.64564, 1.33638, -0.71902])
+    warm = time_parameterize(r, np.array([qa, qb]), dt=DT)
+    out = optimize_trajectory(r, warm, cost="mechEnergy,cyc_0.01", n_nodes=30, dt_out=DT)
+    assert np.all(out.q >= r.q_lower) and np.all(out.q <= r.q_upper)
+    assert out.q[0, 1] == r.q_upper[1] and np.allclose(out.q[-1], qb)
+    assert mechanical_energy(r, out) < 0.2 * mechanical_energy(r, warm)      # 1.0 J vs 10.7 J
+    with pytest.raises(TrajoptError, match="leaves the position limits"):
+        optimize_trajectory(r, warm, cost="mechEnergy,cyc_0.01", n_nodes=30, dt_out=DT, limit_margin=0.0)

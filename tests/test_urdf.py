@@ -18,7 +18,7 @@ from robodesign.robot import Robot
 from robodesign.spatial import homogeneous, rpy_to_matrix
 from robodesign.urdf import CONTINUOUS_LIMIT, export_urdf, import_urdf
 
-COBRA = Path("/work/shared/cobra")
+from conftest import COBRA  # noqa: E402
 MODULES = COBRA / "modules"
 PANDA_DIR = COBRA / "urdf" / "panda"
 PANDA = PANDA_DIR / "urdf" / "panda.urdf"

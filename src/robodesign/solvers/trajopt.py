@@ -10,7 +10,8 @@ constant::
 — the same rule :class:`~robodesign.solvers.timing.Trajectory` samples obey, so the optimized
 trajectory is an exactly integrated C¹ curve. Constraints:
 
-* q_lower ≤ q_k ≤ q_upper, |q̇_k| ≤ q̇_max (q̇ is piecewise linear, so this holds at all times),
+* q_lower + m ≤ q_k ≤ q_upper − m at the interior nodes (m = ``limit_margin``; the fixed end nodes may
+  lie closer), and the output samples are checked against the limits, |q̇_k| ≤ q̇_max (q̇ is piecewise linear, so this holds at all times),
   |q̈_k| ≤ q̈_max (exact: q̈ is constant per interval);
 * drivetrain torque (:func:`~.casadi_dynamics.casadi_drivetrain_torque`, RNEA + armature + viscous +
   smooth Coulomb) within ±τ_max·(1 − ``torque_margin``) at *both ends* of every interval with that
@@ -101,7 +102,7 @@ def mechanical_energy(robot, traj: Trajectory) -> float:
 
 def optimize_trajectory(robot, warm: Trajectory, cost="cyc", n_nodes: int = 30, dt_out: float = 0.01,
                         max_iter: int = 500, tube: Optional[float] = 0.05, *, duration: Optional[float] = None,
-                        torque_limits: bool = True, torque_margin: float = 1e-3,
+                        torque_limits: bool = True, torque_margin: float = 1e-3, limit_margin: float = 1e-3,
                         goal_position: Optional[Sequence[float]] = None, goal_tol: float = 1e-3,
                         tol: float = 1e-7, expand: bool = False, ipopt_options: Optional[dict] = None,
                         verbose: bool = False) -> Trajectory:
@@ -152,14 +153,21 @@ def optimize_trajectory(robot, warm: Trajectory, cost="cyc", n_nodes: int = 30, 
     lo, hi = np.asarray(robot.q_lower, float), np.asarray(robot.q_upper, float)
     vmax, amax, tmax = (np.asarray(x, float) for x in (robot.dq_max, robot.ddq_max, robot.tau_max))
     for j in range(dof):
-        qlo = lo[j] if math.isfinite(lo[j]) else -np.inf
-        qhi = hi[j] if math.isfinite(hi[j]) else np.inf
+        # interior nodes keep ``limit_margin`` from the position limits (ipopt's constraint tolerance, the
+        # quadratic pieces between nodes and the resampling may bulge a little); the end nodes, fixed by
+        # the boundary conditions, may lie closer (an IK solution at a limit)
+        qlo_k = np.full(N + 1, lo[j] + limit_margin if math.isfinite(lo[j]) else -np.inf)
+        qhi_k = np.full(N + 1, hi[j] - limit_margin if math.isfinite(hi[j]) else np.inf)
+        qlo_k[0], qhi_k[0] = min(qlo_k[0], q_start[j]), max(qhi_k[0], q_start[j])
+        if goal_position is None:
+            qlo_k[N], qhi_k[N] = min(qlo_k[N], q_goal[j]), max(qhi_k[N], q_goal[j])
+        else:
+            qlo_k[N], qhi_k[N] = lo[j], hi[j]
         if tube is not None:
-            qlo_k = np.maximum(Wq[:, j] - tube, qlo)
-            qhi_k = np.minimum(Wq[:, j] + tube, qhi)
+            qlo_k = np.maximum(Wq[:, j] - tube, qlo_k)
+            qhi_k = np.minimum(Wq[:, j] + tube, qhi_k)
+        if np.isfinite(qlo_k).any() or np.isfinite(qhi_k).any():
             opti.subject_to(opti.bounded(qlo_k.reshape(1, -1), Q[j, :], qhi_k.reshape(1, -1)))
-        elif math.isfinite(lo[j]) or math.isfinite(hi[j]):
-            opti.subject_to(opti.bounded(qlo, Q[j, :], qhi))
         if math.isfinite(vmax[j]):
             opti.subject_to(opti.bounded(-vmax[j], DQ[j, :], vmax[j]))
         if math.isfinite(amax[j]):
@@ -242,6 +250,11 @@ def optimize_trajectory(robot, warm: Trajectory, cost="cyc", n_nodes: int = 30, 
 
     q_end = q_goal if goal_position is None else Qs[-1]
     out = resample_velocity_profile(robot, velocity, T_opt, q_start, q_end, dt_out, torque_limits, position)
+    bad = (out.q < lo[None, :]) | (out.q > hi[None, :])
+    if bad.any():
+        k, j = map(int, np.argwhere(bad)[0])
+        raise TrajoptError(f"the optimized trajectory leaves the position limits (joint {j}, sample {k}: "
+                           f"q = {out.q[k, j]:.6g} outside [{lo[j]:.6g}, {hi[j]:.6g}])")
     out.info.update(solve_time=_time.perf_counter() - t_start, ipopt_time=t_ipopt,
                     iterations=int(stats.get("iter_count", -1)), status=stats.get("return_status"),
                     T_opt=T_opt, objective=float(sol.value(J)), cost=weights, n_nodes=N, tube=tube,
