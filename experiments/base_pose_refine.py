@@ -29,7 +29,7 @@ import numpy as np
 from robodesign.evaluator import Evaluator, EvaluatorSpec
 from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
 from robodesign.paths import project_root
-from robodesign.search_space import Candidate
+from robodesign.search_space import BASE_PARAMS, Candidate
 
 HERE = Path(__file__).resolve().parent
 
@@ -67,7 +67,7 @@ def main():
     space = ev.search_space()
     bounds = space.base_bounds
     free = bounds.free
-    names = ["x", "y", "z", "yaw"]
+    names = BASE_PARAMS
     out = []
     for order, study_cost in best_orders(res_dir / "evaluations.sqlite", "modules_only", args.designs):
         t0 = time.perf_counter()

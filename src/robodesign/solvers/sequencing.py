@@ -75,11 +75,11 @@ def choose(nodes: List[Node], cost: Callable[[np.ndarray, np.ndarray], np.ndarra
             total = best[:, :, None] + cost(cfg, new_cfg)[None, :, :]     # (n0, m_prev, m_new)
             arg = np.argmin(total, axis=1)
             new_best = np.take_along_axis(total, arg[:, None, :], axis=1)[:, 0, :]
-            if isinstance(node, Tied):
-                mask = np.full(new_best.shape, np.inf)
-                if tied:
-                    mask[np.arange(n0), np.arange(n0)] = 0.0
-                new_best = new_best + mask
+            if isinstance(node, Tied):      # only the first choice itself: keep the diagonal
+                diag = np.arange(n0)
+                kept = np.full(new_best.shape, np.inf)
+                kept[diag, diag] = new_best[diag, diag]
+                new_best = kept
         backs.append(arg)
         best, cfg = new_best, new_cfg
     i0, j = np.unravel_index(int(np.argmin(best)), best.shape)

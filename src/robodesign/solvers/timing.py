@@ -286,8 +286,7 @@ def time_optimal_bound(robot, q_a, q_b) -> float:
     """Lower bound on the duration of a rest-to-rest move q_a → q_b: the slowest joint's optimal
     trapezoid/bang-bang time under its own velocity and acceleration limits (torques, jerk, paths and
     coordination ignored)."""
-    d = np.abs(np.asarray(q_b, float) - np.asarray(q_a, float))
-    return max((trapezoid_time(d[j], robot.dq_max[j], robot.ddq_max[j]) for j in range(len(d))), default=0.0)
+    return float(time_optimal_bounds(robot, np.asarray(q_b, float) - np.asarray(q_a, float)))
 
 
 def time_optimal_bounds(robot, D: np.ndarray) -> np.ndarray:

@@ -11,7 +11,8 @@ constant::
 trajectory is an exactly integrated C¹ curve. Constraints:
 
 * q_lower + m ≤ q_k ≤ q_upper − m at the interior nodes (m = ``limit_margin``; the fixed end nodes may
-  lie closer), and the output samples are checked against the limits, |q̇_k| ≤ q̇_max (q̇ is piecewise linear, so this holds at all times),
+  lie closer), and the output samples are checked against the limits (TrajoptError otherwise);
+  |q̇_k| ≤ q̇_max (q̇ is piecewise linear, so this holds at all times),
   |q̈_k| ≤ q̈_max (exact: q̈ is constant per interval);
 * drivetrain torque (:func:`~.casadi_dynamics.casadi_drivetrain_torque`, RNEA + armature + viscous +
   smooth Coulomb) within ±τ_max·(1 − ``torque_margin``) at *both ends* of every interval with that
