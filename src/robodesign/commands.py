@@ -54,6 +54,8 @@ def cmd_solve(args) -> int:
         print(json.dumps({"feasible": res.feasible, "stage": res.stage, "message": res.message,
                           "stages": [s.to_json() for s in res.stages], "cost": res.cost,
                           "costs": res.verdict.costs if res.verdict else {},
+                          "goals_achieved": res.goals_achieved, "num_goals": res.num_goals,
+                          "goals_missed": res.goals_missed,
                           "solution": str(out) if out else None, "seconds": elapsed}))
     else:
         for s in res.stages:
@@ -61,6 +63,9 @@ def cmd_solve(args) -> int:
         if res.feasible:
             print(f"VALID solution of {task.id}: {res.verdict.cost_function} = {res.cost:.6g}  ({elapsed:.2f} s)")
             print("costs  " + ", ".join(f"{k}={v:.6g}" for k, v in res.verdict.costs.items()))
+            print(f"goals  {res.goals_achieved} of {res.num_goals} achieved"
+                  + (f" (missed: {', '.join(res.goals_missed)}; the task does not require every goal)"
+                     if res.goals_missed else ""))
         else:
             print(f"no valid solution: stage '{res.stage}' failed: {res.message}")
         if out:

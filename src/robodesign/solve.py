@@ -52,6 +52,11 @@ class SolveSettings:
     seed: int = 0
     check: bool = True
     stop_after: Optional[str] = None  # stop after this stage (screening, e.g. "ik"); no solution is produced
+    # a task without allGoalsFulfilled accepts a solution that misses goals, but the solver still wants
+    # them: the motions of the goals the checker found missed are re-timed this many times, each at half
+    # the joint speed (a quarter of the acceleration) of the previous try; the try that achieves most
+    # goals is kept (a goal-level endEffector v_max is the usual reason a goal is missed)
+    goal_retries: int = 5
 
 
 @dataclass
@@ -70,8 +75,17 @@ class SolveResult:
     stages: List[StageRecord] = field(default_factory=list)
     solution: Optional[Solution] = None
     verdict: Optional[Verdict] = None
-    goals_reached: int = 0
+    goals_reached: int = 0  # goals with an IK solution (how far the ik stage got)
     num_goals: int = 0
+
+    @property
+    def goals_achieved(self) -> Optional[int]:
+        """Goals the checker found achieved in the solution (None when there is no checked solution)."""
+        return None if self.verdict is None else sum(bool(ok) for ok in self.verdict.goals.values())
+
+    @property
+    def goals_missed(self) -> List[str]:
+        return [] if self.verdict is None else [gid for gid, ok in self.verdict.goals.items() if not ok]
 
     @property
     def feasible(self) -> bool:
@@ -184,12 +198,14 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
             motion, g2t = plan.time_parameterize(cost)
         if res.stage != "done" or _stop(res, settings):
             return res
-    sol = Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
-                   module_order=tuple(asm.module_ids), base_pose=base_pose,
-                   trajectory=SolutionTrajectory(motion.t, motion.q, motion.dq, motion.ddq, g2t),
-                   module_connection=None if asm.is_serial() else asm.connections,
-                   base_connection=None if asm.is_serial() else asm.base,
-                   computation_time=sum(s.seconds for s in res.stages), notes="robodesign solve")
+    def solution_of(motion, g2t) -> Solution:
+        return Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
+                        module_order=tuple(asm.module_ids), base_pose=base_pose,
+                        trajectory=SolutionTrajectory(motion.t, motion.q, motion.dq, motion.ddq, g2t),
+                        module_connection=None if asm.is_serial() else asm.connections,
+                        base_connection=None if asm.is_serial() else asm.base,
+                        computation_time=sum(s.seconds for s in res.stages), notes="robodesign solve")
+    sol = solution_of(motion, g2t)
     res.solution = sol
     if settings.check:
         with _Stage(res, "check"):
@@ -198,7 +214,31 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
             res.solution = sol.with_(cost=v.cost)
             if not v.valid:
                 raise _Fail("; ".join(str(x) for x in v.violations[:3]))
+            _achieve_missed_goals(res, plan, task, module_set, solution_of, cost, settings)
     return res
+
+
+def _achieve_missed_goals(res: SolveResult, plan: "_GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
+                          cost: str, settings: SolveSettings) -> None:
+    """A valid solution that misses goals (possible only without allGoalsFulfilled): re-time the motions of
+    the missed goals slower (``settings.goal_retries`` times, halving the speed each time) and keep the
+    valid solution that achieves most goals (then the cheaper one)."""
+    slow: Dict[str, float] = {}
+    for _ in range(settings.goal_retries):
+        missed = res.goals_missed
+        if not missed:
+            return
+        for gid in missed:
+            slow[gid] = slow.get(gid, 1.0) * 0.5
+        try:
+            motion, g2t = plan.time_parameterize(cost if settings.optimize_trajectory else None, slow=slow)
+        except RobodesignError:
+            return
+        sol = solution_of(motion, g2t)
+        v = check(task, sol, module_set)
+        achieved = sum(bool(ok) for ok in v.goals.values())
+        if v.valid and (achieved, -v.cost) > (res.goals_achieved, -res.verdict.cost):
+            res.verdict, res.solution = v, sol.with_(cost=v.cost)
 
 
 def _stop(res: SolveResult, settings: SolveSettings) -> bool:
@@ -430,19 +470,22 @@ class _GoalPlanner:
         raise _Fail(f"leave goal {g.id}: could not move the TCP out of the region")
 
     # -- timing ----------------------------------------------------------------------------------
-    def time_parameterize(self, cost: Optional[str] = None):
+    def time_parameterize(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None):
         """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
         optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
-        whose optimization fails keeps its time-optimal TOPP-RA timing."""
+        whose optimization fails keeps its time-optimal TOPP-RA timing. ``slow`` maps goal IDs to a speed
+        factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²)."""
         from .solvers.timing import Trajectory, time_parameterize
         dt = self.task.dt
         traj = Trajectory.at_rest(self.q0)
         g2t: Dict[str, float] = {}
+        slow = slow or {}
         for (kind, arg, g), path in zip(self.actions, self.paths):
+            robot = self.robot if g is None or g.id not in slow else _SlowedRobot(self.robot, slow[g.id])
             if kind == "move":
                 if path is not None:
-                    seg = time_parameterize(self.robot, path, dt=dt, method=self.settings.timing)
-                    if cost is not None:
+                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing)
+                    if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
                         seg = self._optimize_move(seg, cost)
                     traj = traj.concatenate(seg)
                 if g is not None:
@@ -455,7 +498,7 @@ class _GoalPlanner:
                     g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
             elif kind == "follow":
                 if g.t is None:
-                    seg = time_parameterize(self.robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
+                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
                                             stop_at=list(range(len(path))))
                 else:
                     seg = _timed_follow(path, g.t, dt)
@@ -476,6 +519,19 @@ class _GoalPlanner:
         except Exception:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
             return seg
         return out if np.allclose(out.q[-1], seg.q[-1], atol=1e-9) and np.all(out.dq[-1] == 0) else seg
+
+
+class _SlowedRobot:
+    """The robot with its joint speed limits scaled by ``s`` and its acceleration limits by ``s²`` (for
+    timing only: a motion timed with it is the robot's own motion, slower)."""
+
+    def __init__(self, robot, s: float):
+        self._robot = robot
+        self.dq_max = np.asarray(robot.dq_max, dtype=float) * s
+        self.ddq_max = np.asarray(robot.ddq_max, dtype=float) * s * s
+
+    def __getattr__(self, name):
+        return getattr(self._robot, name)
 
 
 def _trajopt_cost(cost: str) -> str:
