@@ -199,6 +199,12 @@ def build_parser() -> argparse.ArgumentParser:
     sv.add_argument("--workers", type=int, default=None, help="checker threads (default: number of CPUs, 2..8)")
     sv.set_defaults(func=cmd_serve)
 
+    ge = sub.add_parser("generate", help="write seeded CoBRA tasks of a published task family into a folder "
+                                         "(whitman2020, liu2020, bpo2024; --list)")
+    from .generate.cli import add_generate_arguments, cmd_generate
+    add_generate_arguments(ge)
+    ge.set_defaults(func=cmd_generate)
+
     vw = sub.add_parser("view", help="write one self-contained HTML page that shows a solution (animated), "
                                      "a task or a robot")
     vw.add_argument("solution", nargs="?", help="solution JSON file (omit it to show --task and/or a robot)")

@@ -1,0 +1,230 @@
+"""What every task generator shares: pose and geometry helpers, the deterministic JSON writer, the
+provenance header and the reachability test with the reference arm.
+
+Determinism: a generator draws every number from one ``numpy.random.Generator`` seeded from
+(family, folder seed, task index), rounds every float to 10 decimals and writes with a fixed layout,
+so the same arguments give byte-identical files on any machine with the same numpy bit generator
+(PCG64).
+"""
+from __future__ import annotations
+
+import json
+import math
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..errors import InputError
+
+PI = math.pi
+DATE = "2026-01-01"  # fixed: the date is part of the bytes
+DT = 0.01
+GRAVITY = [0.0, 0.0, -9.81]
+TAG_PREFIX = "robodesign-generate:"  # header tags "robodesign-generate:<key>=<value>" hold the provenance
+
+# The reference design used to prove that goals are reachable: robodesign_arm in its default order (floor
+# base, 6 DoF, reach ≈ 0.98 m from the shoulder at z = 0.372 m); assets/modules/robodesign_arm/README.md.
+REFERENCE_MODULE_SET = "robodesign_arm"
+REFERENCE_ORDER = ("1", "21", "22", "4", "22", "3", "23", "24", "23", "12")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# poses and geometry (plain JSON-ready dicts)
+def rot_x(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]], dtype=float)
+
+
+def rot_y(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]], dtype=float)
+
+
+def rot_z(a: float) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]], dtype=float)
+
+
+def transform(p=(0.0, 0.0, 0.0), R: Optional[np.ndarray] = None) -> np.ndarray:
+    M = np.eye(4)
+    if R is not None:
+        M[:3, :3] = R
+    M[:3, 3] = p
+    return M
+
+
+def tolerated(nominal: np.ndarray, **tol) -> dict:
+    """A ToleratedPose dict; keyword = projection name, value = (lo, hi)."""
+    out: dict = {"nominal": nominal}
+    if tol:
+        out["toleranceProjection"] = list(tol)
+        out["tolerance"] = [list(v) for v in tol.values()]
+    return out
+
+
+def box(center, size) -> dict:
+    """An axis-aligned box geometry (full edge lengths ``size``) centred at ``center``."""
+    return {"type": "box", "parameters": {"x": size[0], "y": size[1], "z": size[2]}, "pose": transform(center)}
+
+
+def box_between(lo, hi) -> dict:
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return box((lo + hi) / 2, hi - lo)
+
+
+@dataclass(frozen=True)
+class AABB:
+    """An axis-aligned box [lo, hi] in world coordinates (the generators' own geometry for placement)."""
+    lo: Tuple[float, float, float]
+    hi: Tuple[float, float, float]
+
+    @classmethod
+    def cube(cls, center, edge: float) -> "AABB":
+        c = np.asarray(center, float)
+        return cls(tuple(c - edge / 2), tuple(c + edge / 2))
+
+    def distance(self, p) -> float:
+        """Euclidean distance of point ``p`` from the box (0 inside)."""
+        p = np.asarray(p, float)
+        d = np.maximum(np.maximum(np.asarray(self.lo) - p, p - np.asarray(self.hi)), 0.0)
+        return float(np.linalg.norm(d))
+
+    def overlaps(self, other: "AABB", gap: float = 0.0) -> bool:
+        return all(self.lo[k] < other.hi[k] + gap and other.lo[k] < self.hi[k] + gap for k in range(3))
+
+    def geometry(self) -> dict:
+        return box_between(self.lo, self.hi)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# header and provenance
+@dataclass(frozen=True)
+class Provenance:
+    """Everything needed to regenerate one task file: family, generator version, folder seed, index, options."""
+    family: str
+    version: int
+    seed: int
+    index: int
+    options: Tuple[Tuple[str, str], ...]  # sorted (name, value) pairs, values as written on the CLI
+
+    def tags(self) -> List[str]:
+        items = [("generator", self.family), ("version", str(self.version)), ("seed", str(self.seed)),
+                 ("index", str(self.index))] + list(self.options)
+        return [f"{TAG_PREFIX}{k}={v}" for k, v in items]
+
+    @classmethod
+    def from_tags(cls, tags: Sequence[str], file: str = "<task>") -> "Provenance":
+        kv: Dict[str, str] = {}
+        for t in tags:
+            if isinstance(t, str) and t.startswith(TAG_PREFIX) and "=" in t:
+                k, v = t[len(TAG_PREFIX):].split("=", 1)
+                kv[k] = v
+        for k in ("generator", "version", "seed", "index"):
+            if k not in kv:
+                raise InputError(f"no '{TAG_PREFIX}{k}=...' tag: not written by robodesign generate",
+                                 file=file, path=["header", "tags"])
+        try:
+            version, seed, index = int(kv.pop("version")), int(kv.pop("seed")), int(kv.pop("index"))
+        except ValueError:
+            raise InputError("version, seed and index tags must be integers", file=file,
+                             path=["header", "tags"]) from None
+        family = kv.pop("generator")
+        return cls(family, version, seed, index, tuple(sorted(kv.items())))
+
+    def rng(self) -> np.random.Generator:
+        """The task's random stream: a function of (family, seed, index) only."""
+        key = zlib.crc32(self.family.encode())
+        return np.random.default_rng(np.random.SeedSequence([key, self.seed, self.index]))
+
+
+def header(task_id: str, title: str, prov: Provenance, tags: Sequence[str] = ()) -> dict:
+    return {"ID": task_id, "version": "2023", "taskName": title,
+            "tags": [prov.family, *tags, *prov.tags()], "date": DATE, "timeStepSize": DT, "gravity": GRAVITY,
+            "author": [f"robodesign generate {prov.family} v{prov.version} (seed {prov.seed}, index {prov.index})"],
+            "affiliation": ["robodesign project"]}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# deterministic JSON (the layout of assets/tasks/make_tasks.py)
+def clean(obj):
+    """JSON-ready copy: arrays to lists, floats rounded to 10 decimals (integral ones to int, -0 to 0)."""
+    if isinstance(obj, np.ndarray):
+        return clean(obj.tolist())
+    if isinstance(obj, dict):
+        return {k: clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [clean(v) for v in obj]
+    if isinstance(obj, (float, np.floating)):
+        v = round(float(obj), 10)
+        return int(v) if v.is_integer() and abs(v) < 1e9 else v
+    if isinstance(obj, np.integer):
+        return int(obj)
+    return obj
+
+
+def _is_numbers(v) -> bool:
+    return isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+
+
+def _inline(v) -> bool:
+    """Number lists, small matrices and string lists are written on one line."""
+    return (_is_numbers(v) or (isinstance(v, list) and v and all(_is_numbers(x) for x in v) and len(v) <= 4)
+            or (isinstance(v, list) and all(isinstance(x, str) for x in v)))
+
+
+def dumps(obj, indent: int = 0) -> str:
+    pad, pad1 = "  " * indent, "  " * (indent + 1)
+    if isinstance(obj, dict):
+        if not obj:
+            return "{}"
+        if len(obj) <= 4 and all(isinstance(v, (int, float, str)) for v in obj.values()):
+            return json.dumps(obj, separators=(", ", ": "))
+        items = [f"{pad1}{json.dumps(k)}: {dumps(v, indent + 1)}" for k, v in obj.items()]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    if isinstance(obj, list):
+        if not obj:
+            return "[]"
+        if _inline(obj):
+            return json.dumps(obj, separators=(", ", ": "))
+        items = [f"{pad1}{dumps(v, indent + 1)}" for v in obj]
+        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
+    return json.dumps(obj)
+
+
+def task_text(task: dict) -> str:
+    return dumps(clean(task)) + "\n"
+
+
+# ---------------------------------------------------------------------------------------------------------
+# reachability with the reference arm
+class ReferenceArm:
+    """robodesign_arm in REFERENCE_ORDER at a given base pose, in a cell of obstacles: tests whether a
+    tolerated goal has a collision-free IK solution that holds its pose within the torque limits."""
+
+    def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
+                 ik_restarts: int = 60, seed: int = 0):
+        from ..assembly import Assembly
+        from ..checker import build_robot
+        from ..module_io import load_module_set
+        from ..task_io import parse_task
+        self.task = parse_task(clean(task_dict), folder / "_probe.json")
+        self.module_set = load_module_set(REFERENCE_MODULE_SET)
+        asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
+        self.robot = build_robot(self.task, self.module_set, asm,
+                                 np.eye(4) if base_pose is None else np.asarray(base_pose, float))
+        self.ik_restarts = ik_restarts
+        self.rng = np.random.default_rng(seed)
+
+    def reaches(self, goal_pose: dict) -> bool:
+        from ..solvers.ik import reach_bound, solve_ik
+        from ..tolerance import ToleratedPose
+        tp = ToleratedPose.from_json(clean(goal_pose))
+        o, R = reach_bound(self.robot)
+        if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
+            return False
+        r = solve_ik(self.robot, tp, self.rng, max_restarts=self.ik_restarts, n_solutions=4)
+        limit = self.robot.tau_max
+        return any(np.all(np.abs(self.robot.gravity_torque(q)) <= limit) for q in r.solutions)

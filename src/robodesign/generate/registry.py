@@ -1,0 +1,188 @@
+"""The task-generator families and their options (a small registry, one module per family).
+
+A family is a :class:`Family`: a name, a version (bumped whenever the same arguments would write
+different bytes), its options, and ``build(prov, folder) -> GeneratedTask``. ``generate()`` writes a
+folder of tasks; ``regenerate()`` rebuilds one task from the provenance tags in its header.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+from ..errors import InputError
+from .common import Provenance, task_text
+
+
+@dataclass(frozen=True)
+class Option:
+    name: str  # CLI spelling without dashes, e.g. "goals" (→ --goals)
+    kind: type  # int | float | str
+    default: object
+    help: str
+    choices: Optional[Tuple[str, ...]] = None
+    minimum: Optional[float] = None
+    path: bool = False  # a file given by the user (copied into the output folder)
+
+    def parse(self, value, family: str) -> object:
+        where = f"{family} --{self.name.replace('_', '-')}"
+        if self.kind is str:
+            v = str(value)
+            if self.choices and v not in self.choices:
+                raise InputError(f"{where}: expected one of {', '.join(self.choices)}, got {v!r}")
+            return v
+        try:
+            v = self.kind(value)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: expected {'an integer' if self.kind is int else 'a number'}, got {value!r}") \
+                from None
+        if v != v or v in (float("inf"), float("-inf")):
+            raise InputError(f"{where}: expected a finite number, got {value!r}")
+        if self.minimum is not None and v < self.minimum:
+            raise InputError(f"{where}: must be at least {self.minimum:g}, got {value!r}")
+        return v
+
+
+@dataclass
+class GeneratedTask:
+    task_id: str
+    task: dict  # JSON-ready task
+    assets: Dict[str, bytes] = field(default_factory=dict)  # path relative to the output folder → content
+
+    @property
+    def text(self) -> str:
+        return task_text(self.task)
+
+    @property
+    def filename(self) -> str:
+        return self.task_id + ".json"
+
+
+@dataclass(frozen=True)
+class Family:
+    name: str
+    version: int
+    summary: str
+    options: Tuple[Option, ...]
+    build: Callable[[Provenance, Dict[str, object], Path], GeneratedTask]
+
+    def option(self, name: str) -> Option:
+        for o in self.options:
+            if o.name == name:
+                return o
+        raise InputError(f"{self.name} has no option --{name.replace('_', '-')} "
+                         f"(its options: {', '.join('--' + o.name.replace('_', '-') for o in self.options) or 'none'})")
+
+    def resolve(self, given: Dict[str, object]) -> Dict[str, object]:
+        """Typed values of every option (defaults filled in); unknown options are an error."""
+        for k in given:
+            self.option(k)
+        return {o.name: o.parse(given[o.name], self.name) if given.get(o.name) is not None else o.default
+                for o in self.options}
+
+
+def _families() -> Dict[str, Family]:
+    from . import whitman2020
+    return {f.name: f for f in (whitman2020.FAMILY,)}
+
+
+def families() -> Dict[str, Family]:
+    return _families()
+
+
+def get_family(name: str) -> Family:
+    fams = _families()
+    if name not in fams:
+        raise InputError(f"unknown generator family {name!r} (one of {', '.join(fams)}; see robodesign generate --list)")
+    return fams[name]
+
+
+def option_tags(family: Family, values: Dict[str, object]) -> Tuple[Tuple[str, str], ...]:
+    """Options as written into the header tags; a user-given file is recorded by its name in the folder."""
+    out = []
+    for o in family.options:
+        v = values[o.name]
+        if v is None:
+            continue
+        out.append((o.name, Path(str(v)).name if o.path else (repr(v) if isinstance(v, float) else str(v))))
+    return tuple(sorted(out))
+
+
+def build_one(family: Family, values: Dict[str, object], seed: int, index: int, folder: Path) -> GeneratedTask:
+    prov = Provenance(family.name, family.version, seed, index, option_tags(family, values))
+    return family.build(prov, values, folder)
+
+
+def write_task(gen: GeneratedTask, folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    for rel, content in sorted(gen.assets.items()):
+        p = folder / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if not p.exists() or p.read_bytes() != content:
+            p.write_bytes(content)
+    out = folder / gen.filename
+    out.write_text(gen.text, encoding="utf-8")
+    return out
+
+
+def generate(family_name: str, out: Path, count: int, seed: int, options: Optional[Dict[str, object]] = None,
+             progress: Optional[Callable[[Path], None]] = None) -> List[Path]:
+    """Write ``count`` tasks of a family into folder ``out`` (task index 0..count-1); returns the files."""
+    family = get_family(family_name)
+    if count < 1:
+        raise InputError(f"--count must be at least 1, got {count}")
+    if seed < 0:
+        raise InputError(f"--seed must be non-negative, got {seed}")
+    values = family.resolve(dict(options or {}))
+    out = Path(out)
+    files = []
+    for index in range(count):
+        p = write_task(build_one(family, values, seed, index, out), out)
+        files.append(p)
+        if progress:
+            progress(p)
+    return files
+
+
+def regenerate(task_file: Path, out: Path, machine: Optional[Path] = None) -> Path:
+    """Rebuild one generated task from its header's provenance tags into folder ``out``.
+
+    A family that reads a user file (liu2020 ``--machine``) finds it next to the task (the copy the generator
+    made) unless ``machine`` is given."""
+    from ..jsonio import load_json
+    task_file = Path(task_file)
+    data = load_json(task_file, display_name=task_file.name)
+    tags = (data.get("header") or {}).get("tags") or [] if isinstance(data, dict) else []
+    prov = Provenance.from_tags(tags, task_file.name)
+    family = get_family(prov.family)
+    if prov.version != family.version:
+        raise InputError(f"written by {prov.family} generator version {prov.version}, this is version "
+                         f"{family.version}: it cannot be reproduced bit for bit", file=task_file.name,
+                         path=["header", "tags"])
+    given: Dict[str, object] = dict(prov.options)
+    for o in family.options:
+        if o.path and o.name in given:
+            src = Path(machine) if machine else _find_asset(task_file, str(given[o.name]))
+            given[o.name] = str(src)
+    values = family.resolve(given)
+    return write_task(build_one(family, values, prov.seed, prov.index, Path(out)), Path(out))
+
+
+def _find_asset(task_file: Path, name: str) -> Path:
+    for cand in (task_file.parent / "assets" / name, task_file.parent / name):
+        if cand.is_file():
+            return cand
+    raise InputError(f"the task was generated from the file {name!r}, which is not in assets/ beside it",
+                     file=task_file.name, path=["header", "tags"])
+
+
+def copy_file(src: Path) -> bytes:
+    """The bytes of a user-given file (a clear error when it is missing)."""
+    src = Path(src)
+    if not src.is_file():
+        raise InputError("no such file", file=str(src))
+    return src.read_bytes()
+
+
+__all__ = ["Family", "GeneratedTask", "Option", "families", "get_family", "generate", "regenerate", "copy_file",
+           "build_one", "write_task", "shutil"]
