@@ -16,6 +16,9 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--out", metavar="DIR", help="results folder (default: results/<config name>-<timestamp>/)")
     run.add_argument("--resume", metavar="DIR", help="continue the experiment in this results folder (after a "
                                                      "crash or kill); finished runs are skipped")
+    run.add_argument("--restart", action="store_true",
+                     help="with --resume: start the experiment over in its folder when its results database is "
+                          "missing or damaged (the old database and best files are moved to damaged-<time>/)")
     run.add_argument("--executor", choices=("serial", "process", "ray"), help="override the config's executor")
     run.add_argument("--workers", type=int, help="worker processes / Ray actors (default: the config's, else "
                                                  "the number of CPUs)")
@@ -41,6 +44,8 @@ def cmd_run(args) -> int:
     if args.address and (args.executor or "ray") != "ray":
         raise InputError("--address needs --executor ray")
     executor = args.executor or ("ray" if args.address else None)
+    if args.restart and not args.resume:
+        raise InputError("--restart needs --resume DIR (it starts the experiment in that folder over)")
     if args.resume:
         if args.config:
             raise InputError("give either a CONFIG or --resume DIR, not both (a resumed experiment uses the "
@@ -60,8 +65,8 @@ def cmd_run(args) -> int:
                      f"{len(exp.seeds)} seed(s) = {n_runs} runs → {out}")
     try:
         outcome = run_experiment(exp, out, config_text=text, config_path=cfg_path, resume=bool(args.resume),
-                                 executor=executor, workers=args.workers, address=args.address, progress=progress,
-                                 report=not args.no_report)
+                                 restart=args.restart, executor=executor, workers=args.workers, address=args.address,
+                                 progress=progress, report=not args.no_report)
     finally:
         progress.close()
     print(f"\n{outcome.evaluations} evaluations ({outcome.new_evaluations} new) in {outcome.runs} runs, "

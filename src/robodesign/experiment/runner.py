@@ -12,6 +12,11 @@ Results folder (docs/experiments.md)::
 Resume: ``run_experiment(..., resume=True)`` on the folder re-reads ``config.yaml``; finished runs are
 skipped, a run that was cut off is replayed from the database (see storage.py) and continued; the
 result is exactly the evaluations of an uninterrupted run for evaluation budgets.
+
+Damage: meta.json's ``stored_evaluations`` is the number of evaluations the database held at its last
+checkpoint. A resume refuses (InputError, exit 2) when the database is missing, unreadable, or holds
+fewer evaluations than that; ``restart=True`` then moves the old database and best files aside into
+``damaged-<timestamp>/`` and starts the experiment over in the same folder.
 """
 from __future__ import annotations
 
@@ -31,7 +36,7 @@ from typing import Dict, Optional
 from ..errors import InputError
 from ..optimize import Budget, Study, load_optimizer
 from .config import ResolvedExperiment, RunSpec, load_experiment
-from .storage import ExperimentDB
+from .storage import DB_FILE, ExperimentDB
 
 PACKAGES = ("robodesign", "robodesign-optimizers", "numpy", "pin", "coal", "ompl", "casadi", "ruckig", "toppra",
             "optuna", "deap", "ray", "scipy", "matplotlib", "pydantic", "PyYAML", "rich", "jsonschema", "trimesh")
@@ -309,7 +314,7 @@ class ExperimentOutcome:
 
 
 def prepare_new(exp: ResolvedExperiment, config_text: str, config_path: Optional[Path], out: Path) -> None:
-    if (out / "evaluations.sqlite").exists() or (out / "meta.json").exists():
+    if (out / DB_FILE).exists() or (out / "meta.json").exists():
         raise InputError(f"already holds an experiment; continue it with --resume {out}", file=str(out))
     out.mkdir(parents=True, exist_ok=True)
     (out / "config.yaml").write_text(config_text, encoding="utf-8")
@@ -324,7 +329,7 @@ def prepare_new(exp: ResolvedExperiment, config_text: str, config_path: Optional
         "runs": [{"run_id": r.run_id, "task": r.problem.name, "optimizer": r.optimizer.label, "seed": r.seed}
                  for r in exp.runs()],
         "solve": exp.config.solve.model_dump(),
-        "versions": package_versions(), "machine": machine_info(), "sessions": [],
+        "versions": package_versions(), "machine": machine_info(), "sessions": [], "stored_evaluations": 0,
         "note": "results are exact and resumable for evaluation budgets; time budgets depend on the machine",
     }
     _write_json(out / "meta.json", meta)
@@ -352,18 +357,93 @@ def load_resume(folder: Path):
     return exp, text, meta
 
 
+def claimed_evaluations(meta: dict) -> int:
+    """How many evaluations meta.json says the database holds (folders written before ``stored_evaluations``
+    existed: the sum of the finished sessions' new evaluations)."""
+    if "stored_evaluations" in meta:
+        return int(meta["stored_evaluations"] or 0)
+    return sum(int(s.get("new_evaluations") or 0) for s in meta.get("sessions", []))
+
+
+def open_for_resume(out: Path, meta: dict) -> ExperimentDB:
+    """The results database of a folder being resumed, after checking that it holds at least what meta.json
+    says was stored; otherwise an InputError saying what is missing and what to do."""
+    path = out / DB_FILE
+    claimed = claimed_evaluations(meta)
+    todo = (f"restore {DB_FILE} (with its {DB_FILE}-wal file, if any) from a copy, or start the experiment over "
+            f"in this folder with `robodesign run --resume {out} --restart` (the old files are moved aside)")
+    if not path.is_file():
+        if claimed:
+            raise InputError(f"the results database is missing, but meta.json records {claimed} stored "
+                             f"evaluations: {todo}", file=str(path))
+        return _open_db(path, out)
+    if path.stat().st_size == 0 and claimed:
+        raise InputError(f"the results database is an empty file, but meta.json records {claimed} stored "
+                         f"evaluations: {todo}", file=str(path))
+    wal_lost = not Path(f"{path}-wal").exists()
+    db = _open_db(path, out)
+    held = db.count()
+    if held < claimed:
+        db.close()
+        what = "holds no evaluations" if held == 0 else f"holds only {held} evaluations"
+        why = " (its -wal file is gone: was the .sqlite copied or restored without it?)" if wal_lost else ""
+        raise InputError(f"the results database {what}, but meta.json records {claimed} stored evaluations{why}: "
+                         f"{todo}", file=str(path))
+    return db
+
+
+def restart_folder(out: Path, meta: dict) -> dict:
+    """Move the database (and its -wal/-shm) and the best files aside into ``damaged-<timestamp>/``; the
+    experiment then starts over in the folder. Nothing is deleted."""
+    aside = out / f"damaged-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}"
+    k = 2
+    while aside.exists():
+        aside = out / f"damaged-{_dt.datetime.now().strftime('%Y%m%d-%H%M%S')}-{k}"
+        k += 1
+    moved = []
+    for name in (DB_FILE, f"{DB_FILE}-wal", f"{DB_FILE}-shm", "best"):
+        if (out / name).exists():
+            aside.mkdir(exist_ok=True)
+            (out / name).replace(aside / name)
+            moved.append(name)
+    meta.setdefault("restarts", []).append({"at": _now(), "stored_evaluations": claimed_evaluations(meta),
+                                            "moved_to": aside.name if moved else None, "moved": moved})
+    meta["stored_evaluations"] = 0
+    return meta
+
+
+def _open_db(path: Path, out: Path) -> ExperimentDB:
+    def record(count: int) -> None:
+        meta = json.loads((out / "meta.json").read_text())
+        meta["stored_evaluations"] = count
+        _write_json(out / "meta.json", meta)
+    return ExperimentDB(path, on_checkpoint=record)
+
+
 def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "", config_path=None,
-                   resume: bool = False, executor: Optional[str] = None, workers: Optional[int] = None,
-                   address: Optional[str] = None, progress=None, report: bool = True) -> ExperimentOutcome:
-    """Run (or resume) an experiment into ``out``. The executor settings of the config can be overridden."""
+                   resume: bool = False, restart: bool = False, executor: Optional[str] = None,
+                   workers: Optional[int] = None, address: Optional[str] = None, progress=None,
+                   report: bool = True) -> ExperimentOutcome:
+    """Run (or resume) an experiment into ``out``. The executor settings of the config can be overridden.
+    ``restart`` (with ``resume``): start the experiment over in its folder, the old results moved aside."""
     from .executors import make_pool
     out = Path(out)
     t_start = time.perf_counter()
     progress = progress or NoProgress()
+    if restart and not resume:
+        raise InputError("--restart needs --resume DIR (it starts the experiment in that folder over)")
     if not resume:
         prepare_new(exp, config_text, config_path, out)
     lock = FolderLock(out).acquire()
-    db = ExperimentDB(out / "evaluations.sqlite")
+    try:
+        meta = json.loads((out / "meta.json").read_text())
+        if restart:
+            _write_json(out / "meta.json", restart_folder(out, meta))
+            progress.message(f"restart: the old results are in {meta['restarts'][-1]['moved_to'] or '(nothing)'}")
+        db = open_for_resume(out, meta) if resume else _open_db(out / DB_FILE, out)
+    except BaseException:
+        lock.release()
+        raise
     pool = None
     session = {"started": _now(), "resume": resume, "argv": sys.argv, "pid": os.getpid()}
     meta = json.loads((out / "meta.json").read_text())

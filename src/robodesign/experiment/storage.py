@@ -2,7 +2,14 @@
 
 Durability: WAL journal, one transaction per evaluation (``synchronous=NORMAL``: a committed evaluation
 survives the process being killed at any moment, ``kill -9`` included; only an OS crash or power loss
-may lose the last commits, and those are re-evaluated on resume).
+may lose the last commits, and those are re-evaluated on resume). The WAL is checkpointed into the main
+file every ``checkpoint_seconds`` (default 1 s) and on close, so the ``.sqlite`` file alone (copied
+without its ``-wal``) holds every evaluation but those of the last second of a killed run. After each
+checkpoint ``on_checkpoint(count)`` reports the evaluations stored so far (the runner records the number
+in meta.json, where a resume compares it with what the database holds).
+
+Damage: :func:`open_db` turns an unreadable file (truncated, garbled, not SQLite) into an
+:class:`~robodesign.errors.InputError` naming the file and what to do, never a traceback.
 
 Exact resume: :class:`RunStorage` is the ``storage`` of a :class:`robodesign.optimize.Study`. ``load()``
 returns the stored evaluations of the run in ask order; the study replays them through the (seeded,
@@ -19,12 +26,14 @@ import math
 import sqlite3
 import time
 from pathlib import Path
-from typing import List, Optional
+from typing import Callable, List, Optional
 
+from ..errors import InputError
 from ..evaluator import Evaluation
 from ..search_space import Candidate
 
 SCHEMA_VERSION = 1
+DB_FILE = "evaluations.sqlite"
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS info (key TEXT PRIMARY KEY, value TEXT);
@@ -87,18 +96,77 @@ def _num(v: Optional[float]) -> Optional[float]:
     return v if math.isfinite(v) else None
 
 
+CHECKPOINT_SECONDS = 1.0
+
+
+class DamagedDatabase(InputError):
+    """The results database cannot be read (truncated, garbled, not an SQLite file)."""
+
+    def __init__(self, path: Path, reason: str):
+        folder = Path(path).parent
+        reason = " ".join(str(reason).split())  # one line (an integrity check answers on several)
+        super().__init__(
+            f"the results database is damaged ({reason}). Keep a copy of the folder; to salvage what is readable "
+            f"run `sqlite3 {path} .recover | sqlite3 recovered.sqlite`; to start the experiment over in this "
+            f"folder run `robodesign run --resume {folder} --restart` (the damaged file is moved aside, not "
+            f"deleted)", file=str(path))
+        self.reason_text = reason
+
+
 class ExperimentDB:
-    def __init__(self, path):
+    """The results database of one results folder (see the module doc).
+
+    ``checkpoint_seconds``: copy the WAL into the main file at most this often (after a commit) and on
+    close; ``on_checkpoint(count)`` is then called with the number of stored evaluations."""
+
+    def __init__(self, path, checkpoint_seconds: float = CHECKPOINT_SECONDS,
+                 on_checkpoint: Optional[Callable[[int], None]] = None):
         self.path = Path(path)
-        self.con = connect(self.path)
-        self.con.executescript(_SCHEMA)
-        self.con.execute("INSERT OR IGNORE INTO info(key, value) VALUES ('schema_version', ?)", (str(SCHEMA_VERSION),))
+        self.checkpoint_seconds = float(checkpoint_seconds)
+        self.on_checkpoint = on_checkpoint
+        self._last_checkpoint = time.monotonic()
+        self._stored = None  # evaluations stored (counted once, then incremented per insert)
+        try:
+            self.con = connect(self.path)
+            if self.path.stat().st_size > 0:
+                row = self.con.execute("PRAGMA quick_check(1)").fetchone()
+                if row is None or row[0] != "ok":
+                    raise DamagedDatabase(self.path, f"integrity check: {row[0] if row else 'no answer'}")
+            self.con.executescript(_SCHEMA)
+            self.con.execute("INSERT OR IGNORE INTO info(key, value) VALUES ('schema_version', ?)",
+                             (str(SCHEMA_VERSION),))
+            self._stored = self.count()
+        except sqlite3.DatabaseError as e:
+            self.close()
+            raise DamagedDatabase(self.path, str(e)) from None
+        except DamagedDatabase:
+            self.close()
+            raise
+
+    def checkpoint(self) -> int:
+        """Copy the WAL into the main database file now; returns the number of stored evaluations."""
+        self.con.execute("PRAGMA wal_checkpoint(PASSIVE)").fetchone()
+        self._last_checkpoint = time.monotonic()
+        if self.on_checkpoint is not None:
+            self.on_checkpoint(self._stored)
+        return self._stored
 
     def close(self) -> None:
+        con = getattr(self, "con", None)
+        if con is None:
+            return
         try:
-            self.con.close()
+            if self._stored is not None:
+                con.execute("PRAGMA wal_checkpoint(TRUNCATE)").fetchone()
+                if self.on_checkpoint is not None:
+                    self.on_checkpoint(self._stored)
         except sqlite3.Error:
             pass
+        try:
+            con.close()
+        except sqlite3.Error:
+            pass
+        self.con = None
 
     # -- runs -------------------------------------------------------------------------------------
     def ensure_run(self, run_id: str, task: str, optimizer: str, optimizer_name: str, seed: int, ordinal: int,
@@ -145,6 +213,9 @@ class ExperimentDB:
             self.con.execute("ROLLBACK")
             raise RuntimeError(f"evaluation {index} of run {run_id!r} is already stored (a second process writing "
                                f"to the same results folder?)") from None
+        self._stored += 1
+        if time.monotonic() - self._last_checkpoint >= self.checkpoint_seconds:
+            self.checkpoint()
 
     def evaluations(self, run_id: Optional[str] = None, with_solution: bool = False) -> List[dict]:
         cols = "*" if with_solution else ", ".join(
