@@ -1,18 +1,31 @@
-"""Command line interface: ``robodesign robot | run | ...``.
+"""Command line interface: ``robodesign robot | check | solve | ...``.
 
-Exit codes: 0 success, 1 a negative verdict (e.g. an invalid solution), 2 bad input.
-Bad input never prints a traceback: an :class:`InputError` is one line on stderr.
+Exit codes (the same for every subcommand):
+
+* 0 success (a valid solution, a written file, ...);
+* 1 a negative verdict: an invalid solution, no valid solution or no feasible robot found;
+* 2 bad input: a malformed or invalid file, field or argument. One line on stderr naming the file and
+  field, never a traceback;
+* 3 an internal error (a bug in robodesign): one line "internal error, please report"; ``--debug``
+  (or ``ROBODESIGN_DEBUG=1``) prints the full traceback.
+
+With ``--json``, stdout is JSON on every path: on exit 2 or 3 it is
+``{"error": message, "file": file or null, "path": JSON path or null}``.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
+import traceback
 from typing import List, Optional
 
 import numpy as np
 
 from .errors import InputError, RobodesignError
+
+EXIT_OK, EXIT_NEGATIVE, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
 
 def _fmt_matrix(T) -> str:
@@ -71,13 +84,14 @@ def cmd_run(args) -> int:
 
 def cmd_check(args) -> int:
     from .checker import check
+    from .cli_args import module_set_for_solution
     from .solution import load_solution
     from .task_io import load_task
     task = load_task(args.task)
     sol = load_solution(args.solution)
     for w in task.warnings:
         print(f"robodesign: warning: {w}", file=sys.stderr)
-    verdict = check(task, sol, module_set=args.modules)
+    verdict = check(task, sol, module_set=module_set_for_solution(sol, args.modules))
     if args.json:
         print(json.dumps(verdict.to_json()))
     else:
@@ -93,7 +107,7 @@ def cmd_check(args) -> int:
             print(f"  - {v}")
         if verdict.costs:
             print("costs     " + ", ".join(f"{k}={v:.6g}" for k, v in verdict.costs.items()))
-    return 0 if verdict.valid else 1
+    return EXIT_OK if verdict.valid else EXIT_NEGATIVE
 
 
 def cmd_serve(args) -> int:
@@ -116,22 +130,82 @@ def cmd_serve(args) -> int:
 def cmd_view(args) -> int:
     """Write a self-contained HTML page of a solution, a task or a robot (docs/viewer.md)."""
     from .viewer.cli import describe, run_view
-    path = run_view(args.solution, task=args.task, modules=args.modules, order=args.order, q=args.q,
-                    base_pose=args.base_pose, out=args.out, check=args.check, plots=not args.no_plots,
-                    collision=args.collision, fps=args.fps)
+    path, warnings = run_view(args.solution, task=args.task, modules=args.modules, order=args.order, q=args.q,
+                              base_pose=args.base_pose, out=args.out, check=args.check, plots=not args.no_plots,
+                              collision=args.collision, fps=args.fps)
     print(describe(path))
-    return 0
+    for w in warnings:
+        print(f"robodesign: warning: {w}", file=sys.stderr)
+    return EXIT_NEGATIVE if warnings else EXIT_OK
+
+
+class _UsageError(Exception):
+    def __init__(self, parser: argparse.ArgumentParser, message: str):
+        super().__init__(message)
+        self.parser = parser
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """Appends "(default: X)" to an option's help unless the help already says its default."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (action.option_strings and action.default not in (None, False, [], argparse.SUPPRESS)
+                and "default" not in text):
+            text += " (default: %(default)s)"
+        return text
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line usage errors raised (main() prints them, as JSON too with --json) and
+    option values that start with "-" taken as values (``--budget -5s``, ``--q -0.3,0.2``)."""
+
+    def __init__(self, *a, **kw):
+        kw.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*a, **kw)
+
+    def error(self, message):
+        raise _UsageError(self, message)
+
+    def parse_known_args(self, args=None, namespace=None):
+        if args is not None:
+            args = self._join_dash_values(list(args))
+        return super().parse_known_args(args, namespace)
+
+    def _join_dash_values(self, args: List[str]) -> List[str]:
+        out, i = [], 0
+        while i < len(args):
+            act = self._option_string_actions.get(args[i])
+            if (act is not None and act.nargs is None and i + 1 < len(args) and args[i + 1].startswith("-")
+                    and args[i + 1] != "--" and args[i + 1].split("=")[0] not in self._option_string_actions):
+                out.append(f"{args[i]}={args[i + 1]}")
+                i += 2
+            else:
+                if args[i] == "--":
+                    return out + args[i:]
+                out.append(args[i])
+                i += 1
+        return out
+
+
+def _version() -> str:
+    from . import __version__
+    return f"robodesign {__version__} (Python {sys.version.split()[0]})"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="robodesign", description="Find the best modular robot for a task.")
-    sub = p.add_subparsers(dest="command", required=True)
+    p = _Parser(prog="robodesign", description="Find the best modular robot for a task.",
+                epilog="Exit codes: 0 success, 1 negative verdict (invalid solution, nothing feasible found), "
+                       "2 bad input, 3 internal error (please report; --debug shows the traceback).")
+    p.add_argument("--version", action="version", version=_version())
+    p.add_argument("--debug", action="store_true", help="print the full traceback of an internal error")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     r = sub.add_parser("robot", help="assemble a robot from a module order and print its summary")
-    r.add_argument("modules", help="module set: a folder with modules.json or a built-in name")
+    r.add_argument("modules", help="module set: a folder with modules.json, a built-in name or a URDF file")
     r.add_argument("--order", required=True, help="comma-separated module IDs, base first")
     r.add_argument("--q", help="joint values (comma-separated); default zeros")
-    r.add_argument("--base-pose", help="x,y,z[,roll,pitch,yaw] or 16 numbers (row-major 4x4)")
+    r.add_argument("--base-pose", help="x,y,z[,roll,pitch,yaw] or 16 numbers (row-major 4x4); default identity")
     r.add_argument("--json", action="store_true", help="print one JSON object")
     r.add_argument("--urdf", help="also write the robot as URDF to this file")
     r.set_defaults(func=cmd_robot)
@@ -153,31 +227,35 @@ def build_parser() -> argparse.ArgumentParser:
     so.add_argument("--planner", default="rrtconnect", help="OMPL planner (rrtconnect, rrtstar, prm, bitstar, kpiece, ...)")
     so.add_argument("--plan-time", type=float, default=1.0, help="seconds per planning query")
     so.add_argument("--timing", default="toppra", choices=["toppra", "ruckig"], help="time parameterization")
-    so.add_argument("--optimize-trajectory", action="store_true", help="refine every move with CasADi/ipopt for the cost")
-    so.add_argument("--seed", type=int, default=0)
+    commands.add_trajectory_arguments(so)
+    so.add_argument("--seed", type=int, default=0, help="random seed of IK restarts and planning")
     so.add_argument("--out", help="write the CoBRA solution here")
-    so.add_argument("--json", action="store_true")
+    so.add_argument("--json", action="store_true", help="print {feasible, stage, cost, costs, trajectory, stages, "
+                                                        "solution, seconds} as one JSON object")
     so.set_defaults(func=commands.cmd_solve)
 
     op = sub.add_parser("optimize", help="search module orders (and base poses) for the best robot")
     op.add_argument("task", help="task JSON file or built-in task ID")
     op.add_argument("--modules", required=True, help="module set folder or built-in name")
     op.add_argument("--optimizer", default="random", help="installed plugin name (see: robodesign optimizers)")
-    op.add_argument("--cost", default="cyc")
+    op.add_argument("--cost", default="cyc", help="cost function to minimise, e.g. cyc, mechEnergy, cyc_0.2,mass_1")
     op.add_argument("--budget", default="50evals", help="e.g. 500evals, 60s, 10min, or 500evals,60s")
-    op.add_argument("--seed", type=int, default=0)
+    op.add_argument("--seed", type=int, default=0, help="random seed of the optimizer and of every evaluation")
     op.add_argument("--out", help="where to write the best checked solution (default best_solution.json)")
-    op.add_argument("--opt", action="append", default=[], metavar="KEY=VALUE", help="optimizer option (repeatable)")
+    op.add_argument("--opt", action="append", default=[], metavar="KEY=VALUE",
+                    help="optimizer option (repeatable; default: none)")
     op.add_argument("--dof", help="DoF rule, e.g. 6 or 5-7 (default 6)")
     op.add_argument("--max-links", type=int, help="max passive link modules between two joints (default 1)")
     op.add_argument("--fixed-base", action="store_true", help="keep the base at its nominal pose")
-    op.add_argument("--planner", default="rrtconnect")
-    op.add_argument("--optimize-trajectory", action="store_true")
-    op.add_argument("--json", action="store_true")
+    op.add_argument("--planner", default="rrtconnect", help="OMPL planner of every evaluation")
+    op.add_argument("--optimize-trajectory", action="store_true",
+                    help="refine every move of every evaluated design with CasADi/ipopt for the cost (slow)")
+    op.add_argument("--json", action="store_true", help="print the summary (best design, cost, evaluations) "
+                                                        "as one JSON object; no progress lines")
     op.set_defaults(func=commands.cmd_optimize)
 
     ol = sub.add_parser("optimizers", help="list installed optimizer plugins")
-    ol.add_argument("--json", action="store_true")
+    ol.add_argument("--json", action="store_true", help="print {name: entry point} as one JSON object")
     ol.set_defaults(func=commands.cmd_optimizers)
 
     run = sub.add_parser("run", help="run an experiment config (default: the built-in demo); resumable")
@@ -207,38 +285,50 @@ def build_parser() -> argparse.ArgumentParser:
 
     vw = sub.add_parser("view", help="write one self-contained HTML page that shows a solution (animated), "
                                      "a task or a robot")
-    vw.add_argument("solution", nargs="?", help="solution JSON file (omit it to show --task and/or a robot)")
-    vw.add_argument("--task", help="task file or built-in task (default for a solution: its taskID if found)")
-    vw.add_argument("--modules", help="module set folder or built-in name (default: the solution's moduleSet)")
-    vw.add_argument("--order", help="without a solution: comma-separated module IDs of a static robot")
-    vw.add_argument("--q", help="with --order: joint values (comma-separated); default zeros")
-    vw.add_argument("--base-pose", help="with --order: x,y,z[,roll,pitch,yaw] or 16 numbers (default: the "
-                                        "task's nominal base placement, else identity)")
-    vw.add_argument("--out", help="HTML file to write (default: <solution stem>_view.html or view.html); the "
-                                  "plots are also written next to it as <stem>_q.png, _dq, _ddq, _tau, _tcp")
-    vw.add_argument("--check", action="store_true", help="also run the checker and show the verdict on the page")
-    vw.add_argument("--no-plots", action="store_true", help="no trajectory plots (faster, smaller page)")
-    vw.add_argument("--collision", action="store_true", help="include the collision geometry (a toggle on the page)")
-    vw.add_argument("--fps", type=float, default=25.0, help="animation frames per second at most (default 25; "
-                                                            "goal instants are always kept)")
+    from .viewer.cli import add_view_arguments
+    add_view_arguments(vw)
     vw.set_defaults(func=cmd_view)
+
+    for sp in sub.choices.values():  # also accepted after the subcommand: robodesign check ... --debug
+        sp.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="print the full traceback of an internal error")
     return p
 
 
+def _fail(code: int, line: str, as_json: bool, error: Optional[str] = None, file: Optional[str] = None,
+          path: Optional[str] = None) -> int:
+    """One line on stderr; with --json also {"error", "file", "path"} on stdout. Returns ``code``."""
+    print(f"robodesign: {'internal error' if code == EXIT_INTERNAL else 'error'}: {line}", file=sys.stderr)
+    if as_json:
+        print(json.dumps({"error": error or line, "file": file, "path": path or None}))
+    return code
+
+
 def main(argv: Optional[List[str]] = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
+    as_json = "--json" in argv
+    debug = "--debug" in argv or os.environ.get("ROBODESIGN_DEBUG", "") not in ("", "0")
     try:
+        args = build_parser().parse_args(argv)
         return int(args.func(args) or 0)
+    except _UsageError as e:
+        e.parser.print_usage(sys.stderr)
+        command = e.parser.prog.removeprefix("robodesign").strip()
+        return _fail(EXIT_BAD_INPUT, f"{command}: {e}" if command else str(e), as_json)
     except InputError as e:
-        print(f"robodesign: error: {e}", file=sys.stderr)
-        return 2
+        return _fail(EXIT_BAD_INPUT, str(e), as_json, e.reason, e.file, e.json_path)
     except RobodesignError as e:
-        print(f"robodesign: error: {e}", file=sys.stderr)
-        return 2
+        return _fail(EXIT_BAD_INPUT, str(e), as_json)
     except KeyboardInterrupt:
         print("robodesign: interrupted", file=sys.stderr)
         return 130
+    except Exception as e:  # a bug: its own exit code and a short line; the traceback only on request
+        if debug:
+            traceback.print_exc()
+        what = f"{type(e).__name__}: {e}"
+        what = what if len(what) <= 200 else what[:197] + "..."
+        hint = "with the output of --debug" if debug else "(run again with --debug for the traceback)"
+        return _fail(EXIT_INTERNAL, f"{what}. This is a bug in robodesign, please report it {hint}", as_json)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import List
 
 import numpy as np
@@ -44,3 +45,27 @@ def parse_base_pose(text: str) -> np.ndarray:
             raise InputError("--base-pose: the 4x4 matrix is not a rigid transform")
         return T
     raise InputError(f"--base-pose: expected 3 (x,y,z), 6 (x,y,z,roll,pitch,yaw) or 16 numbers, got {len(v)}")
+
+
+def module_set_for_solution(solution, modules=None):
+    """The module set for checking or showing ``solution``: ``--modules`` if given, else the solution's
+    ``moduleSet`` when it is found locally (a folder or a built-in name); otherwise an error that says to
+    pass --modules."""
+    from .module_io import load_module_set, resolve_module_set_path
+    from .paths import builtin_module_sets
+    name = modules or solution.module_set
+    where = solution.source or "solution"
+    if not name:
+        raise InputError("the solution names no moduleSet; pass --modules DIR (a folder with modules.json or "
+                         "a built-in name)", file=where, path="moduleSet")
+    if not modules:
+        try:
+            if not str(name).lower().endswith(".urdf"):
+                resolve_module_set_path(name)
+            elif not Path(name).is_file():
+                raise InputError("no such URDF file")
+        except InputError:
+            known = ", ".join(builtin_module_sets()) or "none"
+            raise InputError(f"module set {name!r} is not found locally (built-in: {known}); pass --modules DIR "
+                             "(the folder holding its modules.json)", file=where, path="moduleSet") from None
+    return load_module_set(name)

@@ -30,28 +30,61 @@ def _base_pose(text, task):
     return parse_base_pose(text) if text else task.nominal_base_pose
 
 
-def cmd_solve(args) -> int:
-    from .cli_args import parse_order
+TRAJECTORY_CHOICES = ("auto", "time-optimal", "optimize")
+# cost terms the trajectory optimizer lowers beyond what the time-optimal profile gives (solvers.trajopt)
+_TRAJOPT_TERMS = ("mechEnergy", "effort")
+
+
+def add_trajectory_arguments(p) -> None:
+    p.add_argument("--trajectory", choices=TRAJECTORY_CHOICES, default="auto",
+                   help="how each move is timed: time-optimal (TOPP-RA/ruckig), optimize (then refined with "
+                        "CasADi/ipopt for the cost), or auto: optimize when the cost has an energy-like term "
+                        "(mechEnergy, effort, Liu2, ...), else time-optimal (default: auto)")
+    p.add_argument("--optimize-trajectory", action="store_true", help="the same as --trajectory optimize")
+
+
+def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False) -> str:
+    """"time-optimal" or "optimize" for a cost and the --trajectory / --optimize-trajectory options."""
     from .costs import parse_cost
+    if optimize_flag:
+        if choice == "time-optimal":
+            raise InputError("--optimize-trajectory contradicts --trajectory time-optimal")
+        return "optimize"
+    if choice != "auto":
+        return choice
+    weights = parse_cost(cost, path="--cost").terms
+    return "optimize" if any(n in _TRAJOPT_TERMS and w > 0 for n, w in weights) else "time-optimal"
+
+
+def cmd_solve(args) -> int:
+    from .assembly import Assembly
+    from .cli_args import parse_order
     from .module_io import load_module_set
     from .solve import SolveSettings, solve
     from .solvers.planning import available_planners
     from .task_io import load_task
     task = load_task(args.task)
     ms = load_module_set(args.modules)
-    parse_cost(args.cost, path="--cost")
+    mode = trajectory_mode(args.cost, args.trajectory, args.optimize_trajectory)
     if args.planner.lower() not in [p.lower() for p in available_planners()]:
         raise InputError(f"--planner: unknown planner {args.planner!r} (available: {', '.join(available_planners())})")
+    if args.plan_time <= 0:
+        raise InputError("--plan-time must be positive")
+    order = parse_order(args.order)
+    try:
+        Assembly.from_order(ms, order)  # an order that cannot be assembled is bad input, as in `robodesign robot`
+    except InputError as e:
+        raise InputError(f"--order: {e}") from None
     settings = SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing,
-                             optimize_trajectory=args.optimize_trajectory, seed=args.seed)
+                             optimize_trajectory=mode == "optimize", seed=args.seed)
     t0 = time.perf_counter()
-    res = solve(task, ms, parse_order(args.order), _base_pose(args.base_pose, task), cost=args.cost, settings=settings)
+    res = solve(task, ms, order, _base_pose(args.base_pose, task), cost=args.cost, settings=settings)
     elapsed = time.perf_counter() - t0
     out = None
     if res.solution is not None and args.out:
         out = res.solution.write(args.out)
     if args.json:
-        print(json.dumps({"feasible": res.feasible, "stage": res.stage, "message": res.message,
+        print(json.dumps({"feasible": res.feasible, "stage": res.stage, "message": res.message, "trajectory": mode,
                           "stages": [s.to_json() for s in res.stages], "cost": res.cost,
                           "costs": res.verdict.costs if res.verdict else {},
                           "goals_achieved": res.goals_achieved, "num_goals": res.num_goals,
@@ -60,6 +93,11 @@ def cmd_solve(args) -> int:
     else:
         for s in res.stages:
             print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {s.message[:150]}")
+        how = ("time-optimal (TOPP-RA)" if args.timing == "toppra" else "time-optimal (ruckig)") \
+            if mode == "time-optimal" else f"optimized for {args.cost} (CasADi/ipopt)"
+        chosen = " (--trajectory auto, from the cost)" if args.trajectory == "auto" and not args.optimize_trajectory \
+            else ""
+        print(f"trajectory   {how}{chosen}")
         if res.feasible:
             print(f"VALID solution of {task.id}: {res.verdict.cost_function} = {res.cost:.6g}  ({elapsed:.2f} s)")
             print("costs  " + ", ".join(f"{k}={v:.6g}" for k, v in res.verdict.costs.items()))

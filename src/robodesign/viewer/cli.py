@@ -1,9 +1,10 @@
-"""What ``robodesign view`` does (the argparse part lives in :mod:`robodesign.cli`)."""
+"""What ``robodesign view`` does: its options (added to :mod:`robodesign.cli`'s parser) and the page."""
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
-from typing import Optional
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -14,11 +15,33 @@ def _note(msg: str) -> None:
     print(f"robodesign: note: {msg}", file=sys.stderr)
 
 
+def add_view_arguments(vw: argparse.ArgumentParser) -> None:
+    """The options of ``robodesign view``; docs/viewer.md has the same table."""
+    vw.add_argument("solution", nargs="?", help="a CoBRA solution file; omit it to show --task and/or a robot")
+    vw.add_argument("--task", help="task file or built-in task (default for a solution: its taskID if that names a "
+                                   "built-in task; otherwise the robot is shown without a cell and a note says so)")
+    vw.add_argument("--modules", help="module set folder or built-in name (default: the solution's moduleSet)")
+    vw.add_argument("--order", help="without a solution: comma-separated module IDs of a static robot")
+    vw.add_argument("--q", help="with --order: joint values (comma-separated); default zeros")
+    vw.add_argument("--base-pose", help="with --order: x,y,z[,roll,pitch,yaw] or 16 numbers (default: the "
+                                        "task's nominal base placement, else identity)")
+    vw.add_argument("--out", help="HTML file to write (default: <solution stem>_view.html, or view.html); with "
+                                  "--out the plots are also written next to it as <stem>_q.png, _dq, _ddq, _tau, _tcp")
+    vw.add_argument("--check", action="store_true", help="also run the checker and show the verdict on the page "
+                                                         "(exit 1 if the solution is invalid)")
+    vw.add_argument("--no-plots", action="store_true", help="no trajectory plots (faster: matplotlib takes 1-3 s)")
+    vw.add_argument("--collision", action="store_true", help="also embed the collision geometry (a check box on "
+                                                             "the page shows it)")
+    vw.add_argument("--fps", type=float, default=25.0, help="animation frames per second at most (default 25; "
+                                                            "goal instants are always kept)")
+
+
 def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules: Optional[str] = None,
              order: Optional[str] = None, q: Optional[str] = None, base_pose: Optional[str] = None,
              out: Optional[str] = None, check: bool = False, plots: bool = True, collision: bool = False,
-             fps: float = 25.0) -> Path:
-    """Write the page; returns its path. See ``robodesign view --help`` and docs/viewer.md."""
+             fps: float = 25.0) -> Tuple[Path, List[str]]:
+    """Write the page; returns its path and warnings that make the command exit 1: a solution shown in
+    a task that is not its own, or (with ``check``) an invalid solution. See docs/viewer.md."""
     from ..task_io import load_task
     from . import render_html, solution_page
     from .scene import build_scene
@@ -33,8 +56,9 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
     for w in (task_obj.warnings if task_obj is not None else ()):
         _note(w)
 
+    warnings: List[str] = []
     if solution is not None:
-        from ..checker import resolve_module_set
+        from ..cli_args import module_set_for_solution
         from ..solution import load_solution
         from .plots import trajectory_plots
         sol = load_solution(solution)
@@ -43,7 +67,10 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
                 task_obj = load_task(sol.task_id)
             except InputError:
                 _note(f"task {sol.task_id!r} not found; showing the robot without its cell (use --task)")
-        ms = resolve_module_set(sol, modules)
+        if task_obj is not None and sol.task_id != task_obj.id:
+            warnings.append(f"the solution is for task {sol.task_id!r}, not {task_obj.id!r}: the page shows it in "
+                            f"a cell it was not planned for")
+        ms = module_set_for_solution(sol, modules)
         path = Path(out) if out else Path(Path(solution).stem + "_view.html")
         verdict = None
         if check:
@@ -52,6 +79,9 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
             else:
                 from ..checker import check as run_check
                 verdict = run_check(task_obj, sol, ms)
+                if not verdict.valid:
+                    warnings.append(f"the checker finds the solution INVALID ({len(verdict.violations)} "
+                                    "violation(s), listed on the page)")
         images = False
         if plots:
             try:
@@ -88,7 +118,7 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
         page = render_html(scene, None, name)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
-    return path
+    return path, warnings
 
 
 def describe(path: Path) -> str:
