@@ -71,7 +71,10 @@ def cmd_run(args) -> int:
         progress.close()
     print(f"\n{outcome.evaluations} evaluations ({outcome.new_evaluations} new) in {outcome.runs} runs, "
           f"{outcome.seconds:.1f} s")
+    in_suite = {p.name for p in exp.problems if p.suite}
     for task, b in outcome.best.items():
+        if task in in_suite:
+            continue  # summarized per suite below
         if b is None:
             print(f"best robot for {task}: none feasible found")
             continue
@@ -84,7 +87,31 @@ def cmd_run(args) -> int:
         print(f"  module order  {','.join(json.loads(b['module_order']))}")
         print(f"  base pose     {base_pose_text(bp)}" + (f"  (search parameters {[round(x, 4) for x in params]})"
                                                        if params else ""))
+    if in_suite:
+        print_suites(outcome.out_dir)
     print(f"results: {outcome.out_dir}")
     if outcome.report:
         print(f"report:  {outcome.report}")
     return 0
+
+
+def print_suites(out: Path) -> None:
+    """One line per suite and optimizer: solved share, best costs, time to the first feasible design, and
+    where the unsolved runs stopped."""
+    import json
+    from .storage import ExperimentDB
+    from .suites import cell, records_from_db, suite_of_problems, summarize_suites
+    db = ExperimentDB(out / "evaluations.sqlite")
+    try:
+        summary = summarize_suites(records_from_db(db, suite_of_problems(json.loads((out / "meta.json").read_text()))))
+    finally:
+        db.close()
+    for s in summary:
+        line = (f"suite {s['suite']} · {s['optimizer']}: solved {s['solved']}/{s['runs']} runs "
+                f"({cell('solved_pct', s['solved_pct'])}) of {s['tasks']} tasks; best cost median "
+                f"{cell('', s['best_cost_median'])} [min {cell('', s['best_cost_min'])}, max "
+                f"{cell('', s['best_cost_max'])}]; first feasible after {cell('', s['first_feasible_s_median'])} s "
+                f"(median)")
+        if s["unsolved_stopped_at"]:
+            line += f"; unsolved runs stopped at: {s['unsolved_stopped_at']}"
+        print(line)

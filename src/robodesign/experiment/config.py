@@ -167,6 +167,59 @@ class TaskEntry(BaseModel):
         return v
 
 
+class SuiteGenerate(BaseModel):
+    """How a suite's tasks are generated (``robodesign generate FAMILY``) when its folder lacks them."""
+    model_config = _STRICT
+    family: str
+    count: int = Field(ge=1)
+    seed: int = Field(0, ge=0)
+    options: Dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _known(self):
+        from ..generate import get_family
+        get_family(self.family).resolve(dict(self.options))  # unknown family or option, bad value: InputError
+        return self
+
+
+class SuiteEntry(BaseModel):
+    """A task suite: every task file of a folder (generated there first from ``generate`` when missing),
+    summarized together in the report (solved share, best costs, time to the first feasible design)."""
+    model_config = _STRICT
+    name: str
+    folder: Optional[str] = None
+    generate: Optional[SuiteGenerate] = None
+    modules: Optional[str] = None
+    cost: Optional[List[str]] = None
+    rules: Optional[Rules] = None
+    base_search: Optional[bool] = None
+
+    _c = field_validator("cost", mode="before")(classmethod(lambda cls, v: _str_list(v)))
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v):
+        if not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
+            raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it prefixes the task names)")
+        return v
+
+    @field_validator("cost")
+    @classmethod
+    def _costs(cls, v):
+        if v is not None:
+            if not v:
+                raise ValueError("give at least one cost")
+            for c in v:
+                _check_cost(c)
+        return v
+
+    @model_validator(mode="after")
+    def _where(self):
+        if self.folder is None and self.generate is None:
+            raise ValueError("give the suite a 'folder' of task files, a 'generate' block, or both")
+        return self
+
+
 class BenchmarkEntry(BaseModel):
     """A CoBRA benchmark ID ``Robot:Cost:Task`` (robot = the module set to optimise)."""
     model_config = _STRICT
@@ -241,6 +294,7 @@ class ExperimentConfig(BaseModel):
     base_search: bool = True
     tasks: List[TaskEntry] = Field(default_factory=list)
     benchmarks: List[BenchmarkEntry] = Field(default_factory=list)
+    suites: List[SuiteEntry] = Field(default_factory=list)
     optimizers: List[OptimizerEntry] = Field(min_length=1)
     budget: str = DEFAULT_BUDGET
     seeds: List[int] = Field(default_factory=lambda: [0], min_length=1)
@@ -318,8 +372,12 @@ class ExperimentConfig(BaseModel):
 
     @model_validator(mode="after")
     def _something_to_do(self):
-        if not self.tasks and not self.benchmarks:
-            raise ValueError("give at least one entry in 'tasks' or 'benchmarks'")
+        if not self.tasks and not self.benchmarks and not self.suites:
+            raise ValueError("give at least one entry in 'tasks', 'benchmarks' or 'suites'")
+        names = [x.name for x in self.suites]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"suite {dup[0]!r} is listed twice: give the suites distinct names")
         keys = [o.key for o in self.optimizers]
         dup = sorted({k for k in keys if keys.count(k) > 1})
         if dup:
@@ -409,6 +467,7 @@ class Problem:
     rules: Dict[str, Any]
     base_search: bool
     where: str             # config path of the entry, for messages
+    suite: Optional[str] = None  # the suite (task family) the task belongs to
     _space: Any = field(default=None, repr=False)
     _models: Any = field(default=None, repr=False)  # (Task, ModuleSet) loaded in this process
 
@@ -447,7 +506,7 @@ class Problem:
     def to_json(self) -> dict:
         return {"name": self.name, "task_id": self.task_id, "task": self.task_ref, "modules": self.modules_ref,
                 "module_set": self.module_set_name, "cost": self.cost, "rules": self.rules,
-                "base_search": self.base_search}
+                "base_search": self.base_search, "suite": self.suite}
 
 
 @dataclass
@@ -565,6 +624,52 @@ def _find_modules(ref: str, base: Path, module_dirs: List[Path], display: str, p
     raise InputError(f"no such module set {ref!r} (looked for: {', '.join(tried)})", file=display, path=path)
 
 
+SUITE_MANIFEST = ".suite.json"  # in a generated suite's folder: what was generated there, and the files
+
+
+def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> List[Path]:
+    """The task files of a suite, sorted. With ``generate``, the folder (default ``generated/<name>``
+    beside the config) holds exactly what that generator call writes: generated on first use (the
+    generators are deterministic, so a folder cut short by a kill is completed with identical bytes) and
+    recorded in ``.suite.json``; a folder generated with other arguments is an error, never overwritten."""
+    import json
+    folder = Path(su.folder or f"generated/{su.name}")
+    folder = folder if folder.is_absolute() else (base / folder).resolve()
+    if su.generate is None:
+        if not folder.is_dir():
+            raise InputError(f"no such folder {su.folder!r} (resolved to {folder})", file=display,
+                             path=where + ["folder"])
+        files = sorted(p for p in folder.glob("*.json") if not p.name.startswith("."))
+        if not files:
+            raise InputError(f"no task files (*.json) in {folder}", file=display, path=where + ["folder"])
+        return files
+    want = {"family": su.generate.family, "count": su.generate.count, "seed": su.generate.seed,
+            "options": su.generate.options}
+    manifest = folder / SUITE_MANIFEST
+    if manifest.is_file():
+        try:
+            have = json.loads(manifest.read_text())
+        except ValueError as e:
+            raise InputError(f"unreadable {manifest}: {e}", file=display, path=where + ["folder"]) from None
+        if {k: have.get(k) for k in want} != want:
+            got = ", ".join(f"{k} {have.get(k)!r}" for k in want)
+            raise InputError(f"{folder} holds tasks generated with other arguments ({got}): delete it or give the "
+                             "suite another folder", file=display, path=where + ["generate"])
+        files = [folder / n for n in have.get("files", [])]
+        if files and all(p.is_file() for p in files):
+            return files
+    from ..generate import generate
+    try:
+        files = generate(su.generate.family, folder, count=su.generate.count, seed=su.generate.seed,
+                         options=dict(su.generate.options))
+    except InputError as e:
+        raise InputError(str(e), file=display, path=where + ["generate"]) from None
+    tmp = manifest.with_name(manifest.name + ".tmp")
+    tmp.write_text(json.dumps({**want, "files": [p.name for p in files]}, indent=1))
+    tmp.replace(manifest)
+    return sorted(files)
+
+
 def _slug(s: str) -> str:
     return re.sub(r"[^A-Za-z0-9_./+\-]+", "_", s)
 
@@ -604,6 +709,17 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
                         rules=cfg.rules.merged(b.rules), base_search=cfg.base_search if b.base_search is None
                         else b.base_search, name=b.name, n_costs=1))
 
+    for i, su in enumerate(cfg.suites):
+        where = ["suites", i]
+        mod_path = where + ["modules"] if su.modules else ["modules"]
+        modules_ref = _find_modules(su.modules or default_modules, base_dir, module_dirs, display, mod_path)
+        for f in suite_task_files(su, base_dir, display, where):
+            for cost in (su.cost or cfg.cost):
+                n_costs = len(su.cost or cfg.cost)
+                raw.append(dict(entry=su, where=where, task_ref=str(f), modules_ref=modules_ref, cost=cost,
+                                rules=cfg.rules.merged(su.rules), base_search=cfg.base_search if su.base_search is None
+                                else su.base_search, name=f"{su.name}/{f.stem}", n_costs=n_costs, suite=su.name))
+
     # load every task and module set once: file errors name the file and field
     tasks: Dict[str, Any] = {}
     sets: Dict[str, Any] = {}
@@ -639,7 +755,8 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
         rules = r["rules"].model_dump()
         problems.append(Problem(name=name, task_id=r["task_id"], task_ref=r["task_ref"], modules_ref=r["modules_ref"],
                                 module_set_name=r["ms_name"], cost=r["cost"], rules=rules,
-                                base_search=bool(r["base_search"]), where=format_json_path(r["where"])))
+                                base_search=bool(r["base_search"]), where=format_json_path(r["where"]),
+                                suite=r.get("suite")))
     seen: Dict[str, Problem] = {}
     for p in problems:
         if p.name in seen:

@@ -306,7 +306,7 @@ def base_pose_text(bp) -> str:
 
 
 def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str], best: List[dict],
-                verdicts: List[dict]) -> Path:
+                verdicts: List[dict], suites_html: str = "") -> Path:
     e = html.escape
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{e(meta.get('name', 'experiment'))}</title>",
              "<style>body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;"
@@ -322,7 +322,10 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
     parts.append("<p>Files: <a href='summary.csv'>summary.csv</a> · <a href='summary.md'>summary.md</a> · "
                  "<a href='evaluations.csv'>evaluations.csv</a> · <a href='anytime_evals.csv'>anytime_evals.csv</a> · "
                  "<a href='anytime_time.csv'>anytime_time.csv</a> · <a href='meta.json'>meta.json</a> · "
-                 "<a href='config.yaml'>config.yaml</a> · evaluations.sqlite</p>")
+                 "<a href='config.yaml'>config.yaml</a> · evaluations.sqlite"
+                 + (" · <a href='suites.csv'>suites.csv</a> · <a href='suites.md'>suites.md</a>" if suites_html else "")
+                 + "</p>")
+    parts.append(suites_html)
     parts.append("<h2>Best robots</h2><table><tr><th>task</th><th>optimizer</th><th>seed</th><th>cost</th>"
                  "<th>module order</th><th>base pose</th><th>files</th></tr>")
     for b in best:
@@ -377,6 +380,23 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
     return p
 
 
+def write_suites(out: Path, meta: dict, db: ExperimentDB) -> str:
+    """``suites.csv``, ``suites_unsolved.csv`` and ``suites.md`` when the experiment has suites; returns the
+    HTML tables for the report page ("" without suites)."""
+    from .suites import (SUITE_COLUMNS, UNSOLVED_COLUMNS, html_tables, markdown, records_from_db, suite_of_problems,
+                         summarize_suites, unsolved_rows)
+    suite_of = suite_of_problems(meta)
+    if not suite_of:
+        return ""
+    recs = records_from_db(db, suite_of)
+    summary, unsolved = summarize_suites(recs), unsolved_rows(recs)
+    _write_csv(out / "suites.csv", SUITE_COLUMNS, ([_f(s[c], 10) if isinstance(s[c], float) else s[c]
+                                                    for c in SUITE_COLUMNS] for s in summary))
+    _write_csv(out / "suites_unsolved.csv", UNSOLVED_COLUMNS, ([u[c] for c in UNSOLVED_COLUMNS] for u in unsolved))
+    (out / "suites.md").write_text(markdown(summary, unsolved))
+    return html_tables(summary, unsolved)
+
+
 def write_report(out: Path, db: Optional[ExperimentDB] = None) -> Path:
     """Write every report file of a results folder; returns the path of ``index.html``."""
     out = Path(out)
@@ -405,7 +425,7 @@ def write_report(out: Path, db: Optional[ExperimentDB] = None) -> Path:
                 continue
             vd["path"] = str(vp.with_name(vp.name.replace(".verdict.json", ".json")).relative_to(out))
             verdicts.append(vd)
-        return write_index(out, meta, summary, plots, _best_robots(db), verdicts)
+        return write_index(out, meta, summary, plots, _best_robots(db), verdicts, write_suites(out, meta, db))
     finally:
         if own:
             db.close()
