@@ -84,3 +84,71 @@ def test_suite_folder_errors_name_the_field(tmp_path, capsys):
     cfg.write_text("name: x\nsuites:\n  - name: s\n    generate: {family: nosuch, count: 2}\noptimizers: [random]\n")
     assert main(["run", str(cfg), "--out", str(tmp_path / "o")]) == 2
     assert "suites[0].generate: unknown generator family 'nosuch'" in capsys.readouterr().err
+
+
+FAMILIES = {  # family → generator options of a small suite
+    "whitman2020": {"goals": 3, "obstacles": 3, "base": "xyz_any_rot"},
+}
+
+
+def _hand_count(db_path, tasks):
+    """Per task: solved?, best cost, wall time of the first feasible evaluation, and for an unsolved task the
+    furthest stage reached, counted straight from the stored evaluations."""
+    out = {}
+    with sqlite3.connect(db_path) as c:
+        for t in tasks:
+            ev = c.execute("SELECT e.feasible, e.cost, e.wall, e.stage, e.stage_index FROM evaluations e JOIN runs r "
+                           "USING (run_id) WHERE r.task=? ORDER BY e.idx", (t,)).fetchall()
+            feas = [e for e in ev if e[0] == 1]
+            out[t] = {"solved": bool(feas), "best": min((e[1] for e in feas), default=None),
+                      "first": feas[0][2] if feas else None,
+                      "stopped": None if feas else sorted(ev, key=lambda e: -e[4])[0][3]}
+    return out
+
+
+@pytest.mark.slow
+def test_suite_summary_matches_a_hand_count(tmp_path, capsys):
+    suites = "".join(
+        f"  - name: {fam}\n    folder: gen/{fam}\n"
+        f"    generate: {{family: {fam}, count: 3, seed: 1, options: {json.dumps(opts)}}}\n"
+        for fam, opts in FAMILIES.items())
+    cfg = tmp_path / "fam.yaml"
+    cfg.write_text(f"name: fam\nmodules: robodesign_arm\nsuites:\n{suites}optimizers: [random]\nbudget: 8evals\n")
+    out = tmp_path / "out"
+    assert main(["run", str(cfg), "--out", str(out), "--progress", "none"]) == 0
+    printed = capsys.readouterr().out
+    with open(out / "suites.csv") as f:
+        summary = {r["suite"]: r for r in csv.DictReader(f)}
+    with open(out / "suites_unsolved.csv") as f:
+        unsolved = list(csv.DictReader(f))
+    assert set(summary) == set(FAMILIES)
+    solved_somewhere = 0
+    for fam in FAMILIES:
+        files = sorted(p for p in (tmp_path / "gen" / fam).glob("*.json") if not p.name.startswith("."))
+        assert len(files) == 3 and (tmp_path / "gen" / fam / ".suite.json").is_file()
+        tasks = [f"{fam}/{p.stem}" for p in files]
+        hand = _hand_count(out / "evaluations.sqlite", tasks)
+        s = summary[fam]
+        solved = [t for t in tasks if hand[t]["solved"]]
+        solved_somewhere += len(solved)
+        assert (int(s["tasks"]), int(s["runs"]), int(s["solved"])) == (3, 3, len(solved))
+        assert float(s["solved_pct"]) == pytest.approx(100 * len(solved) / 3)
+        bests = sorted(hand[t]["best"] for t in solved)
+        if bests:
+            assert float(s["best_cost_min"]) == pytest.approx(bests[0])
+            assert float(s["best_cost_max"]) == pytest.approx(bests[-1])
+            assert float(s["best_cost_median"]) == pytest.approx(
+                bests[len(bests) // 2] if len(bests) % 2 else (bests[0] + bests[1]) / 2)
+            firsts = sorted(hand[t]["first"] for t in solved)
+            assert float(s["first_feasible_s_max"]) == pytest.approx(firsts[-1])
+        else:
+            assert s["best_cost_median"] == ""
+        stopped = sorted((u["task"], u["stopped_at"]) for u in unsolved if u["suite"] == fam)
+        assert stopped == sorted((t, hand[t]["stopped"]) for t in tasks if not hand[t]["solved"])
+        assert f"suite {fam} · random: solved {len(solved)}/3 runs" in printed
+    assert solved_somewhere >= 1  # the budget finds designs: the statistics above are not all empty
+    # the generated folder is recorded; the same folder with other generator arguments is refused
+    text = cfg.read_text()
+    cfg.write_text(text.replace("seed: 1", "seed: 2", 1))
+    assert main(["run", str(cfg), "--out", str(tmp_path / "out2")]) == 2
+    assert "holds tasks generated with other arguments" in capsys.readouterr().err
