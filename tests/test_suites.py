@@ -152,3 +152,16 @@ def test_suite_summary_matches_a_hand_count(tmp_path, capsys):
     cfg.write_text(text.replace("seed: 1", "seed: 2", 1))
     assert main(["run", str(cfg), "--out", str(tmp_path / "out2")]) == 2
     assert "holds tasks generated with other arguments" in capsys.readouterr().err
+
+
+def test_optimize_json_says_where_the_candidates_stopped(capsys):
+    from robodesign.solve import STAGES
+    # the nominal base of base_placement is 1.25 m from the fixture: with the base held there, designs fail
+    code = main(["optimize", "robodesign/base_placement", "--modules", "robodesign_arm", "--fixed-base",
+                 "--optimizer", "random", "--budget", "6evals", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1 and not out["feasible"] and out["first_feasible_seconds"] is None
+    counts = out["stage_counts"]
+    assert sum(counts.values()) == out["evaluations"] == 6
+    assert out["stopped_at"] == max(counts, key=STAGES.index)  # the furthest stage any candidate reached
+    assert out["best"]["stage"] == out["stopped_at"]

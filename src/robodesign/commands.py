@@ -163,9 +163,18 @@ def cmd_optimize(args) -> int:
         msg = str(e).removeprefix(f"{args.optimizer}: ")
         raise InputError(f"optimizer {args.optimizer!r}: {msg}") from None
     progress = _Progress(budget, quiet=args.json)
-    study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=progress)
+    walls: List[float] = []  # wall time of each evaluation since the study started
+
+    def on_evaluation(i, e, best):
+        walls.append(time.perf_counter() - progress.t0)
+        progress(i, e, best)
+    study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=on_evaluation)
     res = study.run()
     progress.close()
+    from .experiment.suites import record_of_run
+    run = record_of_run("", args.task, args.optimizer, args.seed, [
+        {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
+         "message": e.message} for e, w in zip(res.history, walls)])
     best = res.best
     out = None
     if best is not None and best.feasible and best.solution is not None:
@@ -177,7 +186,8 @@ def cmd_optimize(args) -> int:
                "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
                                                   "base_pose": space.base_pose(best.candidate).tolist(),
                                                   "cost": best.cost, "stage": best.stage, "costs": best.costs},
-               "solution": str(out) if out else None}
+               "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
+               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
     if args.json:
         print(json.dumps(summary))
     else:
@@ -192,6 +202,10 @@ def cmd_optimize(args) -> int:
         else:
             print("no feasible robot found within the budget"
                   + (f"; the best candidate failed at stage '{best.stage}': {best.message}" if best else ""))
+            if run.stage_counts:
+                from .experiment.suites import stage_counts_text
+                print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
+                      f"{stage_counts_text(run.stage_counts)})")
     return 0 if best is not None and best.feasible else 1
 
 
