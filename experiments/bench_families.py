@@ -174,8 +174,11 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default=",".join(VARIANTS), help=f"comma-separated, of {', '.join(VARIANTS)}")
     ap.add_argument("--sets", default=",".join(SETS), help="comma-separated module sets: builtin, IMPROV")
     ap.add_argument("--out", default=str(ROOT / "experiments" / "results" / "families"))
+    ap.add_argument("--improv", default=SETS["IMPROV"], help="folder of the IMPROV module set (default: "
+                                                              "../shared/cobra/modules/IMPROV beside the checkout)")
     ap.add_argument("--stop-at", help="UTC time HH:MM: start no new task after it (the ones running finish)")
     args = ap.parse_args(argv)
+    SETS["IMPROV"] = args.improv
     variants = [v for v in args.variants.split(",") if v]
     sets = [s for s in args.sets.split(",") if s]
     for v in variants:
