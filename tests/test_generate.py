@@ -18,6 +18,10 @@ from robodesign.solve import SolveSettings, solve
 from robodesign.task_io import load_task
 from robodesign.task_spec import BasePlacement, Reach
 
+from conftest import TASKS as COBRA_TASKS
+
+COBRA_ASSETS = COBRA_TASKS / "assets"
+
 WHITMAN_SETS = [({"goals": 3, "obstacles": 3, "base": "fixed"}, 3),
                 ({"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}, 3)]
 
@@ -166,3 +170,123 @@ def test_cli_writes_folder(tmp_path, capsys):
     files = _files(tmp_path)
     assert [f.name for f in files] == ["whitman2020_g2o1_fixed_s3_0000.json", "whitman2020_g2o1_fixed_s3_0001.json"]
     assert len(load_task(files[0]).goals) == 2
+
+
+# ---------------------------------------------------------------------------------------------------------
+# liu2020 (machine tending)
+QUASER = COBRA_ASSETS / "QUASER_MV205_v3_compressed.stl"
+
+
+@pytest.fixture(scope="module")
+def liu(tmp_path_factory):
+    out = {}
+    for key, machine in (("default", None), ("quaser", QUASER)):
+        d = tmp_path_factory.mktemp(f"liu_{key}")
+        generate("liu2020", d, 3, seed=5, options={"machine": str(machine)} if machine else {})
+        out[key] = d
+    return out
+
+
+def test_default_machine_stl_and_its_opening(tmp_path):
+    from robodesign.generate.machine import analyse, default_machine_stl
+    data = default_machine_stl()
+    assert data == default_machine_stl() and len(data) == 84 + 50 * 120  # 10 boxes, 12 triangles each
+    f = tmp_path / "m.stl"
+    f.write_bytes(data)
+    import trimesh
+    m = trimesh.load(str(f))
+    assert np.allclose(m.bounds, [[0, -0.9, 0], [1.6, 0.9, 2.1]], atol=1e-6)
+    fr = analyse(str(f), 1.0)
+    assert fr.yaw == 0.0
+    deep = np.array([r for r in fr.rays if r[2] >= 0.35])
+    # the door: y in [-0.45, 0.45], z in [0.85, 1.55] (the boxes in machine._BOXES); behind it, the
+    # back wall (x = 1.5 from the front face), less where the vise (z < 0.95) or the spindle head (z > 1.4, |y| < 0.3) is in the way
+    assert len(deep) > 0 and np.all(np.abs(deep[:, 0]) < 0.45) and np.all((deep[:, 1] > 0.85) & (deep[:, 1] < 1.55))
+    free = deep[(deep[:, 1] > 1.0) & (deep[:, 1] < 1.35) & (np.abs(deep[:, 0]) < 0.4)]
+    assert np.allclose(free[:, 2], 1.5, atol=1e-6)
+    # the same machine turned by 90°: the analysis turns its door back to the robot
+    R = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])
+    m2 = trimesh.Trimesh(m.vertices @ R.T, m.faces)
+    f2 = tmp_path / "m90.stl"
+    m2.export(str(f2))
+    fr2 = analyse(str(f2), 1.0)
+    assert fr2.yaw == pytest.approx(3 * math.pi / 2)
+    assert np.allclose(sorted(r[2] for r in fr2.rays if r[2] >= 0.35), sorted(deep[:, 2]), atol=1e-6)
+
+
+def test_liu_cells(liu):
+    for key, folder in liu.items():
+        files = _files(folder)
+        assert len(files) == 3
+        assets = sorted(p.name for p in (folder / "assets").iterdir())
+        assert assets == ["QUASER_MV205_v3_compressed.stl" if key == "quaser" else "robodesign_cnc_box.stl"]
+        if key == "quaser":
+            assert (folder / "assets" / assets[0]).read_bytes() == QUASER.read_bytes()
+        for f in files:
+            raw = json.loads(f.read_text())
+            (mesh,) = raw["obstacles"][0]["collision"]
+            assert mesh["parameters"]["file"] == f"assets/{assets[0]}"
+            assert mesh["parameters"]["scale"] == (0.001 if key == "quaser" else 1)
+            task = load_task(f)
+            assert [g.id for g in task.goals] == ["pick", "load", "unload", "place"]
+            g = task.obstacles[0].collision[0]
+            assert g.file == (folder / "assets" / assets[0]).resolve()
+            import trimesh
+            V = trimesh.load(str(g.file)).vertices * g.scale[0]
+            W = V @ g.pose[:3, :3].T + g.pose[:3, 3]
+            front = W[:, 0].min()
+            assert W[:, 2].min() == pytest.approx(0.0, abs=1e-6)  # standing on the floor
+            assert 0.4 - 1e-6 <= front <= 0.6 + 1e-6
+            for goal in task.goals:
+                p = goal.pose.nominal[:3, 3]
+                assert _point_distance(task, p) >= 0.049
+                if goal.id in ("load", "unload"):
+                    assert p[0] >= front + 0.15 - 1e-6  # inside the machine's work area
+                    assert np.allclose(goal.pose.nominal[:3, 2], [1, 0, 0])  # tool points into the machine
+                else:
+                    assert np.allclose(goal.pose.nominal[:3, 2], [0, 0, -1])  # tool down over a tray
+            bp = task.constraint(BasePlacement).pose
+            ok = np.eye(4)
+            ok[:3, :3] = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])  # any yaw
+            ok[:3, 3] = [0.29, -0.29, 0.59]
+            assert bp.valid(ok)
+            ok[2, 3] = 0.62
+            assert not bp.valid(ok)
+
+
+def test_liu_deterministic_and_regenerates(liu, tmp_path):
+    again = tmp_path / "again"
+    generate("liu2020", again, 3, seed=5, options={"machine": str(QUASER)})
+    assert _bytes(again) == _bytes(liu["quaser"])
+    other = tmp_path / "other"
+    generate("liu2020", other, 1, seed=6, options={"machine": str(QUASER)})
+    assert _files(other)[0].read_bytes() != _files(liu["quaser"])[0].read_bytes()
+    f = _files(liu["quaser"])[1]
+    assert "robodesign-generate:machine=QUASER_MV205_v3_compressed.stl" in json.loads(f.read_text())["header"]["tags"]
+    out = regenerate(f, tmp_path / "re")  # finds the machine in assets/ beside the task
+    assert out.read_bytes() == f.read_bytes()
+
+
+def test_liu_solve_check_round_trip(liu, ms):
+    for folder in liu.values():
+        for f in _files(folder)[:2]:
+            task = load_task(f)
+            results = [solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=s)) for s in range(3)]
+            good = [r for r in results if r.feasible]
+            assert good, (f.name, [(r.stage, r.message) for r in results])
+            v = check(task, good[0].solution, ms)
+            assert v.valid and v.goals == {"pick": True, "load": True, "unload": True, "place": True}
+
+
+def test_liu_bad_machine_input(tmp_path, capsys):
+    assert main(["generate", "liu2020", "--out", str(tmp_path), "--machine", str(tmp_path / "none.stl")]) == 2
+    assert "none.stl" in capsys.readouterr().err
+    assert main(["generate", "liu2020", "--out", str(tmp_path), "--machine", str(QUASER),
+                 "--machine-scale", "-1"]) == 2
+    fake = tmp_path / "src" / "QUASER_MV205_v3_compressed.stl"  # same name, other content
+    fake.parent.mkdir()
+    fake.write_bytes(QUASER.read_bytes()[:-50] + b"\0" * 50)
+    d = tmp_path / "out"
+    assert main(["generate", "liu2020", "--out", str(d), "--machine", str(QUASER)]) == 0
+    assert main(["generate", "liu2020", "--out", str(d), "--machine", str(fake)]) == 2
+    assert "other content" in capsys.readouterr().err

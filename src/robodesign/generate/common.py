@@ -205,7 +205,7 @@ class ReferenceArm:
     tolerated goal has a collision-free IK solution that holds its pose within the torque limits."""
 
     def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
-                 ik_restarts: int = 60, seed: int = 0):
+                 ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
         from ..assembly import Assembly
         from ..checker import build_robot
         from ..module_io import load_module_set
@@ -215,8 +215,23 @@ class ReferenceArm:
         asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
         self.robot = build_robot(self.task, self.module_set, asm,
                                  np.eye(4) if base_pose is None else np.asarray(base_pose, float))
-        self.ik_restarts = ik_restarts
+        self.ik_restarts, self.min_converged = ik_restarts, min_converged
         self.rng = np.random.default_rng(seed)
+
+    def clearance(self, p) -> float:
+        """Distance (coal) of point ``p`` from the cell's obstacles."""
+        import coal
+        from ..geometry import coal_shapes
+        if not hasattr(self, "_obstacles"):
+            self._obstacles = [coal.CollisionObject(s, coal.Transform3s(g.pose[:3, :3], g.pose[:3, 3]))
+                               for o in self.task.obstacles for g in o.collision for s in coal_shapes(g)]
+        probe = coal.CollisionObject(coal.Sphere(1e-6), coal.Transform3s(np.eye(3), np.asarray(p, float)))
+        best = math.inf
+        for obj in self._obstacles:
+            res = coal.DistanceResult()
+            coal.distance(probe, obj, coal.DistanceRequest(), res)
+            best = min(best, res.min_distance)
+        return best
 
     def reaches(self, goal_pose: dict) -> bool:
         from ..solvers.ik import reach_bound, solve_ik
@@ -225,6 +240,10 @@ class ReferenceArm:
         o, R = reach_bound(self.robot)
         if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
             return False
-        r = solve_ik(self.robot, tp, self.rng, max_restarts=self.ik_restarts, n_solutions=4)
+        # every restart runs (n_solutions = restarts): a goal that the IK finds from only a few random starts
+        # is out, so that solvers with other seeds find it too
+        r = solve_ik(self.robot, tp, self.rng, max_restarts=self.ik_restarts, n_solutions=self.ik_restarts)
+        if int(r.stats["converged"]) < self.min_converged:
+            return False
         limit = self.robot.tau_max
         return any(np.all(np.abs(self.robot.gravity_torque(q)) <= limit) for q in r.solutions)

@@ -82,8 +82,8 @@ class Family:
 
 
 def _families() -> Dict[str, Family]:
-    from . import whitman2020
-    return {f.name: f for f in (whitman2020.FAMILY,)}
+    from . import liu2020, whitman2020
+    return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY)}
 
 
 def families() -> Dict[str, Family]:
