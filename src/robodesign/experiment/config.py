@@ -658,10 +658,14 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         files = [folder / n for n in have.get("files", [])]
         if files and all(p.is_file() for p in files):
             return files
-    from ..generate import generate
+    from ..generate import generate, get_family
+    options = dict(su.generate.options)
+    for k, v in options.items():  # a file option (e.g. liu2020 machine) is relative to the config file
+        if v is not None and get_family(su.generate.family).option(k).path and not Path(str(v)).is_absolute():
+            options[k] = str((base / str(v)).resolve())
     try:
         files = generate(su.generate.family, folder, count=su.generate.count, seed=su.generate.seed,
-                         options=dict(su.generate.options))
+                         options=options)
     except InputError as e:
         raise InputError(str(e), file=display, path=where + ["generate"]) from None
     tmp = manifest.with_name(manifest.name + ".tmp")
