@@ -16,7 +16,7 @@ import numpy as np
 
 from robodesign import load_module_set
 from robodesign.checker import CheckSettings, check
-from robodesign.solution import Trajectory
+from robodesign.solution import SolutionTrajectory
 from robodesign.solve import SolveSettings, solve
 from robodesign.task_io import load_task
 
@@ -37,7 +37,7 @@ def stretched(sol, n_target: int, dt: float):
         i = int(round(g2t[g] / dt))
         j = int(np.argmin(np.abs(tr.t - v)))
         q[i], dq[i], ddq[i] = tr.q[j], tr.dq[j] / k, tr.ddq[j] / k ** 2
-    return sol.with_(trajectory=Trajectory(t_new, q, dq, ddq, g2t))
+    return sol.with_(trajectory=SolutionTrajectory(t_new, q, dq, ddq, g2t))
 
 
 def main():

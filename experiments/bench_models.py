@@ -61,12 +61,12 @@ def main():
     rd_rnea = time.perf_counter() - t0
     t0 = time.perf_counter()
     for q, v, a in zip(Q, V, A):
-        r.drivetrain_torque(q, v, a)
+        r.drivetrain_torques(q, v, a)
     rd_id = time.perf_counter() - t0
     print(f"FK:   raw pinocchio {raw_fk / 2000 * 1e6:.2f} us, robodesign Robot.fk {rd_fk / 2000 * 1e6:.2f} us "
           f"-> ratio {rd_fk / raw_fk:.2f}x")
     print(f"RNEA: raw pinocchio {raw_id / 2000 * 1e6:.2f} us, robodesign Robot.rnea {rd_rnea / 2000 * 1e6:.2f} us "
-          f"-> ratio {rd_rnea / raw_id:.2f}x; Robot.drivetrain_torque (RNEA + motor inertia + friction) "
+          f"-> ratio {rd_rnea / raw_id:.2f}x; Robot.drivetrain_torques per sample (RNEA + motor inertia + friction) "
           f"{rd_id / 2000 * 1e6:.2f} us -> ratio {rd_id / raw_id:.2f}x")
 
 

@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from robodesign import load_module_set
-from robodesign.checker import build_robot, check
+from robodesign.cell import build_robot
+from robodesign.checker import check
 from robodesign.solve import SolveSettings, solve
 from robodesign.solvers.timing import time_optimal_bound
 from robodesign.task_io import load_task

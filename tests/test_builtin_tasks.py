@@ -13,9 +13,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.checker import _check_goal, _Context, build_robot, check
+from robodesign.cell import build_robot
+from robodesign.checker import check
+from robodesign.quantities import TrajectoryQuantities
 from robodesign.module_io import load_module_set
-from robodesign.solution import Solution, Trajectory, load_solution
+from robodesign.solution import Solution, SolutionTrajectory, load_solution
 from robodesign.solvers.ik import solve_ik
 from robodesign.task_io import load_task
 from robodesign.task_spec import (BasePlacement, CollisionFree, EndEffectorConstraint, Follow, JointLimitsConstraint,
@@ -61,7 +63,7 @@ def kinds(verdict):
 
 def with_trajectory(sol: Solution, q=None, g2t=None, base=None) -> Solution:
     tr = sol.trajectory
-    return sol.with_(trajectory=Trajectory(tr.t, tr.q if q is None else q, tr.dq, tr.ddq,
+    return sol.with_(trajectory=SolutionTrajectory(tr.t, tr.q if q is None else q, tr.dq, tr.ddq,
                                            dict(tr.goal2time if g2t is None else g2t)),
                      base_pose=sol.base_pose if base is None else base)
 
@@ -238,11 +240,13 @@ def test_welding_seam_external_force_raises_torque(ms, solved):
     weld = task.goal("weld")
     np.testing.assert_array_equal(weld.external_force, mt.WS_FORCE)  # read from the file, not dropped
     robot = build_robot(task, ms, sol.assembly(ms), sol.base_pose)
-    with_force = _Context(robot, task, sol)
-    ok, _, (k0, k1) = _check_goal(weld, with_force, tr.goal2time)  # registers the wrench window
-    assert ok and k1 > k0
-    without = _Context(robot, task, sol)
-    tau_f, tau_0 = with_force.taus()[0], without.taus()[0]
+    with_force = TrajectoryQuantities.from_solution(robot, sol, task)
+    k0, k1 = with_force.goal_windows["weld"]
+    assert k1 > k0 and tr.t[k1] == pytest.approx(tr.goal2time["weld"])
+    np.testing.assert_array_equal(with_force.external_wrenches[k0:k1 + 1, :3],
+                                  np.broadcast_to(mt.WS_FORCE, (k1 - k0 + 1, 3)))
+    without = TrajectoryQuantities.from_solution(robot, sol, None)  # no task: no wrenches
+    tau_f, tau_0 = with_force.torques, without.torques
     outside = [k for k in range(tr.n) if k < k0 or k > k1]
     np.testing.assert_array_equal(tau_f[outside], tau_0[outside])
     m = robot.model
@@ -293,7 +297,7 @@ def test_base_placement_moving_part_is_checked_over_time(ms, solved):
     t = np.arange(n) * mt.DT
     Q = np.tile(q_hit, (n, 1))
     hold = Solution(task_id=task.id, cost_function="cyc", module_set=mt.MODULE_SET, module_order=sol.module_order,
-                    base_pose=sol.base_pose, trajectory=Trajectory(t, Q, np.zeros_like(Q), np.zeros_like(Q), {}))
+                    base_pose=sol.base_pose, trajectory=SolutionTrajectory(t, Q, np.zeros_like(Q), np.zeros_like(Q), {}))
     v = check(task, hold, ms)
     hits = [x for x in v.violations if x.constraint == "collisionFree" and "part" in x.message]
     assert hits, [str(x) for x in v.violations]

@@ -52,7 +52,7 @@ def _check_robot(robot, rng):
         np.testing.assert_allclose(rnea(q, dq, ddq).full().ravel(), robot.rnea(q, dq, ddq), rtol=0, atol=TOL)
         np.testing.assert_allclose(rnea_arm(q, dq, ddq).full().ravel(), pin.rnea(robot.model, data, q, dq, ddq),
                                    rtol=0, atol=TOL)
-        np.testing.assert_allclose(dtt(q, dq, ddq).full().ravel(), robot.drivetrain_torque(q, dq, ddq),
+        np.testing.assert_allclose(dtt(q, dq, ddq).full().ravel(), robot.drivetrain_torques(q, dq, ddq)[0],
                                    rtol=0, atol=TOL)
         for f, fid in ((fk, None), (fk_other, other)):
             p, R = f(q)

@@ -8,7 +8,7 @@ import pytest
 
 from robodesign import load_module_set
 from robodesign.checker import check
-from robodesign.solution import Solution, Trajectory, load_solution
+from robodesign.solution import Solution, SolutionTrajectory, load_solution
 from robodesign.task_io import load_task, parse_task
 
 from conftest import toy_module_set
@@ -111,7 +111,7 @@ def setup(tmp_path):
 
 def solution(t, q, dq, ddq, g2t, base=np.eye(4), cost="cyc", order=("B", "J", "J", "E")):
     return Solution(task_id="toy/all", cost_function=cost, module_set="toy", module_order=order, base_pose=base,
-                    trajectory=Trajectory(t, q, dq, ddq, dict(g2t)))
+                    trajectory=SolutionTrajectory(t, q, dq, ddq, dict(g2t)))
 
 
 def kinds(verdict):
@@ -176,7 +176,7 @@ def test_torque_limit(setup):
     v = check(task, solution(t, q, dq, ddq, g2t), ms)
     from robodesign.robot import Robot
     r = Robot.from_order(ms, ["B", "J", "J", "E"])
-    tau = np.array([r.drivetrain_torque(q[k], dq[k], ddq[k]) for k in range(len(t))])
+    tau = r.drivetrain_torques(q, dq, ddq)
     assert np.abs(tau).max() < 50  # the valid plan is well inside the limit
     # scale the limit down through a module-set edit: 5 Nm < the gravity torque at QA
     d = json.loads((setup[2] / "toy" / "modules.json").read_text())
@@ -281,7 +281,7 @@ def test_obstacle_collision_at_samples_and_between_samples(setup, tmp_path):
     Q2 = np.vstack([qa, qb])
     sol = solution(T2, Q2, np.zeros((2, 2)), np.zeros((2, 2)), {})
     from robodesign.robot import Robot
-    from robodesign.checker import build_robot
+    from robodesign.cell import build_robot
     r = build_robot(task, ms, sol.assembly(ms), np.eye(4))
     assert not r.in_collision(qa) and not r.in_collision(qb)  # both samples are free ...
     v = check(task, sol, ms)

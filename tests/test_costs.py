@@ -50,9 +50,9 @@ def test_compounds_by_hand():
 
 
 def test_breakdown_sums_to_total():
-    c = parse_cost("cyc_0.2,mechEnergy,qDist_-2")
+    c = parse_cost("cyc_0.2,mechEnergy,qDist_2")
     b = c.breakdown(ctx())
-    assert b == pytest.approx({"cyc": 0.3, "mechEnergy": MECH, "qDist": -2 * QDIST})
+    assert b == pytest.approx({"cyc": 0.3, "mechEnergy": MECH, "qDist": 2 * QDIST})
     assert c.evaluate(ctx()) == pytest.approx(sum(b.values()))
     assert c.raw_values(ctx()) == pytest.approx({"cyc": CYC, "mechEnergy": MECH, "qDist": QDIST})
 
@@ -141,6 +141,11 @@ def test_fulfill_p_without_goals_is_zero():
     ("cyc_nan", r"weight 'nan' of cost 'cyc' is not a number"),
     ("cyc_inf", r"weight 'inf' of cost 'cyc' is not a number"),
     ("cyc_0.2_3", r"weight '0.2_3' of cost 'cyc' is not a number"),
+    ("cyc_1e400", r"weight '1e400' of cost 'cyc' must be finite"),
+    ("cyc_-1", r"weight -1 of cost 'cyc' is negative: costs are minimised, so only rewards \(fulfillN, fulfillP\)"),
+    ("mass,qDist_-0.5", r"weight -0.5 of cost 'qDist' is negative"),
+    ("Liu2_-1", r"weight -1 of cost 'mechEnergy' is negative"),       # a compound scales its terms
+    ("[(cyc|0.2),(effort|-3)]", r"weight -3 of cost 'effort' is negative"),
     ("cyc,,mass", r"empty term in cost"),
     ("[(cyc|0.2),(mass|x)]", r"weight 'x' of cost 'mass' is not a number"),
     ("[(cyc|0.2)", r"does not end with '\]'"),
@@ -149,6 +154,54 @@ def test_fulfill_p_without_goals_is_zero():
 def test_bad_costs_name_the_field(text, message):
     with pytest.raises(InputError, match=r"sol\.json: costFunction: .*" + message):
         parse_cost(text, file="sol.json", path="costFunction")
+
+
+def test_negative_weights_only_on_rewards():
+    # a reward (what the reference writes as fulfillN_-1) keeps its negative weight ...
+    assert parse_cost("cyc,fulfillN_-1").evaluate(ctx(goals_achieved=3, num_goals=4)) == pytest.approx(CYC - 3)
+    assert parse_cost("fulfillP_-2").evaluate(ctx(goals_achieved=3, num_goals=4)) == pytest.approx(-1.5)
+    # ... every other term is minimised with a weight >= 0, also when built in Python
+    with pytest.raises(InputError, match="weight -1 of cost 'cyc' is negative"):
+        CostFunction((("cyc", -1.0),))
+    with pytest.raises(InputError, match="negative"):
+        parse_cost("mass") * -1
+    with pytest.raises(ValueError, match="weight -1 of cost 'numJ' is negative"):
+        register_compound("Bad", {"numJ": -1.0}, "a compound rewarding more joints")
+
+
+def test_term_properties_match_what_the_terms_do():
+    """needs_torques ⇔ the term fails without torques; non_negative terms are ≥ 0 on random contexts;
+    trajopt ⇔ trajectory optimization accepts the term."""
+    from robodesign.costs import cost_terms
+    from robodesign.solvers.trajopt import parse_cost as trajopt_weights
+    rng = np.random.default_rng(0)
+    builtin = ("cyc", "mechEnergy", "linkMechEnergy", "qDist", "effort", "mass", "numJ", "fulfillN", "fulfillP")
+    terms = cost_terms()
+    for name in builtin:
+        term = terms[name]
+        no_tau = ctx(tau=None, tau_link=None)
+        try:
+            term.fn(no_tau)
+            needs = False
+        except MissingQuantityError:
+            needs = True
+        assert term.needs_torques == needs, name
+        assert parse_cost(name).needs_torques == needs
+        if term.non_negative:
+            for _ in range(20):
+                t = np.cumsum(rng.uniform(0.01, 1, 5))
+                q = rng.normal(size=(5, 3))
+                c = CostContext(t=t, q=q, dq=rng.normal(size=(5, 3)), tau=rng.normal(size=(5, 3)),
+                                tau_link=rng.normal(size=(5, 3)), mass=3.0, goals_achieved=1, num_goals=2)
+                assert term.fn(c) >= 0, name
+        try:
+            trajopt_weights(name)
+            ok = True
+        except ValueError:
+            ok = False
+        assert term.trajopt == ok, name
+    assert {n for n in builtin if terms[n].trajopt} == {"cyc", "mechEnergy", "effort"}
+    assert {n for n in builtin if terms[n].reward} == {"fulfillN", "fulfillP"}
 
 
 def test_non_string_cost():

@@ -8,7 +8,7 @@ from robodesign import load_module_set
 from robodesign.checker import check
 from robodesign.evaluator import INFEASIBLE, Evaluator, EvaluatorSpec
 from robodesign.search_space import Candidate
-from robodesign.solution import Trajectory, parse_solution
+from robodesign.solution import SolutionTrajectory, parse_solution
 from robodesign.solve import STAGES
 from robodesign.task_io import load_task, parse_task
 
@@ -65,7 +65,7 @@ def test_ptp3_solution_valid_then_invalid_after_each_single_perturbation(evaluat
     tr = sol.trajectory
 
     def variant(q=None, dq=None, ddq=None, g2t=None, base=None):
-        t2 = Trajectory(tr.t, tr.q if q is None else q, tr.dq if dq is None else dq,
+        t2 = SolutionTrajectory(tr.t, tr.q if q is None else q, tr.dq if dq is None else dq,
                         tr.ddq if ddq is None else ddq, tr.goal2time if g2t is None else g2t)
         return sol.with_(trajectory=t2, base_pose=sol.base_pose if base is None else base)
 

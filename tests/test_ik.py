@@ -10,7 +10,7 @@ import pytest
 from robodesign.geometry import coal_shapes, parse_geometries
 from robodesign.module_io import load_module_set
 from robodesign.robot import Obstacle, Robot
-from robodesign.solvers.ik import IKResult, goal_model, reach_bound, solve_ik
+from robodesign.solvers.ik import IKResult, goal_model, solve_ik
 from robodesign.tolerance import ToleratedPose
 
 from conftest import IMPROV, TASKS
@@ -164,7 +164,7 @@ def test_out_of_workspace_fails_cleanly(robot):
     far = np.eye(4)
     far[:3, 3] = [5.0, 0.0, 0.5]
     goal = ToleratedPose(far, ("r_sph", "Theta_R"), ((0.0, 0.01), (0.0, 0.01)))
-    o, R = reach_bound(robot)
+    o, R = robot.reach_bound()
     assert np.linalg.norm(far[:3, 3] - o) > R
     res = solve_ik(robot, goal, 0)
     assert not res.success and res.q is None and res.solutions == []

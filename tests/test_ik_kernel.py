@@ -26,13 +26,13 @@ BASE = homogeneous(rpy_to_matrix(0.3, -0.2, 1.0), [1.0, 2.0, 0.5])
 
 @pytest.fixture(scope="module")
 def robots(tmp_path_factory):
-    from test_urdf import _reversed_robot
+    from test_urdf import reversed_robot
     imp = load_module_set(IMPROV)
     prim = load_module_set(PRIMITIVES)
     rs = [Robot.from_order(imp, ["1", "21", "4", "21", "23", "12"]),
           Robot.from_order(imp, ["1", "22", "5", "23", "15", "29", "101"], base_pose=BASE),
           Robot.from_order(prim, ["base", "J2", "i_30", "J1", "l_15", "J2", "eef"]),   # prismatic joints
-          _reversed_robot(tmp_path_factory.mktemp("rev"))]                              # joints about −z
+          reversed_robot(tmp_path_factory.mktemp("rev"))]                              # joints about −z
     kinds = [set(ik_kernel.chain_kernel(r).kind.tolist()) for r in rs]
     assert kinds[2] == {0, 1} and min(ik_kernel.chain_kernel(rs[3]).sign) == -1.0
     return rs

@@ -47,16 +47,16 @@ def test_gravity_and_drivetrain_torque_by_hand(toy_set):
     dq = np.zeros(2)
     M = pin.crba(r.model, r.data, np.array([q1, q2]))
     M = np.triu(M) + np.triu(M, 1).T  # includes armature
-    tau = r.drivetrain_torque([q1, q2], dq, ddq)
+    tau = r.drivetrain_torques([q1, q2], dq, ddq)[0]
     np.testing.assert_allclose(tau, [dV1, dV2] + M @ ddq, atol=1e-10)
     assert r.model.armature == pytest.approx([100 ** 2 * 1e-5] * 2)
     # friction: viscous 3·dq + Coulomb 2·sin(atan(100 dq))
     dq = np.array([0.5, -0.01])
-    tau_f = r.drivetrain_torque([q1, q2], dq, np.zeros(2)) - r.rnea([q1, q2], dq, np.zeros(2))
+    tau_f = r.drivetrain_torques([q1, q2], dq, np.zeros(2))[0] - r.rnea([q1, q2], dq, np.zeros(2))
     np.testing.assert_allclose(tau_f, 3 * dq + 2 * np.sin(np.arctan(100 * dq)), atol=1e-12)
     # forward dynamics inverts the drivetrain torque
     dq = np.array([0.3, -0.2])
-    np.testing.assert_allclose(r.forward_dynamics([q1, q2], dq, r.drivetrain_torque([q1, q2], dq, ddq)), ddq,
+    np.testing.assert_allclose(r.forward_dynamics([q1, q2], dq, r.drivetrain_torques([q1, q2], dq, ddq)[0]), ddq,
                                atol=1e-9)
 
 

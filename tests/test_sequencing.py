@@ -99,7 +99,8 @@ def test_returning_move_is_in_the_objective():
     from robodesign.assembly import Assembly
     from robodesign.evaluator import evaluation_settings
     from robodesign.module_io import load_module_set
-    from robodesign.solve import SolveResult, _GoalPlanner, build_robot
+    from robodesign.cell import build_robot
+    from robodesign.solve import GoalPlanner, SolveResult
     from robodesign.task_io import load_task
     from robodesign.task_spec import ReturnTo
     task = load_task(str(COBRA / "tasks" / "simple" / "PTP_3.json"))
@@ -108,7 +109,7 @@ def test_returning_move_is_in_the_objective():
     ms = load_module_set(str(COBRA / "modules" / "IMPROV"))
     order = ["1", "8", "22", "5", "21", "5", "29", "5", "13"]          # 7 DoF: many IK solutions per goal
     robot = build_robot(task, ms, Assembly.from_order(ms, order), task.nominal_base_pose)
-    gp = _GoalPlanner(task, robot, evaluation_settings(seed=0), np.random.default_rng(0), SolveResult())
+    gp = GoalPlanner(task, robot, evaluation_settings(seed=0), np.random.default_rng(0), SolveResult())
     gp.solve_ik()
     gp.filter_static_torque()
     gp.choose_and_plan()

@@ -1,4 +1,4 @@
-"""Time parameterization (toppra / ruckig), the Trajectory type and the analytic bounds."""
+"""Time parameterization (toppra / ruckig), the JointTrajectory type and the analytic bounds."""
 import math
 
 import numpy as np
@@ -9,7 +9,7 @@ import pytest
 from conftest import COBRA as _COBRA
 
 from robodesign import Robot, load_module_set
-from robodesign.solvers.timing import (BlendedPolyline, Trajectory, TimingError, jerk_limited_time,
+from robodesign.solvers.timing import (BlendedPolyline, JointTrajectory, TimingError, jerk_limited_time,
                                        time_optimal_bound, time_parameterize, trapezoid_time)
 
 COBRA = _COBRA / "modules"
@@ -181,7 +181,7 @@ def test_hold_is_exact(arm):
     assert np.all(held.dq[tail] == 0.0) and np.all(held.ddq[tail] == 0.0)
     rq, rv = held.consistency_residual()
     assert rq < 1e-10 and rv < 1e-10
-    moving = Trajectory(tr.t[:5], tr.q[:5], tr.dq[:5], tr.ddq[:5])
+    moving = JointTrajectory(tr.t[:5], tr.q[:5], tr.dq[:5], tr.ddq[:5])
     with pytest.raises(ValueError):
         moving.hold(0.1, DT)
 

@@ -50,7 +50,7 @@ def check_rest_to_rest(tr, qa, qb):
 def energy_independent(robot, tr):
     e = 0.0
     for k in range(len(tr) - 1):
-        tau = robot.drivetrain_torque(tr.q[k], tr.dq[k], tr.ddq[k])
+        tau = robot.drivetrain_torques(tr.q[k], tr.dq[k], tr.ddq[k])[0]
         e += abs(float(tau @ tr.dq[k])) * (tr.t[k + 1] - tr.t[k])
     return e
 

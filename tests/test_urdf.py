@@ -33,7 +33,7 @@ ASSEMBLIES = [
 ]
 ASSEMBLY_IDS = ["improv-6", "improv-7-moved-base", "primitives-7"]
 # Modules mounted backwards (entered through their distal body): joints about -z. Needs an f–f adapter,
-# added to a copy of geometric_primitive_modules; connections are explicit (see _reversed_robot).
+# added to a copy of geometric_primitive_modules; connections are explicit (see reversed_robot).
 REVERSED = ("reversed", ("base", "ff_15", "J2", "i_30", "J1", "i_15"), None)
 
 
@@ -50,7 +50,7 @@ def _module_set(name: str):
     return load_module_set(MODULES / name)
 
 
-def _reversed_robot(tmp_root: Path) -> Robot:
+def reversed_robot(tmp_root: Path) -> Robot:
     import copy
     from robodesign.assembly import Assembly
     from robodesign.jsonio import dumps_json, load_json
@@ -75,7 +75,7 @@ def _reversed_robot(tmp_root: Path) -> Robot:
 
 def _robot(set_name, order, base_pose, tmp_root: Path = None) -> Robot:
     if set_name == "reversed":
-        return _reversed_robot(tmp_root)
+        return reversed_robot(tmp_root)
     return Robot.from_order(_module_set(set_name), list(order), base_pose=base_pose)
 
 

@@ -12,10 +12,10 @@ import pytest
 
 from robodesign import Robot, load_module_set
 from robodesign.cli import main as cli_main
-from robodesign.solution import Solution, Trajectory, load_solution
+from robodesign.solution import Solution, SolutionTrajectory, load_solution
 from robodesign.task_io import load_task
 from robodesign.viewer import build_scene, render_html, solution_page, trajectory_plots
-from robodesign.viewer.html import _asset, decode_page_data
+from robodesign.viewer.html import asset, decode_page_data
 from robodesign.viewer.meshes import MAX_TRIANGLES, decimate, decode_b64, mesh_entry, weld
 from robodesign.viewer.scene import animation_samples
 
@@ -73,7 +73,7 @@ def world(tmp_path_factory):
     q = 0.6 * np.sin(np.pi * t / 2)[:, None] * np.linspace(1.0, 0.3, robot.dof)[None, :]
     dq = np.gradient(q, t, axis=0)
     ddq = np.gradient(dq, t, axis=0)
-    traj = Trajectory(t, q, dq, ddq, dict(G2T))
+    traj = SolutionTrajectory(t, q, dq, ddq, dict(G2T))
     sol = Solution(task_id="cell/view", cost_function="cyc", module_set="robodesign_arm", module_order=ORDER,
                    base_pose=np.eye(4), trajectory=traj)
     sol_file = sol.write(root / "sol.json")
@@ -176,8 +176,8 @@ def test_page_is_self_contained_with_animation_and_meshes(world):
     page = render_html(scene, {"q": b"\x89PNG fake"}, title="view <test>")
     assert not re.search(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page, re.I)
     assert not re.search(r"""@import|url\(\s*["']?https?:""", page, re.I)
-    assert _asset("three/three.module.min.js") in page and "Copyright 2010-2024 Three.js Authors" in page
-    assert _asset("three/OrbitControls.js") in page
+    assert asset("three/three.module.min.js") in page and "Copyright 2010-2024 Three.js Authors" in page
+    assert asset("three/OrbitControls.js") in page
     assert "view &lt;test&gt;" in page and 'src="data:image/png;base64,' in page
     data = decode_page_data(page)
     anim = data["animation"]

@@ -30,7 +30,9 @@ Notation (both parse to the same terms):
 * A bare compound name ``"Liu2"`` (or ``"Liu2_2"``, which scales its terms; or a compound inside a list).
 
 Decisions: ``""`` and ``"[]"`` are the empty cost (value 0), as in the reference. A term that appears twice
-is merged by adding its weights (same value, deterministic descriptor). Weights must be finite numbers.
+is merged by adding its weights (same value, deterministic descriptor). Weights must be finite numbers and,
+unlike the reference, non-negative, except on rewards (``fulfillN``, ``fulfillP``: ``fulfillN_-1`` is the
+reference's way to reward achieved goals): a cost such as ``cyc_-1`` would rank the slowest robot first.
 Terms with weight 0 are not evaluated (so they never trigger a torque computation).
 
 Writer rule (``CostFunction.descriptor``), as the reference: each term is ``abbr`` if round(w, 4) == 1, else
@@ -43,6 +45,7 @@ and calls them at most once, only when a term needs them.
 """
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import re
@@ -167,9 +170,21 @@ def _fulfill_p(ctx: CostContext) -> float:
 
 @dataclass(frozen=True)
 class CostTerm:
+    """A registered cost term and what the rest of robodesign may rely on about it:
+
+    * ``non_negative``: its value is never negative (bound pruning may count it as ≥ 0);
+    * ``needs_torques``: it reads ``tau``/``tau_link`` (inverse dynamics along the trajectory);
+    * ``trajopt``: trajectory optimization (:mod:`robodesign.solvers.trajopt`) has a differentiable model of it;
+    * ``reward``: it measures something to *maximise*, so a negative weight is allowed (``fulfillN_-1``, as in
+      the reference); every other term only takes weights ≥ 0.
+    """
     name: str
     fn: Callable[[CostContext], float]
     description: str
+    non_negative: bool = False
+    needs_torques: bool = False
+    trajopt: bool = False
+    reward: bool = False
 
 
 _REGISTRY: Dict[str, CostTerm] = {}
@@ -179,11 +194,24 @@ _NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
 _NUMBER_RE = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 
 
+def _weight_problem(name: str, w: float) -> Optional[str]:
+    """Why ``w`` is not an acceptable weight of term ``name`` (None if it is)."""
+    if not math.isfinite(w):
+        return f"weight {w} of cost {name!r} must be finite"
+    if w < 0 and not _REGISTRY[name].reward:
+        rewards = ", ".join(n for n, t in _REGISTRY.items() if t.reward)
+        return (f"weight {w:g} of cost {name!r} is negative: costs are minimised, so only rewards ({rewards}) "
+                "may take a negative weight")
+    return None
+
+
 def register_cost(name: str, fn: Callable[[CostContext], float], description: str, *,
-                  overwrite: bool = False) -> None:
+                  overwrite: bool = False, non_negative: bool = False, needs_torques: bool = False,
+                  reward: bool = False) -> None:
     """Add a cost term usable in descriptors. ``fn(ctx) -> float`` gets a :class:`CostContext`.
 
-    Names are letters and digits, starting with a letter (``_ , | : [ ] ( )`` are separators).
+    Names are letters and digits, starting with a letter (``_ , | : [ ] ( )`` are separators). The flags
+    are the term's properties (:class:`CostTerm`); only built-in terms have a trajectory-optimization model.
     """
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise ValueError(f"invalid cost name {name!r}: use letters and digits, starting with a letter")
@@ -192,7 +220,8 @@ def register_cost(name: str, fn: Callable[[CostContext], float], description: st
     if not overwrite and (name in _REGISTRY or name in _COMPOUNDS):
         raise ValueError(f"cost {name!r} is already registered (pass overwrite=True to replace it)")
     _COMPOUNDS.pop(name, None)
-    _REGISTRY[name] = CostTerm(name, fn, description)
+    _REGISTRY[name] = CostTerm(name, fn, description, non_negative=non_negative, needs_torques=needs_torques,
+                               reward=reward)
 
 
 def register_compound(name: str, terms: Mapping[str, float] | Iterable[Tuple[str, float]], description: str, *,
@@ -204,13 +233,26 @@ def register_compound(name: str, terms: Mapping[str, float] | Iterable[Tuple[str
     for k, w in items:
         if k not in _REGISTRY:
             raise ValueError(f"compound {name!r} uses unknown cost {k!r}")
-        if not math.isfinite(w):
-            raise ValueError(f"compound {name!r}: weight of {k!r} must be finite")
+        problem = _weight_problem(k, w)
+        if problem:
+            raise ValueError(f"compound {name!r}: {problem}")
     if not overwrite and (name in _REGISTRY or name in _COMPOUNDS):
         raise ValueError(f"cost {name!r} is already registered (pass overwrite=True to replace it)")
     _REGISTRY.pop(name, None)
     _COMPOUNDS[name] = items
     _COMPOUND_DESCRIPTIONS[name] = description
+
+
+def cost_term(name: str) -> CostTerm:
+    """The registered term ``name`` (InputError naming the known costs if there is none)."""
+    if name not in _REGISTRY:
+        raise InputError(_unknown_cost_message(name))
+    return _REGISTRY[name]
+
+
+def cost_terms() -> Dict[str, CostTerm]:
+    """name → :class:`CostTerm` of every registered term (compounds expand to these)."""
+    return dict(_REGISTRY)
 
 
 def known_costs() -> Dict[str, str]:
@@ -220,17 +262,22 @@ def known_costs() -> Dict[str, str]:
     return out
 
 
-register_cost("cyc", _cyc, "cycle time: last time stamp t[-1] [s]")
+register_cost("cyc", _cyc, "cycle time: last time stamp t[-1] [s]", non_negative=True)
 register_cost("mechEnergy", lambda c: _energy(c, "tau"),
-              "mechanical energy Σ|τ·dq|·Δt with drivetrain torque (motor inertia + friction) [J]")
+              "mechanical energy Σ|τ·dq|·Δt with drivetrain torque (motor inertia + friction) [J]",
+              non_negative=True, needs_torques=True)
 register_cost("linkMechEnergy", lambda c: _energy(c, "tau_link"),
-              "mechanical energy Σ|τ·dq|·Δt with link-side torque [J]")
-register_cost("qDist", _qdist, "joint-space distance Σ|Δq| (rad and m mixed)")
-register_cost("effort", _effort, "effort Σ|τ| · (t1 − t0) [N·m·s]")
-register_cost("mass", lambda c: float(c.get("mass")), "total robot mass [kg]")
-register_cost("numJ", lambda c: float(c.get("num_joints")), "number of actuated joints")
-register_cost("fulfillN", lambda c: float(c.get("goals_achieved")), "number of achieved goals")
-register_cost("fulfillP", _fulfill_p, "fraction of achieved goals")
+              "mechanical energy Σ|τ·dq|·Δt with link-side torque [J]", non_negative=True, needs_torques=True)
+register_cost("qDist", _qdist, "joint-space distance Σ|Δq| (rad and m mixed)", non_negative=True)
+register_cost("effort", _effort, "effort Σ|τ| · (t1 − t0) [N·m·s]", non_negative=True, needs_torques=True)
+register_cost("mass", lambda c: float(c.get("mass")), "total robot mass [kg]", non_negative=True)
+register_cost("numJ", lambda c: float(c.get("num_joints")), "number of actuated joints", non_negative=True)
+register_cost("fulfillN", lambda c: float(c.get("goals_achieved")), "number of achieved goals", non_negative=True,
+              reward=True)
+register_cost("fulfillP", _fulfill_p, "fraction of achieved goals", non_negative=True, reward=True)
+# the terms solvers/trajopt.py models with CasADi (cycle time, drivetrain energy, effort)
+for _name in ("cyc", "mechEnergy", "effort"):
+    _REGISTRY[_name] = dataclasses.replace(_REGISTRY[_name], trajopt=True)
 register_compound("Liu2", (("mechEnergy", 1.0), ("cyc", 0.2)), "Liu2 = mechEnergy + 0.2·cyc")
 register_compound("Whit2", (("numJ", 0.025), ("mass", 0.1)), "Whit2 = 0.025·numJ + 0.1·mass")
 
@@ -258,6 +305,10 @@ class CostFunction:
             if n not in _REGISTRY:
                 raise InputError(_unknown_cost_message(n))
             merged[n] = merged.get(n, 0.0) + float(w)
+        for n, w in merged.items():
+            problem = _weight_problem(n, w)
+            if problem:
+                raise InputError(problem)
         object.__setattr__(self, "terms", tuple(sorted(merged.items())))
 
     @classmethod
@@ -285,6 +336,11 @@ class CostFunction:
 
     def weight(self, term: str) -> float:
         return dict(self.terms).get(term, 0.0)
+
+    @property
+    def needs_torques(self) -> bool:
+        """Whether evaluating this cost runs inverse dynamics (a term with non-zero weight needs torques)."""
+        return any(_REGISTRY[n].needs_torques for n in self.needs())
 
     def needs(self) -> set:
         """Names of the registered terms with non-zero weight."""
@@ -380,4 +436,11 @@ def parse_cost(text: Any, file: Optional[str] = None, path: Sequence[PathPart] |
             weight = _parse_weight(w, n, file, path) if sep else 1.0
             terms += _expand(n, weight, file, path)
         name = s if s in _COMPOUNDS else None
+    merged: Dict[str, float] = {}
+    for n, w in terms:
+        merged[n] = merged.get(n, 0.0) + w
+    for n, w in merged.items():
+        problem = _weight_problem(n, w)
+        if problem:
+            raise InputError(f"cost {text!r}: {problem}", file=file, path=path)
     return CostFunction(tuple(terms), name=name)

@@ -11,7 +11,7 @@ Conventions (docs/formats.md):
   module mounted "backwards" (entered through its child body) gets the same joint about −z so q
   keeps its meaning.
 * The TCP is the free ``eef`` connector (or the last free connector in breadth-first order).
-* Drivetrain torque τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
+* Drivetrain torque (:meth:`Robot.drivetrain_torques`, the one formula) τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
   (the smooth sign of the reference, so costs are comparable); k²·I_m is pinocchio's ``armature``.
 """
 from __future__ import annotations
@@ -69,7 +69,9 @@ class Robot:
         self._sync_link_model()
         self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
+        self._reach = None
         self.obstacles: List[Obstacle] = []
+        self._obstacle_ids: List[int] = []
         if base_pose is not None:
             self.set_base_pose(base_pose)
 
@@ -264,6 +266,7 @@ class Robot:
         self.data = self.model.createData()
         self._sync_link_model()
         self._geom_data = None
+        self._reach = None
 
     def set_gravity(self, g: Sequence[float]) -> None:
         self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
@@ -290,6 +293,11 @@ class Robot:
                 geom.addCollisionPair(pin.CollisionPair(a, k))
         self.safety_margin = float(safety_margin)
         self._geom_data = None
+
+    @property
+    def obstacle_geometry_ids(self) -> Tuple[int, ...]:
+        """Geometry-model index of each obstacle (in the order of :attr:`obstacles`)."""
+        return tuple(self._obstacle_ids)
 
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
@@ -358,16 +366,37 @@ class Robot:
         f = self.tcp_frame if frame is None else frame
         return pin.computeFrameJacobian(self.model, self.data, self._q(q), f, reference)
 
-    def tcp_velocity(self, q, dq) -> np.ndarray:
-        """TCP twist [v; ω] in world-aligned axes at the TCP."""
-        pin.forwardKinematics(self.model, self.data, self._q(q), np.asarray(dq, float))
-        pin.updateFramePlacements(self.model, self.data)
-        return pin.getFrameVelocity(self.model, self.data, self.tcp_frame, pin.LOCAL_WORLD_ALIGNED).vector.copy()
+    def reach_bound(self) -> Tuple[np.ndarray, float]:
+        """(world point o, radius R): every reachable TCP position lies within R of o.
+
+        o is the origin of the first joint on the TCP's chain (fixed in the world); R sums the distances
+        between consecutive joint origins on the chain (constant for revolute joints, plus the stroke for
+        prismatic ones) and the TCP offset from its joint. Cached until the base pose changes.
+        """
+        if self._reach is None:
+            m = self.model
+            chain = self.tcp_chain()
+            d = m.createData()
+            pin.framesForwardKinematics(m, d, pin.neutral(m))
+            if not chain:
+                o, R = d.oMf[self.tcp_frame].translation.copy(), 0.0
+            else:
+                o = d.oMi[chain[0]].translation.copy()
+                R = sum(float(np.linalg.norm(m.jointPlacements[b].translation)) for b in chain[1:])
+                R += float(np.linalg.norm(m.frames[self.tcp_frame].placement.translation))
+                for j in chain:
+                    if m.joints[j].shortname().startswith("JointModelP"):  # PX/PY/PZ, PrismaticUnaligned
+                        idx = m.joints[j].idx_q
+                        lo, hi = m.lowerPositionLimit[idx], m.upperPositionLimit[idx]
+                        R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf
+            self._reach = (o, R)
+        return self._reach[0].copy(), self._reach[1]
 
     # ------------------------------------------------------------------------------------------
     # dynamics
     def rnea(self, q, dq, ddq, f_ext=None) -> np.ndarray:
-        """Link-side inverse dynamics (no motor inertia, no friction)."""
+        """Link-side inverse dynamics of one sample (no motor inertia, no friction); ``f_ext``: pinocchio
+        joint-frame forces (see :meth:`tcp_wrench_forces`)."""
         if self._link_model is None:  # a copy without armature: link-side RNEA in one pinocchio call
             self._link_model = pin.Model(self.model)
             self._link_model.armature = np.zeros(self.model.nv)
@@ -380,24 +409,46 @@ class Robot:
     def gravity_torque(self, q) -> np.ndarray:
         return pin.computeGeneralizedGravity(self.model, self.data, self._q(q)).copy()
 
-    def drivetrain_torque(self, q, dq, ddq, f_ext=None) -> np.ndarray:
-        """τ = RNEA + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇) (motor-side torque, what peakTorque limits)."""
-        dq = np.asarray(dq, dtype=float)
-        if f_ext is None:  # pinocchio 4's RNEA already adds armature·q̈ (= k²·I_m·q̈)
-            tau = pin.rnea(self.model, self.data, self._q(q), dq, np.asarray(ddq, dtype=float))
-        else:
-            tau = pin.rnea(self.model, self.data, self._q(q), dq, np.asarray(ddq, dtype=float), f_ext)
-        s = COULOMB_SMOOTHING * dq
-        return tau + self.friction_viscous * dq + self.friction_coulomb * (s / np.sqrt(1.0 + s * s))
-
-    def drivetrain_torques(self, Q, DQ, DDQ) -> np.ndarray:
-        """Vectorised over samples: arrays (N, dof) → (N, dof)."""
-        out = np.empty_like(np.asarray(Q, float))
+    def tcp_wrench_forces(self, q, wrench) -> "pin.StdVec_Force":
+        """A world wrench ``[f; τ]`` acting at the TCP as pinocchio joint-frame external forces for RNEA
+        (which subtracts them: the joints resist the push, τ gains −Jᵀw)."""
         m, d = self.model, self.data
-        for k in range(len(out)):
-            out[k] = pin.rnea(m, d, Q[k], DQ[k], DDQ[k])
-        DQ = np.asarray(DQ)
-        return out + self.friction_viscous * DQ + self.friction_coulomb * smooth_sign(DQ)
+        pin.framesForwardKinematics(m, d, self._q(q))
+        jid = m.frames[self.tcp_frame].parentJoint
+        oMi = d.oMi[jid]
+        w = np.asarray(wrench, dtype=float)
+        f = w[:3]
+        # the force acts at the TCP point: about the joint origin it adds the moment (p_tcp − p_joint) × f;
+        # both are then expressed in the joint frame, as pinocchio's external forces are
+        moment = w[3:] + np.cross(d.oMf[self.tcp_frame].translation - oMi.translation, f)
+        fext = pin.StdVec_Force()
+        for _ in range(m.njoints):
+            fext.append(pin.Force.Zero())
+        fext[jid] = pin.Force(oMi.rotation.T @ f, oMi.rotation.T @ moment)
+        return fext
+
+    def link_torques(self, Q, DQ, DDQ, fext=None) -> np.ndarray:
+        """Link-side torques (RNEA without motor inertia and friction) at every sample: arrays (N, dof) →
+        (N, dof). ``fext``: None or (N, 6) world wrenches ``[f; τ]`` applied at the TCP (zero rows: none)."""
+        Q, DQ, DDQ = (np.asarray(x, dtype=float).reshape(-1, self.dof) for x in (Q, DQ, DDQ))
+        out = np.empty_like(Q)
+        for k in range(len(Q)):
+            f = None if fext is None or not np.any(fext[k]) else self.tcp_wrench_forces(Q[k], fext[k])
+            out[k] = self.rnea(Q[k], DQ[k], DDQ[k], f)
+        return out
+
+    def friction_torques(self, DQ) -> np.ndarray:
+        """f_v·q̇ + f_c·σ(q̇) (σ: :func:`smooth_sign`), per sample."""
+        DQ = np.asarray(DQ, dtype=float)
+        return self.friction_viscous * DQ + self.friction_coulomb * smooth_sign(DQ)
+
+    def drivetrain_torques(self, Q, DQ, DDQ, fext=None, link_torques: Optional[np.ndarray] = None) -> np.ndarray:
+        """Drivetrain (motor-side) torques, what peakTorque limits: τ = RNEA + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇)
+        at every sample, arrays (N, dof) → (N, dof). ``fext`` as in :meth:`link_torques`; pass
+        ``link_torques`` when they are already computed for the same samples and wrenches."""
+        tau_link = self.link_torques(Q, DQ, DDQ, fext) if link_torques is None else link_torques
+        DDQ = np.asarray(DDQ, dtype=float).reshape(tau_link.shape)
+        return tau_link + self.model.armature * DDQ + self.friction_torques(np.reshape(DQ, tau_link.shape))
 
     def mass_matrix(self, q) -> np.ndarray:
         """Joint-space inertia incl. reflected motor inertia (armature)."""
@@ -405,10 +456,9 @@ class Robot:
         return np.triu(M) + np.triu(M, 1).T
 
     def forward_dynamics(self, q, dq, tau) -> np.ndarray:
-        """q̈ from drivetrain torque (inverse of :meth:`drivetrain_torque`)."""
+        """q̈ from drivetrain torque (inverse of :meth:`drivetrain_torques`)."""
         dq = np.asarray(dq, float)
-        tau_link = np.asarray(tau, float) - self.friction_viscous * dq - self.friction_coulomb * smooth_sign(dq)
-        return pin.aba(self.model, self.data, self._q(q), dq, tau_link).copy()
+        return pin.aba(self.model, self.data, self._q(q), dq, np.asarray(tau, float) - self.friction_torques(dq)).copy()
 
     # ------------------------------------------------------------------------------------------
     # collision

@@ -33,11 +33,6 @@ from .spatial import homogeneous, rot_z
 
 BASE_PARAMS = ("x", "y", "z", "yaw")
 
-#: cost terms whose value is never negative (a positive weight contributes ≥ 0 to a lower bound)
-_NONNEGATIVE_TERMS = ("cyc", "mechEnergy", "linkMechEnergy", "qDist", "effort", "mass", "numJ", "fulfillN",
-                      "fulfillP")
-
-
 @dataclass(frozen=True)
 class ModuleInfo:
     """What an optimizer may know about one module: ``kind`` ('base', 'joint', 'link' or 'eef'), ``dof``
@@ -293,6 +288,7 @@ class SearchSpace:
         weight is negative). A negative weight on an unbounded term, or an unknown (custom) term, makes
         the bound ``-inf``. So for ``mass``, ``numJ`` and ``Whit2`` the bound of a complete order *is* its cost.
         """
+        from .costs import cost_terms
         prefix = tuple(str(x) for x in prefix)
         terms = _cost_terms(str(cost))
         count, lightest = self._prefix_completion(prefix)
@@ -310,7 +306,7 @@ class SearchSpace:
                 lb += w * (max(dof, self.min_dof) if w > 0 else self.max_dof)
             elif name == "fulfillP" and w < 0:
                 lb += w
-            elif name in _NONNEGATIVE_TERMS and w > 0:
+            elif cost_terms()[name].non_negative and w > 0:  # contributes ≥ 0
                 pass
             else:
                 return -math.inf
@@ -322,9 +318,8 @@ class SearchSpace:
         R bounds the distance of every reachable TCP position from o. The reach stage fails iff some goal
         position is farther than R + (its position tolerance) from o. Costs one robot build (~ms)."""
         from .robot import Robot
-        from .solvers.ik import reach_bound
         robot = Robot.from_order(self.module_set, tuple(candidate.order), base_pose=self.base_pose(candidate))
-        o, R = reach_bound(robot)
+        o, R = robot.reach_bound()
         return np.asarray(o, dtype=float), float(R)
 
     def is_complete(self, order: Sequence[str]) -> bool:

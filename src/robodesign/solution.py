@@ -21,7 +21,7 @@ from .spatial import parse_pose, pose_to_list
 
 
 @dataclass(frozen=True, eq=False)
-class Trajectory:
+class SolutionTrajectory:
     t: np.ndarray  # (N,)
     q: np.ndarray  # (N, dof)
     dq: np.ndarray
@@ -44,7 +44,7 @@ class Solution:
     module_set: str
     module_order: Tuple[str, ...]
     base_pose: np.ndarray
-    trajectory: Trajectory
+    trajectory: SolutionTrajectory
     module_connection: Optional[Tuple[Tuple[int, str, int, str], ...]] = None
     base_connection: Optional[Tuple[int, str]] = None
     version: str = "2023"
@@ -158,7 +158,7 @@ def parse_solution(data, fname: str, source: Optional[str] = None) -> Solution:
             raise InputError(f"goal time {v} is outside the trajectory [{t[0]}, {t[-1]}]", file=fname,
                              path=tp + ["goal2time", gid])
         g2t[str(gid)] = v
-    traj = Trajectory(t=t, q=q, dq=grads["dq"], ddq=grads["ddq"], goal2time=g2t)
+    traj = SolutionTrajectory(t=t, q=q, dq=grads["dq"], ddq=grads["ddq"], goal2time=g2t)
     bp = data.get("basePose", [np.eye(4).tolist()])
     if isinstance(bp, list) and bp and isinstance(bp[0], list) and bp and isinstance(bp[0][0], list):
         base_pose = parse_pose(bp[0], fname, ["basePose", 0])

@@ -25,10 +25,12 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from .assembly import Assembly
-from .checker import Verdict, build_robot, check
+from .cell import build_robot
+from .checker import Verdict, check
+from .costs import cost_term, parse_cost
 from .errors import RobodesignError
 from .module_spec import ModuleSet
-from .solution import Solution, Trajectory as SolutionTrajectory
+from .solution import Solution, SolutionTrajectory
 from .task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
 from .tolerance import ToleratedPose
 
@@ -44,9 +46,8 @@ class SolveSettings:
     trajopt_nodes: int = 30
     ik_restarts: int = 300  # LM restarts per goal before the goal counts as unreachable
     # distinct IK solutions per goal to choose from: the sequencing picks the combination with the
-    # shortest time-optimal bounds, so more choice means shorter, less random cycle times (48 vs 4 on
-    # base_placement: cycle time / the arm's best, median 1.24 -> 1.11, worst seed 2.13 -> 1.71;
-    # docs/benchmarks.md, "Choosing among IK solutions")
+    # shortest time-optimal bounds, so more choice gives shorter, less random cycle times
+    # (docs/benchmarks.md, "Choosing among IK solutions")
     ik_solutions: int = 48
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
     seed: int = 0
@@ -140,85 +141,94 @@ class _Fail(Exception):
     pass
 
 
-def _pose_goals(task: Task):
-    return [g for g in task.goals if isinstance(g, (At, Reach))]
-
-
 def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
           cost: str = "cyc", settings: Optional[SolveSettings] = None) -> SolveResult:
     """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
-    robot: the failing stage and its reason are in the result."""
+    robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError."""
     settings = settings or SolveSettings()
+    parse_cost(cost)  # bad input, not an infeasible robot
     res = SolveResult(num_goals=len(task.goals))
-    rng = np.random.default_rng(settings.seed)
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
-    robot = None
-    with _Stage(res, "assembly"):
-        asm = (order_or_assembly if isinstance(order_or_assembly, Assembly)
-               else Assembly.from_order(module_set, order_or_assembly))
-        robot = build_robot(task, module_set, asm, base_pose)
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    with _Stage(res, "base"):
-        bp = task.base_placement
-        if bp is not None and not bp.valid(base_pose):
-            raise _Fail("base pose outside the base-placement tolerance")
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    with _Stage(res, "reach"):
-        from .solvers.ik import reach_bound
-        o, R = reach_bound(robot)
-        for g in task.goals:
-            for pose in _goal_poses(g):
-                d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
-                slack = _position_slack(pose)
-                if d > R + slack:
-                    raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    plan = _GoalPlanner(task, robot, settings, rng, res, cost)
-    with _Stage(res, "ik"):
-        plan.solve_ik()
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    with _Stage(res, "static_torque"):
-        plan.filter_static_torque()
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    with _Stage(res, "plan"):
-        plan.choose_and_plan()
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    with _Stage(res, "timing"):
-        motion, g2t = plan.time_parameterize()
-    if res.stage != "done" or _stop(res, settings):
-        return res
-    if settings.optimize_trajectory:
-        with _Stage(res, "trajopt"):
-            motion, g2t = plan.time_parameterize(cost)
+    run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res)
+    for name in STAGES:
+        if name == "trajopt" and not settings.optimize_trajectory:
+            continue
+        if name == "check":
+            res.solution = run.solution()
+            if not settings.check:
+                break
+        with _Stage(res, name):
+            getattr(run, name)()
         if res.stage != "done" or _stop(res, settings):
-            return res
-    def solution_of(motion, g2t) -> Solution:
-        return Solution(task_id=task.id, cost_function=cost, module_set=module_set.name,
-                        module_order=tuple(asm.module_ids), base_pose=base_pose,
-                        trajectory=SolutionTrajectory(motion.t, motion.q, motion.dq, motion.ddq, g2t),
-                        module_connection=None if asm.is_serial() else asm.connections,
-                        base_connection=None if asm.is_serial() else asm.base,
-                        computation_time=sum(s.seconds for s in res.stages), notes="robodesign solve")
-    sol = solution_of(motion, g2t)
-    res.solution = sol
-    if settings.check:
-        with _Stage(res, "check"):
-            v = check(task, sol, module_set)
-            res.verdict = v
-            res.solution = sol.with_(cost=v.cost)
-            if not v.valid:
-                raise _Fail("; ".join(str(x) for x in v.violations[:3]))
-            _achieve_missed_goals(res, plan, task, module_set, solution_of, cost, settings)
+            break
     return res
 
 
-def _achieve_missed_goals(res: SolveResult, plan: "_GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
+class _Pipeline:
+    """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
+    to stop the pipeline with its reason."""
+
+    def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res):
+        self.task, self.module_set, self.order_or_assembly = task, module_set, order_or_assembly
+        self.base_pose, self.cost, self.settings, self.res = base_pose, cost, settings, res
+        self.rng = np.random.default_rng(settings.seed)
+
+    def assembly(self) -> None:
+        ms, a = self.module_set, self.order_or_assembly
+        self.asm = a if isinstance(a, Assembly) else Assembly.from_order(ms, a)
+        self.robot = build_robot(self.task, ms, self.asm, self.base_pose)
+
+    def base(self) -> None:
+        bp = self.task.base_placement
+        if bp is not None and not bp.valid(self.base_pose):
+            raise _Fail("base pose outside the base-placement tolerance")
+
+    def reach(self) -> None:
+        o, R = self.robot.reach_bound()
+        for g in self.task.goals:
+            for pose in _goal_poses(g):
+                d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
+                if d > R + _position_slack(pose):
+                    raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
+
+    def ik(self) -> None:
+        self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost)
+        self.planner.solve_ik()
+
+    def static_torque(self) -> None:
+        self.planner.filter_static_torque()
+
+    def plan(self) -> None:
+        self.planner.choose_and_plan()
+
+    def timing(self) -> None:
+        self.motion, self.g2t = self.planner.time_parameterize()
+
+    def trajopt(self) -> None:
+        self.motion, self.g2t = self.planner.time_parameterize(self.cost)
+
+    def solution(self, motion=None, g2t=None) -> Solution:
+        """The solution of the timed motion (default: the last stage's)."""
+        asm, ms = self.asm, self.module_set
+        m, g2t = (self.motion, self.g2t) if motion is None else (motion, g2t)
+        return Solution(task_id=self.task.id, cost_function=self.cost, module_set=ms.name,
+                        module_order=tuple(asm.module_ids), base_pose=self.base_pose,
+                        trajectory=SolutionTrajectory(m.t, m.q, m.dq, m.ddq, g2t),
+                        module_connection=None if asm.is_serial() else asm.connections,
+                        base_connection=None if asm.is_serial() else asm.base,
+                        computation_time=sum(s.seconds for s in self.res.stages), notes="robodesign solve")
+
+    def check(self) -> None:
+        res = self.res
+        v = check(self.task, res.solution, self.module_set)
+        res.verdict = v
+        res.solution = res.solution.with_(cost=v.cost)
+        if not v.valid:
+            raise _Fail("; ".join(str(x) for x in v.violations[:3]))
+        _achieve_missed_goals(res, self.planner, self.task, self.module_set, self.solution, self.cost, self.settings)
+
+
+def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
                           cost: str, settings: SolveSettings) -> None:
     """A valid solution that misses goals (possible only without allGoalsFulfilled): re-time the motions of
     the missed goals slower (``settings.goal_retries`` times, halving the speed each time) and keep the
@@ -263,17 +273,19 @@ def _position_slack(pose: ToleratedPose) -> float:
     return s if math.isfinite(s) else 1e9
 
 
-class _GoalPlanner:
-    """Holds the per-goal IK solutions and turns the goal sequence into a motion."""
+class GoalPlanner:
+    """The ik → static_torque → plan → timing stages for one robot: holds the per-goal IK solutions
+    (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
+    actions and paths of the goal sequence, and turns them into a motion."""
 
     def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc"):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
-        from .costs import parse_cost
         terms = dict(parse_cost(cost).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
-        # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move)
+        # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
+        # the latter for every term that integrates torques (mechEnergy, linkMechEnergy, effort)
         self.w_time = terms.get("cyc", 0.0)
-        self.w_energy = terms.get("mechEnergy", 0.0) + terms.get("linkMechEnergy", 0.0) + terms.get("effort", 0.0)
+        self.w_energy = sum(w for n, w in terms.items() if cost_term(n).needs_torques)
         if self.w_time == 0.0 and self.w_energy == 0.0:
             self.w_time = 1.0
         self.order = [task.goal(gid) for gid in task.goal_order]
@@ -475,9 +487,9 @@ class _GoalPlanner:
         optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
         whose optimization fails keeps its time-optimal TOPP-RA timing. ``slow`` maps goal IDs to a speed
         factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²)."""
-        from .solvers.timing import Trajectory, time_parameterize
+        from .solvers.timing import JointTrajectory, time_parameterize
         dt = self.task.dt
-        traj = Trajectory.at_rest(self.q0)
+        traj = JointTrajectory.at_rest(self.q0)
         g2t: Dict[str, float] = {}
         slow = slow or {}
         for (kind, arg, g), path in zip(self.actions, self.paths):
@@ -535,9 +547,7 @@ class _SlowedRobot:
 
 
 def _trajopt_cost(cost: str) -> str:
-    from .costs import parse_cost
-    cf = parse_cost(cost)
-    terms = {n: w for n, w in cf.terms if n in ("cyc", "mechEnergy", "effort")}
+    terms = {n: w for n, w in parse_cost(cost).terms if cost_term(n).trajopt}
     if not terms:
         return "cyc"
     return ",".join(f"{n}_{w}" for n, w in terms.items())
@@ -555,8 +565,8 @@ def _translate(T: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
     """Quintic rest-to-rest moves between consecutive follow poses with exactly the given timing."""
-    from .solvers.timing import Trajectory
-    out = Trajectory.at_rest(path[0])
+    from .solvers.timing import JointTrajectory
+    out = JointTrajectory.at_rest(path[0])
     for a, b, T in zip(path, path[1:], np.diff(t_rel)):
         n = max(1, int(round(T / dt)))
         s = np.linspace(0, 1, n + 1)[:, None]
@@ -565,5 +575,5 @@ def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
         dq = d * (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / T
         ddq = d * (60 * s - 180 * s ** 2 + 120 * s ** 3) / T ** 2
         ddq[-1] = 0.0
-        out = out.concatenate(Trajectory(np.arange(n + 1) * dt, q, dq, ddq))
+        out = out.concatenate(JointTrajectory(np.arange(n + 1) * dt, q, dq, ddq))
     return out

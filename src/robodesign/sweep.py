@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass
-from typing import List, Optional, Sequence
+from typing import Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -72,7 +72,8 @@ class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
-                 max_substeps: int = 2000):
+                 max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None):
+        """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all)."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
@@ -82,7 +83,11 @@ class SweepChecker:
         if check_self:
             pairs += list(range(n_self))
         if check_env:
-            pairs += list(range(n_self, len(gm.collisionPairs)))
+            env = range(n_self, len(gm.collisionPairs))
+            if obstacles is not None:
+                keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
+                env = [k for k in env if gm.collisionPairs[k].second in keep]
+            pairs += list(env)
         self.pairs = pairs
         R = lever_arms(robot)
         model = robot.model
@@ -115,12 +120,13 @@ class SweepChecker:
                     W[j, c] = R[j, b]
         self.W = W
         names = [o.name for o in gm.geometryObjects]
-        self._names = [(names[gm.collisionPairs[k].first], names[gm.collisionPairs[k].second]) for k in pairs]
+        self.pair_names = [(names[gm.collisionPairs[k].first], names[gm.collisionPairs[k].second]) for k in pairs]
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests
 
     # ------------------------------------------------------------------------------------------
-    def _distances_at(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
+    def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
+        """Exact distances at configuration q of the checked pairs with indices ``cols``."""
         r = self.robot
         gd = self._req
         pin.updateGeometryPlacements(r.model, r.data, r.geom_model, gd, q)
@@ -141,8 +147,8 @@ class SweepChecker:
         if P == 0 or n == 0:
             return []
         if n == 1:
-            d = self._distances_at(Q[0], range(P))
-            return [CollisionEvent(0, 0.0, *self._names[c], float(d[c]), bool(self.is_env[c]))
+            d = self.distances(Q[0], range(P))
+            return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
                     for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
         dQ = np.abs(np.diff(Q, axis=0))  # (n-1, dof)
         seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
@@ -156,11 +162,11 @@ class SweepChecker:
             due = []
             while heap and heap[0][0] == k:
                 due.append(heapq.heappop(heap)[1])
-            d = self._distances_at(Q[k], due)
+            d = self.distances(Q[k], due)
             for c, dist in zip(due, d):
                 free = dist - self.margins[c]
                 if free <= 0:
-                    events.append(CollisionEvent(k, 0.0, *self._names[c], float(dist), bool(self.is_env[c])))
+                    events.append(CollisionEvent(k, 0.0, *self.pair_names[c], float(dist), bool(self.is_env[c])))
                     if first_only:
                         return events
                     nxt = self._rearm(Q, k, c, cum)
@@ -179,7 +185,7 @@ class SweepChecker:
                 hit = self._advance(Q[k], Q[k + 1], seg[k, c], c, free)
                 if hit is not None:
                     s, dist2 = hit
-                    events.append(CollisionEvent(k, s, *self._names[c], dist2, bool(self.is_env[c])))
+                    events.append(CollisionEvent(k, s, *self.pair_names[c], dist2, bool(self.is_env[c])))
                     if first_only:
                         return events
                     nxt = self._rearm(Q, k + 1, c, cum)
@@ -194,7 +200,7 @@ class SweepChecker:
         """After a contact, skip ahead to the first sample where the pair is free again."""
         n = len(Q)
         for kk in range(k + 1, n):
-            dist = self._distances_at(Q[kk], [c])[0]
+            dist = self.distances(Q[kk], [c])[0]
             if dist - self.margins[c] > 0:
                 return kk
         return None
@@ -208,20 +214,22 @@ class SweepChecker:
             if s >= 1.0:
                 return None
             q = qa + s * (qb - qa)
-            dist = self._distances_at(q, [c])[0]
+            dist = self.distances(q, [c])[0]
             free = dist - self.margins[c]
             if free <= tol:
                 return s, float(dist)
         return s, float(free + self.margins[c])  # could not certify: report as contact
 
-    def first_collision(self, Q) -> Optional[CollisionEvent]:
-        ev = self.check(Q, first_only=True)
-        return ev[0] if ev else None
+    def in_contact(self, q: np.ndarray, names: Iterable[Tuple[str, str]]) -> Set[Tuple[str, str]]:
+        """Which of the pairs named ``names`` are in contact (within their margin) at configuration q."""
+        cols = [self.pair_names.index(p) for p in names]
+        d = self.distances(np.asarray(q, dtype=float), cols)
+        return {self.pair_names[c] for c, dist in zip(cols, d) if dist <= self.margins[c]}
 
     def sample_collisions(self, Q) -> np.ndarray:
         """Boolean per sample: in collision at the sample itself (no in-between reasoning)."""
         out = np.zeros(len(Q), dtype=bool)
         for k, q in enumerate(np.asarray(Q, dtype=float)):
-            d = self._distances_at(q, range(len(self.pairs)))
+            d = self.distances(q, range(len(self.pairs)))
             out[k] = bool(np.any(d <= self.margins))
         return out

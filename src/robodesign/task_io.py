@@ -19,7 +19,7 @@ from .jsonio import check_finite, load_json
 from .paths import builtin_tasks_dir
 from .schema import validate
 from .spatial import parse_pose
-from .task_spec import (GLOBAL_ONLY, AllGoalsFulfilled, AlwaysTrue, At, BasePlacement, CollisionFree, Constraint,
+from .task_spec import (GLOBAL_ONLY, AllGoalsFulfilled, AlwaysTrue, At, BasePlacement, CollisionFree, TaskConstraint,
                         EndEffectorConstraint, Follow, Goal, GoalsInOrder, JointLimitsConstraint, Leave,
                         ObstacleSpec, Pause, Reach, ReturnTo, SelfCollisionFree, Task, TaskHeader, ValidAssembly,
                         default_constraints)
@@ -203,7 +203,7 @@ def _ci(d: dict) -> dict:
     return {k.lower(): (k, v) for k, v in d.items()}
 
 
-def _parse_constraint(c, fname, path, resolver, task_level) -> Constraint:
+def _parse_constraint(c, fname, path, resolver, task_level) -> TaskConstraint:
     t = c.get("type")
     ci = _ci(c)
     if t == "joint":

@@ -58,34 +58,34 @@ class ObstacleSpec:
 # Constraints (paper Table III)
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class Constraint:
+class TaskConstraint:
     @property
     def type(self) -> str:
         return _CONSTRAINT_TYPE_NAMES[type(self)]
 
 
 @dataclass(frozen=True)
-class JointLimitsConstraint(Constraint):
+class JointLimitsConstraint(TaskConstraint):
     parts: FrozenSet[str] = frozenset({"q", "dq", "tau"})
 
 
 @dataclass(frozen=True)
-class CollisionFree(Constraint):
+class CollisionFree(TaskConstraint):
     safety_margin: float = 0.0
 
 
 @dataclass(frozen=True)
-class SelfCollisionFree(Constraint):
+class SelfCollisionFree(TaskConstraint):
     pass
 
 
 @dataclass(frozen=True, eq=False)
-class BasePlacement(Constraint):
+class BasePlacement(TaskConstraint):
     pose: ToleratedPose = None
 
 
 @dataclass(frozen=True, eq=False)
-class EndEffectorConstraint(Constraint):
+class EndEffectorConstraint(TaskConstraint):
     pose: Optional[ToleratedPose] = None
     v_min: float = 0.0
     v_max: float = float("inf")
@@ -94,22 +94,22 @@ class EndEffectorConstraint(Constraint):
 
 
 @dataclass(frozen=True)
-class AllGoalsFulfilled(Constraint):
+class AllGoalsFulfilled(TaskConstraint):
     pass
 
 
 @dataclass(frozen=True)
-class GoalsInOrder(Constraint):
+class GoalsInOrder(TaskConstraint):
     order: Tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
-class ValidAssembly(Constraint):
+class ValidAssembly(TaskConstraint):
     pass
 
 
 @dataclass(frozen=True)
-class AlwaysTrue(Constraint):
+class AlwaysTrue(TaskConstraint):
     pass
 
 
@@ -121,7 +121,7 @@ _CONSTRAINT_TYPE_NAMES = {JointLimitsConstraint: "joint", CollisionFree: "collis
 GLOBAL_ONLY = (BasePlacement, AllGoalsFulfilled, GoalsInOrder, ValidAssembly)
 
 
-def default_constraints() -> Tuple[Constraint, ...]:
+def default_constraints() -> Tuple[TaskConstraint, ...]:
     return (JointLimitsConstraint(frozenset({"q", "dq", "tau"})), CollisionFree(0.0), AllGoalsFulfilled())
 
 
@@ -131,7 +131,7 @@ def default_constraints() -> Tuple[Constraint, ...]:
 @dataclass(frozen=True, eq=False)
 class Goal:
     id: str
-    constraints: Tuple[Constraint, ...] = ()
+    constraints: Tuple[TaskConstraint, ...] = ()
 
     @property
     def type(self) -> str:
@@ -184,7 +184,7 @@ class Task:
     header: TaskHeader
     obstacles: Tuple[ObstacleSpec, ...]
     goals: Tuple[Goal, ...]
-    constraints: Tuple[Constraint, ...]
+    constraints: Tuple[TaskConstraint, ...]
     frames: Dict[str, np.ndarray] = field(default_factory=dict)  # name → world pose
     root: Optional[Path] = None  # package folder (assets resolve against it)
     source: Optional[str] = None
@@ -204,7 +204,7 @@ class Task:
                 return g
         raise KeyError(goal_id)
 
-    def constraint(self, cls) -> Optional[Constraint]:
+    def constraint(self, cls) -> Optional[TaskConstraint]:
         for c in self.constraints:
             if isinstance(c, cls):
                 return c

@@ -304,7 +304,7 @@ def _intersect_arcs(A: List[Tuple[float, float]], B: List[Tuple[float, float]]) 
 
 
 @dataclass
-class Constraint:
+class ProjectionConstraint:
     """All entries on one (projection, frame), merged into their intersection ``pieces``."""
     projection: str
     frame: str
@@ -339,7 +339,7 @@ class Constraint:
                 return v
             a2, b2 = (a + margin, b - margin) if b - a > 2 * margin else ((a + b) / 2, (a + b) / 2)
             shrunk.append((a2, b2))
-        return v - Constraint(self.projection, self.frame, shrunk, self.entries).signed_distance(v)
+        return v - ProjectionConstraint(self.projection, self.frame, shrunk, self.entries).signed_distance(v)
 
     def covers_allowed_range(self) -> bool:
         info = self.info
@@ -555,11 +555,11 @@ class ToleratedPose:
                 F = _resolve_frame(self.frame_resolver, f, file, base + ["toleranceFrame", i])
                 self._Q[f] = F[:3, :3].T @ Rn
 
-        constraints: Dict[Tuple[str, str], Constraint] = {}
+        constraints: Dict[Tuple[str, str], ProjectionConstraint] = {}
         for i, (p, (lo, hi), f) in enumerate(entries):
             key = (p, f)
             if key not in constraints:
-                constraints[key] = Constraint(p, f, [(lo, hi)], [i])
+                constraints[key] = ProjectionConstraint(p, f, [(lo, hi)], [i])
                 continue
             c = constraints[key]
             c.entries.append(i)
@@ -572,7 +572,7 @@ class ToleratedPose:
                 which = ", ".join(f"tolerance[{j}]" for j in c.entries) if not self.uses_default else ""
                 raise InputError(f"the intervals for {p!r} in frame {f!r} ({which}) do not overlap: "
                                  "no pose can satisfy them", file=file, path=base + ["tolerance", i])
-        self.constraints: List[Constraint] = list(constraints.values())
+        self.constraints: List[ProjectionConstraint] = list(constraints.values())
         self._active = [c for c in self.constraints if not c.covers_allowed_range()]
 
     # -- construction from / to JSON ----------------------------------------------------------------------
@@ -748,7 +748,7 @@ class ToleratedPose:
             R = self._sample_part(rng, rot, False, max_tries, unbounded_scale)
         return self.nominal @ homogeneous(R, p)
 
-    def _part_ok(self, cs: List[Constraint], p=None, R=None) -> bool:
+    def _part_ok(self, cs: List[ProjectionConstraint], p=None, R=None) -> bool:
         for c in cs:
             Q = self._Q[c.frame]
             if p is not None:
@@ -762,9 +762,9 @@ class ToleratedPose:
                 return False
         return True
 
-    def _sample_part(self, rng, cs: List[Constraint], translational: bool, max_tries: int, scale: float):
+    def _sample_part(self, rng, cs: List[ProjectionConstraint], translational: bool, max_tries: int, scale: float):
         # candidate proposals: (volume, frame, system)
-        by_frame: Dict[str, Dict[str, Constraint]] = {}
+        by_frame: Dict[str, Dict[str, ProjectionConstraint]] = {}
         for c in cs:
             by_frame.setdefault(c.frame, {})[c.projection] = c
         candidates = []
@@ -806,7 +806,7 @@ class ToleratedPose:
 # ---------------------------------------------------------------------------------------------------------
 # Helpers for project() and sample()
 # ---------------------------------------------------------------------------------------------------------
-def _clip_translation(p: np.ndarray, c: Constraint, margin: float = 0.0) -> np.ndarray:
+def _clip_translation(p: np.ndarray, c: ProjectionConstraint, margin: float = 0.0) -> np.ndarray:
     x, y, z = (float(v) for v in p)
     name = c.projection
     if name in ("x", "y", "z"):
@@ -840,7 +840,7 @@ def _clip_translation(p: np.ndarray, c: Constraint, margin: float = 0.0) -> np.n
     raise AssertionError(name)
 
 
-def _clip_rotation(R: np.ndarray, c: Constraint, margin: float = 0.0) -> np.ndarray:
+def _clip_rotation(R: np.ndarray, c: ProjectionConstraint, margin: float = 0.0) -> np.ndarray:
     name, system = c.projection, c.info.system
     if system in ("rpy", "euler"):
         r, p, y = rotation_to_rpy(R)
@@ -875,7 +875,7 @@ def _clip_rotation(R: np.ndarray, c: Constraint, margin: float = 0.0) -> np.ndar
     raise AssertionError(name)
 
 
-def _proposal_volume(system: str, d: Dict[str, Constraint], scale: float) -> float:
+def _proposal_volume(system: str, d: Dict[str, ProjectionConstraint], scale: float) -> float:
     def m(name, default):
         return d[name].measure(scale) if name in d else default
 
@@ -910,7 +910,7 @@ def _proposal_volume(system: str, d: Dict[str, Constraint], scale: float) -> flo
     raise AssertionError(system)
 
 
-def _propose(system: str, d: Dict[str, Constraint], rng: np.random.Generator, scale: float):
+def _propose(system: str, d: Dict[str, ProjectionConstraint], rng: np.random.Generator, scale: float):
     def draw(name, lo, hi):
         return d[name].draw(rng, scale) if name in d else float(rng.uniform(lo, hi))
 

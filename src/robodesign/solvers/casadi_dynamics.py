@@ -15,7 +15,7 @@ joint frame; the base acceleration is −gravity (so the result includes gravity
 
 * :func:`casadi_rnea` — link-side RNEA, equal to ``Robot.rnea`` (pinocchio's ``rnea`` minus the
   armature term, which pinocchio ≥ 3 includes); ``include_armature=True`` gives ``pin.rnea`` itself.
-* :func:`casadi_drivetrain_torque` — ``Robot.drivetrain_torque``: RNEA + k²·I_m·q̈ + f_v·q̇ +
+* :func:`casadi_drivetrain_torque` — ``Robot.drivetrain_torques``: RNEA + k²·I_m·q̈ + f_v·q̇ +
   f_c·sin(atan(100·q̇)).
 * :func:`casadi_fk` — world position (3,) and rotation (3×3) of a frame (default: the TCP).
 """
@@ -168,7 +168,7 @@ def casadi_rnea(robot, include_armature: bool = False) -> ca.Function:
 
 
 def casadi_drivetrain_torque(robot) -> ca.Function:
-    """``Function('drivetrain_torque', [q, dq, ddq], [tau])`` (SX) equal to ``Robot.drivetrain_torque``:
+    """``Function('drivetrain_torque', [q, dq, ddq], [tau])`` (SX) equal to ``Robot.drivetrain_torques``:
     τ = RNEA + armature·q̈ + f_v·q̇ + f_c·sin(atan(100·q̇))."""
     model = _model(robot)
     nv = model.nv

@@ -65,7 +65,7 @@ import pinocchio as pin
 from ..errors import InputError
 from ..tolerance import PROJECTIONS, ToleratedPose
 
-__all__ = ["IKResult", "solve_ik", "reach_bound", "goal_model", "GoalModel", "DISTINCT_TOL"]
+__all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL"]
 
 DISTINCT_TOL = 0.1          # rad: solutions closer than this (Euclidean, joint space) count as one
 _SHRINK = 0.25              # dead-zone: shrink each bounded side by this fraction of the interval width
@@ -534,43 +534,6 @@ class GoalModel:
         return best
 
 
-def reach_bound(robot) -> Tuple[np.ndarray, float]:
-    """(world point o, radius R): every reachable TCP position lies within R of o.
-
-    o is the origin of the first joint on the TCP's chain (fixed in the world); R sums the distances
-    between consecutive joint origins on the chain (constant for revolute joints, plus the stroke for
-    prismatic ones) and the TCP offset from its joint. Cached per robot and base pose.
-    """
-    key = robot.base_pose.tobytes()
-    hit = _REACH_CACHE.get(robot)
-    if hit is not None and hit[0] == key:
-        return hit[1], hit[2]
-    m = robot.model
-    fr = m.frames[robot.tcp_frame]
-    chain = robot.tcp_chain()
-    d = m.createData()
-    pin.framesForwardKinematics(m, d, pin.neutral(m))
-    if not chain:
-        o, R = d.oMf[robot.tcp_frame].translation.copy(), 0.0
-    else:
-        o = d.oMi[chain[0]].translation.copy()
-        R = 0.0
-        for a, b in zip(chain, chain[1:]):
-            R += float(np.linalg.norm(m.jointPlacements[b].translation))
-        R += float(np.linalg.norm(fr.placement.translation))
-        for j in chain:
-            if m.joints[j].shortname().startswith("JointModelP"):  # PX/PY/PZ, PrismaticUnaligned
-                idx = m.joints[j].idx_q
-                lo, hi = m.lowerPositionLimit[idx], m.upperPositionLimit[idx]
-                R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf
-    try:
-        _REACH_CACHE[robot] = (key, o, R)
-    except TypeError:  # not weak-referenceable
-        pass
-    return o, R
-
-
-_REACH_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 _GOAL_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
@@ -706,7 +669,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             raise InputError(f"q_seed must have {n} values, got shape {q_seed.shape}")
 
     if not gm.unconstrained:
-        o, R = reach_bound(robot)
+        o, R = robot.reach_bound()
         if gm.position_lower_bound(o) > R + 1e-9:
             return finish("out_of_reach")
 

@@ -1,6 +1,6 @@
 """Time parameterization of joint-space paths, and the project's trajectory type.
 
-:class:`Trajectory` holds samples ``t (N,)``, ``q, dq, ddq (N, dof)``.
+:class:`JointTrajectory` holds samples ``t (N,)``, ``q, dq, ddq (N, dof)``.
 
 Integration rule (guaranteed by every trajectory this module and :mod:`.trajopt` produce)
 -----------------------------------------------------------------------------------------
@@ -10,9 +10,9 @@ Piecewise-constant acceleration ("zero-order hold" on ``ddq``): ``ddq[k]`` is th
     q[k+1]  = q[k] + dq[k]·h + ½·ddq[k]·h²
     dq[k+1] = dq[k] + ddq[k]·h
 
-both up to floating-point rounding (measured ≤ 1e-12; :meth:`Trajectory.consistency_residual`).
+both up to floating-point rounding (measured ≤ 1e-12; :meth:`JointTrajectory.consistency_residual`).
 The sampled trajectory therefore *is* a continuous, exactly integrated C¹ trajectory, and
-:meth:`Trajectory.interpolate` evaluates it between samples. ``ddq`` of the last sample is the
+:meth:`JointTrajectory.interpolate` evaluates it between samples. ``ddq`` of the last sample is the
 acceleration after the motion: 0 for every trajectory that ends at rest.
 
 Rest samples: every rest-to-rest motion starts with one step of zero acceleration (a "pre-roll" of one
@@ -104,7 +104,7 @@ class TimingError(RobodesignError):
 # trajectory type
 # ==============================================================================================
 @dataclass
-class Trajectory:
+class JointTrajectory:
     """Sampled joint trajectory: ``t (N,)``, ``q, dq, ddq (N, dof)``; see the module docstring for the
     integration rule. ``info`` carries solver metadata (not compared)."""
 
@@ -148,30 +148,30 @@ class Trajectory:
         return float(self.t[1] - self.t[0]) if len(self.t) > 1 else None
 
     @classmethod
-    def at_rest(cls, q, t0: float = 0.0) -> "Trajectory":
+    def at_rest(cls, q, t0: float = 0.0) -> "JointTrajectory":
         q = np.asarray(q, dtype=float).reshape(1, -1)
         return cls(np.array([t0]), q.copy(), np.zeros_like(q), np.zeros_like(q))
 
-    def copy(self) -> "Trajectory":
-        return Trajectory(self.t.copy(), self.q.copy(), self.dq.copy(), self.ddq.copy(), dict(self.info))
+    def copy(self) -> "JointTrajectory":
+        return JointTrajectory(self.t.copy(), self.q.copy(), self.dq.copy(), self.ddq.copy(), dict(self.info))
 
-    def shifted(self, t0: float) -> "Trajectory":
+    def shifted(self, t0: float) -> "JointTrajectory":
         """The same trajectory starting at time ``t0``."""
         out = self.copy()
         out.t = self.t - self.t[0] + t0
         return out
 
-    def slice(self, k0: int, k1: int) -> "Trajectory":
+    def slice(self, k0: int, k1: int) -> "JointTrajectory":
         """Samples k0..k1 (inclusive), times kept; e.g. one rest-to-rest part between two
         ``info["stop_samples"]`` entries."""
         k0, k1 = int(k0) % len(self.t), int(k1) % len(self.t)
         if k1 < k0:
             raise ValueError("slice end before start")
         sl = slice(k0, k1 + 1)
-        return Trajectory(self.t[sl].copy(), self.q[sl].copy(), self.dq[sl].copy(), self.ddq[sl].copy())
+        return JointTrajectory(self.t[sl].copy(), self.q[sl].copy(), self.dq[sl].copy(), self.ddq[sl].copy())
 
     # -- composition ----------------------------------------------------------------------------
-    def concatenate(self, other: "Trajectory", tol: float = 1e-9) -> "Trajectory":
+    def concatenate(self, other: "JointTrajectory", tol: float = 1e-9) -> "JointTrajectory":
         """``self`` followed by ``other`` shifted in time to start at ``self.t[-1]``.
 
         The junction sample appears once: it keeps ``self.q[-1]`` and takes ``other``'s dq and ddq
@@ -188,9 +188,9 @@ class Trajectory:
         q = np.vstack([self.q, other.q[1:]])
         dq = np.vstack([self.dq[:-1], other.dq])
         ddq = np.vstack([self.ddq[:-1], other.ddq])
-        return Trajectory(np.concatenate([self.t, t_other]), q, dq, ddq)
+        return JointTrajectory(np.concatenate([self.t, t_other]), q, dq, ddq)
 
-    def hold(self, duration: float, dt: Optional[float] = None) -> "Trajectory":
+    def hold(self, duration: float, dt: Optional[float] = None) -> "JointTrajectory":
         """Append a pause: samples every ``dt`` covering at least ``duration`` with q bit-identical to
         the last sample and dq = ddq = 0 exactly. The trajectory must end at rest (dq = 0 exactly); its
         last ddq is set to 0 as well (the CoBRA pause window starts at that sample)."""
@@ -210,7 +210,7 @@ class Trajectory:
         t_new = self.t[-1] + dt * np.arange(1, n + 1)
         q_new = np.repeat(self.q[-1:], n, axis=0)
         z = np.zeros((n, self.dof))
-        return Trajectory(np.concatenate([self.t, t_new]), np.vstack([out.q, q_new]), np.vstack([out.dq, z]),
+        return JointTrajectory(np.concatenate([self.t, t_new]), np.vstack([out.q, q_new]), np.vstack([out.dq, z]),
                           np.vstack([out.ddq, z]), out.info)
 
     # -- evaluation -----------------------------------------------------------------------------
@@ -248,7 +248,7 @@ def _finite(x, fallback: float = UNBOUNDED_LIMIT) -> np.ndarray:
     return np.where(np.isfinite(x) & (x > 0), x, fallback)
 
 
-def limit_ratios(robot, traj: Trajectory, torque: bool = True) -> Dict[str, float]:
+def limit_ratios(robot, traj: JointTrajectory, torque: bool = True) -> Dict[str, float]:
     """Largest |value|/limit over all samples for dq, ddq and τ (infinite limits ignored), and the
     largest position-limit excess ``q`` (rad or m; 0 when inside)."""
     out = {}
@@ -371,7 +371,7 @@ class _Profile:
 
 def resample_velocity_profile(robot, velocity: Callable[[np.ndarray], np.ndarray], duration: float,
                               q_start, q_goal, dt: float, torque_limits: bool = True,
-                              position: Optional[Callable] = None, max_iter: int = 60) -> Trajectory:
+                              position: Optional[Callable] = None, max_iter: int = 60) -> JointTrajectory:
     """Sample a continuous rest-to-rest velocity profile at ``dt`` (duration rounded up to a multiple
     of dt) obeying the integration rule, and slow it down uniformly until every sample satisfies the
     velocity, acceleration and (optionally) drivetrain-torque limits."""
@@ -379,7 +379,7 @@ def resample_velocity_profile(robot, velocity: Callable[[np.ndarray], np.ndarray
     return _fit_limits(robot, prof, dt, torque_limits, max_iter)
 
 
-def _sample(prof: _Profile, n: int, h: float) -> Tuple[Trajectory, float]:
+def _sample(prof: _Profile, n: int, h: float) -> Tuple[JointTrajectory, float]:
     """n steps of the (stretched) profile after one step of rest (the pre-roll; module docstring)."""
     T_new = n * h
     lam = T_new / prof.duration
@@ -387,12 +387,12 @@ def _sample(prof: _Profile, n: int, h: float) -> Tuple[Trajectory, float]:
     V = np.zeros((n + 2, len(prof.q_start)))
     V[1:] = prof.velocity(np.minimum(tp / lam, prof.duration)) / lam
     Q, V, A = _zoh_from_velocity(prof.q_start, prof.q_goal, V, h)
-    return Trajectory(h * np.arange(n + 2), Q, V, A), lam
+    return JointTrajectory(h * np.arange(n + 2), Q, V, A), lam
 
 
-def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> Trajectory:
+def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> JointTrajectory:
     if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
-        tr = Trajectory.at_rest(prof.q_goal)
+        tr = JointTrajectory.at_rest(prof.q_goal)
         tr.info.update(stretch=1.0, max_path_error=0.0)
         return tr
     vmax = np.asarray(robot.dq_max, float)
@@ -755,7 +755,7 @@ def _split(K: int, stops: Sequence[int]) -> List[Tuple[int, int]]:
 def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", torque_limits: bool = True,
                       stop_at: Optional[Sequence[int]] = None, *, blend_radius: float = 0.05,
                       jerk_factor: float = 10.0, grid_step: float = 0.02, torque_passes: int = 3,
-                      fallback: bool = True) -> Trajectory:
+                      fallback: bool = True) -> JointTrajectory:
     """Time-parameterize a joint-space path (K×dof waypoints) from rest to rest, sampled every ``dt``.
 
     * ``method="toppra"``: time-optimal along a blended polyline (``blend_radius``; 0 = stop at every
@@ -766,7 +766,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
     * ``stop_at``: waypoint indices where the robot must be at rest (dq = ddq = 0 exactly at one
       sample, q = the waypoint exactly); the first and last waypoints always are.
 
-    Returns a :class:`Trajectory` starting at t = 0 (each rest-to-rest part begins with one rest step,
+    Returns a :class:`JointTrajectory` starting at t = 0 (each rest-to-rest part begins with one rest step,
     see the module docstring) with ``info`` keys: ``method`` ("toppra", "ruckig" or "toppra+ruckig"
     after a fallback), ``stop_samples`` ({waypoint index: index of the sample where the robot arrives
     there at rest} for every waypoint passed at rest — use ``t[k]`` as the CoBRA goal time),
@@ -806,11 +806,11 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
             if na > 1e-12 and nb > 1e-12 and a @ b < math.cos(REVERSAL_ANGLE) * na * nb:
                 stops.append(i)
     used = method
-    traj: Optional[Trajectory] = None
+    traj: Optional[JointTrajectory] = None
     stop_samples: Dict[int, int] = {0: 0}
     max_dev, max_err, stretch, n_grid, tp_time = 0.0, 0.0, 1.0, 0, 0.0
 
-    def append(part: Trajectory, waypoint: int) -> None:
+    def append(part: JointTrajectory, waypoint: int) -> None:
         nonlocal traj, max_err, stretch
         max_err = max(max_err, part.info.get("max_path_error", 0.0))
         stretch = max(stretch, part.info.get("stretch", 1.0))
@@ -820,7 +820,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
     for a, b in _split(K, stops):
         seg = P[a:b + 1]
         if np.max(np.abs(seg - seg[0])) == 0.0:
-            append(Trajectory.at_rest(seg[0]), b)
+            append(JointTrajectory.at_rest(seg[0]), b)
             continue
         if method == "toppra":
             try:
@@ -842,7 +842,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
             prof = _ruckig_profile(seg[i], seg[i + 1], vmax, amax, jmax, dt)
             append(_fit_limits(robot, prof, dt, torque_limits), a + i + 1)
     if traj is None:  # a single waypoint
-        traj = Trajectory.at_rest(P[0])
+        traj = JointTrajectory.at_rest(P[0])
     traj.ddq[-1] = 0.0
     traj.dq[-1] = 0.0
     traj.info.update(method=used, stop_samples=dict(sorted(stop_samples.items())),

@@ -32,7 +32,7 @@ def solution_page(task, solution, module_set=None, *, verdict=None, plots: Union
     be built (bad assembly, wrong number of joints, unknown module set) still gives a page: the task
     alone with the reason as a note.
     """
-    from ..checker import resolve_module_set
+    from ..cell import resolve_module_set
     from ..errors import RobodesignError
     from ..robot import Robot
 

@@ -34,7 +34,7 @@ PLOT_CAPTIONS = {
 
 
 @lru_cache(maxsize=None)
-def _asset(name: str) -> str:
+def asset(name: str) -> str:
     text = (STATIC / name).read_text(encoding="utf-8")
     low = text.lower()
     if "</script" in low or "<!--" in low:
@@ -186,7 +186,7 @@ def render_html(scene: dict, plots: Optional[Mapping[str, Union[str, bytes]]] = 
 <meta name="generator" content="robodesign viewer (three.js {THREE_VERSION} inlined)">
 <title>{_e(title)}</title>
 <style>
-{_asset("viewer.css")}
+{asset("viewer.css")}
 </style>
 </head>
 <body>
@@ -209,10 +209,10 @@ def render_html(scene: dict, plots: Optional[Mapping[str, Union[str, bytes]]] = 
 </div>
 {plots_html}
 <script type="application/json" id="scene-data">{_json_for_script(data)}</script>
-<script type="text/plain" id="three-src">{_asset("three/three.module.min.js")}</script>
-<script type="text/plain" id="orbit-src">{_asset("three/OrbitControls.js")}</script>
+<script type="text/plain" id="three-src">{asset("three/three.module.min.js")}</script>
+<script type="text/plain" id="orbit-src">{asset("three/OrbitControls.js")}</script>
 <script type="module">
-{_asset("viewer.js")}
+{asset("viewer.js")}
 </script>
 </body>
 </html>

@@ -95,7 +95,8 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     None for the solution's ``moduleSet``. With ``out_dir`` the images are also written there as
     ``<stem>_<name>.png``.
     """
-    from ..checker import _Context, _check_goal, resolve_module_set
+    from ..cell import resolve_module_set
+    from ..quantities import TrajectoryQuantities
     from ..robot import Robot
     from ..task_spec import Follow
 
@@ -107,17 +108,9 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     if tr.q.shape[1] != robot.dof:
         raise ValueError(f"trajectory has {tr.q.shape[1]} joint columns, the robot {robot.dof} joints")
     g2t = {str(k): float(v) for k, v in (tr.goal2time or {}).items()}
-
     # drivetrain torque as the checker computes it (follow goals add their wrench in their window)
-    ctx = _Context(robot, task, solution)
-    if task is not None:
-        for g in task.goals:
-            if isinstance(g, Follow) and g.id in g2t and (np.any(g.external_force) or np.any(g.external_torque)):
-                try:
-                    _check_goal(g, ctx, g2t)
-                except Exception:  # a broken goal only loses its wrench in the plot
-                    pass
-    tau = ctx.taus()[0]
+    tq = TrajectoryQuantities.from_solution(robot, solution, task)
+    tau = tq.torques
 
     names = [j.name for j in robot.joint_infos]
     lin = [j.type == "prismatic" for j in robot.joint_infos]
@@ -130,7 +123,7 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
                                u("rad/s²", "m/s²"), names, g2t)
     out["tau"] = _joint_figure(t, tau, -robot.tau_max, robot.tau_max, "Drivetrain torques τ", u("Nm", "N"), names, g2t)
 
-    P = np.array([robot.fk(q)[:3, 3] for q in tr.q])
+    P = tq.tcp_poses[:, :3, 3]
     goals = []
     if task is not None:
         from ..task_spec import At, Leave, Reach

@@ -237,7 +237,7 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
 
     ``task``: a :class:`~robodesign.task_spec.Task` (obstacles, goals, base placement) or None.
     ``robot``: a :class:`~robodesign.robot.Robot` (at its ``base_pose``) or None.
-    ``trajectory``: a :class:`~robodesign.solution.Trajectory` for ``robot``, or None for a static robot
+    ``trajectory``: a :class:`~robodesign.solution.SolutionTrajectory` for ``robot``, or None for a static robot
     at ``q`` (default zeros). ``include_collision`` adds the collision geometry (hidden by default on
     the page). Meshes with more than ``max_triangles`` triangles are decimated.
     """
