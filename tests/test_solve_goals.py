@@ -28,7 +28,7 @@ def _welding_without_all_goals(tmp_path, v_max):
 
 def _tcp_speed(task, sol, ms, k0, k1):
     """Largest TCP speed over samples k0..k1, from forward kinematics and the stored joint velocities."""
-    from robodesign.checker import build_robot
+    from robodesign.cell import build_robot
     from robodesign.assembly import Assembly
     robot = build_robot(task, ms, Assembly.from_order(ms, list(sol.module_order)), sol.base_pose)
     tr = sol.trajectory

@@ -207,7 +207,7 @@ class ReferenceArm:
     def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
                  ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
         from ..assembly import Assembly
-        from ..checker import build_robot
+        from ..cell import build_robot
         from ..module_io import load_module_set
         from ..task_io import parse_task
         self.task = parse_task(clean(task_dict), folder / "_probe.json")
@@ -234,10 +234,10 @@ class ReferenceArm:
         return best
 
     def reaches(self, goal_pose: dict) -> bool:
-        from ..solvers.ik import reach_bound, solve_ik
+        from ..solvers.ik import solve_ik
         from ..tolerance import ToleratedPose
         tp = ToleratedPose.from_json(clean(goal_pose))
-        o, R = reach_bound(self.robot)
+        o, R = self.robot.reach_bound()
         if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
             return False
         # every restart runs (n_solutions = restarts): a goal that the IK finds from only a few random starts
