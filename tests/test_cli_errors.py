@@ -15,7 +15,7 @@ from robodesign import cli
 from robodesign.cli import main
 from robodesign.jsonio import MAX_DEPTH, loads_json
 from robodesign.errors import InputError
-from robodesign.solution import Solution, Trajectory
+from robodesign.solution import Solution, SolutionTrajectory
 
 from conftest import IMPROV, ROOT, TASKS
 
@@ -43,7 +43,7 @@ def ptp3_solution(tmp_path_factory):
     q = np.zeros((5, 6))
     sol = Solution(task_id="simple/PTP_3", cost_function="cyc", module_set="IMPROV",
                    module_order=("1", "21", "4", "22", "5", "23", "12"), base_pose=np.eye(4),
-                   trajectory=Trajectory(t, q, q.copy(), q.copy(), {"1": 0.02}))
+                   trajectory=SolutionTrajectory(t, q, q.copy(), q.copy(), {"1": 0.02}))
     d = tmp_path_factory.mktemp("sol")
     return json.loads(sol.write(d / "sol.json").read_text())
 
