@@ -46,10 +46,12 @@ VARIANTS = {
                          "Whitman 3 goals / 3 obstacles, free base"),
     "whitman2020_g5o5": ("whitman2020", {"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}, 18.9,
                          "Whitman 5 goals / 5 obstacles, free base"),
-    "liu2020": ("liu2020", {}, 12.0, "Liu case 2b (machine tending)"),
+    "liu2020": ("liu2020", {"machine": "<cobra>/tasks/assets/DMU_125P_compress.stl"}, 12.0,
+                "Liu case 2b (machine tending), DMU 125P mesh of the CoBRA data"),
     "bpo2024": ("bpo2024", {}, 11.4, "edge cases"),
 }
-SETS = {"builtin": "robodesign_arm", "IMPROV": str(ROOT.parent / "shared" / "cobra" / "modules" / "IMPROV")}
+COBRA = ROOT.parent / "shared" / "cobra"  # the CoBRA reference data beside the checkout (--cobra)
+SETS = {"builtin": "robodesign_arm", "IMPROV": "<cobra>/modules/IMPROV"}
 FIELDS = ("variant", "family", "set", "task", "index", "valid", "cyc", "stopped_at", "stage_counts", "evaluations",
           "first_feasible_s", "optimize_s", "exit_optimize", "exit_check", "message", "finished")
 
@@ -61,6 +63,7 @@ def _rd() -> list:
 
 def task_files(variant: str, count: int, seed: int) -> list:
     family, options, _, _ = VARIANTS[variant]
+    options = {k: v.replace("<cobra>", str(COBRA)) if isinstance(v, str) else v for k, v in options.items()}
     su = SuiteEntry.model_validate({"name": variant, "folder": str(ROOT / "results" / "tasks" / f"{variant}_s{seed}_n{count}"),
                                     "generate": {"family": family, "count": count, "seed": seed,
                                                  "options": options}})
@@ -165,6 +168,7 @@ def write_outputs(out: Path, rows: list, meta: dict) -> list:
 
 
 def main(argv=None) -> int:
+    global COBRA
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=50, help="tasks per family variant (default 50)")
     ap.add_argument("--seed", type=int, default=0, help="generator seed (default 0)")
@@ -174,11 +178,12 @@ def main(argv=None) -> int:
     ap.add_argument("--variants", default=",".join(VARIANTS), help=f"comma-separated, of {', '.join(VARIANTS)}")
     ap.add_argument("--sets", default=",".join(SETS), help="comma-separated module sets: builtin, IMPROV")
     ap.add_argument("--out", default=str(ROOT / "experiments" / "results" / "families"))
-    ap.add_argument("--improv", default=SETS["IMPROV"], help="folder of the IMPROV module set (default: "
-                                                              "../shared/cobra/modules/IMPROV beside the checkout)")
+    ap.add_argument("--cobra", default=str(COBRA), help="the CoBRA reference data (IMPROV modules, machine "
+                                                         "meshes; default: ../shared/cobra beside the checkout)")
     ap.add_argument("--stop-at", help="UTC time HH:MM: start no new task after it (the ones running finish)")
     args = ap.parse_args(argv)
-    SETS["IMPROV"] = args.improv
+    COBRA = Path(args.cobra).resolve()
+    SETS["IMPROV"] = str(COBRA / "modules" / "IMPROV")
     variants = [v for v in args.variants.split(",") if v]
     sets = [s for s in args.sets.split(",") if s]
     for v in variants:
