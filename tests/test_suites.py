@@ -16,6 +16,8 @@ import pytest
 from robodesign.cli import main
 from robodesign.paths import builtin_tasks_dir
 
+from conftest import TASKS
+
 RD = [sys.executable, "-m", "robodesign.cli"]
 BUILTIN = ("pick_and_place", "timed_follow", "welding_seam")
 
@@ -88,6 +90,7 @@ def test_suite_folder_errors_name_the_field(tmp_path, capsys):
 
 FAMILIES = {  # family → generator options of a small suite
     "whitman2020": {"goals": 3, "obstacles": 3, "base": "xyz_any_rot"},
+    "liu2020": {"machine": str(TASKS / "assets" / "DMU_125P_compress.stl")},
 }
 
 
