@@ -33,10 +33,11 @@ def _fmt_matrix(T) -> str:
 
 
 def cmd_robot(args) -> int:
-    from .cli_args import parse_base_pose, parse_floats, parse_order
+    from .cli_args import parse_base_pose, parse_floats, parse_order, print_input_warnings
     from .module_io import load_module_set
     from .robot import Robot
     ms = load_module_set(args.modules)
+    print_input_warnings(ms)
     robot = Robot.from_order(ms, parse_order(args.order),
                              base_pose=parse_base_pose(args.base_pose) if args.base_pose else None)
     q = np.zeros(robot.dof)
@@ -84,14 +85,15 @@ def cmd_run(args) -> int:
 
 def cmd_check(args) -> int:
     from .checker import check
-    from .cli_args import module_set_for_solution
+    from .cli_args import module_set_for_solution, print_input_warnings
     from .solution import load_solution
     from .task_io import load_task
     task = load_task(args.task)
+    print_input_warnings(task)
     sol = load_solution(args.solution)
-    for w in task.warnings:
-        print(f"robodesign: warning: {w}", file=sys.stderr)
-    verdict = check(task, sol, module_set=module_set_for_solution(sol, args.modules))
+    ms = module_set_for_solution(sol, args.modules)
+    print_input_warnings(ms)
+    verdict = check(task, sol, module_set=ms)
     if args.json:
         print(json.dumps(verdict.to_json()))
     else:

@@ -69,3 +69,11 @@ def module_set_for_solution(solution, modules=None):
             raise InputError(f"module set {name!r} is not found locally (built-in: {known}); pass --modules DIR "
                              "(the folder holding its modules.json)", file=where, path="moduleSet") from None
     return load_module_set(name)
+
+
+def print_input_warnings(*loaded) -> None:
+    """Show once, on stderr, what was tolerated while reading tasks / module sets (their ``warnings``)."""
+    import sys
+    for obj in loaded:
+        for w in getattr(obj, "warnings", ()) or ():
+            print(f"robodesign: warning: {w}", file=sys.stderr)

@@ -58,7 +58,7 @@ def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False
 
 def cmd_solve(args) -> int:
     from .assembly import Assembly
-    from .cli_args import parse_order
+    from .cli_args import parse_order, print_input_warnings
     from .module_io import load_module_set
     from .solve import SolveSettings, solve
     from .solvers.planning import available_planners
@@ -66,6 +66,7 @@ def cmd_solve(args) -> int:
     task = load_task(args.task)
     ms = load_module_set(args.modules)
     mode = trajectory_mode(args.cost, args.trajectory, args.optimize_trajectory)
+    print_input_warnings(task, ms)
     if args.planner.lower() not in [p.lower() for p in available_planners()]:
         raise InputError(f"--planner: unknown planner {args.planner!r} (available: {', '.join(available_planners())})")
     if args.plan_time <= 0:
@@ -138,7 +139,8 @@ def cmd_optimize(args) -> int:
     parse_cost(args.cost, path="--cost")
     budget = Budget.parse(args.budget)
     task_path = str(resolve_task_path(args.task))
-    load_task(task_path)  # validate early
+    from .cli_args import print_input_warnings
+    print_input_warnings(load_task(task_path))  # validate early
     spec = EvaluatorSpec(task=task_path, module_set=args.modules, cost=args.cost,
                          settings=evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
                          seed=args.seed)

@@ -22,6 +22,10 @@ from .spatial import parse_pose
 
 GEOMETRY_TYPES = ("box", "cylinder", "sphere", "mesh", "empty")
 _PARAM_ALIASES = {"radius": "r", "length": "z"}
+# parameter names each type reads (others are ignored by the reference: dropped with a warning)
+_PARAMETERS = {"box": ("x", "y", "z"), "cylinder": ("r", "radius", "z", "length"), "sphere": ("r",),
+               "mesh": ("file", "scale"), "empty": ()}
+LFS_POINTER_PREFIX = b"version https://git-lfs"
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,12 +55,38 @@ class GeometrySpec:
         return {"type": self.kind, "parameters": params, "pose": pose_to_list(self.pose)}
 
 
+def canonical_geometry_json(value, file: str, path: Sequence[PathPart], warnings):
+    """The canonical form of a geometry object (or list of them) as real files write it.
+
+    The type name is matched case-insensitively (the reference accepts ``BOX`` and ``box``); parameters
+    the type does not read are dropped and reported once through ``warnings.ignored_key`` (the reference
+    ignores them). Anything malformed is returned as it is, for the schema to name.
+    """
+    if isinstance(value, list):
+        return [canonical_geometry_json(g, file, list(path) + [i], warnings) for i, g in enumerate(value)]
+    if not isinstance(value, dict):
+        return value
+    out = dict(value)
+    kind = out.get("type")
+    if isinstance(kind, str) and kind.lower() in GEOMETRY_TYPES:
+        kind = out["type"] = kind.lower()
+    params = out.get("parameters")
+    if kind in _PARAMETERS and isinstance(params, dict):
+        known = _PARAMETERS[kind]
+        for k in params:
+            if k not in known:
+                warnings.ignored_key(file, list(path) + ["parameters"], k, known)
+        out["parameters"] = {k: v for k, v in params.items() if k in known}
+    return out
+
+
 def parse_geometries(value, root: Optional[Path], file: str, path: Sequence[PathPart],
-                     required_files: bool = True, warnings: Optional[list] = None) -> Tuple[GeometrySpec, ...]:
+                     required_files: bool = True, warnings=None) -> Tuple[GeometrySpec, ...]:
     """Parse one geometry object or a list of them. ``root`` is the folder mesh paths are relative to.
 
-    A missing mesh file raises, unless ``required_files`` is False (visual geometry): then the
-    geometry is dropped and a message is appended to ``warnings``.
+    A collision mesh (``required_files``) that is missing, empty, a Git LFS pointer, unreadable or
+    degenerate raises :class:`InputError` naming the file and field. A visual mesh that is missing,
+    empty or an LFS pointer is dropped with a message in ``warnings`` (an :class:`InputWarnings`).
     """
     path = list(path)
     if value is None:
@@ -121,13 +151,56 @@ def parse_geometry(g, root, file, path, required_files=True, warnings=None) -> O
     if any(s <= 0 for s in sc):
         raise InputError(f"scale must be positive, got {list(sc)}", file=file, path=pp + ["scale"])
     if not target.is_file():
-        msg = f"mesh file not found: {ref!r} (looked at {target})"
+        problem = f"mesh file not found: {ref!r} (looked at {target})"
+    else:
+        problem = mesh_problem(target, sc, full=required_files)
+        problem = problem and f"{'collision' if required_files else 'visual'} mesh file {ref!r} {problem}"
+    if problem:
         if required_files:
-            raise InputError(msg, file=file, path=pp + ["file"])
+            raise InputError(problem, file=file, path=pp + ["file"])
         if warnings is not None:
-            warnings.append(f"{file}: {'.'.join(str(x) for x in pp)}.file: {msg}; the visual is skipped")
+            warnings.add(file, pp + ["file"], f"{problem}; the visual is skipped")
         return None
     return GeometrySpec("mesh", pose, (), target, sc, ref)
+
+
+def mesh_problem(file: Path, scale: Tuple[float, float, float], full: bool = True) -> Optional[str]:
+    """Why a mesh file cannot serve as geometry (None if it can).
+
+    Always checked: empty file, a Git LFS pointer left in place of the mesh. With ``full`` (collision
+    geometry) the mesh is read: unreadable, no triangles, non-finite vertices, or zero surface area
+    (all triangles degenerate) are problems too — an obstacle that silently disappears would make the
+    checker certify collisions.
+    """
+    try:
+        with open(file, "rb") as fh:
+            head = fh.read(len(LFS_POINTER_PREFIX))
+    except OSError as e:
+        return f"cannot be read ({e.strerror or e})"
+    if not head:
+        return "is empty (0 bytes)"
+    if head == LFS_POINTER_PREFIX:
+        return "is a Git LFS pointer, not the mesh (fetch it with `git lfs pull`)"
+    if not full:
+        return None
+    try:
+        parts = load_mesh_arrays(str(file), tuple(scale))
+    except Exception as e:  # any reader error means: not a usable mesh
+        return f"cannot be read as a mesh ({type(e).__name__}: {str(e)[:120]})"
+    area = 0.0
+    for verts, tris in parts:
+        if len(verts) and not np.all(np.isfinite(verts)):
+            return "has non-finite vertex coordinates"
+        if len(tris):
+            if tris.min() < 0 or tris.max() >= len(verts):
+                return "has triangles that index missing vertices"
+            a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+            area += 0.5 * float(np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    if not any(len(t) for _, t in parts):
+        return "has no triangles (truncated or not a mesh?)"
+    if area <= 1e-12:
+        return "is degenerate (all triangles have zero area)"
+    return None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -223,6 +296,41 @@ def coal_shapes(spec: GeometrySpec, convex_meshes: bool = False) -> Tuple[object
     if spec.kind == "mesh":
         return _mesh_shapes(str(spec.file), tuple(spec.scale), convex_meshes)
     return ()
+
+
+def contains_point(spec: GeometrySpec, point) -> bool:
+    """Whether a world point lies inside (or on) the geometry; meshes by their generalized winding number
+    (exact for closed meshes, a sensible inside/outside for small holes)."""
+    local = np.linalg.solve(spec.pose, np.append(np.asarray(point, dtype=float), 1.0))[:3]
+    if spec.kind == "box":
+        return bool(np.all(np.abs(local) <= 0.5 * np.asarray(spec.size) + 1e-12))
+    if spec.kind == "cylinder":
+        return bool(np.hypot(local[0], local[1]) <= spec.size[0] + 1e-12 and abs(local[2]) <= 0.5 * spec.size[1] + 1e-12)
+    if spec.kind == "sphere":
+        return bool(np.linalg.norm(local) <= spec.size[0] + 1e-12)
+    if spec.kind == "mesh":
+        return any(abs(_winding_number(v, f, local)) > 0.5
+                   for v, f in load_mesh_arrays(str(spec.file), tuple(spec.scale)) if len(f))
+    return False
+
+
+def center_point(spec: GeometrySpec) -> np.ndarray:
+    """World position of the geometry's centre (a mesh: the mean of its vertices)."""
+    if spec.kind == "mesh":
+        vs = [v for v, _ in load_mesh_arrays(str(spec.file), tuple(spec.scale)) if len(v)]
+        if vs:
+            return (spec.pose @ np.append(np.vstack(vs).mean(axis=0), 1.0))[:3]
+    return np.asarray(spec.pose[:3, 3], dtype=float)
+
+
+def _winding_number(verts: np.ndarray, tris: np.ndarray, p: np.ndarray) -> float:
+    """Σ solid angles of the triangles seen from p / 4π (Van Oosterom & Strackee)."""
+    a, b, c = (verts[tris[:, i]] - p for i in range(3))
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    num = np.einsum("ij,ij->i", a, np.cross(b, c))
+    den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", a, c) * lb
+           + np.einsum("ij,ij->i", b, c) * la)
+    return float(2.0 * np.arctan2(num, den).sum() / (4.0 * np.pi))
 
 
 def bounding_radius(spec: GeometrySpec) -> float:

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Dict, List, Optional, Union
+from typing import Dict, Optional, Union
 
 import numpy as np
 
 from .errors import InputError, describe_value
-from .geometry import parse_geometries
+from .geometry import canonical_geometry_json, parse_geometries
+from .input_warnings import InputWarnings
 from .jsonio import check_finite, dumps_json, load_json
 from .module_spec import (IGNORE_COLLISIONS, Body, Connector, Joint, JointLimits, Module, ModuleHeader,
                           ModuleSet)
@@ -83,11 +84,15 @@ def _display(f: Path) -> str:
 def parse_module_set(data, file: Path, name: Optional[str] = None) -> ModuleSet:
     fname = _display(file)
     root = file.parent
+    warnings = InputWarnings()
+    if isinstance(data, dict) and isinstance(data.get("modules"), list):
+        data = dict(data, modules=[_canonical_module(m, fname, ["modules", i], warnings)
+                                   for i, m in enumerate(data["modules"])])
     validate(data, "modules", fname)
     modules: Dict[str, Module] = {}
     names = {}
     for i, m in enumerate(data["modules"]):
-        mod = _parse_module(m, root, fname, ["modules", i])
+        mod = _parse_module(m, root, fname, ["modules", i], warnings)
         if mod.id in modules:
             raise InputError(f"duplicate module ID {mod.id!r}", file=fname, path=["modules", i, "header", "ID"])
         if mod.name in names:
@@ -100,7 +105,24 @@ def parse_module_set(data, file: Path, name: Optional[str] = None) -> ModuleSet:
         raise InputError(f"expected one of {IGNORE_COLLISIONS}, got {describe_value(ic)}", file=fname,
                          path=["ignore_collisions"])
     return ModuleSet(name=name or file.parent.name, modules=modules, root=root, ignore_collisions=ic,
-                     source=str(file))
+                     source=str(file), warnings=warnings.messages)
+
+
+def _canonical_module(m, file, path, warnings):
+    """Geometry variants of real files in canonical form (type case, ignored parameters): see geometry.py."""
+    if not isinstance(m, dict) or not isinstance(m.get("bodies"), (list, dict)):
+        return m
+    many = isinstance(m["bodies"], list)
+    out = []
+    for i, b in enumerate(m["bodies"] if many else [m["bodies"]]):
+        if isinstance(b, dict):
+            b = dict(b)
+            for key in ("collision", "visual"):
+                if key in b:
+                    bp = path + ["bodies", i] if many else path + ["bodies"]
+                    b[key] = canonical_geometry_json(b[key], file, bp + [key], warnings)
+        out.append(b)
+    return dict(m, bodies=out if many else out[0])
 
 
 def _vec(value, n, file, path):
@@ -115,7 +137,7 @@ def _as_list(v):
     return v if isinstance(v, list) else [v]
 
 
-def _parse_module(m, root, file, path) -> Module:
+def _parse_module(m, root, file, path, warnings) -> Module:
     h = m["header"]
     header = ModuleHeader(id=str(h["ID"]), name=str(h.get("name", h["ID"])), date=str(h.get("date", "")),
                           author=tuple(_as_list(h.get("author"))), email=tuple(_as_list(h.get("email"))),
@@ -127,7 +149,7 @@ def _parse_module(m, root, file, path) -> Module:
     body_list = raw_bodies if isinstance(raw_bodies, list) else [raw_bodies]
     for bi, b in enumerate(body_list):
         bp = path + ["bodies", bi] if isinstance(raw_bodies, list) else path + ["bodies"]
-        body = _parse_body(b, root, file, bp)
+        body = _parse_body(b, root, file, bp, warnings)
         if body.id in seen_b:
             raise InputError(f"duplicate body ID {body.id!r} in module {header.id!r}", file=file, path=bp + ["ID"])
         seen_b.add(body.id)
@@ -182,7 +204,7 @@ def _check_tree(mid, bodies, joints, file, path):
         raise InputError(f"bodies of module {mid!r} are not all connected by joints", file=file, path=path + ["bodies"])
 
 
-def _parse_body(b, root, file, path) -> Body:
+def _parse_body(b, root, file, path, warnings) -> Body:
     bid = str(b["ID"])
     mass = check_finite(b.get("mass", 0.0), file, path + ["mass"])
     if mass < 0:
@@ -213,14 +235,11 @@ def _parse_body(b, root, file, path) -> Body:
     collision = parse_geometries(b.get("collision"), root, file, path + ["collision"], required_files=True)
     if "visual" in b:
         visual = parse_geometries(b.get("visual"), root, file, path + ["visual"], required_files=False,
-                                  warnings=_WARNINGS)
+                                  warnings=warnings)
     else:
         visual = collision
     return Body(id=bid, mass=mass, com=com, inertia=inertia, connectors=tuple(cons), collision=collision,
                 visual=visual)
-
-
-_WARNINGS: List[str] = []
 
 
 def _parse_joint(j, file, path) -> Joint:

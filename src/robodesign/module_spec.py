@@ -163,6 +163,7 @@ class ModuleSet:
     root: Optional[Path] = None  # folder that holds modules.json; mesh paths are inside it
     ignore_collisions: str = "via_joint"
     source: Optional[str] = None  # file the set was read from
+    warnings: Tuple[str, ...] = ()  # what was tolerated while reading (ignored keys, unreadable visual meshes)
 
     def __getitem__(self, module_id) -> Module:
         return self.modules[str(module_id)]

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Dict, List, Union
+from typing import Dict, Optional, Union
 
 import numpy as np
 
 from .errors import InputError, describe_value
-from .geometry import parse_geometries
+from .geometry import canonical_geometry_json, parse_geometries
+from .input_warnings import InputWarnings
 from .jsonio import check_finite, load_json
 from .paths import builtin_tasks_dir
 from .schema import validate
@@ -54,20 +55,136 @@ def load_task(name_or_path: Union[str, Path]) -> Task:
     return parse_task(data, f)
 
 
-def validate_task_json(data, fname: str) -> dict:
-    """Schema-validate task JSON (``Constraints`` is accepted as ``constraints``, as the reference does)."""
+def validate_task_json(data, fname: str, warnings: Optional[InputWarnings] = None) -> dict:
+    """Bring task JSON into canonical form (every variant the reference reads, docs/formats.md) and
+    schema-validate it. Unknown keys the reference ignores are dropped and reported in ``warnings``."""
     if not isinstance(data, dict):
         raise InputError("a task file must hold a JSON object", file=fname)
-    if "Constraints" in data and "constraints" not in data:
-        data = dict(data)
-        data["constraints"] = data.pop("Constraints")
+    data = _canonical_task(data, fname, InputWarnings() if warnings is None else warnings)
     validate(data, "task", fname)
     return data
 
 
+# ---------------------------------------------------------------------------------------------
+# Variants → canonical form (one place; see docs/formats.md, "Variants read as the reference reads them")
+# ---------------------------------------------------------------------------------------------
+_HEADER_OPTIONAL = ("version", "taskName", "date", "tags", "author", "email", "affiliation")
+_HEADER_LISTS = ("tags", "author", "email", "affiliation")
+_OBSTACLE_KEYS = ("ID", "name", "collision", "visual", "pose", "acknowledgement", "trajectory")
+_GOAL_KEYS = ("ID", "type", "constraints", "goalPose", "returnToGoal", "epsilon", "duration", "trajectory",
+              "externalForce", "externalTorque", "forceTorqueReferenceFrame", "occupiedSpace", "region")
+_GOAL_TYPES = {"at": "at", "reach": "reach", "returnto": "returnTo", "pause": "pause", "follow": "follow",
+               "leave": "leave"}
+_LENIENT_CONSTRAINT_KEYS = {"basePlacement": ("type", "pose"),
+                            "endEffector": ("type", "pose", "v_min", "v_max", "o_min", "o_max")}
+
+
+def _canonical_task(data: dict, f: str, w: InputWarnings) -> dict:
+    out = dict(data)
+    if "Constraints" in out and "constraints" not in out:
+        w.add(f, ["Constraints"], "read as 'constraints' (the key is lower case)")
+        out["constraints"] = out.pop("Constraints")
+    if isinstance(out.get("header"), dict):
+        h = dict(out["header"])
+        for k in _HEADER_OPTIONAL:
+            if k in h and h[k] is None:
+                del h[k]  # null = absent
+            elif k in _HEADER_LISTS and isinstance(h.get(k), str):
+                h[k] = [h[k]]
+            elif k in _HEADER_LISTS and isinstance(h.get(k), list):
+                h[k] = [x for x in h[k] if x is not None]
+        out["header"] = h
+    if isinstance(out.get("obstacles"), list):
+        out["obstacles"] = [_canonical_obstacle(o, f, ["obstacles", i], w) for i, o in enumerate(out["obstacles"])]
+    if isinstance(out.get("goals"), list):
+        out["goals"] = [_canonical_goal(g, f, ["goals", i], w) for i, g in enumerate(out["goals"])]
+    if isinstance(out.get("constraints"), list):
+        out["constraints"] = [_canonical_constraint(c, f, ["constraints", i], w)
+                              for i, c in enumerate(out["constraints"])]
+    return out
+
+
+def _canonical_obstacle(o, f, path, w):
+    if not isinstance(o, dict):
+        return o
+    out = {}
+    for k, v in o.items():
+        if k not in _OBSTACLE_KEYS:
+            w.ignored_key(f, path, k, _OBSTACLE_KEYS)
+        elif v is not None or k not in ("name", "acknowledgement", "visual"):  # null = absent
+            out[k] = v
+    for k in ("collision", "visual"):
+        if k in out:
+            out[k] = canonical_geometry_json(out[k], f, path + [k], w)
+    pose = out.get("pose")
+    if isinstance(pose, dict):  # informative pose written as a tolerated pose: its nominal
+        pose = ToleratedPose.canonical_json(pose, f, path + ["pose"], w)
+        if "nominal" not in pose:
+            raise InputError("an obstacle pose given as an object needs 'nominal'", file=f, path=path + ["pose"])
+        out["pose"] = pose["nominal"]
+    return out
+
+
+def _canonical_goal(g, f, path, w):
+    if not isinstance(g, dict):
+        return g
+    names = {k.lower(): k for k in _GOAL_KEYS}
+    out = {}
+    for k, v in g.items():
+        canon = names.get(str(k).lower())  # the reference matches goal keys case-insensitively
+        if canon is None:
+            w.ignored_key(f, path, k, _GOAL_KEYS)
+            continue
+        if canon in out:
+            raise InputError(f"{k!r} is given twice (keys are matched case-insensitively)", file=f, path=path + [k])
+        if v is None and canon in ("returnToGoal", "constraints", "epsilon"):
+            continue  # null = absent
+        out[canon] = v
+    t = out.get("type")
+    if isinstance(t, str) and t.lower() in _GOAL_TYPES:
+        out["type"] = _GOAL_TYPES[t.lower()]
+    if "goalPose" in out:
+        out["goalPose"] = ToleratedPose.canonical_json(out["goalPose"], f, path + ["goalPose"], w)
+    if isinstance(out.get("trajectory"), dict):
+        traj = {k: v for k, v in out["trajectory"].items() if not (k == "t" and v is None)}
+        if isinstance(traj.get("pose"), list):
+            traj["pose"] = [ToleratedPose.canonical_json(p, f, path + ["trajectory", "pose", i], w)
+                            for i, p in enumerate(traj["pose"])]
+        out["trajectory"] = traj
+    if "occupiedSpace" in out:
+        out["occupiedSpace"] = canonical_geometry_json(out["occupiedSpace"], f, path + ["occupiedSpace"], w)
+    region = out.get("region")
+    if isinstance(region, dict) and "nominal" in region:
+        out["region"] = ToleratedPose.canonical_json(region, f, path + ["region"], w)
+    elif region is not None:
+        out["region"] = canonical_geometry_json(region, f, path + ["region"], w)
+    if isinstance(out.get("constraints"), list):
+        out["constraints"] = [_canonical_constraint(c, f, path + ["constraints", i], w)
+                              for i, c in enumerate(out["constraints"])]
+    return out
+
+
+def _canonical_constraint(c, f, path, w):
+    if not isinstance(c, dict):
+        return c
+    if not c:
+        return {"type": "alwaysTrue"}  # the reference reads {} as "always true" (and writes it so)
+    out = dict(c)
+    known = _LENIENT_CONSTRAINT_KEYS.get(out.get("type"))
+    if known:  # these two constraints ignore other keys in the reference; the others reject them
+        for k in c:
+            if k not in known:
+                w.ignored_key(f, path, k, known)
+                del out[k]
+        if "pose" in out:
+            out["pose"] = ToleratedPose.canonical_json(out["pose"], f, path + ["pose"], w)
+    return out
+
+
 def parse_task(data, file: Path) -> Task:
     fname = file.name
-    data = validate_task_json(data, fname)
+    warnings = InputWarnings()
+    data = validate_task_json(data, fname, warnings)
     h = data["header"]
     tid = str(h["ID"])
     root = _package_root(file, tid)
@@ -82,7 +199,6 @@ def parse_task(data, file: Path) -> Task:
                         tags=tuple(h.get("tags", [])), date=str(h.get("date", "")), time_step=ts, gravity=grav_t,
                         author=tuple(_as_list(h.get("author"))), email=tuple(_as_list(h.get("email"))),
                         affiliation=tuple(_as_list(h.get("affiliation"))))
-    warnings: List[str] = []
     frames = _parse_frames(data.get("frames", {}), fname)
 
     resolver = FrameResolver(frames)
@@ -105,7 +221,7 @@ def parse_task(data, file: Path) -> Task:
     goals = []
     gseen = set()
     for i, g in enumerate(data.get("goals", [])):
-        goal = _parse_goal(g, fname, ["goals", i], resolver)
+        goal = _parse_goal(g, fname, ["goals", i], resolver, root)
         if goal.id in gseen:
             raise InputError(f"duplicate goal ID {goal.id!r}", file=fname, path=["goals", i, "ID"])
         gseen.add(goal.id)
@@ -124,7 +240,7 @@ def parse_task(data, file: Path) -> Task:
         if isinstance(g, ReturnTo) and g.return_to is not None and g.return_to not in gseen:
             raise InputError(f"unknown goal ID {g.return_to!r}", file=fname, path=["goals", i, "returnToGoal"])
     return Task(header=header, obstacles=tuple(obstacles), goals=tuple(goals), constraints=constraints,
-                frames=frames, root=root, source=str(file), warnings=tuple(warnings))
+                frames=frames, root=root, source=str(file), warnings=warnings.messages)
 
 
 class FrameResolver:
@@ -257,7 +373,7 @@ def _parse_constraint(c, fname, path, resolver, task_level) -> TaskConstraint:
     return out
 
 
-def _parse_goal(g, fname, path, resolver) -> Goal:
+def _parse_goal(g, fname, path, resolver, root) -> Goal:
     if not isinstance(g, dict):
         raise InputError("expected a goal object", file=fname, path=path)
     ci = _ci(g)
@@ -313,16 +429,23 @@ def _parse_goal(g, fname, path, resolver) -> Goal:
         torque = _vec3(key("externalTorque"), fname, path)
         return Follow(gid, cons, poses, tt, force, torque)
     if t == "leave":
-        k, v = key("region")
-        if v is None:
-            raise InputError("a leave goal needs 'region' (a tolerated pose: the TCP poses to leave)", file=fname,
-                             path=path)
-        region = _tolerated(v, fname, path + [k], resolver)
+        region, occupied = None, ()
+        ko, v = key("occupiedSpace")
+        if v is not None:
+            occupied = parse_geometries(v, root, fname, path + [ko], required_files=True)
+        kr, v = key("region")
+        if isinstance(v, dict) and "nominal" in v:
+            region = _tolerated(v, fname, path + [kr], resolver)
+        elif v is not None:
+            occupied += parse_geometries(v, root, fname, path + [kr], required_files=True)
+        if region is None and not occupied:
+            raise InputError("a leave goal needs 'occupiedSpace' (geometries the TCP must leave) or 'region' "
+                             "(a tolerated pose)", file=fname, path=path)
         kd, d = key("duration")
         dur = check_finite(d if d is not None else 0.0, fname, path + [kd])
         if dur < 0:
             raise InputError(f"must be >= 0, got {dur}", file=fname, path=path + [kd])
-        return Leave(gid, cons, region, dur)
+        return Leave(gid, cons, region, dur, occupied)
     raise InputError(f"unknown goal type {describe_value(g.get('type'))} (at, reach, returnTo, pause, follow, leave)",
                      file=fname, path=path + ["type"])
 

@@ -12,7 +12,7 @@ from typing import Dict, FrozenSet, Optional, Tuple
 
 import numpy as np
 
-from .geometry import GeometrySpec
+from .geometry import GeometrySpec, center_point, contains_point
 from .tolerance import ToleratedPose
 
 
@@ -170,9 +170,29 @@ class Follow(Goal):
 
 @dataclass(frozen=True, eq=False)
 class Leave(Goal):
-    """At t_g the TCP is outside ``region`` and stays outside for ``duration`` seconds."""
-    region: ToleratedPose = None
+    """At t_g the TCP is outside the space to leave and stays outside for ``duration`` seconds.
+
+    The space is ``occupied_space`` (geometries in world coordinates, the published form
+    ``occupiedSpace``: the TCP point must lie in none of them) and/or ``region`` (robodesign's
+    extension: the TCP poses that satisfy this tolerated pose).
+    """
+    region: Optional[ToleratedPose] = None
     duration: float = 0.0
+    occupied_space: Tuple[GeometrySpec, ...] = ()
+
+    def contains(self, T: np.ndarray) -> bool:
+        """Whether the TCP pose T (4x4, world) is inside the space to leave."""
+        if self.region is not None and self.region.valid(T):
+            return True
+        return any(contains_point(g, T[:3, 3]) for g in self.occupied_space)
+
+    @property
+    def center(self) -> np.ndarray:
+        """A world point in the middle of the space to leave (to move away from)."""
+        pts = [center_point(g) for g in self.occupied_space]
+        if self.region is not None:
+            pts.append(self.region.nominal[:3, 3])
+        return np.mean(pts, axis=0)
 
 
 _GOAL_TYPE_NAMES = {At: "at", Reach: "reach", ReturnTo: "returnTo", Pause: "pause", Follow: "follow",

@@ -48,6 +48,9 @@ Decisions (robodesign's own; the reference is silent or does something surprisin
   *extension* over the reference (which only accepts [−π, π]), their bounds may lie in [−2π, 2π] with
   ``hi − lo ≤ 2π``, so that a wedge crossing ±π can be written ``[2.9, 3.4]``. ``lo > hi`` is still an
   error. Intervals inside [−π, π] behave exactly as in the reference.
+* **Signed ``Theta_R`` bounds.** Published tasks write ``Theta_R: [-a, a]``; the reference reads θ as a
+  signed angle (a rotation R(n, θ) equals R(−n, −θ)), so such an interval allows |θ| ≤ max(a, b) for
+  ``[-a, b]`` (and ``[c, d]`` with d < 0 allows |θ| ∈ [−d, −c]). It is normalised to that range in [0, π].
 * **Bound slack.** Bounded angle/quaternion ranges accept bounds up to 1e-4 outside their range (people
   write 3.1416 for π); such bounds are clipped. Anything further out is an :class:`InputError`.
 * **Degenerate points.** An azimuth (``phi_*``) at a point on the z-axis and a polar angle (``theta``) at
@@ -121,6 +124,9 @@ DEFAULT_ENTRIES = (("x", (-1e-3, 1e-3), "nominal"), ("y", (-1e-3, 1e-3), "nomina
                    ("z", (-1e-3, 1e-3), "nominal"), ("Theta_R", (0.0, math.radians(0.5)), "nominal"))
 
 _JSON_KEYS = ("nominal", "nominalParent", "toleranceProjection", "tolerance", "toleranceFrame")
+# "frame" is what the reference *writes* for the per-projection frames of a single tolerance (and
+# ignores when reading); it means toleranceFrame.
+_JSON_ALIASES = {"frame": "toleranceFrame"}
 
 
 class ToleranceSamplingError(RobodesignError):
@@ -415,6 +421,9 @@ def _check_bounds(name: str, lo: float, hi: float, file, path) -> Tuple[float, f
     if lo > hi:
         raise InputError(f"lower bound {lo:g} is greater than upper bound {hi:g} for {name!r}",
                          file=file, path=path)
+    if name == "Theta_R" and lo < 0 and lo >= -PI - ANGLE_BOUND_SLACK:
+        # signed angle (reference: R(n, θ) = R(−n, −θ), θ ∈ [−π, π]): the set of |θ| that it allows
+        lo, hi = (-hi, -lo) if hi < 0 else (0.0, max(hi, -lo))
     if info.periodic:
         slack = ANGLE_BOUND_SLACK
         if lo < -TWO_PI - slack or hi > TWO_PI + slack or hi - lo > TWO_PI + slack:
@@ -576,6 +585,32 @@ class ToleratedPose:
         self._active = [c for c in self.constraints if not c.covers_allowed_range()]
 
     # -- construction from / to JSON ----------------------------------------------------------------------
+    @staticmethod
+    def canonical_json(obj, file: Optional[str], path: Sequence[PathPart], warnings) -> object:
+        """The canonical form of a tolerated-pose object as real files write it (for :meth:`from_json`).
+
+        ``frame`` → ``toleranceFrame`` (both given and different: an error); ``null`` for
+        ``nominalParent``/``toleranceFrame`` means absent; unknown keys (ignored by the reference) are
+        dropped and reported through ``warnings.ignored_key``. Anything that is not an object is returned
+        unchanged (``from_json`` names the problem).
+        """
+        if not isinstance(obj, dict):
+            return obj
+        out = {}
+        base = list(path)
+        for k, v in obj.items():
+            canon = _JSON_ALIASES.get(k, k)
+            if canon not in _JSON_KEYS:
+                warnings.ignored_key(file, base, k, _JSON_KEYS)
+                continue
+            if v is None and canon in ("nominalParent", "toleranceFrame"):
+                continue
+            if canon in out and out[canon] != v:
+                raise InputError(f"'frame' and {canon!r} are both given, with different frames (they mean the same)",
+                                 file=file, path=base + [k])
+            out[canon] = v
+        return out
+
     @classmethod
     def from_json(cls, obj, file: Optional[str] = None, path: Sequence[PathPart] | None = None,
                   frame_resolver: Optional[FrameResolver] = None, empty_means_any: bool = True) -> "ToleratedPose":
