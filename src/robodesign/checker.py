@@ -415,9 +415,9 @@ def check_goal(g: Goal, tq: TrajectoryQuantities) -> List[Violation]:
         if window is None:
             return [V(f"leave: the trajectory ends before t_g + duration = {t_end:.4f} s", sample=k)]
         T = tq.tcp_poses
-        inside = [kk for kk in range(window[0], window[1] + 1) if g.region.valid(T[kk])]
+        inside = [kk for kk in range(window[0], window[1] + 1) if g.contains(T[kk])]
         if inside:
-            return [V(f"leave: the TCP is inside the region at {len(inside)} samples of [{tg:.4f}, {t_end:.4f}] s "
-                      f"(first at t={tq.t[inside[0]]:.4f})", sample=inside[0])]
+            return [V(f"leave: the TCP is inside the region to leave at {len(inside)} samples of "
+                      f"[{tg:.4f}, {t_end:.4f}] s (first at t={tq.t[inside[0]]:.4f})", sample=inside[0])]
         return []
     return [V(f"unsupported goal type {type(g).__name__}")]

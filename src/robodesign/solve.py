@@ -8,7 +8,7 @@ hierarchical elimination); every stage records pass/fail and time:
 Goals are handled in the task's goal order: ``at``/``reach`` and ``returnTo`` move to a configuration
 and stop; ``pause`` holds still; ``follow`` visits the IK solutions of its poses one after the other
 (stopping at each; timed trajectories with exactly the given timing); ``leave`` retreats to a
-configuration whose TCP is outside the region and holds it for the duration. The trajectory starts
+configuration whose TCP is outside the space to leave and holds it for the duration. The trajectory starts
 at the configuration of the first pose goal (or a collision-free configuration if there is none).
 The returned cost is the checker's: one judge.
 
@@ -458,28 +458,29 @@ class GoalPlanner:
         raise _Fail("no collision-free start configuration found")
 
     def _leave_configuration(self, q: np.ndarray, g: Leave) -> np.ndarray:
-        """A nearby configuration whose TCP is outside the region: step the joints away from the region
-        centre along the Jacobian's pseudo-inverse until out (+2 cm), collision-free."""
+        """A nearby configuration whose TCP is outside the space to leave: the TCP moves in a straight line
+        (2 cm steps through the damped Jacobian pseudo-inverse) until it and a point 2 cm further on are
+        outside, collision-free. Directions tried: away from the space's centre and along ±x, ±y, ±z; the
+        shortest retreat wins."""
         r = self.robot
-        center = g.region.nominal[:3, 3]
-        qc = q.copy()
-        for _ in range(200):
-            T = r.fk(qc)
-            if not g.region.valid(T):
-                # margin: keep going a little further
-                d = T[:3, 3] - center
-                n = np.linalg.norm(d)
-                if n > 0 and not g.region.valid(_translate(T, 0.02 * d / n)) and not g.region.valid(_translate(T, -0.0)):
-                    if not r.in_collision(qc):
-                        return qc
-            d = T[:3, 3] - center
-            if np.linalg.norm(d) < 1e-6:
-                d = np.array([0.0, 0.0, 1.0])
-            step = 0.02 * d / np.linalg.norm(d)
-            J = r.jacobian(qc)[:3]
-            dq = np.linalg.lstsq(J, step, rcond=None)[0]
-            qc = np.clip(qc + dq, r.q_lower, r.q_upper)
-        raise _Fail(f"leave goal {g.id}: could not move the TCP out of the region")
+        away = r.fk(q)[:3, 3] - g.center
+        dirs = [away / np.linalg.norm(away)] if np.linalg.norm(away) > 1e-6 else []
+        dirs += [s * e for e in np.eye(3) for s in (1.0, -1.0)]
+        best = None
+        for u in dirs:
+            qc = q.copy()
+            for n in range(150 if best is None else best[0]):
+                T = r.fk(qc)
+                if not g.contains(T) and not g.contains(_translate(T, 0.02 * u)) and not r.in_collision(qc):
+                    best = (n, qc)
+                    break
+                J = r.jacobian(qc)[:3]
+                dq = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(3), 0.02 * u)  # damped near singularities
+                dq *= min(1.0, 0.05 / max(float(np.abs(dq).max()), 1e-12))     # ≤ 0.05 rad per step
+                qc = np.clip(qc + dq, r.q_lower, r.q_upper)
+        if best is None:
+            raise _Fail(f"leave goal {g.id}: could not move the TCP out of the space to leave")
+        return best[1]
 
     # -- timing ----------------------------------------------------------------------------------
     def time_parameterize(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None):
