@@ -585,3 +585,14 @@ def test_direct_api_stays_strict_about_unknown_tolerance_keys():
     from robodesign.tolerance import ToleratedPose
     with pytest.raises(InputError, match=r"unknown key 'frames'"):
         ToleratedPose.from_json({"nominal": np.eye(4).tolist(), "frames": []}, "x.json", ["p"])
+
+
+def test_null_optional_strings_in_a_solution_mean_absent():
+    base = {"taskID": "simple/PTP_1", "costFunction": "cyc", "moduleSet": "IMPROV", "moduleOrder": ORDER,
+            "trajectory": {"t": 0.01, "q": [[0.0] * 6] * 3, "goal2time": {}}}
+    plain = parse_solution(base, "s.json")
+    nulls = parse_solution(dict(base, notes=None, publication=None, processorName=None, computationTime=None,
+                                author=["A. Author", None], tags=None), "s.json")
+    fields = ("notes", "publication", "processor_name", "computation_time", "tags")
+    assert [getattr(nulls, f) for f in fields] == [getattr(plain, f) for f in fields] == ["", "", "", -1.0, ()]
+    assert nulls.author == ("A. Author",)

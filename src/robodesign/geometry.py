@@ -243,12 +243,47 @@ def load_mesh_arrays(file: str, scale: Tuple[float, float, float]) -> List[Tuple
     p = Path(file)
     if p.suffix.lower() == ".wrl":
         parts = read_wrl_parts(p)
+    elif p.suffix.lower() == ".stl" and (stl := _read_stl(p)) is not None:
+        parts = [stl]
     else:
         import trimesh
         m = trimesh.load(str(p), force="mesh", process=False)
         parts = [(np.asarray(m.vertices, dtype=float), np.asarray(m.faces, dtype=np.int64))]
     s = np.asarray(scale, dtype=float)
     return [(v * s, f) for v, f in parts]
+
+
+def _binary_stl_triangles(path: Path) -> Optional[int]:
+    """Triangle count of a binary STL whose size matches its header (None: ASCII, truncated or other)."""
+    size = path.stat().st_size
+    if size < 84:
+        return None
+    with open(path, "rb") as fh:
+        fh.seek(80)
+        n = int(np.frombuffer(fh.read(4), dtype="<u4")[0])
+    return n if size == 84 + 50 * n else None
+
+
+_STL_VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)")
+
+
+def _read_stl(path: Path) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """Vertices (one per triangle corner, as trimesh reads them unprocessed) and triangles of a binary or
+    ASCII STL, read with numpy (no trimesh import); None if the file is neither (the caller falls back)."""
+    if _binary_stl_triangles(path) is not None:
+        rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+        verts = np.fromfile(path, dtype=rec, offset=84)["v"].reshape(-1, 3).astype(float)
+    else:
+        text = path.read_bytes()
+        if not text.lstrip().startswith(b"solid"):
+            return None
+        try:
+            verts = np.array(_STL_VERTEX.findall(text), dtype=float).reshape(-1, 3)
+        except ValueError:
+            return None
+        if len(verts) % 3 or len(verts) != 3 * text.count(b"endfacet"):
+            return None
+    return verts, np.arange(len(verts), dtype=np.int64).reshape(-1, 3)
 
 
 def _vec3s(points: np.ndarray):
@@ -305,7 +340,8 @@ def contains_point(spec: GeometrySpec, point) -> bool:
     if spec.kind == "box":
         return bool(np.all(np.abs(local) <= 0.5 * np.asarray(spec.size) + 1e-12))
     if spec.kind == "cylinder":
-        return bool(np.hypot(local[0], local[1]) <= spec.size[0] + 1e-12 and abs(local[2]) <= 0.5 * spec.size[1] + 1e-12)
+        r, half = spec.size[0], 0.5 * spec.size[1]
+        return bool(np.hypot(local[0], local[1]) <= r + 1e-12 and abs(local[2]) <= half + 1e-12)
     if spec.kind == "sphere":
         return bool(np.linalg.norm(local) <= spec.size[0] + 1e-12)
     if spec.kind == "mesh":

@@ -110,11 +110,19 @@ _HEADER_KEYS = {"taskid": "taskID", "version": "version", "author": "author", "e
                 "computationtime": "computationTime", "processorname": "processorName", "notes": "notes"}
 
 
+_OPTIONAL_HEADER = ("version", "author", "email", "affiliation", "tags", "publication", "date", "computationTime",
+                    "processorName", "notes")
+_HEADER_LISTS = ("author", "email", "affiliation", "tags")
+
+
 def parse_solution(data, fname: str, source: Optional[str] = None) -> Solution:
     if not isinstance(data, dict):
         raise InputError("a solution file must hold a JSON object", file=fname)
     # header fields are matched case-insensitively (as the reference does)
     data = {(_HEADER_KEYS.get(k.lower(), k)): v for k, v in data.items()}
+    # null for an optional header string (notes, publication, ...) means absent; null list entries are dropped
+    data = {k: ([x for x in v if x is not None] if k in _HEADER_LISTS and isinstance(v, list) else v)
+            for k, v in data.items() if not (v is None and k in _OPTIONAL_HEADER)}
     validate(data, "solution", fname)
     tr_raw = data["trajectory"]
     tp = ["trajectory"]
