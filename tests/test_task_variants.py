@@ -20,12 +20,14 @@ from robodesign.solution import parse_solution
 from robodesign.task_io import load_task
 from robodesign.task_spec import Leave
 
-from conftest import IMPROV, TASKS
+from conftest import IMPROV, ROOT, TASKS
 
 ORDER = ["1", "21", "4", "22", "5", "23", "12"]
 
 
 def source(name):
+    if name == "timed_follow":  # robodesign's own task (a follow goal; the CoBRA samples have none)
+        return json.loads((ROOT / "assets" / "tasks" / "robodesign" / "timed_follow.json").read_text())
     return json.loads((TASKS / "simple" / f"{name}.json").read_text())
 
 
@@ -192,6 +194,11 @@ def c_end_effector_extra(d):
     d["goals"][0]["constraints"] = [{"type": "endEffector", "v_max": 0.5}, {"type": "alwaysTrue"}]
 
 
+def v_follow_trajectory(d):
+    traj = next(g for g in d["goals"] if g["type"] == "follow")["trajectory"]
+    traj.update(t=[0.4], goal2time={})   # as the reference's Trajectory writes a timed pose trajectory
+
+
 def nothing(d):
     pass
 
@@ -208,6 +215,7 @@ VARIANTS = {
     "package:// mesh path": ("PTP_2", v_package_prefix, nothing),
     "leave goal: single geometry, type case": ("PTP_1", v_leave_lists, c_leave_lists),
     "ignored endEffector key, {} goal constraint": ("PTP_3", v_end_effector_extra, c_end_effector_extra),
+    "follow trajectory: goal2time {}, t = [step]": ("timed_follow", v_follow_trajectory, nothing),
 }
 
 
@@ -596,3 +604,37 @@ def test_null_optional_strings_in_a_solution_mean_absent():
     fields = ("notes", "publication", "processor_name", "computation_time", "tags")
     assert [getattr(nulls, f) for f in fields] == [getattr(plain, f) for f in fields] == ["", "", "", -1.0, ()]
     assert nulls.author == ("A. Author",)
+
+
+def test_module_set_variants_build_the_same_robot(tmp_path):
+    """Joint and limit keys in any case, null optional header strings, geometry type case and ignored geometry
+    parameters (warned once): the same robot as the canonical IMPROV set."""
+    data = json.loads((IMPROV / "modules.json").read_text())
+    var = copy.deepcopy(data)
+    for m in var["modules"]:
+        m["header"].update(author=None, email=[None, "x@y.z"])
+        for j in m.get("joints") or []:
+            j["PoseParent"] = j.pop("poseParent")
+            j["LIMITS"] = {k.upper(): v for k, v in j.pop("limits").items()}
+        for b in m["bodies"]:
+            for g in b.get("collision") or []:
+                g["type"] = g["type"].upper()
+                g["parameters"]["material"] = "steel"
+    sets = {}
+    for tag, d in (("canonical", data), ("variant", var)):
+        folder = tmp_path / tag / "IMPROV"
+        folder.mkdir(parents=True)
+        (folder / "STLfiles").symlink_to(IMPROV / "STLfiles", target_is_directory=True)
+        (folder / "modules.json").write_text(json.dumps(d))
+        sets[tag] = load_module_set(folder, use_cache=False)
+    assert sets["canonical"].warnings == ()
+    assert len(sets["variant"].warnings) == 1 and "parameters.material: unknown key 'material' ignored (and at " \
+        in sets["variant"].warnings[0]
+    assert sets["variant"]["12"].header.email == ("x@y.z",) and sets["variant"]["12"].header.author == ()
+    a, b = (Robot.from_order(sets[k], ORDER) for k in ("canonical", "variant"))
+    q = np.array([0.3, -0.4, 0.5, 0.2, -0.7, 0.1])
+    np.testing.assert_array_equal(a.fk(q), b.fk(q))
+    np.testing.assert_array_equal(a.q_upper, b.q_upper)
+    np.testing.assert_array_equal(a.tau_max, b.tau_max)
+    np.testing.assert_array_equal(a.gravity_torque(q), b.gravity_torque(q))
+    assert a.in_collision(q) == b.in_collision(q) and a.min_distances(q) == b.min_distances(q)

@@ -108,9 +108,39 @@ def parse_module_set(data, file: Path, name: Optional[str] = None) -> ModuleSet:
                      source=str(file), warnings=warnings.messages)
 
 
+_JOINT_SPELLING = {k.lower(): k for k in ("ID", "parent", "child", "type", "passive", "poseParent", "parent2joint",
+                                           "poseChild", "joint2child", "limits", "gearRatio", "motorInertia",
+                                           "frictionCoulomb", "frictionViscous")}
+_LIMIT_SPELLING = {k.lower(): k for k in ("positionLower", "lower", "positionUpper", "upper", "peakTorque", "velocity",
+                                          "acceleration")}
+
+
+def _respell(d, spelling):
+    """Keys matched case-insensitively to their canonical spelling (as the reference's alias table does)."""
+    return {spelling.get(k.lower(), k) if isinstance(k, str) else k: v for k, v in d.items()}
+
+
 def _canonical_module(m, file, path, warnings):
-    """Geometry variants of real files in canonical form (type case, ignored parameters): see geometry.py."""
-    if not isinstance(m, dict) or not isinstance(m.get("bodies"), (list, dict)):
+    """Variants of real files in canonical form: null optional header strings (absent), joint and limit keys
+    in any letter case, geometry type case and ignored geometry parameters (geometry.py)."""
+    if not isinstance(m, dict):
+        return m
+    m = dict(m)
+    if isinstance(m.get("header"), dict):
+        h = {k: v for k, v in m["header"].items() if not (v is None and k != "ID")}
+        for k in ("author", "email", "affiliation"):
+            if isinstance(h.get(k), list):
+                h[k] = [x for x in h[k] if x is not None]
+        m["header"] = h
+    joints = m.get("joints")
+    if isinstance(joints, (list, dict)):
+        js = [_respell(j, _JOINT_SPELLING) if isinstance(j, dict) else j
+              for j in (joints if isinstance(joints, list) else [joints])]
+        for j in js:
+            if isinstance(j, dict) and isinstance(j.get("limits"), dict):
+                j["limits"] = _respell(j["limits"], _LIMIT_SPELLING)
+        m["joints"] = js if isinstance(joints, list) else js[0]
+    if not isinstance(m.get("bodies"), (list, dict)):
         return m
     many = isinstance(m["bodies"], list)
     out = []

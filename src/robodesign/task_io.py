@@ -147,6 +147,11 @@ def _canonical_goal(g, f, path, w):
         out["goalPose"] = ToleratedPose.canonical_json(out["goalPose"], f, path + ["goalPose"], w)
     if isinstance(out.get("trajectory"), dict):
         traj = {k: v for k, v in out["trajectory"].items() if not (k == "t" and v is None)}
+        g2t = traj.pop("goal2time", None)  # the reference's Trajectory writes it (empty); goals ignore it
+        if g2t:
+            w.add(f, path + ["trajectory", "goal2time"], "ignored (a follow goal's trajectory has no goal times)")
+        if isinstance(traj.get("t"), list) and len(traj["t"]) == 1 and len(traj.get("pose") or ()) > 1:
+            traj["t"] = traj["t"][0]  # one time for several poses is the time step (reference: t.size == 1)
         if isinstance(traj.get("pose"), list):
             traj["pose"] = [ToleratedPose.canonical_json(p, f, path + ["trajectory", "pose", i], w)
                             for i, p in enumerate(traj["pose"])]
