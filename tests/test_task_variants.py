@@ -124,6 +124,14 @@ def c_header_nulls(d):
     d["header"].update(tags=["unitTest", "PTP"], author=["Matthias Mayer"])
 
 
+def v_header_numbers(d):
+    d["header"].update(version=2022, taskName=7)
+
+
+def c_header_numbers(d):
+    d["header"].update(version="2022", taskName="7")
+
+
 def v_frame_key(d):
     _base_placement(d)["pose"].update(toleranceProjection=["x", "z", "N_z"], tolerance=[[-1, 1], [0, 0.5], [-3, 3]],
                                       frame=["nominal", "world", "world"])
@@ -206,6 +214,7 @@ def nothing(d):
 VARIANTS = {
     "obstacle name null": ("PTP_2", v_name_null, c_name_null),
     "header nulls, string author": ("PTP_3", v_header_nulls, c_header_nulls),
+    "header numbers where strings are expected": ("PTP_2", v_header_numbers, c_header_numbers),
     "frame = toleranceFrame": ("PTP_2", v_frame_key, c_frame_key),
     "obstacle pose as tolerated pose + acknowledgement": ("PTP_2", v_obstacle_pose_tolerated, nothing),
     "goal keys in any case": ("PTP_3", v_goal_key_case, nothing),
@@ -638,3 +647,29 @@ def test_module_set_variants_build_the_same_robot(tmp_path):
     np.testing.assert_array_equal(a.tau_max, b.tau_max)
     np.testing.assert_array_equal(a.gravity_torque(q), b.gravity_torque(q))
     assert a.in_collision(q) == b.in_collision(q) and a.min_distances(q) == b.min_distances(q)
+
+
+def test_website_rejects_broken_collision_meshes_and_warns_about_visual_ones(tmp_path):
+    pytest.importorskip("fastapi")
+    from fastapi.testclient import TestClient
+    from robodesign.web import create_app
+    lfs = b"version https://git-lfs.github.com/spec/v1\noid sha256:4d7a\nsize 160062\n"
+    stl = (TASKS / "assets" / "QUASER_MV205_v3_compressed.stl").read_bytes()
+
+    def task(tid, visual=None):
+        ob = {"ID": "cnc", "collision": {"type": "mesh", "parameters": {"file": "assets/cnc.stl", "scale": 0.001}}}
+        if visual:
+            ob["visual"] = {"type": "mesh", "parameters": {"file": visual, "scale": 0.001}}
+        return json.dumps({"header": {"ID": tid}, "obstacles": [ob], "goals": []})
+
+    with TestClient(create_app(data_dir=tmp_path / "data", seed=[], seed_builtin=False)) as c:
+        r = c.post("/api/tasks", files=[("task", ("a.json", task("up/lfs"))), ("files", ("assets/cnc.stl", lfs))])
+        assert r.status_code == 400
+        assert ("obstacles[0].collision.parameters.file: collision mesh file 'assets/cnc.stl' is a Git LFS "
+                "pointer") in r.json()["detail"]
+        r = c.post("/api/tasks", files=[("task", ("b.json", task("up/ok", visual="assets/look.stl"))),
+                                        ("files", ("assets/cnc.stl", stl)), ("files", ("assets/look.stl", lfs))])
+        assert r.status_code == 201, r.text
+        (created,) = r.json()["tasks"]
+        assert any("visual.parameters.file: visual mesh file 'assets/look.stl' is a Git LFS pointer" in w
+                   for w in created["warnings"])

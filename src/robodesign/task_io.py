@@ -86,6 +86,9 @@ def _canonical_task(data: dict, f: str, w: InputWarnings) -> dict:
         out["constraints"] = out.pop("Constraints")
     if isinstance(out.get("header"), dict):
         h = dict(out["header"])
+        for k in ("ID", "version", "taskName"):  # the reference casts these to str
+            if isinstance(h.get(k), (int, float)) and not isinstance(h.get(k), bool):
+                h[k] = _number_text(h[k])
         for k in _HEADER_OPTIONAL:
             if k in h and h[k] is None:
                 del h[k]  # null = absent
@@ -102,6 +105,10 @@ def _canonical_task(data: dict, f: str, w: InputWarnings) -> dict:
         out["constraints"] = [_canonical_constraint(c, f, ["constraints", i], w)
                               for i, c in enumerate(out["constraints"])]
     return out
+
+
+def _number_text(v) -> str:
+    return str(int(v)) if isinstance(v, float) and v.is_integer() and abs(v) < 1e15 else str(v)
 
 
 def _canonical_obstacle(o, f, path, w):
