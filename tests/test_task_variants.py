@@ -673,3 +673,26 @@ def test_website_rejects_broken_collision_meshes_and_warns_about_visual_ones(tmp
         (created,) = r.json()["tasks"]
         assert any("visual.parameters.file: visual mesh file 'assets/look.stl' is a Git LFS pointer" in w
                    for w in created["warnings"])
+
+
+def test_broken_collision_mesh_in_a_urdf_is_exit_2(tmp_path, capsys):
+    """A URDF is a one-module set: an LFS pointer as a collision mesh is exit 2, as a visual mesh a warning."""
+    (tmp_path / "lfs.stl").write_bytes(b"version https://git-lfs.github.com/spec/v1\noid sha256:1\nsize 9\n")
+    shutil.copy(TASKS / "assets" / "QUASER_MV205_v3_compressed.stl", tmp_path / "ok.stl")
+
+    def urdf(col, vis):
+        return f"""<robot name="r"><link name="base"><collision><geometry><mesh filename="{col}"/></geometry></collision>
+          <visual><geometry><mesh filename="{vis}"/></geometry></visual></link>
+          <link name="tool"/><joint name="j" type="revolute"><parent link="base"/><child link="tool"/>
+          <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint></robot>"""
+    (tmp_path / "bad.urdf").write_text(urdf("lfs.stl", "ok.stl"))
+    assert main(["robot", str(tmp_path / "bad.urdf"), "--order", "bad"]) == 2
+    err = capsys.readouterr().err
+    assert "collision mesh file 'lfs.stl' is a Git LFS pointer" in err and len(err.strip().splitlines()) == 1
+    (tmp_path / "vis.urdf").write_text(urdf("ok.stl", "lfs.stl"))
+    from robodesign.urdf import import_urdf
+    warnings = []
+    ms = import_urdf(tmp_path / "vis.urdf", warnings=warnings)
+    assert len(warnings) == 1 and "visual mesh file 'lfs.stl' is a Git LFS pointer" in warnings[0]
+    (body,) = [b for m in ms for b in m.bodies if b.collision]
+    assert body.visual == () or all(g.file.name != "lfs.stl" for g in body.visual)

@@ -70,7 +70,7 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from .errors import InputError
-from .geometry import GeometrySpec, load_mesh_arrays
+from .geometry import GeometrySpec, load_mesh_arrays, mesh_problem
 from .jsonio import resolve_inside
 from .module_spec import Body, Connector, Joint, JointLimits, Module, ModuleHeader, ModuleSet
 from .spatial import RX_PI, homogeneous, inv, pose_to_list, rpy_to_matrix
@@ -579,13 +579,15 @@ def _parse_geometry(ctx: _Ctx, el: ET.Element, field: str, meshes: _MeshResolver
                 warnings.append(f"{ctx.display}: {gf}.filename: {msg}; the visual is skipped")
             return None
         spec = GeometrySpec("mesh", pose, (), target, tuple(float(s) for s in scale), shown)
-        if required:  # collision meshes must load now (clear error) rather than when the Robot is built
-            try:
-                parts = load_mesh_arrays(str(target), spec.scale)
-            except Exception as e:  # trimesh raises many types (e.g. ImportError for .dae without pycollada)
-                raise ctx.err(f"cannot read mesh {ref!r} ({type(e).__name__}: {e})", f"{gf}.filename") from None
-            if not any(len(v) >= 4 for v, _ in parts):
-                raise ctx.err(f"mesh {ref!r} has no usable triangles", f"{gf}.filename")
+        # collision meshes must load now (a clear error) rather than vanish when the Robot is built
+        problem = mesh_problem(target, spec.scale, full=required)
+        if problem and required:
+            raise ctx.err(f"collision mesh file {ref!r} {problem}", f"{gf}.filename")
+        if problem:
+            if warnings is not None:
+                warnings.append(f"{ctx.display}: {gf}.filename: visual mesh file {ref!r} {problem}; "
+                                "the visual is skipped")
+            return None
         return spec
     raise ctx.err(f"unsupported geometry <{shape.tag}> (box, cylinder, sphere, mesh)", gf)
 
