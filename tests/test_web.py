@@ -43,6 +43,8 @@ from conftest import toy_module_set  # noqa: E402
 from test_checker import plan, solution, task_json  # noqa: E402
 
 BOARD = "M-toy:cyc:toy/all"
+ADMIN = "admin-token-of-the-tests"  # registering tasks and module sets is an admin action
+ADMIN_HEADERS = {"X-Admin-Token": ADMIN}
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -84,8 +86,8 @@ def judge(seed_dir):
 
 @pytest.fixture
 def client(tmp_path, seed_dir):
-    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
-    with TestClient(app) as c:
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
+    with TestClient(app, headers=ADMIN_HEADERS) as c:
         yield c
 
 
@@ -333,8 +335,8 @@ def test_unknown_task_module_set_or_missing_author_is_400(client):
 
 
 def test_oversized_request_is_413(tmp_path, seed_dir):
-    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, max_request_bytes=50_000)
-    with TestClient(app) as c:
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, max_request_bytes=50_000)
+    with TestClient(app, headers=ADMIN_HEADERS) as c:
         big = json.dumps(sol_json())  # ~40 kB: fits
         assert len(big) < 50_000
         assert upload(c, sol_json(), author="A").status_code == 201
@@ -377,7 +379,8 @@ def test_task_upload_with_mesh_path_traversal_writes_nothing(client, tmp_path):
                                          ("files", ("../../../etc/passwd", b"solid x\nendsolid x\n"))])
     assert r.status_code == 400 and "contains '..'" in r.json()["detail"]
     assert listing(tmp_path) == before
-    assert listing(data / "tasks") + listing(data / "modulesets") == stored_before and listing(data / "tmp") == []
+    assert listing(data / "tasks") + listing(data / "modulesets") == stored_before
+    assert listing(client.app.state.bench.tmp) == []  # this server's staging folder is empty again
     assert client.get("/api/tasks").json()[0]["id"] == "toy/all" and len(client.get("/api/tasks").json()) == 1
 
 
@@ -424,10 +427,10 @@ def test_task_upload_multipart_and_zip(client, tmp_path):
 
 
 def test_zip_slip_symlink_and_bomb_rejected(tmp_path, seed_dir):
-    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False,
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False,
                      max_unzipped_bytes=2_000_000)
     stl = stl_box()
-    with TestClient(app) as c:
+    with TestClient(app, headers=ADMIN_HEADERS) as c:
         before = listing(tmp_path)
         # zip slip: an entry that climbs out of the extraction folder
         z = zip_bytes([("t.json", json.dumps(mesh_task("slip/one"))), ("assets/box.stl", stl),
@@ -463,7 +466,7 @@ def test_seed_symlink_leaving_the_folder_is_refused(tmp_path):
     (tmp_path / "outside.stl").write_bytes(stl_box())
     (seed / "tasks" / "assets").mkdir()
     os.symlink(tmp_path / "outside.stl", seed / "tasks" / "assets" / "box.stl")
-    app = create_app(data_dir=tmp_path / "data", seed=[seed], seed_builtin=False)
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed], seed_builtin=False)
     bench = app.state.bench
     assert not [t.task_id for t in bench.tasks()]
     assert any("skipped" in line and "'assets/box.stl' escapes its folder" in line for line in bench.seed_log), \
@@ -535,8 +538,8 @@ def test_query_by_cost_range(client, judge):
 
 
 def test_pages_and_listings(tmp_path, seed_dir):
-    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir])  # with the built-in assets/
-    with TestClient(app) as c:
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed_dir])  # with the built-in assets/
+    with TestClient(app, headers=ADMIN_HEADERS) as c:
         tasks = c.get("/api/tasks").json()
         ids = [t["id"] for t in tasks]
         builtin = sorted("robodesign/" + f.stem for f in (ROOT / "assets" / "tasks" / "robodesign").glob("*.json"))
@@ -596,7 +599,9 @@ def test_solution_page_embeds_the_viewer(client):
 
 
 def test_concurrent_uploads_on_a_real_server(tmp_path, seed_dir, judge):
-    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
+    # 24 uploads at once from one address: the per-client limits are lifted here (tested on their own below)
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False,
+                     queue_size=24, per_client_queue=24, upload_rate=0)
     ks = [1.0 + 0.1 * i for i in range(20)]
     with running_server(app) as url:
         def one(k):
@@ -647,8 +652,8 @@ def test_cli_serve(tmp_path, seed_dir):
                     reason="the CoBRA data (shared/cobra) is not next to the checkout")
 def test_seed_real_cobra_folders(tmp_path):
     cobra = Path(__file__).parents[2] / "shared" / "cobra"
-    app = create_app(data_dir=tmp_path / "data", seed=[cobra], seed_builtin=False)
-    with TestClient(app) as c:
+    app = create_app(admin_token=ADMIN, data_dir=tmp_path / "data", seed=[cobra], seed_builtin=False)
+    with TestClient(app, headers=ADMIN_HEADERS) as c:
         ids = [t["id"] for t in c.get("/api/tasks").json()]
         assert {"simple/PTP_1", "simple/PTP_2", "simple/PTP_3"} <= set(ids)
         assert {"IMPROV", "geometric_primitive_modules"} <= {m["name"] for m in c.get("/api/modulesets").json()}
@@ -723,14 +728,14 @@ def postgres_cluster():
 
 def test_postgresql_backend(tmp_path, seed_dir, judge):
     with postgres_cluster() as url:
-        app = create_app(db_url=url, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
+        app = create_app(admin_token=ADMIN, db_url=url, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
         assert app.state.bench.engine.dialect.name == "postgresql"
-        with TestClient(app) as c:
+        with TestClient(app, headers=ADMIN_HEADERS) as c:
             exercise_site(c, judge)
             assert not (tmp_path / "data" / "bench.db").exists()
             # a second server process on the same database and data folder sees the same site
-            app2 = create_app(db_url=url, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
-            with TestClient(app2) as c2:
+            app2 = create_app(admin_token=ADMIN, db_url=url, data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False)
+            with TestClient(app2, headers=ADMIN_HEADERS) as c2:
                 assert [t["id"] for t in c2.get("/api/tasks").json()] == ["toy/all"]
                 assert len(c2.get(f"/api/leaderboard/{BOARD}").json()["entries"]) == 1
                 r = upload(c2, sol_json(1.2), author="Second Server")

@@ -8,26 +8,30 @@ import asyncio
 import base64
 import binascii
 import contextlib
+import hmac
 import json
 import logging
 import math
-import threading
-from collections import OrderedDict
+import os
+import time
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
-from urllib.parse import quote
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from urllib.parse import quote, unquote_to_bytes
 
 from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
+from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from ..errors import InputError
-from ..jsonio import loads_json
 from ..paths import assets_dir
 from . import pages
+from .cache import ByteLRU
 from .safefiles import TooLarge, check_name
-from .service import (Bench, Conflict, Forbidden, NotFound, Settings, SubmitResult, clean_json, files_source,
-                      solution_summary)
+from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, Submission, SubmitResult, clean_json,
+                      files_source, parse_json, solution_summary)
+from .throttle import Busy, CheckQueue, RateLimiter
 
 log = logging.getLogger("robodesign.web")
 MiB = 1 << 20
@@ -46,17 +50,20 @@ class _BodyTooLarge(Exception):
     pass
 
 
+class _BodyTooSlow(Exception):
+    pass
+
+
 class BodyLimitMiddleware:
-    def __init__(self, app, limit: int):
-        self.app, self.limit = app, limit
+    """Caps every request body at ``limit`` bytes (by Content-Length, and counted while it streams in) and at
+    ``timeout`` seconds to arrive: a huge upload is cut off at the limit, a slow one gets 408."""
+
+    def __init__(self, app, limit: int, timeout: float = 120.0):
+        self.app, self.limit, self.timeout = app, limit, timeout
 
     async def _reject(self, scope, send):
-        msg = (f"request body too large: the limit is {self.limit} bytes "
-               f"({self.limit / MiB:.1f} MiB)")
-        resp = (JSONResponse({"detail": msg}, status_code=413) if scope["path"].startswith("/api/")
-                else HTMLResponse(pages.error_page(413, msg), status_code=413))
-        resp.headers["Connection"] = "close"
-        await resp(scope, _noop_receive, send)
+        await _plain_error(scope, send, 413, f"request body too large: the limit is {self.limit} bytes "
+                                             f"({self.limit / MiB:.1f} MiB)")
 
     async def __call__(self, scope, receive, send):
         if scope["type"] != "http":
@@ -71,14 +78,22 @@ class BodyLimitMiddleware:
                     return await resp(scope, receive, send)
         received = 0
         started = False
+        body_done = False
+        deadline = time.monotonic() + self.timeout
 
         async def limited_receive():
-            nonlocal received
-            message = await receive()
+            nonlocal received, body_done
+            if body_done:
+                return await receive()
+            try:
+                message = await asyncio.wait_for(receive(), max(0.0, deadline - time.monotonic()))
+            except asyncio.TimeoutError:
+                raise _BodyTooSlow() from None
             if message["type"] == "http.request":
                 received += len(message.get("body", b""))
                 if received > self.limit:
                     raise _BodyTooLarge()
+                body_done = not message.get("more_body", False)
             return message
 
         async def tracking_send(message):
@@ -93,6 +108,48 @@ class BodyLimitMiddleware:
             if started:
                 raise
             await self._reject(scope, send)
+        except _BodyTooSlow:
+            if started:
+                raise
+            msg = f"the request body did not arrive within {self.timeout:g} s"
+            await _plain_error(scope, send, 408, msg)
+
+
+async def _plain_error(scope, send, status: int, msg: str, headers: Optional[Dict[str, str]] = None):
+    resp = (JSONResponse({"detail": msg}, status_code=status) if scope["path"].startswith("/api/")
+            else HTMLResponse(pages.error_page(status, msg), status_code=status))
+    for k, v in (headers or {}).items():
+        resp.headers[k] = v
+    resp.headers["Connection"] = "close"
+    await resp(scope, _noop_receive, send)
+
+
+class GuardMiddleware:
+    """Before anything else: a NUL character anywhere in the path or query is 400, and each client (its address;
+    behind a reverse proxy on 127.0.0.1 uvicorn takes it from X-Forwarded-For) has two token buckets, one for
+    reading (GET/HEAD) and one for writing (uploads, withdrawals, registrations): an empty bucket is 429 with
+    Retry-After. ``/healthz`` and ``/static/`` are not limited."""
+
+    def __init__(self, app, reads: RateLimiter, writes: RateLimiter):
+        self.app, self.reads, self.writes = app, reads, writes
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        path = scope.get("path", "")
+        if "\x00" in path or b"\x00" in scope.get("query_string", b"") \
+                or b"\x00" in unquote_to_bytes(scope.get("query_string", b"")):
+            return await _plain_error(scope, send, 400, "the URL contains a NUL character")
+        if path != "/healthz" and not path.startswith("/static/"):
+            client = (scope.get("client") or ("?", 0))[0]
+            write = scope.get("method", "GET") not in ("GET", "HEAD", "OPTIONS")
+            wait = (self.writes if write else self.reads).wait_time(client)
+            if wait > 0:
+                retry = max(1, math.ceil(wait))
+                what = "uploads/changes" if write else "requests"
+                return await _plain_error(scope, send, 429, f"too many {what} from your address; retry in {retry} s",
+                                          {"Retry-After": str(retry)})
+        return await self.app(scope, receive, send)
 
 
 async def _noop_receive():
@@ -151,7 +208,7 @@ async def read_upload(request: Request) -> Upload:
     if ct in ("multipart/form-data", "application/x-www-form-urlencoded"):
         try:
             form = await request.form(max_files=5000, max_fields=200, max_part_size=4 * MiB)
-        except _BodyTooLarge:
+        except (_BodyTooLarge, _BodyTooSlow):
             raise
         except Exception as e:  # malformed multipart body
             raise InputError(f"malformed form data ({e})") from None
@@ -194,40 +251,73 @@ def _float_param(request: Request, name: str) -> Optional[float]:
         f = float(v)
     except ValueError:
         raise InputError(f"query parameter {name}: expected a number, got {v!r}") from None
-    if math.isnan(f):
-        raise InputError(f"query parameter {name}: NaN is not allowed")
+    if not math.isfinite(f):
+        raise InputError(f"query parameter {name}: expected a finite number, got {v!r}")
     return f
 
 
 # ------------------------------------------------------------------------------------------------------------
 # the app
 # ------------------------------------------------------------------------------------------------------------
+ADMIN_TOKEN_ENV = "ROBODESIGN_ADMIN_TOKEN"
+
+
 def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_data",
                seed: Sequence[str | Path] = (), seed_builtin: bool = True, max_request_bytes: int = 20 * MiB,
-               max_unzipped_bytes: int = 200 * MiB, check_workers: Optional[int] = None) -> FastAPI:
-    """Build the website. ``db_url``: SQLAlchemy URL (default SQLite ``<data_dir>/bench.db``; ``postgresql://``
-    uses psycopg 3). ``seed``: extra folders to register tasks/module sets from at startup (after the built-in
-    ``assets/`` when ``seed_builtin``)."""
+               max_unzipped_bytes: int = 200 * MiB, check_workers: Optional[int] = None, *,
+               admin_token: Optional[str] = None, open_registration: bool = False, queue_size: int = 8,
+               per_client_queue: int = 2, upload_rate: float = 30.0, read_rate: float = 20.0,
+               body_timeout: float = 120.0, viewer_cache_bytes: int = 64 * MiB, big_check_values: int = 100_000,
+               limits: Optional[Limits] = None) -> FastAPI:
+    """Build the website (docs/website.md). ``db_url``: SQLAlchemy URL (default SQLite ``<data_dir>/bench.db``;
+    ``postgresql://`` uses psycopg 3). ``seed``: extra folders to register tasks/module sets from at startup (after
+    the built-in ``assets/`` when ``seed_builtin``).
+
+    Registering tasks and module sets needs ``admin_token`` (default: the ``ROBODESIGN_ADMIN_TOKEN`` environment
+    variable) unless ``open_registration``. ``queue_size`` uploads may wait for the ``check_workers`` checker
+    threads, at most ``per_client_queue`` per client; checks of more than ``big_check_values`` trajectory values
+    use at most all threads but one. ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client
+    rate limits (0 = none); ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
+    of one solution."""
     settings = Settings(data_dir=Path(data_dir), db_url=db_url, max_request_bytes=int(max_request_bytes),
                         max_unzipped_bytes=int(max_unzipped_bytes), seed_dirs=tuple(Path(s) for s in seed),
-                        seed_builtin=seed_builtin)
+                        seed_builtin=seed_builtin, limits=limits or Limits())
     if check_workers:
         settings.check_workers = int(check_workers)
+    if admin_token is None:
+        admin_token = os.environ.get(ADMIN_TOKEN_ENV) or None
+    if admin_token is not None and len(admin_token) < 16:
+        raise InputError("the admin token must have at least 16 characters")
     bench = Bench(settings)
     bench.seed(([assets_dir()] if seed_builtin else []) + list(settings.seed_dirs))
+    queue = CheckQueue(settings.check_workers, queue_size, per_client_queue)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app):
         yield
+        queue.close()
         bench.close()
 
     app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url="/api/docs",
                   redoc_url=None, openapi_url="/api/openapi.json")
-    app.state.bench = bench
-    app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes)
+    app.state.bench, app.state.queue = bench, queue
+    app.state.viewer_cache = viewer_cache = ByteLRU(viewer_cache_bytes)
+    app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes, timeout=body_timeout)
+    app.add_middleware(GuardMiddleware, reads=RateLimiter(read_rate, max(1.0, 5 * read_rate)),
+                       writes=RateLimiter(upload_rate / 60.0, max(1.0, upload_rate / 3)))
 
-    async def in_pool(fn, *args, **kw):
-        return await asyncio.wrap_future(bench.pool.submit(fn, *args, **kw))
+    def require_admin(request: Request) -> None:
+        if open_registration:
+            return
+        if admin_token is None:
+            raise Forbidden("registering tasks and module sets is disabled on this server: start it with an admin "
+                            f"token ({ADMIN_TOKEN_ENV} or --admin-token) or with --open-registration")
+        auth = request.headers.get("authorization", "")
+        given = request.headers.get("x-admin-token") or (auth[7:] if auth.lower().startswith("bearer ") else "")
+        if not hmac.compare_digest(given.encode("utf-8", "replace"), admin_token.encode("utf-8")):
+            raise Forbidden("registering tasks and module sets is an admin action: send the admin token as "
+                            "'Authorization: Bearer <token>' or 'X-Admin-Token'" + (" (the one given is wrong)"
+                                                                                    if given else ""))
 
     # ---------------------------------------------------------------- errors and headers
     @app.exception_handler(TooLarge)
@@ -237,6 +327,11 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.exception_handler(InputError)
     async def _bad_input(request, exc):
         return _error(request, 400, str(exc))
+
+    @app.exception_handler(RequestValidationError)
+    async def _bad_params(request, exc):
+        where = "; ".join(f"{'.'.join(str(x) for x in e.get('loc', ()))}: {e.get('msg')}" for e in exc.errors())
+        return _error(request, 400, f"bad request ({where})")
 
     @app.exception_handler(Conflict)
     async def _conflict(request, exc):
@@ -249,6 +344,12 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.exception_handler(Forbidden)
     async def _forbidden(request, exc):
         return _error(request, 403, str(exc))
+
+    @app.exception_handler(Busy)
+    async def _busy(request, exc):
+        resp = _error(request, 429, str(exc))
+        resp.headers["Retry-After"] = str(exc.retry_after)
+        return resp
 
     @app.exception_handler(Exception)
     async def _internal(request, exc):
@@ -263,6 +364,37 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         if resp.headers.get("content-type", "").startswith("text/html"):
             resp.headers.setdefault("Content-Security-Policy", PAGE_CSP)
         return resp
+
+    # ---------------------------------------------------------------- the check queue
+    def run_check(sub: Submission) -> dict:
+        """On a checker thread: the verdict as {status, body, result}; bad input is its 4xx, never an error."""
+        try:
+            res = bench.judge(sub)
+        except TooLarge as e:
+            return {"status": 413, "body": {"detail": str(e)}}
+        except InputError as e:
+            return {"status": 400, "body": {"detail": str(e)}}
+        return {"status": 201 if res.valid else 422, "body": res.to_json(), "result": res}
+
+    async def submit(request: Request, read: Callable[[Upload], Tuple[str, str, dict, Optional[str]]]):
+        """Take a place in the check queue (429 when full), read and validate the upload (4xx), put it in line.
+        → (job, future, place in line when it joined)."""
+        client = (request.client.host if request.client else "?")
+        job = queue.reserve(client)
+        try:
+            up = await read_upload(request)
+            text, fname, meta, token = read(up)
+            sub: Submission = await run_in_threadpool(bench.prepare_submission, text, fname, meta.get("author"),
+                                                      meta.get("email"), meta.get("affiliation"), token or None)
+            fut = queue.submit(job, lambda: run_check(sub), big=sub.size > big_check_values)
+        except BaseException:
+            queue.release(job)
+            raise
+        return job, fut, queue.status(job)["position"]
+
+    def wants_async(request: Request) -> bool:
+        return request.query_params.get("async", "") in ("1", "true", "yes") or \
+            "respond-async" in request.headers.get("prefer", "")
 
     # ---------------------------------------------------------------- HTML pages
     @app.get("/static/style.css", include_in_schema=False)
@@ -304,37 +436,30 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return pages.leaderboard(display, ms, tid, rows)
 
     @app.get("/solutions/{sid}", response_class=HTMLResponse, include_in_schema=False)
-    def solution_page(sid: int):
+    def solution_page(sid: str):
         row = bench.solution_row(sid)
         ok, note = _viewer_available()
         return pages.solution_page(row, ok, note)
 
-    viewer_cache: "OrderedDict[int, str]" = OrderedDict()
-    viewer_lock = threading.Lock()
-
     @app.get("/solutions/{sid}/viewer", response_class=HTMLResponse, include_in_schema=False)
-    def solution_viewer(sid: int):
+    def solution_viewer(sid: str):
         ok, note = _viewer_available()
         if not ok:
             raise NotFound(note)
-        with viewer_lock:
-            html = viewer_cache.get(sid)
+        row = bench.solution_row(sid)
+        html = viewer_cache.get(row.id)
         if html is None:
             from ..viewer import solution_page as render
-            row = bench.solution_row(sid)
-            html = render(bench.task(row.task_id), bench.solution(sid), bench.module_set(row.module_set),
+            html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
                           verdict=json.loads(row.verdict_json or "{}") or None)
-            with viewer_lock:
-                viewer_cache[sid] = html
-                while len(viewer_cache) > 16:
-                    viewer_cache.popitem(last=False)
+            viewer_cache.put(row.id, html)
         return HTMLResponse(html, headers={"Content-Security-Policy": VIEWER_CSP})
 
     @app.post("/solutions/{sid}/withdraw", response_class=HTMLResponse, include_in_schema=False)
-    async def withdraw_form(sid: int, request: Request):
+    async def withdraw_form(sid: str, request: Request):
         up = await read_upload(request)
-        res = await in_pool(bench.withdraw, sid, up.fields.get("token"))
-        return HTMLResponse(pages.layout("Withdrawn", f'<div class="card" id="result"><p>Solution #{sid} was '
+        res = await run_in_threadpool(bench.withdraw, sid, up.fields.get("token"))
+        return HTMLResponse(pages.layout("Withdrawn", f'<div class="card" id="result"><p>Solution #{res["id"]} was '
                                          f'withdrawn from <a href="{pages.e(pages.bid_url(res["benchmark_id"]))}">'
                                          f'{pages.e(res["benchmark_id"])}</a>.</p></div>'))
 
@@ -342,17 +467,21 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     def upload_page():
         return pages.upload_form()
 
-    @app.post("/upload", response_class=HTMLResponse, include_in_schema=False)
-    async def upload_submit(request: Request):
-        up = await read_upload(request)
+    def read_form_upload(up: Upload):
         f = up.file("file", "solution")
         if f is None:
             raise InputError("choose a solution file")
         name, data = f
-        res: SubmitResult = await in_pool(bench.submit_solution, _decode(data, name), name,
-                                          up.fields.get("author"), up.fields.get("email"),
-                                          up.fields.get("affiliation"), up.fields.get("token") or None)
-        return HTMLResponse(pages.upload_result(res), status_code=201 if res.valid else 422)
+        return _decode(data, name), name, {k: up.fields.get(k) for k in ("author", "email", "affiliation")}, \
+            up.fields.get("token")
+
+    @app.post("/upload", response_class=HTMLResponse, include_in_schema=False)
+    async def upload_submit(request: Request):
+        _job, fut, _pos = await submit(request, read_form_upload)
+        out = await asyncio.wrap_future(fut)
+        if "result" not in out:
+            return _error(request, out["status"], out["body"]["detail"])
+        return HTMLResponse(pages.upload_result(out["result"]), status_code=out["status"])
 
     # ---------------------------------------------------------------- JSON API
     @app.get("/api/tasks")
@@ -367,18 +496,19 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/api/tasks", status_code=201)
     async def api_add_task(request: Request):
+        require_admin(request)
         up = await read_upload(request)
         if up.raw is not None:
             if _is_zip("", up.raw) or up.content_type in ("application/zip", "application/x-zip-compressed"):
-                created = await in_pool(bench.add_tasks_from_zip, up.raw, "upload.zip")
+                created = await run_in_threadpool(bench.add_tasks_from_zip, up.raw, "upload.zip")
             else:
-                data = loads_json(_decode(up.raw, "request body"), "request body")
+                data = parse_json(_decode(up.raw, "request body"), "request body")
                 if isinstance(data, dict) and "task" in data and "header" not in data:
                     files = _b64_files(data.get("files"), "files")
                     text = json.dumps(data["task"])
                 else:
                     files, text = {}, _decode(up.raw, "request body")
-                created = [await in_pool(bench.add_task, text, files_source(files), "task.json")]
+                created = [await run_in_threadpool(bench.add_task, text, files_source(files), "task.json")]
         else:
             f = up.file("file", "task", "zip")
             if f is None:
@@ -386,10 +516,10 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                                  "or 'file' (zip)")
             name, data = f
             if _is_zip(name, data):
-                created = await in_pool(bench.add_tasks_from_zip, data, name)
+                created = await run_in_threadpool(bench.add_tasks_from_zip, data, name)
             else:
                 files = {n: d for n, d in up.files.get("files", [])}
-                created = [await in_pool(bench.add_task, _decode(data, name), files_source(files), name)]
+                created = [await run_in_threadpool(bench.add_task, _decode(data, name), files_source(files), name)]
         return JSONResponse({"tasks": created}, status_code=201)
 
     @app.get("/api/modulesets")
@@ -404,15 +534,16 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/api/modulesets", status_code=201)
     async def api_add_moduleset(request: Request):
+        require_admin(request)
         up = await read_upload(request)
         name = up.field("name", request)
         if name:
             check_name(name)
         if up.raw is not None:
             if _is_zip("", up.raw):
-                res = await in_pool(bench.add_module_set_from_zip, up.raw, "upload.zip", name)
+                res = await run_in_threadpool(bench.add_module_set_from_zip, up.raw, "upload.zip", name)
             else:
-                data = loads_json(_decode(up.raw, "request body"), "request body")
+                data = parse_json(_decode(up.raw, "request body"), "request body")
                 if isinstance(data, dict) and "modules" in data and isinstance(data.get("name"), str):
                     name = data["name"]
                     files = _b64_files(data.get("files"), "files")
@@ -424,7 +555,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                     files, text = {}, _decode(up.raw, "request body")
                 if not name:
                     raise InputError("give the module set a name (query parameter or field 'name')")
-                res = await in_pool(bench.add_module_set, check_name(name), text, files_source(files))
+                res = await run_in_threadpool(bench.add_module_set, check_name(name), text, files_source(files))
         else:
             f = up.file("file", "modules", "zip")
             if f is None:
@@ -432,12 +563,12 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                                  "'files') or 'file' (zip)")
             fname, data = f
             if _is_zip(fname, data):
-                res = await in_pool(bench.add_module_set_from_zip, data, fname, name)
+                res = await run_in_threadpool(bench.add_module_set_from_zip, data, fname, name)
             else:
                 if not name:
                     raise InputError("give the module set a name (form field 'name')")
                 files = {n: d for n, d in up.files.get("files", [])}
-                res = await in_pool(bench.add_module_set, name, _decode(data, fname), files_source(files))
+                res = await run_in_threadpool(bench.add_module_set, name, _decode(data, fname), files_source(files))
         return JSONResponse(res, status_code=201)
 
     @app.get("/api/costs")
@@ -449,36 +580,54 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     def api_benchmarks():
         return clean_json(bench.benchmarks())
 
+    def read_api_upload(request: Request):
+        def read(up: Upload):
+            token = request.headers.get("x-author-token")
+            if up.raw is not None:
+                text = _decode(up.raw, "request body")
+                fname = "solution.json"
+                meta = {k: request.query_params.get(k) for k in ("author", "email", "affiliation")}
+                data = parse_json(text, fname)
+                if isinstance(data, dict) and "solution" in data and "taskID" not in data:
+                    sol = data["solution"]
+                    text = sol if isinstance(sol, str) else json.dumps(sol)
+                    for k in ("author", "email", "affiliation"):
+                        if data.get(k) is not None:
+                            if not isinstance(data[k], str):
+                                raise InputError("expected a string", file="request body", path=[k])
+                            meta[k] = data[k]
+                    if data.get("token") is not None:
+                        token = str(data["token"])
+            else:
+                f = up.file("file", "solution")
+                if f is None:
+                    raise InputError("send the solution as form field 'file' (a CoBRA solution JSON file)")
+                fname, raw = f
+                text = _decode(raw, fname)
+                meta = {k: up.fields.get(k) for k in ("author", "email", "affiliation")}
+                token = up.fields.get("token") or token
+            return text, fname, meta, token
+        return read
+
     @app.post("/api/solutions", status_code=201)
     async def api_submit(request: Request):
-        up = await read_upload(request)
-        token = request.headers.get("x-author-token")
-        if up.raw is not None:
-            text = _decode(up.raw, "request body")
-            fname = "solution.json"
-            meta = {k: request.query_params.get(k) for k in ("author", "email", "affiliation")}
-            data = loads_json(text, fname)
-            if isinstance(data, dict) and "solution" in data and "taskID" not in data:
-                sol = data["solution"]
-                text = sol if isinstance(sol, str) else json.dumps(sol)
-                for k in ("author", "email", "affiliation"):
-                    if data.get(k) is not None:
-                        if not isinstance(data[k], str):
-                            raise InputError("expected a string", file="request body", path=[k])
-                        meta[k] = data[k]
-                if data.get("token") is not None:
-                    token = str(data["token"])
-        else:
-            f = up.file("file", "solution")
-            if f is None:
-                raise InputError("send the solution as form field 'file' (a CoBRA solution JSON file)")
-            fname, raw = f
-            text = _decode(raw, fname)
-            meta = {k: up.fields.get(k) for k in ("author", "email", "affiliation")}
-            token = up.fields.get("token") or token
-        res: SubmitResult = await in_pool(bench.submit_solution, text, fname, meta["author"], meta["email"],
-                                          meta["affiliation"], token or None)
-        return JSONResponse(res.to_json(), status_code=201 if res.valid else 422)
+        job, fut, position = await submit(request, read_api_upload(request))
+        if wants_async(request):
+            return JSONResponse({**queue.status(job), "status_url": f"/api/checks/{job.id}"}, status_code=202,
+                                headers={"Location": f"/api/checks/{job.id}"})
+        out = await asyncio.wrap_future(fut)
+        return JSONResponse({**out["body"], "queue_position": position}, status_code=out["status"])
+
+    @app.get("/api/checks/{job_id}")
+    def api_check_status(job_id: str):
+        job = queue.get(job_id)
+        if job is None:
+            raise NotFound("unknown or expired check (results are kept for an hour)")
+        return clean_json(queue.status(job))
+
+    @app.get("/api/queue")
+    def api_queue():
+        return queue.stats()
 
     @app.get("/api/solutions")
     def api_solutions(request: Request):
@@ -489,7 +638,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return [solution_summary(r) for r in rows]
 
     @app.get("/api/solutions/{sid}")
-    def api_solution(sid: int):
+    def api_solution(sid: str):
         row = bench.solution_row(sid)
         out = solution_summary(row)
         out["email"] = None  # never published
@@ -497,12 +646,12 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return clean_json(out)
 
     @app.get("/api/solutions/{sid}/json")
-    def api_solution_json(sid: int):
-        return Response(bench.solution_row(sid).solution_json, media_type="application/json")
+    def api_solution_json(sid: str):
+        return Response(bench.solution_text(sid), media_type="application/json")
 
     @app.delete("/api/solutions/{sid}")
-    async def api_withdraw(sid: int, request: Request):
-        return await in_pool(bench.withdraw, sid, request.headers.get("x-author-token"))
+    async def api_withdraw(sid: str, request: Request):
+        return await run_in_threadpool(bench.withdraw, sid, request.headers.get("x-author-token"))
 
     @app.get("/api/leaderboard/{bid:path}")
     def api_leaderboard(bid: str):

@@ -8,11 +8,15 @@ from __future__ import annotations
 
 import datetime as _dt
 from pathlib import Path
-from typing import Optional
+from typing import Dict, Optional, Sequence
 
-from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, Index)
+from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, Index, inspect)
 from sqlalchemy.engine import Engine, make_url
-from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
+from sqlalchemy.orm import DeclarativeBase, Mapped, load_only, mapped_column, sessionmaker
+
+from ..errors import InputError
+
+MAX_ID = 2 ** 63 - 1  # the largest row ID both SQLite and PostgreSQL (BIGINT) can hold
 
 
 def utcnow() -> _dt.datetime:
@@ -86,6 +90,48 @@ class SolutionRow(Base):
 Index("ix_solutions_board", SolutionRow.task_id, SolutionRow.module_set, SolutionRow.cost_key, SolutionRow.cost)
 
 
+# columns the listings read (never the stored files: json, solution_json, verdict_json, ...)
+TASK_LIST_COLUMNS = (TaskRow.id, TaskRow.task_id, TaskRow.name, TaskRow.tags, TaskRow.folder, TaskRow.assets,
+                     TaskRow.n_goals, TaskRow.n_obstacles, TaskRow.origin, TaskRow.created)
+MODULE_SET_LIST_COLUMNS = (ModuleSetRow.id, ModuleSetRow.name, ModuleSetRow.folder, ModuleSetRow.assets,
+                           ModuleSetRow.module_ids, ModuleSetRow.origin, ModuleSetRow.created)
+SOLUTION_LIST_COLUMNS = (SolutionRow.id, SolutionRow.benchmark_id, SolutionRow.task_id, SolutionRow.module_set,
+                         SolutionRow.cost_function, SolutionRow.cost_key, SolutionRow.author_name,
+                         SolutionRow.author_affiliation, SolutionRow.valid, SolutionRow.cost, SolutionRow.n_modules,
+                         SolutionRow.dof, SolutionRow.created, SolutionRow.withdrawn)
+SOLUTION_PAGE_COLUMNS = SOLUTION_LIST_COLUMNS + (SolutionRow.verdict_json,)
+
+
+def only(columns: Sequence) -> "load_only":
+    """Query option: load just these columns (the others raise when touched on a detached row)."""
+    return load_only(*columns, raiseload=True)
+
+
+def check_row(row: Base, fields: Optional[Dict[str, str]] = None, file: Optional[str] = None) -> None:
+    """Refuse values the database would refuse, *before* anything is stored or checked: a string longer than its
+    column (PostgreSQL raises, SQLite would silently keep it) or containing a NUL character (PostgreSQL text
+    cannot hold it). ``fields`` maps column names to the names the user knows (JSON fields, form fields)."""
+    unloaded = inspect(row).unloaded
+    for col in row.__table__.columns:
+        if col.key in unloaded:
+            continue
+        v = getattr(row, col.key, None)
+        if not isinstance(v, str):
+            continue
+        label = (fields or {}).get(col.key, col.key)
+        if "\x00" in v:
+            raise InputError("contains a NUL character", file=file, path=[label])
+        n = getattr(col.type, "length", None)
+        if n is not None and len(v) > n:
+            raise InputError(f"at most {n} characters are allowed (got {len(v)})", file=file, path=[label])
+
+
+def _check_before_flush(session, _ctx, _instances):  # the safety net under every explicit check_row
+    for obj in list(session.new) + list(session.dirty):
+        if isinstance(obj, Base):
+            check_row(obj)
+
+
 def normalize_url(db_url: Optional[str], data_dir: Path) -> str:
     """Default: ``sqlite:///<data>/bench.db``. ``postgresql://`` / ``postgres://`` use the psycopg 3 driver."""
     if not db_url:
@@ -115,4 +161,6 @@ def make_engine(url: str) -> Engine:
 
 def make_sessionmaker(engine: Engine) -> sessionmaker:
     Base.metadata.create_all(engine)
-    return sessionmaker(engine, expire_on_commit=False)
+    maker = sessionmaker(engine, expire_on_commit=False)
+    event.listen(maker, "before_flush", _check_before_flush)
+    return maker

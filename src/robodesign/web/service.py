@@ -7,6 +7,8 @@ Everything here is synchronous; the web layer runs it in a thread pool. Bad inpu
 """
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import hmac
 import json
@@ -16,8 +18,8 @@ import os
 import secrets
 import shutil
 import threading
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -57,6 +59,16 @@ class Forbidden(RobodesignError):
 
 
 @dataclass
+class Limits:
+    """What one uploaded solution may hold (docs/website.md, "Limits"). Beyond them: 413 naming the field."""
+    notes_chars: int = 16_384  # ``notes``
+    text_chars: int = 1_000  # every other free-text field: version, publication, processorName, date, list entries
+    list_items: int = 100  # entries of author / email / affiliation / tags
+    trajectory_values: int = 500_000  # samples × joints of the trajectory
+    modules: int = 1_000  # entries of moduleOrder / moduleConnection
+
+
+@dataclass
 class Settings:
     data_dir: Path
     db_url: Optional[str] = None
@@ -66,6 +78,7 @@ class Settings:
     check_workers: int = max(2, min(8, os.cpu_count() or 2))
     seed_dirs: Sequence[Path] = ()
     seed_builtin: bool = True
+    limits: Limits = field(default_factory=Limits)
 
 
 @dataclass
@@ -139,8 +152,13 @@ def canonical_benchmark(module_set: str, cost_text: str, task_id: str) -> Tuple[
     return str(bid), cost.descriptor()
 
 
+MAX_BENCHMARK_ID = 600  # the solutions.benchmark_id column
+
+
 def parse_benchmark(text: str) -> Tuple[str, str, str, str]:
     """→ (display ID, module set, cost key, task ID). Bare robot names mean ``M-``."""
+    if len(text) > MAX_BENCHMARK_ID:
+        raise InputError(f"benchmark ID of {len(text)} characters (at most {MAX_BENCHMARK_ID})")
     bid = BenchmarkID.parse(text)
     if bid.robot.collaborative or len(bid.robot.robots) != 1:
         raise InputError(f"benchmark ID {text!r}: collaborative (multi-robot) benchmarks are not hosted")
@@ -159,18 +177,24 @@ class Bench:
         self.data = Path(settings.data_dir).resolve()
         for sub in ("tasks", "modulesets", "tmp"):
             (self.data / sub).mkdir(parents=True, exist_ok=True)
+        self.seed_log: List[str] = []
+        self.removed_staging = remove_stale_staging(self.data / "tmp")
+        for name in self.removed_staging:
+            self._note(f"removed the staging folder tmp/{name} left by a server that stopped mid-upload")
+        self.tmp, self._tmp_lock = claim_staging(self.data / "tmp")
         self.db_url = db.normalize_url(settings.db_url, self.data)
         self.engine = db.make_engine(self.db_url)
         self.Session = db.make_sessionmaker(self.engine)
-        self.pool = ThreadPoolExecutor(max_workers=settings.check_workers, thread_name_prefix="bench-check")
         self._lock = threading.RLock()
         self._tasks: Dict[str, Task] = {}
         self._msets: Dict[str, ModuleSet] = {}
-        self.seed_log: List[str] = []
 
     def close(self):
-        self.pool.shutdown(wait=False, cancel_futures=True)
         self.engine.dispose()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+        with contextlib.suppress(OSError):
+            os.unlink(str(self.tmp) + ".lock")
+        self._tmp_lock.close()
 
     # ----------------------------------------------------------------------------------------------------
     # seeding
@@ -224,7 +248,7 @@ class Bench:
                 continue
             try:
                 text = f.read_text(encoding="utf-8")
-                data = loads_json(text, f.name)
+                data = parse_json(text, f.name)
                 if not (isinstance(data, dict) and isinstance(data.get("header"), dict) and "ID" in data["header"]):
                     continue
                 tid = str(data["header"]["ID"])
@@ -252,9 +276,22 @@ class Bench:
     # registering tasks and module sets
     # ----------------------------------------------------------------------------------------------------
     def _staging(self) -> Path:
-        p = self.data / "tmp" / secrets.token_hex(8)
+        p = self.tmp / secrets.token_hex(8)
         p.mkdir(parents=True)
         return p
+
+    def _commit_new(self, row: db.Base, folder: Path, taken: str) -> None:
+        """Insert ``row`` whose files were just moved to ``folder``; on any failure the folder goes too."""
+        with self.Session() as s:
+            s.add(row)
+            try:
+                s.commit()
+            except BaseException as e:
+                s.rollback()
+                shutil.rmtree(self.data / folder, ignore_errors=True)
+                if isinstance(e, IntegrityError):
+                    raise Conflict(taken) from None
+                raise
 
     def _store_refs(self, refs: Dict[str, list], source: FileSource, dest: Path) -> List[dict]:
         assets, total = [], 0
@@ -271,9 +308,13 @@ class Bench:
 
     def add_task(self, text: str, source: FileSource, fname: str = "task.json", origin: str = "upload") -> dict:
         """Validate (schema first), store the task file and its referenced meshes, register it."""
-        data = validate_task_json(loads_json(text, fname), fname)
+        data = validate_task_json(parse_json(text, fname), fname)
         tid = str(data["header"]["ID"])
         segs = task_id_segments(tid, fname)
+        header = data["header"]
+        row = db.TaskRow(task_id=tid, name=str(header.get("taskName") or segs[-1]), json=text, folder="",
+                         origin=origin)
+        db.check_row(row, {"task_id": "header.ID", "name": "header.taskName"}, fname)
         if self._has_task(tid):
             raise Conflict(f"task {tid!r} is already registered (task IDs are immutable; use a new ID or version)")
         stage = self._staging()
@@ -292,25 +333,18 @@ class Bench:
             shutil.rmtree(stage, ignore_errors=True)
             raise
         shutil.rmtree(stage, ignore_errors=True)
-        row = db.TaskRow(task_id=tid, name=task.header.name or segs[-1], tags=json.dumps(list(task.header.tags)),
-                         json=text, folder=folder.as_posix(), assets=json.dumps(assets), n_goals=len(task.goals),
-                         n_obstacles=len(task.obstacles), origin=origin)
-        with self.Session() as s:
-            s.add(row)
-            try:
-                s.commit()
-            except IntegrityError:
-                s.rollback()
-                shutil.rmtree(self.data / folder, ignore_errors=True)
-                raise Conflict(f"task {tid!r} is already registered") from None
+        row.tags, row.folder, row.assets = json.dumps(list(task.header.tags)), folder.as_posix(), json.dumps(assets)
+        row.n_goals, row.n_obstacles = len(task.goals), len(task.obstacles)
+        self._commit_new(row, folder, f"task {tid!r} is already registered")
         return {"id": tid, "name": row.name, "assets": [a["path"] for a in assets], "warnings": list(task.warnings),
                 "url": f"/tasks/{tid}"}
 
     def add_module_set(self, name: str, text: str, source: FileSource, origin: str = "upload") -> dict:
         check_name(name)
         fname = f"{name}/modules.json"
-        data = loads_json(text, fname)
+        data = parse_json(text, fname)
         validate(data, "modules", fname)
+        db.check_row(db.ModuleSetRow(name=name, json=text, folder=""), {"json": "modules.json"}, fname)
         if self._has_module_set(name):
             raise Conflict(f"module set {name!r} is already registered")
         stage = self._staging()
@@ -328,15 +362,9 @@ class Bench:
             shutil.rmtree(stage, ignore_errors=True)
             raise
         shutil.rmtree(stage, ignore_errors=True)
-        with self.Session() as s:
-            s.add(db.ModuleSetRow(name=name, json=text, folder=folder.as_posix(), assets=json.dumps(assets),
-                                  module_ids=json.dumps(list(ms.modules)), origin=origin))
-            try:
-                s.commit()
-            except IntegrityError:
-                s.rollback()
-                shutil.rmtree(self.data / folder, ignore_errors=True)
-                raise Conflict(f"module set {name!r} is already registered") from None
+        self._commit_new(db.ModuleSetRow(name=name, json=text, folder=folder.as_posix(), assets=json.dumps(assets),
+                                         module_ids=json.dumps(list(ms.modules)), origin=origin),
+                         folder, f"module set {name!r} is already registered")
         return {"name": name, "modules": len(ms.modules), "assets": [a["path"] for a in assets],
                 "url": f"/modulesets/{name}"}
 
@@ -351,7 +379,7 @@ class Bench:
                 text = raw.decode("utf-8")
             except UnicodeDecodeError:
                 raise InputError("not UTF-8 text", file=rel) from None
-            data = loads_json(text, rel)
+            data = parse_json(text, rel)
             if isinstance(data, dict) and "header" in data:
                 found.append((rel, text, data))
         if not found:
@@ -428,12 +456,16 @@ class Bench:
         return ms
 
     def tasks(self) -> List[db.TaskRow]:
+        """Every task, without its file (``json`` is not loaded)."""
         with self.Session() as s:
-            return list(s.scalars(select(db.TaskRow).order_by(db.TaskRow.task_id)))
+            return list(s.scalars(select(db.TaskRow).options(db.only(db.TASK_LIST_COLUMNS))
+                                  .order_by(db.TaskRow.task_id)))
 
     def module_sets(self) -> List[db.ModuleSetRow]:
+        """Every module set, without its file (``json`` is not loaded)."""
         with self.Session() as s:
-            return list(s.scalars(select(db.ModuleSetRow).order_by(db.ModuleSetRow.name)))
+            return list(s.scalars(select(db.ModuleSetRow).options(db.only(db.MODULE_SET_LIST_COLUMNS))
+                                  .order_by(db.ModuleSetRow.name)))
 
     def cost_functions(self) -> List[db.CostFunctionRow]:
         with self.Session() as s:
@@ -443,10 +475,15 @@ class Bench:
     # solutions
     # ----------------------------------------------------------------------------------------------------
     def prepare_solution(self, text: str, fname: str) -> Tuple[Solution, Task, ModuleSet, str, str]:
-        data = loads_json(text, fname)
+        data = parse_json(text, fname)
         sol = parse_solution(data, fname)  # schema validation first
+        check_solution_size(data, sol, self.settings.limits, fname)
         if not sol.module_set:
             raise InputError("the solution names no moduleSet", file=fname, path=["moduleSet"])
+        for key, value, n in (("taskID", sol.task_id, 200), ("moduleSet", sol.module_set, 100),
+                              ("costFunction", sol.cost_function, 300)):
+            if len(value) > n:  # the database columns; checked before the cost is even parsed
+                raise InputError(f"at most {n} characters are allowed (got {len(value)})", file=fname, path=[key])
         try:
             display, key = canonical_benchmark(sol.module_set, sol.cost_function, sol.task_id)
         except InputError as e:
@@ -468,53 +505,78 @@ class Bench:
         names = [getattr(r, attr) for r in rows]
         return ", ".join(names[:n]) + (", ..." if len(names) > n else "") if names else "none"
 
-    def submit_solution(self, text: str, fname: str = "solution.json", author: Optional[str] = None,
-                        email: Optional[str] = None, affiliation: Optional[str] = None,
-                        token: Optional[str] = None) -> SubmitResult:
+    def prepare_submission(self, text: str, fname: str = "solution.json", author: Optional[str] = None,
+                           email: Optional[str] = None, affiliation: Optional[str] = None,
+                           token: Optional[str] = None) -> "Submission":
+        """Everything that can be refused without running the checker: JSON, schema, sizes, lengths, the task,
+        module set and cost; the row to store is built and checked against the database's column rules."""
         sol, task, ms, display, key = self.prepare_solution(text, fname)
         author = (author or "").strip() or (sol.author[0] if sol.author else "")
         if not author:
             raise InputError("the author name is required (form field 'author' or the solution's 'author')")
         email = (email or "").strip() or (sol.email[0] if sol.email else "")
         affiliation = (affiliation or "").strip() or (sol.affiliation[0] if sol.affiliation else "")
-        for label, v, n in (("author", author, 200), ("email", email, 200), ("affiliation", affiliation, 300)):
-            if len(v) > n:
-                raise InputError(f"{label} is longer than {n} characters")
         if token is not None and token != "" and not (8 <= len(token) <= 200):
             raise InputError("a chosen token must have 8 to 200 characters (or leave it empty to get a random one)")
-        verdict: Verdict = check(task, sol, ms)
+        row = db.SolutionRow(benchmark_id=display, task_id=sol.task_id, module_set=sol.module_set,
+                             cost_function=sol.cost_function, cost_key=key, author_name=author, author_email=email,
+                             author_affiliation=affiliation, token_hash="", valid=True, solution_json=text,
+                             n_modules=len(sol.module_order))
+        db.check_row(row, {"author_name": "author", "author_email": "email", "author_affiliation": "affiliation",
+                           "cost_key": "costFunction", "benchmark_id": "benchmark ID"})
+        if token and "\x00" in token:
+            raise InputError("the token contains a NUL character")
+        return Submission(sol, task, ms, row, token or None, size=trajectory_values(sol))
+
+    def judge(self, sub: "Submission") -> SubmitResult:
+        """Run the checker on a prepared submission; store it when valid."""
+        sol, row = sub.solution, sub.row
+        verdict: Verdict = check(sub.task, sol, sub.module_set)
         vj = clean_json(verdict.to_json())
         cost = vj.get("cost")
         if not verdict.valid:
-            return SubmitResult(False, display, vj, cost, task_id=sol.task_id, module_set=sol.module_set)
-        token = token or secrets.token_urlsafe(24)
-        dof = int(verdict.costs.get("numJ", 0) or 0)
-        row = db.SolutionRow(benchmark_id=display, task_id=sol.task_id, module_set=sol.module_set,
-                             cost_function=sol.cost_function, cost_key=key, author_name=author, author_email=email,
-                             author_affiliation=affiliation, token_hash=hash_token(token), valid=True,
-                             cost=cost, costs_json=json.dumps(vj.get("costs", {})), verdict_json=json.dumps(vj),
-                             solution_json=text, n_modules=len(sol.module_order), dof=dof)
+            return SubmitResult(False, row.benchmark_id, vj, cost, task_id=sol.task_id, module_set=sol.module_set)
+        token = sub.token or secrets.token_urlsafe(24)
+        row.token_hash, row.cost = hash_token(token), cost
+        row.costs_json, row.verdict_json = json.dumps(vj.get("costs", {})), json.dumps(vj)
+        row.dof = int(verdict.costs.get("numJ", 0) or 0)
         with self.Session() as s:
             s.add(row)
             s.commit()
             rid = row.id
-        return SubmitResult(True, display, vj, cost, id=rid, token=token, task_id=sol.task_id,
+        return SubmitResult(True, row.benchmark_id, vj, cost, id=rid, token=token, task_id=sol.task_id,
                             module_set=sol.module_set)
 
+    def submit_solution(self, text: str, fname: str = "solution.json", author: Optional[str] = None,
+                        email: Optional[str] = None, affiliation: Optional[str] = None,
+                        token: Optional[str] = None) -> SubmitResult:
+        """Prepare, check and (when valid) store one solution, in the calling thread."""
+        return self.judge(self.prepare_submission(text, fname, author, email, affiliation, token))
+
     def solution_row(self, sid: int) -> db.SolutionRow:
+        """The row shown on a solution page (not the solution file itself)."""
         with self.Session() as s:
-            row = s.get(db.SolutionRow, sid)
+            row = s.scalar(select(db.SolutionRow).options(db.only(db.SOLUTION_PAGE_COLUMNS))
+                           .where(db.SolutionRow.id == solution_id(sid)))
         if row is None:
             raise NotFound(f"unknown solution {sid}")
         return row
 
+    def solution_text(self, sid: int) -> str:
+        """The solution file as uploaded."""
+        with self.Session() as s:
+            text = s.scalar(select(db.SolutionRow.solution_json).where(db.SolutionRow.id == solution_id(sid)))
+        if text is None:
+            raise NotFound(f"unknown solution {sid}")
+        return text
+
     def solution(self, sid: int) -> Solution:
-        row = self.solution_row(sid)
-        return parse_solution(loads_json(row.solution_json, f"solution-{sid}.json"), f"solution-{sid}.json")
+        return parse_solution(loads_json(self.solution_text(sid), f"solution-{sid}.json"), f"solution-{sid}.json")
 
     def withdraw(self, sid: int, token: Optional[str]) -> dict:
         with self.Session() as s:
-            row = s.get(db.SolutionRow, sid)
+            cols = db.SOLUTION_LIST_COLUMNS + (db.SolutionRow.token_hash, db.SolutionRow.withdrawn_at)
+            row = s.scalar(select(db.SolutionRow).options(db.only(cols)).where(db.SolutionRow.id == solution_id(sid)))
             if row is None:
                 raise NotFound(f"unknown solution {sid}")
             if not verify_token(token, row.token_hash):
@@ -524,12 +586,13 @@ class Bench:
                 row.withdrawn = True
                 row.withdrawn_at = db.utcnow()
                 s.commit()
-            return {"id": sid, "withdrawn": True, "benchmark_id": row.benchmark_id}
+            return {"id": row.id, "withdrawn": True, "benchmark_id": row.benchmark_id}
 
     def list_solutions(self, task: Optional[str] = None, cost: Optional[str] = None, moduleset: Optional[str] = None,
                        min_cost: Optional[float] = None, max_cost: Optional[float] = None,
                        limit: int = 1000) -> List[db.SolutionRow]:
-        q = select(db.SolutionRow).where(db.SolutionRow.withdrawn.is_(False), db.SolutionRow.valid.is_(True))
+        q = (select(db.SolutionRow).options(db.only(db.SOLUTION_LIST_COLUMNS))
+             .where(db.SolutionRow.withdrawn.is_(False), db.SolutionRow.valid.is_(True)))
         if task:
             q = q.where(db.SolutionRow.task_id == task)
         if moduleset:
@@ -552,7 +615,7 @@ class Bench:
             raise NotFound(f"benchmark {display!r}: unknown task {tid!r}")
         if not self._has_module_set(ms):
             raise NotFound(f"benchmark {display!r}: unknown module set {ms!r}")
-        q = (select(db.SolutionRow)
+        q = (select(db.SolutionRow).options(db.only(db.SOLUTION_LIST_COLUMNS))
              .where(db.SolutionRow.withdrawn.is_(False), db.SolutionRow.valid.is_(True),
                     db.SolutionRow.task_id == tid, db.SolutionRow.module_set == ms, db.SolutionRow.cost_key == key)
              .order_by(db.SolutionRow.cost.asc().nulls_last(), db.SolutionRow.created.asc(), db.SolutionRow.id.asc()))
@@ -580,6 +643,114 @@ class Bench:
              .group_by(S.module_set, S.cost_key))
         with self.Session() as s:
             return {(m, k): n for m, k, n in s.execute(q)}
+
+
+@dataclass
+class Submission:
+    """A solution that passed every check but the checker itself: what :meth:`Bench.judge` needs."""
+    solution: Solution
+    task: Task
+    module_set: ModuleSet
+    row: db.SolutionRow
+    token: Optional[str]
+    size: int  # samples × joints: how long the check will take
+
+
+def solution_id(sid) -> int:
+    """A solution ID from a URL: a decimal integer the database can hold, else :class:`NotFound`."""
+    text = str(sid)
+    if not (text.isascii() and text.isdigit()) or len(text) > 19 or int(text) > db.MAX_ID:
+        raise NotFound(f"unknown solution {text[:40]!r}")
+    return int(text)
+
+
+def parse_json(text: str, fname: str):
+    """:func:`robodesign.jsonio.loads_json`, plus the two ways Python's own parser fails on hostile input."""
+    try:
+        return loads_json(text, fname)
+    except RecursionError:
+        raise InputError("JSON nested too deeply", file=fname) from None
+    except InputError:
+        raise
+    except ValueError as e:  # e.g. an integer of more than 4300 digits
+        raise InputError(f"unreadable number ({str(e).split(':')[0]})", file=fname) from None
+
+
+def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str) -> None:
+    """The size caps of :class:`Limits` (413 naming the field)."""
+    if len(sol.notes) > limits.notes_chars:
+        raise TooLarge(f"at most {limits.notes_chars} characters are allowed (got {len(sol.notes)})",
+                       file=fname, path=["notes"])
+    for key in ("version", "publication", "processorName", "date"):
+        v = data.get(key)
+        if isinstance(v, str) and len(v) > limits.text_chars:
+            raise TooLarge(f"at most {limits.text_chars} characters are allowed (got {len(v)})", file=fname,
+                           path=[key])
+    for key in ("author", "email", "affiliation", "tags"):
+        v = data.get(key)
+        v = [v] if isinstance(v, str) else (v or [])
+        if len(v) > limits.list_items:
+            raise TooLarge(f"at most {limits.list_items} entries are allowed (got {len(v)})", file=fname, path=[key])
+        for i, x in enumerate(v):
+            if isinstance(x, str) and len(x) > limits.text_chars:
+                raise TooLarge(f"at most {limits.text_chars} characters are allowed (got {len(x)})", file=fname,
+                               path=[key, i])
+    for key in ("moduleOrder", "moduleConnection"):
+        v = data.get(key) or []
+        if len(v) > limits.modules:
+            raise TooLarge(f"at most {limits.modules} entries are allowed (got {len(v)})", file=fname, path=[key])
+    n = trajectory_values(sol)
+    if n > limits.trajectory_values:
+        raise TooLarge(f"{len(sol.trajectory.q)} samples × {n // max(1, len(sol.trajectory.q))} joints = {n} values; "
+                       f"at most {limits.trajectory_values} are allowed", file=fname, path=["trajectory"])
+
+
+def trajectory_values(sol: Solution) -> int:
+    """samples × joints of a solution's trajectory."""
+    return int(sol.trajectory.q.size)
+
+
+STAGING_LOCK = ".lock"
+
+
+def claim_staging(tmp: Path):
+    """A staging folder of this server process under ``tmp``, held by an exclusive lock on ``<folder>.lock``
+    for as long as the process lives (the lock dies with the process, even when it is killed)."""
+    folder = tmp / f"srv-{os.getpid()}-{secrets.token_hex(4)}"
+    lock = open(str(folder) + STAGING_LOCK, "w")
+    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    folder.mkdir()
+    return folder, lock
+
+
+def remove_stale_staging(tmp: Path) -> List[str]:
+    """Delete what servers that are gone left in ``tmp``: staging folders whose lock no process holds (and
+    anything else there that no lock protects). Folders of servers still running on the same data folder stay."""
+    removed = []
+    for p in sorted(tmp.iterdir()):
+        if p.name.endswith(STAGING_LOCK):
+            continue
+        lock_path = Path(str(p) + STAGING_LOCK)
+        try:
+            with open(lock_path, "a") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)  # free: its server is gone
+                if p.is_dir() and not p.is_symlink():
+                    shutil.rmtree(p, ignore_errors=True)
+                else:
+                    p.unlink(missing_ok=True)
+                lock_path.unlink(missing_ok=True)
+        except BlockingIOError:
+            continue  # a running server owns it
+        removed.append(p.name)
+    for lock_path in tmp.glob("*" + STAGING_LOCK):  # a lock without its folder (not one being set up right now)
+        if not Path(str(lock_path)[: -len(STAGING_LOCK)]).exists() and time.time() - lock_path.stat().st_mtime > 60:
+            with open(lock_path, "a") as lock:
+                try:
+                    fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    lock_path.unlink(missing_ok=True)
+                except BlockingIOError:
+                    pass
+    return removed
 
 
 class _Prefixed(FileSource):
