@@ -492,7 +492,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.get("/api/tasks/{task_id:path}")
     def api_task(task_id: str):
-        return Response(bench.task_row(task_id).json, media_type="application/json")
+        return Response(bench.task_row(task_id, file=True).json, media_type="application/json")
 
     @app.post("/api/tasks", status_code=201)
     async def api_add_task(request: Request):
@@ -530,7 +530,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.get("/api/modulesets/{name}")
     def api_moduleset(name: str):
-        return Response(bench.module_set_row(name).json, media_type="application/json")
+        return Response(bench.module_set_row(name, file=True).json, media_type="application/json")
 
     @app.post("/api/modulesets", status_code=201)
     async def api_add_moduleset(request: Request):

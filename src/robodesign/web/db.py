@@ -16,7 +16,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, load_only, mapped_column, se
 
 from ..errors import InputError
 
-MAX_ID = 2 ** 63 - 1  # the largest row ID both SQLite and PostgreSQL (BIGINT) can hold
+MAX_ID = 2 ** 31 - 1  # the largest row ID of the Integer key columns on every backend (32 bits on PostgreSQL)
 
 
 def utcnow() -> _dt.datetime:

@@ -418,16 +418,20 @@ class Bench:
     # ----------------------------------------------------------------------------------------------------
     # lookups
     # ----------------------------------------------------------------------------------------------------
-    def task_row(self, tid: str) -> db.TaskRow:
+    def task_row(self, tid: str, file: bool = False) -> db.TaskRow:
+        """The task's row; its file (``json``) only when ``file``."""
+        cols = db.TASK_LIST_COLUMNS + ((db.TaskRow.json,) if file else ())
         with self.Session() as s:
-            row = s.scalar(select(db.TaskRow).where(db.TaskRow.task_id == tid))
+            row = s.scalar(select(db.TaskRow).options(db.only(cols)).where(db.TaskRow.task_id == tid))
         if row is None:
             raise NotFound(f"unknown task {tid!r}")
         return row
 
-    def module_set_row(self, name: str) -> db.ModuleSetRow:
+    def module_set_row(self, name: str, file: bool = False) -> db.ModuleSetRow:
+        """The module set's row; its file (``json``) only when ``file``."""
+        cols = db.MODULE_SET_LIST_COLUMNS + ((db.ModuleSetRow.json,) if file else ())
         with self.Session() as s:
-            row = s.scalar(select(db.ModuleSetRow).where(db.ModuleSetRow.name == name))
+            row = s.scalar(select(db.ModuleSetRow).options(db.only(cols)).where(db.ModuleSetRow.name == name))
         if row is None:
             raise NotFound(f"unknown module set {name!r}")
         return row
@@ -436,7 +440,7 @@ class Bench:
         with self._lock:
             if tid in self._tasks:
                 return self._tasks[tid]
-        row = self.task_row(tid)
+        row = self.task_row(tid, file=True)
         segs = tid.split("/")
         f = (self.data / row.folder).joinpath(*segs[:-1], segs[-1] + ".json")
         task = parse_task(loads_json(row.json, f.name), f)
@@ -448,7 +452,7 @@ class Bench:
         with self._lock:
             if name in self._msets:
                 return self._msets[name]
-        row = self.module_set_row(name)
+        row = self.module_set_row(name, file=True)
         f = self.data / row.folder / "modules.json"
         ms = parse_module_set(loads_json(row.json, f"{name}/modules.json"), f, name=name)
         with self._lock:

@@ -133,15 +133,23 @@ class CheckQueue:
             return self._jobs.get(job_id)
 
     def status(self, job: Job) -> dict:
-        """``{job, state, position (jobs ahead in the line; 0 = next or being checked), waiting, checking}`` and,
+        """``{job, state, position (jobs that start before it; 0 = next or being checked), waiting, checking}`` and,
         once finished, ``status`` (the HTTP status of the upload) and ``result`` (its answer)."""
         with self._cond:
-            out = {"job": job.id, "state": job.state, "position": self._line.index(job) if job in self._line else 0,
+            out = {"job": job.id, "state": job.state, "position": self._ahead(job),
                    "waiting": len(self._line), "checking": self._running}
             if job.result is not None:
                 out["status"] = job.result["status"]
                 out["result"] = job.result["body"]
             return out
+
+    def _ahead(self, job: Job) -> int:
+        """Jobs in line that start before ``job``: every one ahead of a big job, the small ones ahead of a small
+        job (small jobs never wait for the big-check slots)."""
+        if job not in self._line:
+            return 0
+        ahead = self._line[: self._line.index(job)]
+        return len(ahead) if job.big else sum(1 for j in ahead if not j.big)
 
     def stats(self) -> dict:
         with self._cond:
