@@ -368,27 +368,30 @@ def test_one_client_holds_at_most_per_client_places(make_site):
 
 
 def test_small_upload_is_not_stuck_behind_big_checks(make_site):
-    # 2 checker threads; checks of more than 500 values are "big" and use at most one of them
-    c = make_site(check_workers=2, queue_size=4, upload_rate=0, big_check_values=500)
-    gate = _gate(c.app)
-    big = [TestClient(c.app, client=(f"192.0.2.{i}", 1)).post(
-        "/api/solutions?async=1", json={"solution": sol_json(1 + i / 10), "author": f"big{i}"}).json()["job"]
-        for i in range(2)]  # 702 values each
-    _wait_state(c, big[0], "checking")
-    assert c.get(f"/api/checks/{big[1]}").json()["state"] == "queued"  # waits for the big slot
     small_sol = sol_json(3.0)
-    for key in ("q", "dq", "ddq"):
+    for key in ("q", "dq", "ddq"):  # one joint only: smaller (and invalid for the 2-joint robot)
         small_sol["trajectory"][key] = [row[:1] for row in small_sol["trajectory"][key]]
-    # a 1-joint trajectory does not fit the 2-joint robot (invalid), but it is small (351 values): it takes the
-    # free thread at once, ahead of the big upload that arrived earlier
-    r = TestClient(c.app, client=("192.0.2.99", 1)).post("/api/solutions?async=1",
-                                                           json={"solution": small_sol, "author": "small"})
+    small, big = len(json.dumps(small_sol)), len(json.dumps(sol_json(1.0)))
+    assert small < 0.8 * big
+    # 2 checker threads; uploads larger than the threshold are "big" and use at most one of them
+    c = make_site(check_workers=2, queue_size=4, upload_rate=0, big_upload_bytes=(small + big) // 2)
+    gate = _gate(c.app)
+    big_jobs = [TestClient(c.app, client=(f"192.0.2.{i}", 1)).post(
+        "/api/solutions", content=json.dumps(sol_json(1 + i / 10)), params={"author": f"big{i}", "async": 1},
+        headers={"content-type": "application/json"}).json()["job"] for i in range(2)]
+    _wait_state(c, big_jobs[0], "checking")
+    time.sleep(0.2)
+    assert c.get(f"/api/checks/{big_jobs[1]}").json()["state"] == "queued"  # waits for the big slot
+    # the small upload takes the free thread at once, ahead of the big one that arrived earlier
+    r = TestClient(c.app, client=("192.0.2.99", 1)).post(
+        "/api/solutions", content=json.dumps(small_sol), params={"author": "small", "async": 1},
+        headers={"content-type": "application/json"})
     assert r.status_code == 202 and r.json()["position"] == 0
     _wait_state(c, r.json()["job"], "checking")
-    assert c.get(f"/api/checks/{big[1]}").json()["state"] == "queued"
+    assert c.get(f"/api/checks/{big_jobs[1]}").json()["state"] == "queued"
     gate.set()
     assert _wait_state(c, r.json()["job"], "done")["status"] == 422
-    assert [_wait_state(c, j, "done")["status"] for j in big] == [201, 201]
+    assert [_wait_state(c, j, "done")["status"] for j in big_jobs] == [201, 201]
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -515,3 +518,32 @@ def test_admin_token_from_the_environment_and_open_registration(make_site, monke
     assert opened.post("/api/tasks", json=_new_task("toy/e")).status_code == 201
     with pytest.raises(Exception, match="at least 16 characters"):
         make_site(admin_token="short")
+
+
+# ------------------------------------------------------------------------------------------------------------
+# checks in separate processes (robodesign serve's default)
+# ------------------------------------------------------------------------------------------------------------
+def test_checks_in_processes(make_site):
+    c = make_site(check_processes=True, check_workers=1, upload_rate=0)
+    r = upload(c, sol_json(1.2), author="Proc")
+    assert r.status_code == 201 and r.json()["cost"] == pytest.approx(4.2)
+    r = upload(c, sol_json(broken=True))
+    assert r.status_code == 422 and r.json()["violations"][0]["constraint"] == "joint.q"
+    r = raw_post(c, b"[" * 5000 + b"]" * 5000)
+    assert r.status_code == 400 and "nested too deeply" in r.json()["detail"]
+    r = c.post("/api/solutions?async=1", json={"solution": sol_json(1.5), "author": "Async"})
+    assert r.status_code == 202
+    assert _wait_state(c, r.json()["job"], "done")["result"]["cost"] == pytest.approx(5.25)
+    assert [(e["author"], e["cost"]) for e in board(c).json()["entries"]] == [("Proc", pytest.approx(4.2)),
+                                                                            ("Async", pytest.approx(5.25))]
+    # a checker process that dies: that upload is a 500, the next one gets a new process
+    import os
+    import signal
+    pool = c.app.state.checker._get_pool()
+    for pid in list(pool._processes):
+        os.kill(pid, signal.SIGKILL)
+    time.sleep(0.5)
+    r = upload(c, sol_json(1.1), author="After")
+    if r.status_code == 500:  # the broken pool noticed on this upload
+        r = upload(c, sol_json(1.1), author="After")
+    assert r.status_code == 201 and r.json()["cost"] == pytest.approx(3.85)

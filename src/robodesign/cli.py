@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import traceback
@@ -121,10 +122,26 @@ def cmd_serve(args) -> int:
         raise InputError(f"the website needs fastapi, uvicorn, sqlalchemy and python-multipart ({e})") from None
     if args.max_upload_mb <= 0:
         raise InputError("--max-upload-mb must be positive")
+    for opt in ("queue", "per_client_queue", "upload_rate", "read_rate"):
+        if getattr(args, opt) < 0 or not math.isfinite(getattr(args, opt)):
+            raise InputError(f"--{opt.replace('_', '-')} must be a finite number ≥ 0")
+    if not (args.body_timeout > 0 and math.isfinite(args.body_timeout)):
+        raise InputError("--body-timeout must be a positive number of seconds")
     app = create_app(db_url=args.db, data_dir=args.data, seed=args.seed or (), seed_builtin=not args.no_builtin,
-                     max_request_bytes=int(args.max_upload_mb * (1 << 20)), check_workers=args.workers)
+                     max_request_bytes=int(args.max_upload_mb * (1 << 20)), check_workers=args.workers,
+                     admin_token=args.admin_token, open_registration=args.open_registration, queue_size=args.queue,
+                     per_client_queue=max(1, args.per_client_queue), upload_rate=args.upload_rate,
+                     read_rate=args.read_rate, body_timeout=args.body_timeout,
+                     check_processes=not args.check_threads)
+    if not args.check_threads:
+        app.state.checker.start()  # the checker processes, before the first upload needs them
     for line in app.state.bench.seed_log:
         print(f"robodesign: {line}", file=sys.stderr)
+    if args.open_registration:
+        print("robodesign: registration is open: anyone may add tasks and module sets", file=sys.stderr)
+    elif not (args.admin_token or os.environ.get("ROBODESIGN_ADMIN_TOKEN")):
+        print("robodesign: no admin token (ROBODESIGN_ADMIN_TOKEN / --admin-token): registering tasks and module "
+              "sets is disabled; seeds still work", file=sys.stderr)
     uvicorn.run(app, host=args.host, port=args.port, log_level="info")
     return 0
 
@@ -277,6 +294,23 @@ def build_parser() -> argparse.ArgumentParser:
     sv.add_argument("--port", type=int, default=8000, help="port (default 8000)")
     sv.add_argument("--max-upload-mb", type=float, default=20.0, help="request size limit in MiB (default 20)")
     sv.add_argument("--workers", type=int, default=None, help="checker threads (default: number of CPUs, 2..8)")
+    sv.add_argument("--admin-token", help="token that registers tasks and module sets (header X-Admin-Token or "
+                                          "Authorization: Bearer); default: $ROBODESIGN_ADMIN_TOKEN (preferred: "
+                                          "a command line is visible to other users)")
+    sv.add_argument("--open-registration", action="store_true",
+                    help="let anyone register tasks and module sets (no admin token)")
+    sv.add_argument("--queue", type=int, default=8, help="uploads that may wait for a checker thread (default 8; "
+                                                         "beyond: 429 with Retry-After)")
+    sv.add_argument("--per-client-queue", type=int, default=2, help="uploads one client may have in the queue "
+                                                                    "(default 2)")
+    sv.add_argument("--upload-rate", type=float, default=30.0, help="uploads/changes per minute per client "
+                                                                    "(default 30; 0 = no limit)")
+    sv.add_argument("--read-rate", type=float, default=20.0, help="page/API reads per second per client "
+                                                                  "(default 20; 0 = no limit)")
+    sv.add_argument("--check-threads", action="store_true", help="check uploads in threads of the server process "
+                                                                 "(default: in --workers separate processes)")
+    sv.add_argument("--body-timeout", type=float, default=120.0, help="seconds a request body may take to "
+                                                                      "arrive (default 120; slower: 408)")
     sv.set_defaults(func=cmd_serve)
 
     ge = sub.add_parser("generate", help="write seeded CoBRA tasks of a published task family into a folder "

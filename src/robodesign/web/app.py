@@ -29,9 +29,10 @@ from ..paths import assets_dir
 from . import pages
 from .cache import ByteLRU
 from .safefiles import TooLarge, check_name
-from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, Submission, SubmitResult, clean_json,
-                      files_source, parse_json, solution_summary)
+from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, clean_json, files_source, parse_json,
+                      solution_summary)
 from .throttle import Busy, CheckQueue, RateLimiter
+from .workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
 MiB = 1 << 20
@@ -267,16 +268,16 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                max_unzipped_bytes: int = 200 * MiB, check_workers: Optional[int] = None, *,
                admin_token: Optional[str] = None, open_registration: bool = False, queue_size: int = 8,
                per_client_queue: int = 2, upload_rate: float = 30.0, read_rate: float = 20.0,
-               body_timeout: float = 120.0, viewer_cache_bytes: int = 64 * MiB, big_check_values: int = 100_000,
-               limits: Optional[Limits] = None) -> FastAPI:
+               body_timeout: float = 120.0, viewer_cache_bytes: int = 64 * MiB, big_upload_bytes: int = 2 * MiB,
+               limits: Optional[Limits] = None, check_processes: bool = False) -> FastAPI:
     """Build the website (docs/website.md). ``db_url``: SQLAlchemy URL (default SQLite ``<data_dir>/bench.db``;
     ``postgresql://`` uses psycopg 3). ``seed``: extra folders to register tasks/module sets from at startup (after
     the built-in ``assets/`` when ``seed_builtin``).
 
     Registering tasks and module sets needs ``admin_token`` (default: the ``ROBODESIGN_ADMIN_TOKEN`` environment
     variable) unless ``open_registration``. ``queue_size`` uploads may wait for the ``check_workers`` checker
-    threads, at most ``per_client_queue`` per client; checks of more than ``big_check_values`` trajectory values
-    use at most all threads but one. ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client
+    threads, at most ``per_client_queue`` per client; uploads larger than ``big_upload_bytes`` use at most all threads
+    but one; ``check_processes``: run the checks in as many separate processes (robodesign.web.workers). ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client
     rate limits (0 = none); ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
     of one solution."""
     settings = Settings(data_dir=Path(data_dir), db_url=db_url, max_request_bytes=int(max_request_bytes),
@@ -291,16 +292,18 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     bench = Bench(settings)
     bench.seed(([assets_dir()] if seed_builtin else []) + list(settings.seed_dirs))
     queue = CheckQueue(settings.check_workers, queue_size, per_client_queue)
+    checker = ProcessChecker(settings, settings.check_workers) if check_processes else ThreadChecker(bench)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app):
         yield
         queue.close()
+        checker.close()
         bench.close()
 
     app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url="/api/docs",
                   redoc_url=None, openapi_url="/api/openapi.json")
-    app.state.bench, app.state.queue = bench, queue
+    app.state.bench, app.state.queue, app.state.checker = bench, queue, checker
     app.state.viewer_cache = viewer_cache = ByteLRU(viewer_cache_bytes)
     app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes, timeout=body_timeout)
     app.add_middleware(GuardMiddleware, reads=RateLimiter(read_rate, max(1.0, 5 * read_rate)),
@@ -366,27 +369,16 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return resp
 
     # ---------------------------------------------------------------- the check queue
-    def run_check(sub: Submission) -> dict:
-        """On a checker thread: the verdict as {status, body, result}; bad input is its 4xx, never an error."""
-        try:
-            res = bench.judge(sub)
-        except TooLarge as e:
-            return {"status": 413, "body": {"detail": str(e)}}
-        except InputError as e:
-            return {"status": 400, "body": {"detail": str(e)}}
-        return {"status": 201 if res.valid else 422, "body": res.to_json(), "result": res}
-
-    async def submit(request: Request, read: Callable[[Upload], Tuple[str, str, dict, Optional[str]]]):
-        """Take a place in the check queue (429 when full), read and validate the upload (4xx), put it in line.
-        → (job, future, place in line when it joined)."""
+    async def submit(request: Request, read: Callable[[Upload], tuple]):
+        """Take a place in the check queue (429 when full), read the upload, put it in line; parsing, validation
+        and the checker run on a checker thread/process (``Bench.check_upload``: 201 / 422 / 400 / 413).
+        → (job, future of {status, body, result}, place in line when it joined)."""
         client = (request.client.host if request.client else "?")
         job = queue.reserve(client)
         try:
             up = await read_upload(request)
-            text, fname, meta, token = read(up)
-            sub: Submission = await run_in_threadpool(bench.prepare_submission, text, fname, meta.get("author"),
-                                                      meta.get("email"), meta.get("affiliation"), token or None)
-            fut = queue.submit(job, lambda: run_check(sub), big=sub.size > big_check_values)
+            args = read(up)  # (text, file name, meta, token, unwrap)
+            fut = queue.submit(job, lambda: checker.check(*args), big=len(args[0]) > big_upload_bytes)
         except BaseException:
             queue.release(job)
             raise
@@ -473,7 +465,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
             raise InputError("choose a solution file")
         name, data = f
         return _decode(data, name), name, {k: up.fields.get(k) for k in ("author", "email", "affiliation")}, \
-            up.fields.get("token")
+            up.fields.get("token"), False
 
     @app.post("/upload", response_class=HTMLResponse, include_in_schema=False)
     async def upload_submit(request: Request):
@@ -583,30 +575,15 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     def read_api_upload(request: Request):
         def read(up: Upload):
             token = request.headers.get("x-author-token")
-            if up.raw is not None:
-                text = _decode(up.raw, "request body")
-                fname = "solution.json"
+            if up.raw is not None:  # the solution, or {"solution": ..., "author": ...} (unwrapped by the checker)
                 meta = {k: request.query_params.get(k) for k in ("author", "email", "affiliation")}
-                data = parse_json(text, fname)
-                if isinstance(data, dict) and "solution" in data and "taskID" not in data:
-                    sol = data["solution"]
-                    text = sol if isinstance(sol, str) else json.dumps(sol)
-                    for k in ("author", "email", "affiliation"):
-                        if data.get(k) is not None:
-                            if not isinstance(data[k], str):
-                                raise InputError("expected a string", file="request body", path=[k])
-                            meta[k] = data[k]
-                    if data.get("token") is not None:
-                        token = str(data["token"])
-            else:
-                f = up.file("file", "solution")
-                if f is None:
-                    raise InputError("send the solution as form field 'file' (a CoBRA solution JSON file)")
-                fname, raw = f
-                text = _decode(raw, fname)
-                meta = {k: up.fields.get(k) for k in ("author", "email", "affiliation")}
-                token = up.fields.get("token") or token
-            return text, fname, meta, token
+                return _decode(up.raw, "request body"), "solution.json", meta, token, True
+            f = up.file("file", "solution")
+            if f is None:
+                raise InputError("send the solution as form field 'file' (a CoBRA solution JSON file)")
+            fname, raw = f
+            meta = {k: up.fields.get(k) for k in ("author", "email", "affiliation")}
+            return _decode(raw, fname), fname, meta, up.fields.get("token") or token, False
         return read
 
     @app.post("/api/solutions", status_code=201)

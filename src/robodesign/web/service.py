@@ -172,16 +172,18 @@ def parse_benchmark(text: str) -> Tuple[str, str, str, str]:
 class Bench:
     """One benchmark site: database + data folder + caches of parsed tasks and module sets."""
 
-    def __init__(self, settings: Settings):
+    def __init__(self, settings: Settings, staging: bool = True):
+        """``staging=False``: a checker process of a site, which only reads tasks and module sets and stores
+        solutions (it neither cleans nor claims a staging folder)."""
         self.settings = settings
         self.data = Path(settings.data_dir).resolve()
         for sub in ("tasks", "modulesets", "tmp"):
             (self.data / sub).mkdir(parents=True, exist_ok=True)
         self.seed_log: List[str] = []
-        self.removed_staging = remove_stale_staging(self.data / "tmp")
+        self.removed_staging = remove_stale_staging(self.data / "tmp") if staging else []
         for name in self.removed_staging:
             self._note(f"removed the staging folder tmp/{name} left by a server that stopped mid-upload")
-        self.tmp, self._tmp_lock = claim_staging(self.data / "tmp")
+        self.tmp, self._tmp_lock = claim_staging(self.data / "tmp") if staging else (None, None)
         self.db_url = db.normalize_url(settings.db_url, self.data)
         self.engine = db.make_engine(self.db_url)
         self.Session = db.make_sessionmaker(self.engine)
@@ -191,10 +193,11 @@ class Bench:
 
     def close(self):
         self.engine.dispose()
-        shutil.rmtree(self.tmp, ignore_errors=True)
-        with contextlib.suppress(OSError):
-            os.unlink(str(self.tmp) + ".lock")
-        self._tmp_lock.close()
+        if self.tmp is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            with contextlib.suppress(OSError):
+                os.unlink(str(self.tmp) + STAGING_LOCK)
+            self._tmp_lock.close()
 
     # ----------------------------------------------------------------------------------------------------
     # seeding
@@ -530,7 +533,7 @@ class Bench:
                            "cost_key": "costFunction", "benchmark_id": "benchmark ID"})
         if token and "\x00" in token:
             raise InputError("the token contains a NUL character")
-        return Submission(sol, task, ms, row, token or None, size=trajectory_values(sol))
+        return Submission(sol, task, ms, row, token or None)
 
     def judge(self, sub: "Submission") -> SubmitResult:
         """Run the checker on a prepared submission; store it when valid."""
@@ -556,6 +559,27 @@ class Bench:
                         token: Optional[str] = None) -> SubmitResult:
         """Prepare, check and (when valid) store one solution, in the calling thread."""
         return self.judge(self.prepare_submission(text, fname, author, email, affiliation, token))
+
+    def check_upload(self, text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
+                     unwrap: bool = False) -> dict:
+        """One upload from start to end, as the website answers it: ``{"status": 201 | 422 | 400 | 413, "body":
+        JSON answer, "result": SubmitResult (201/422 only)}``. ``unwrap``: ``text`` may be the JSON wrapper
+        ``{"solution": ..., "author", "email", "affiliation", "token"}`` (its fields win over ``meta``/``token``).
+        This is the CPU-heavy part (parsing, schema, checker): the site runs it on a checker thread or process."""
+        try:
+            if unwrap:
+                text, meta, token = unwrap_upload(text, fname, meta, token)
+            res = self.submit_solution(text, fname, meta.get("author"), meta.get("email"), meta.get("affiliation"),
+                                       token or None)
+        except TooLarge as e:
+            return {"status": 413, "body": {"detail": self.public(str(e))}}
+        except InputError as e:
+            return {"status": 400, "body": {"detail": self.public(str(e))}}
+        return {"status": 201 if res.valid else 422, "body": res.to_json(), "result": res}
+
+    def public(self, message: str) -> str:
+        """A message without the server's own paths."""
+        return message.replace(str(self.data), "<data>")
 
     def solution_row(self, sid: int) -> db.SolutionRow:
         """The row shown on a solution page (not the solution file itself)."""
@@ -657,7 +681,24 @@ class Submission:
     module_set: ModuleSet
     row: db.SolutionRow
     token: Optional[str]
-    size: int  # samples × joints: how long the check will take
+
+
+def unwrap_upload(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str]):
+    """``{"solution": {...} | "<json text>", "author": ..., "token": ...}`` → (solution text, meta, token); any other
+    JSON is the solution itself."""
+    data = parse_json(text, fname)
+    if not (isinstance(data, dict) and "solution" in data and "taskID" not in data):
+        return text, meta, token
+    sol = data["solution"]
+    meta = dict(meta)
+    for k in ("author", "email", "affiliation"):
+        if data.get(k) is not None:
+            if not isinstance(data[k], str):
+                raise InputError("expected a string", file="request body", path=[k])
+            meta[k] = data[k]
+    if data.get("token") is not None:
+        token = str(data["token"])
+    return (sol if isinstance(sol, str) else json.dumps(sol)), meta, token
 
 
 def solution_id(sid) -> int:
@@ -703,15 +744,10 @@ def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str) -
         v = data.get(key) or []
         if len(v) > limits.modules:
             raise TooLarge(f"at most {limits.modules} entries are allowed (got {len(v)})", file=fname, path=[key])
-    n = trajectory_values(sol)
+    n = int(sol.trajectory.q.size)  # samples × joints
     if n > limits.trajectory_values:
         raise TooLarge(f"{len(sol.trajectory.q)} samples × {n // max(1, len(sol.trajectory.q))} joints = {n} values; "
                        f"at most {limits.trajectory_values} are allowed", file=fname, path=["trajectory"])
-
-
-def trajectory_values(sol: Solution) -> int:
-    """samples × joints of a solution's trajectory."""
-    return int(sol.trajectory.q.size)
 
 
 STAGING_LOCK = ".lock"

@@ -1,0 +1,86 @@
+"""Where the site runs the checks of uploads: in the server's own threads, or in separate checker processes.
+
+A check parses up to ``--max-upload-mb`` of JSON and runs the checker: seconds of CPU, partly in C code that holds
+Python's global interpreter lock. In processes (``robodesign serve``'s default) the checks never slow the threads
+that serve pages, a crash or a memory spike stays in the checker process (which is replaced), and several cores are
+used. Threads start faster (the default of :func:`robodesign.web.create_app`, used by most tests).
+"""
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import threading
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from typing import Dict, Optional
+
+from .service import Bench, Settings
+
+log = logging.getLogger("robodesign.web")
+
+_worker_bench: Optional[Bench] = None  # the Bench of a checker process
+
+
+def _init_worker(settings: Settings) -> None:
+    global _worker_bench
+    _worker_bench = Bench(settings, staging=False)
+
+
+def _check_in_worker(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
+                     unwrap: bool) -> dict:
+    return _worker_bench.check_upload(text, fname, meta, token, unwrap)
+
+
+class ThreadChecker:
+    """Checks in the calling (checker) thread."""
+
+    def __init__(self, bench: Bench):
+        self.bench = bench
+
+    def check(self, text, fname, meta, token, unwrap) -> dict:
+        return self.bench.check_upload(text, fname, meta, token, unwrap)
+
+    def close(self) -> None:
+        pass
+
+
+class ProcessChecker:
+    """Checks in ``processes`` spawned checker processes (started at the first check); a pool whose process died is
+    replaced, and that one check answers 500."""
+
+    def __init__(self, settings: Settings, processes: int):
+        self.settings, self.processes = settings, max(1, int(processes))
+        self._pool: Optional[ProcessPoolExecutor] = None
+        self._lock = threading.Lock()
+
+    def _get_pool(self) -> ProcessPoolExecutor:
+        with self._lock:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(self.processes, mp_context=multiprocessing.get_context("spawn"),
+                                                 initializer=_init_worker, initargs=(self.settings,))
+            return self._pool
+
+    def start(self) -> None:
+        """Start the processes now (instead of at the first upload)."""
+        pool = self._get_pool()
+        for f in [pool.submit(int, 0) for _ in range(self.processes)]:
+            f.result()
+
+    def check(self, text, fname, meta, token, unwrap) -> dict:
+        pool = self._get_pool()
+        try:
+            res = pool.submit(_check_in_worker, text, fname, meta, token, unwrap).result()
+        except BrokenProcessPool:
+            log.error("a checker process died; starting new ones")
+            with self._lock:
+                if self._pool is pool:
+                    self._pool = None
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        return res
+
+    def close(self) -> None:
+        with self._lock:
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
