@@ -25,11 +25,12 @@ from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
 from ..errors import InputError
+from ..jsonio import loads_json
 from ..paths import assets_dir
 from . import pages
 from .cache import ByteLRU
 from .safefiles import TooLarge, check_name
-from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, clean_json, files_source, parse_json,
+from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, clean_json, files_source,
                       solution_summary)
 from .throttle import Busy, CheckQueue, RateLimiter
 from .workers import ProcessChecker, ThreadChecker
@@ -494,7 +495,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
             if _is_zip("", up.raw) or up.content_type in ("application/zip", "application/x-zip-compressed"):
                 created = await run_in_threadpool(bench.add_tasks_from_zip, up.raw, "upload.zip")
             else:
-                data = parse_json(_decode(up.raw, "request body"), "request body")
+                data = loads_json(_decode(up.raw, "request body"), "request body")
                 if isinstance(data, dict) and "task" in data and "header" not in data:
                     files = _b64_files(data.get("files"), "files")
                     text = json.dumps(data["task"])
@@ -535,7 +536,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
             if _is_zip("", up.raw):
                 res = await run_in_threadpool(bench.add_module_set_from_zip, up.raw, "upload.zip", name)
             else:
-                data = parse_json(_decode(up.raw, "request body"), "request body")
+                data = loads_json(_decode(up.raw, "request body"), "request body")
                 if isinstance(data, dict) and "modules" in data and isinstance(data.get("name"), str):
                     name = data["name"]
                     files = _b64_files(data.get("files"), "files")

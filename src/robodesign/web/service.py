@@ -251,7 +251,7 @@ class Bench:
                 continue
             try:
                 text = f.read_text(encoding="utf-8")
-                data = parse_json(text, f.name)
+                data = loads_json(text, f.name)
                 if not (isinstance(data, dict) and isinstance(data.get("header"), dict) and "ID" in data["header"]):
                     continue
                 tid = str(data["header"]["ID"])
@@ -311,7 +311,7 @@ class Bench:
 
     def add_task(self, text: str, source: FileSource, fname: str = "task.json", origin: str = "upload") -> dict:
         """Validate (schema first), store the task file and its referenced meshes, register it."""
-        data = validate_task_json(parse_json(text, fname), fname)
+        data = validate_task_json(loads_json(text, fname), fname)
         tid = str(data["header"]["ID"])
         segs = task_id_segments(tid, fname)
         header = data["header"]
@@ -345,7 +345,7 @@ class Bench:
     def add_module_set(self, name: str, text: str, source: FileSource, origin: str = "upload") -> dict:
         check_name(name)
         fname = f"{name}/modules.json"
-        data = parse_json(text, fname)
+        data = loads_json(text, fname)
         validate(data, "modules", fname)
         db.check_row(db.ModuleSetRow(name=name, json=text, folder=""), {"json": "modules.json"}, fname)
         if self._has_module_set(name):
@@ -382,7 +382,7 @@ class Bench:
                 text = raw.decode("utf-8")
             except UnicodeDecodeError:
                 raise InputError("not UTF-8 text", file=rel) from None
-            data = parse_json(text, rel)
+            data = loads_json(text, rel)
             if isinstance(data, dict) and "header" in data:
                 found.append((rel, text, data))
         if not found:
@@ -482,7 +482,7 @@ class Bench:
     # solutions
     # ----------------------------------------------------------------------------------------------------
     def prepare_solution(self, text: str, fname: str) -> Tuple[Solution, Task, ModuleSet, str, str]:
-        data = parse_json(text, fname)
+        data = loads_json(text, fname)
         sol = parse_solution(data, fname)  # schema validation first
         check_solution_size(data, sol, self.settings.limits, fname)
         if not sol.module_set:
@@ -686,7 +686,7 @@ class Submission:
 def unwrap_upload(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str]):
     """``{"solution": {...} | "<json text>", "author": ..., "token": ...}`` → (solution text, meta, token); any other
     JSON is the solution itself."""
-    data = parse_json(text, fname)
+    data = loads_json(text, fname)
     if not (isinstance(data, dict) and "solution" in data and "taskID" not in data):
         return text, meta, token
     sol = data["solution"]
@@ -707,18 +707,6 @@ def solution_id(sid) -> int:
     if not (text.isascii() and text.isdigit()) or len(text) > 19 or int(text) > db.MAX_ID:
         raise NotFound(f"unknown solution {text[:40]!r}")
     return int(text)
-
-
-def parse_json(text: str, fname: str):
-    """:func:`robodesign.jsonio.loads_json`, plus the two ways Python's own parser fails on hostile input."""
-    try:
-        return loads_json(text, fname)
-    except RecursionError:
-        raise InputError("JSON nested too deeply", file=fname) from None
-    except InputError:
-        raise
-    except ValueError as e:  # e.g. an integer of more than 4300 digits
-        raise InputError(f"unreadable number ({str(e).split(':')[0]})", file=fname) from None
 
 
 def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str) -> None:
