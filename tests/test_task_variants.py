@@ -696,3 +696,17 @@ def test_broken_collision_mesh_in_a_urdf_is_exit_2(tmp_path, capsys):
     assert len(warnings) == 1 and "visual mesh file 'lfs.stl' is a Git LFS pointer" in warnings[0]
     (body,) = [b for m in ms for b in m.bodies if b.collision]
     assert body.visual == () or all(g.file.name != "lfs.stl" for g in body.visual)
+
+
+def test_viewer_shows_the_space_to_leave(tmp_path):
+    from robodesign.viewer.scene import build_scene
+    d = source("PTP_1")
+    box_pose = [[1, 0, 0, -0.25], [0, 1, 0, 0.75], [0, 0, 1, 0.9], [0, 0, 0, 1]]
+    d["goals"].append({"ID": "out", "type": "leave", "duration": 0.01, "occupiedSpace": [
+        {"type": "box", "parameters": {"x": 2.5, "y": 1.0, "z": 1.5}, "pose": box_pose}]})
+    scene = build_scene(load_task(write_task(tmp_path, d, assets=False)))
+    (node,) = [n for n in scene["nodes"] if n["id"] == "goal/out"]
+    (geom,) = node["geometries"]
+    assert geom["type"] == "box" and geom["size"] == [2.5, 1.0, 1.5] and geom["role"] == "tolerance"
+    np.testing.assert_allclose(np.asarray(node["pose"]).reshape(4, 4) @ np.asarray(geom["pose"]).reshape(4, 4),
+                               box_pose, atol=1e-12)

@@ -355,7 +355,7 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
         g2t = dict(trajectory.goal2time) if (trajectory is not None and robot is not None) else {}
         times = [f[0] for f in frames_t]
         for g in task.goals:
-            goal_records.append(_goal(g, g2t, times, nodes, focus, paths))
+            goal_records.append(_goal(g, g2t, times, nodes, focus, paths, meshes))
         _merge_labels([n for n in nodes if n["group"] == "goal"])
         bp = task.base_placement
         if bp is not None and not bp.is_unconstrained:
@@ -433,7 +433,7 @@ def _geometry_corners(g: dict, meshes: dict) -> List[np.ndarray]:
 
 
 def _goal(g, g2t: Dict[str, float], times: List[float], nodes: List[dict], focus: List[np.ndarray],
-          paths: Dict[str, list]) -> dict:
+          paths: Dict[str, list], meshes: "_MeshTable") -> dict:
     from ..task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
     tg = g2t.get(g.id)
     rec = {"id": g.id, "type": g.type, "time": None if tg is None else float(tg), "frame": None,
@@ -451,15 +451,22 @@ def _goal(g, g2t: Dict[str, float], times: List[float], nodes: List[dict], focus
         focus.append(tp.nominal[:3, 3])
         if isinstance(g, Reach):
             rec["details"] = f"TCP twist ≤ {g.velocity_tolerance:g}"
-    elif isinstance(g, Leave) and g.region is not None:
+    elif isinstance(g, Leave):
         tp = g.region
-        geoms = [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["leave"])
+        at = tp.nominal if tp is not None else np.eye(4)   # node pose; the space's geometries are world poses
+        geoms = [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["leave"]) if tp is not None else []
+        for spec in g.occupied_space:
+            r = geometry_record(spec, meshes, "tolerance", COLORS["leave"], 0.2, pose=np.linalg.inv(at) @ spec.pose)
+            if r is not None:
+                geoms.append(r)
         nodes.append({"id": f"goal/{g.id}", "name": f"goal {g.id} (leave)", "group": "goal", "label": label,
-                      "pose": _pose(tp.nominal), "geometries": geoms})
-        rec["tolerance"] = tolerance_text(tp)
-        rec["position"] = tp.nominal[:3, 3].tolist()
-        rec["details"] = f"stay outside for {g.duration:g} s"
-        focus.append(tp.nominal[:3, 3])
+                      "pose": _pose(at), "geometries": geoms})
+        rec["tolerance"] = tolerance_text(tp) if tp is not None else []
+        rec["position"] = g.center.tolist()
+        rec["details"] = f"stay outside for {g.duration:g} s" + (
+            f" ({len(g.occupied_space)} geometr{'y' if len(g.occupied_space) == 1 else 'ies'} to leave)"
+            if g.occupied_space else "")
+        focus.append(g.center)
     elif isinstance(g, Follow) and g.poses:
         pts = [p.nominal[:3, 3].tolist() for p in g.poses]
         geoms = [{"type": "line", "points": pts, "pose": _pose(np.eye(4)), "role": "marker",
