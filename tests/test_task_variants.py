@@ -657,12 +657,14 @@ def test_website_rejects_broken_collision_meshes_and_warns_about_visual_ones(tmp
     stl = (TASKS / "assets" / "QUASER_MV205_v3_compressed.stl").read_bytes()
 
     def task(tid, visual=None):
-        ob = {"ID": "cnc", "collision": {"type": "mesh", "parameters": {"file": "assets/cnc.stl", "scale": 0.001}}}
+        ob = {"ID": "cnc", "collision": {"type": "mesh", "parameters": {"file": "assets/cnc.stl", "scale": 0.001}},
+              "cad": "vendor X"}
         if visual:
             ob["visual"] = {"type": "mesh", "parameters": {"file": visual, "scale": 0.001}}
         return json.dumps({"header": {"ID": tid}, "obstacles": [ob], "goals": []})
 
-    with TestClient(create_app(data_dir=tmp_path / "data", seed=[], seed_builtin=False)) as c:
+    app = create_app(data_dir=tmp_path / "data", seed=[], seed_builtin=False, open_registration=True)
+    with TestClient(app) as c:
         r = c.post("/api/tasks", files=[("task", ("a.json", task("up/lfs"))), ("files", ("assets/cnc.stl", lfs))])
         assert r.status_code == 400
         assert ("obstacles[0].collision.parameters.file: collision mesh file 'assets/cnc.stl' is a Git LFS "
@@ -673,6 +675,7 @@ def test_website_rejects_broken_collision_meshes_and_warns_about_visual_ones(tmp
         (created,) = r.json()["tasks"]
         assert any("visual.parameters.file: visual mesh file 'assets/look.stl' is a Git LFS pointer" in w
                    for w in created["warnings"])
+        assert "ok.json: obstacles[0].cad: unknown key 'cad' ignored" in created["warnings"]  # named by its ID
 
 
 def test_broken_collision_mesh_in_a_urdf_is_exit_2(tmp_path, capsys):
@@ -681,7 +684,8 @@ def test_broken_collision_mesh_in_a_urdf_is_exit_2(tmp_path, capsys):
     shutil.copy(TASKS / "assets" / "QUASER_MV205_v3_compressed.stl", tmp_path / "ok.stl")
 
     def urdf(col, vis):
-        return f"""<robot name="r"><link name="base"><collision><geometry><mesh filename="{col}"/></geometry></collision>
+        return f"""<robot name="r"><link name="base">
+          <collision><geometry><mesh filename="{col}"/></geometry></collision>
           <visual><geometry><mesh filename="{vis}"/></geometry></visual></link>
           <link name="tool"/><joint name="j" type="revolute"><parent link="base"/><child link="tool"/>
           <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint></robot>"""

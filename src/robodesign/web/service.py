@@ -328,7 +328,7 @@ class Bench:
             assets = self._store_refs(refs, source, pkg)
             task_file = pkg.joinpath(*segs[:-1], segs[-1] + ".json")
             write_new_file(pkg, "/".join(segs) + ".json", text.encode("utf-8"))
-            task = parse_task(data, task_file)
+            task = parse_task(loads_json(text, fname), task_file)  # the file as written: its warnings too
             assert_no_symlinks(pkg)
             folder = Path("tasks") / f"{segs[-1]}-{secrets.token_hex(6)}"
             os.replace(pkg, self.data / folder)
