@@ -144,11 +144,9 @@ class Rules(BaseModel):
         return self.model_copy(update={k: getattr(override, k) for k in override.model_fields_set})
 
 
-class TaskEntry(BaseModel):
-    """One task: a task ID (searched in ``task_dirs`` then the built-in tasks) or a task file."""
+class _Overrides(BaseModel):
+    """What a task or suite entry may set for itself instead of the config's values."""
     model_config = _STRICT
-    task: str
-    name: Optional[str] = None
     modules: Optional[str] = None
     cost: Optional[List[str]] = None
     rules: Optional[Rules] = None
@@ -165,6 +163,12 @@ class TaskEntry(BaseModel):
             for c in v:
                 _check_cost(c)
         return v
+
+
+class TaskEntry(_Overrides):
+    """One task: a task ID (searched in ``task_dirs`` then the built-in tasks) or a task file."""
+    task: str
+    name: Optional[str] = None
 
 
 class SuiteGenerate(BaseModel):
@@ -182,35 +186,18 @@ class SuiteGenerate(BaseModel):
         return self
 
 
-class SuiteEntry(BaseModel):
+class SuiteEntry(_Overrides):
     """A task suite: every task file of a folder (generated there first from ``generate`` when missing),
     summarized together in the report (solved share, best costs, time to the first feasible design)."""
-    model_config = _STRICT
     name: str
     folder: Optional[str] = None
     generate: Optional[SuiteGenerate] = None
-    modules: Optional[str] = None
-    cost: Optional[List[str]] = None
-    rules: Optional[Rules] = None
-    base_search: Optional[bool] = None
-
-    _c = field_validator("cost", mode="before")(classmethod(lambda cls, v: _str_list(v)))
 
     @field_validator("name")
     @classmethod
     def _name(cls, v):
         if not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
             raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it prefixes the task names)")
-        return v
-
-    @field_validator("cost")
-    @classmethod
-    def _costs(cls, v):
-        if v is not None:
-            if not v:
-                raise ValueError("give at least one cost")
-            for c in v:
-                _check_cost(c)
         return v
 
     @model_validator(mode="after")
