@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
+from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
 from robodesign.paths import project_root
+from robodesign.problem import Problem
 from robodesign.search_space import BASE_PARAMS, Candidate
 
 HERE = Path(__file__).resolve().parent
@@ -59,14 +60,14 @@ def main():
     task_file = project_root() / "assets" / "tasks" / "robodesign" / "base_placement.json"
     settings = meta.get("solve") or {}
     from robodesign.solve import SolveSettings
-    spec = EvaluatorSpec(task=str(task_file), module_set="robodesign_arm", cost="cyc", seed=args.seed)
+    problem = Problem.build(task_file, "robodesign_arm", "cyc")
+    spec = EvaluatorSpec(problem, seed=args.seed)
     if settings:
         known = set(SolveSettings.__dataclass_fields__)
-        spec.settings = SolveSettings(**{k: v for k, v in settings.items() if k in known})
+        spec = replace(spec, settings=SolveSettings(**{k: v for k, v in settings.items() if k in known}))
     ev = Evaluator(spec)
-    space = ev.search_space()
-    bounds = space.base_bounds
-    free = bounds.free
+    space = problem.space
+    free = problem.base_bounds.free
     names = BASE_PARAMS
     out = []
     for order, study_cost in best_orders(res_dir / "evaluations.sqlite", "modules_only", args.designs):
@@ -74,16 +75,14 @@ def main():
         # the control: nominal base, as many planner seeds as the base search has evaluations
         nominal_runs = []
         for k in range(args.budget):
-            ev.spec.seed = args.seed + k
-            nominal_runs.append(ev.evaluate(Candidate(tuple(order))))
-        ev.spec.seed = args.seed
+            nominal_runs.append(Evaluator(replace(spec, seed=args.seed + k)).evaluate(Candidate(tuple(order))))
         nominal_costs = [e.cost for e in nominal_runs if e.feasible]
         nominal = min((e for e in nominal_runs if e.feasible), key=lambda e: e.cost, default=nominal_runs[0])
         # the search: the base_pose plugin (TPE over the free base parameters, nominal base first)
         dof = sum(space.module_info(m).dof for m in order)
-        sub = replace(space, min_dof=dof, max_dof=dof, max_links_between=space.max_modules)
-        opt = load_optimizer("base_pose")(sub, seed=args.seed, order=",".join(order))
-        hist = Study(opt, SerialExecutor(lambda c: ev(c, bounds)), Budget(evaluations=args.budget)).run().history
+        sub = problem.with_(rules={"min_dof": dof, "max_dof": dof, "max_links_between": space.max_modules})
+        opt = create_optimizer("base_pose", sub, seed=args.seed, options={"order": order})
+        hist = Study(opt, SerialExecutor(ev), Budget(evaluations=args.budget)).run().history
         feasible = sum(e.feasible for e in hist)
         best = min((e for e in hist if e.feasible), key=lambda e: e.cost, default=None)
         row = {"order": order, "study_best_cyc": study_cost,

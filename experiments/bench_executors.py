@@ -55,20 +55,21 @@ def machine_ceiling(rounds: int = 3) -> list:
 def main():
     from robodesign.evaluator import Evaluator, EvaluatorSpec
     from robodesign.experiment.executors import ProcessPool, RayPool
+    from robodesign.problem import Problem
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args()
-    specs = {f"s{k}": EvaluatorSpec(task="robodesign/pick_and_place", module_set="robodesign_arm", cost="cyc", seed=k)
-             for k in range(args.rounds)}
+    problem = Problem.build("robodesign/pick_and_place", "robodesign_arm", "cyc")
+    specs = {f"s{k}": EvaluatorSpec(problem, seed=k) for k in range(args.rounds)}
     ev = Evaluator(specs["s0"])
-    space = ev.search_space()
+    space = problem.space
     rng = np.random.default_rng(0)
     # candidates of similar cost: designs that go through every stage (feasible), as the issue asks
     cands = []
     while len(cands) < args.n:
         c = space.random_candidate(rng)
-        if ev(c, space.base_bounds).feasible:
+        if ev(c).feasible:
             cands.append(c)
     # every round evaluates the same candidates with another evaluation seed (a distinct spec), so no
     # worker can answer from its cache. Serial and process rounds alternate (sharing the machine's noise);

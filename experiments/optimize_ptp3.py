@@ -11,12 +11,11 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import replace
 from pathlib import Path
 
 from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
-from robodesign.search_space import BaseBounds
+from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.problem import Problem
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared" / "cobra"
@@ -24,11 +23,9 @@ PAPER = {"cyc": 5.47, "mechEnergy": 100.4, "Whit2": 1.62, "Liu2": 101.5}
 
 
 def run(task, modules, cost, name, budget, seed, fixed_base=False, target=None):
-    ev = Evaluator(EvaluatorSpec(task=str(task), module_set=str(modules), cost=cost, seed=seed))
-    space = ev.search_space()
-    if fixed_base:
-        space = replace(space, base_bounds=BaseBounds(nominal=space.base_bounds.nominal))
-    opt = load_optimizer(name)(space, seed=seed, cost=cost)
+    problem = Problem.build(task, modules, cost, base_search=not fixed_base)
+    ev = Evaluator(EvaluatorSpec(problem, seed=seed))
+    opt = create_optimizer(name, problem, seed=seed)
     curve, hit = [], {}
     t0 = time.perf_counter()
 
@@ -37,7 +34,7 @@ def run(task, modules, cost, name, budget, seed, fixed_base=False, target=None):
         curve.append((i + 1, time.perf_counter() - t0, b))
         if target is not None and b is not None and b <= target and not hit:
             hit.update(evaluation=i + 1, seconds=time.perf_counter() - t0)
-    res = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), Budget(evaluations=budget),
+    res = Study(opt, SerialExecutor(ev), Budget(evaluations=budget),
                 on_evaluation=on_eval).run()
     best = res.best if res.best is not None and res.best.feasible else None
     return {"optimizer": name, "cost": cost, "seed": seed, "fixed_base": fixed_base, "evaluations": len(res.history),

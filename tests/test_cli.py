@@ -121,7 +121,7 @@ def test_optimize_base_pose_cli(capsys, tmp_path):
     assert code == 0 and json.loads(out)["cost"] == d["best"]["cost"]
     code, _, err = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
                        "--optimizer", "base_pose", "--budget", "2evals")
-    assert code == 2 and err.startswith("robodesign: error: optimizer 'base_pose': give the module order")
+    assert code == 2 and err.startswith("robodesign: error: optimizer 'base_pose': option 'order' is required")
     code, _, err = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
                        "--optimizer", "base_pose", "--opt", "order=1,21,12", "--budget", "2evals")
     assert code == 2 and "order 1,21,12: module '12' may not follow" in err and "Traceback" not in err

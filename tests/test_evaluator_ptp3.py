@@ -7,7 +7,8 @@ import pytest
 from robodesign import load_module_set
 from robodesign.checker import check
 from robodesign.evaluator import INFEASIBLE, Evaluator, EvaluatorSpec
-from robodesign.search_space import Candidate
+from robodesign.problem import Problem
+from robodesign.search_space import BaseBounds, Candidate
 from robodesign.solution import SolutionTrajectory, parse_solution
 from robodesign.solve import STAGES
 from robodesign.task_io import load_task, parse_task
@@ -19,8 +20,13 @@ GOOD = ("1", "21", "4", "22", "5", "23", "12")
 
 
 @pytest.fixture(scope="module")
-def evaluator():
-    return Evaluator(EvaluatorSpec(task=str(PTP3), module_set=str(IMPROV), cost="cyc", seed=0))
+def problem():
+    return Problem.build(PTP3, IMPROV, "cyc")
+
+
+@pytest.fixture(scope="module")
+def evaluator(problem):
+    return Evaluator(EvaluatorSpec(problem, seed=0))
 
 
 @pytest.fixture(scope="module")
@@ -52,10 +58,38 @@ def test_known_infeasible_candidates_stop_at_the_right_stage(evaluator):
 
 def test_cache_and_determinism(evaluator, good):
     assert evaluator(Candidate(GOOD)) is good  # cached by candidate key
-    fresh = Evaluator(EvaluatorSpec(task=str(PTP3), module_set=str(IMPROV), cost="cyc", seed=0))
+    fresh = Evaluator(EvaluatorSpec(Problem.build(str(PTP3), str(IMPROV), "cyc"), seed=0))
+    assert fresh.cache_key(Candidate(GOOD)) == evaluator.cache_key(Candidate(GOOD))  # equal problems, equal keys
     again = fresh(Candidate(GOOD))
     assert again.cost == good.cost and again.seed == good.seed
     assert again.solution["trajectory"]["q"] == good.solution["trajectory"]["q"]
+
+
+def _translation(p):
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def test_cache_key_covers_the_base_bounds(problem):
+    """Regression: the cache was keyed by the candidate alone, so the same base parameters decoded under other
+    base bounds (another free dimension, here y instead of x) returned the first problem's evaluation."""
+    c = Candidate(GOOD, (0.03,))
+    along_x = problem.with_(base_bounds=BaseBounds(lower=(-0.05, 0, 0, 0), upper=(0.05, 0, 0, 0)))
+    along_y = problem.with_(base_bounds=BaseBounds(lower=(0, -0.05, 0, 0), upper=(0, 0.05, 0, 0)))
+    assert along_x.fingerprint() != along_y.fingerprint()
+    shared: dict = {}
+    ex = Evaluator(EvaluatorSpec(along_x, seed=0), cache=shared)
+    ey = Evaluator(EvaluatorSpec(along_y, seed=0), cache=shared)
+    assert ex.cache_key(c) != ey.cache_key(c)
+    a, b = ex(c), ey(c)
+    assert a.feasible and b.feasible and len(shared) == 2
+    nominal = problem.task.nominal_base_pose
+    for ev, offset in ((a, [0.03, 0, 0]), (b, [0, 0.03, 0])):
+        assert np.allclose(np.array(ev.solution["basePose"][0]), nominal @ _translation(offset))
+    assert ey(c) is b and ex(c) is a
+    # the seed and the solve settings are part of the key too
+    assert Evaluator(EvaluatorSpec(along_x, seed=1)).cache_key(c) != ex.cache_key(c)
 
 
 def test_ptp3_solution_valid_then_invalid_after_each_single_perturbation(evaluator, good, tmp_path):

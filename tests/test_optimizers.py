@@ -21,6 +21,7 @@ import pytest
 from robodesign.evaluator import Evaluation, Evaluator, EvaluatorSpec, score_of
 from robodesign.module_io import load_module_set
 from robodesign.optimize import Budget, SerialExecutor, Study, available_optimizers, load_optimizer
+from robodesign.problem import Problem
 from robodesign.search_space import BaseBounds, Candidate, SearchSpace
 from robodesign.solve import STAGES
 
@@ -31,8 +32,8 @@ COST = "Whit2"
 OPTIONS = {  # per plugin, for the small space
     "random": {"max_duplicates": 2000},
     "genetic": {"population_size": 8},
-    "elimination": {"cost": COST},
-    "heuristic": {"cost": COST, "beam_width": 4},
+    "elimination": {},
+    "heuristic": {"beam_width": 4},
     "optuna": {"n_startup_trials": 8},
 }
 
@@ -59,14 +60,14 @@ def write_task(path: Path, goals) -> Path:
 
 
 def _bench(folder: Path, goals):
-    ev = Evaluator(EvaluatorSpec(task=str(write_task(folder / "task.json", goals)), module_set="robodesign_arm",
-                                 cost=COST, seed=0))
-    space = ev.search_space(**RULES)
+    problem = Problem.build(write_task(folder / "task.json", goals), "robodesign_arm", COST, rules=RULES)
+    ev = Evaluator(EvaluatorSpec(problem, seed=0))
+    space = problem.space
     cands = [space.nominal_candidate(o) for o in space.enumerate_orders()]
     t0 = time.perf_counter()
-    evals = {c.key(): ev(c, space.base_bounds) for c in cands}
+    evals = {c.key(): ev(c) for c in cands}
     best = min(evals.values(), key=lambda e: e.score)
-    return SimpleNamespace(ev=ev, space=space, cands=cands, evals=evals, best=best,
+    return SimpleNamespace(ev=ev, problem=problem, space=space, cands=cands, evals=evals, best=best,
                            seconds=time.perf_counter() - t0)
 
 
@@ -84,9 +85,8 @@ def far_bench(tmp_path_factory):
 
 def run(bench, name, seed=0, budget=None, **options):
     opts = {**OPTIONS.get(name, {}), **options}
-    opt = load_optimizer(name)(bench.space, seed=seed, **opts)
-    study = Study(opt, SerialExecutor(lambda c: bench.ev(c, bench.space.base_bounds)),
-                  Budget(evaluations=budget or len(bench.cands)))
+    opt = load_optimizer(name)(bench.problem, seed=seed, **opts)
+    study = Study(opt, SerialExecutor(bench.ev), Budget(evaluations=budget or len(bench.cands)))
     return opt, study.run()
 
 
@@ -136,12 +136,12 @@ def test_seed_changes_the_sequence(bench, name):
 
 # -- elimination ------------------------------------------------------------------------------------------------
 def test_elimination_exhausts_and_returns_none(bench):
-    for opts in ({"cost": COST}, {"cost": None}, {"cost": COST, "order_by": "enumeration"}):
+    for opts in ({}, {"cost_bound": False}, {"order_by": "enumeration"}):
         opt, res = run(bench, "elimination", budget=10 * len(bench.cands), **opts)
         assert res.stopped == "exhausted"
         assert res.best.candidate == bench.best.candidate
         assert opt.ask() is None and opt.ask() is None
-        if opts["cost"] is None:  # no bound: every order is evaluated, once
+        if opts.get("cost_bound") is False:  # no bound: every order is evaluated, once
             assert len(res.history) == len(bench.cands)
 
 
@@ -158,15 +158,15 @@ def test_elimination_reach_pruning_is_sound(far_bench):
     """Every candidate skipped by the reach rule does fail at the reach stage; the optimum is still found."""
     b = far_bench
     assert sum(e.stage == "reach" for e in b.evals.values()) >= 8
-    for opts in ({"cost": COST}, {"cost": None}):
+    for opts in ({}, {"cost_bound": False}):
         opt, res = run(b, "elimination", budget=100, keep_pruned=True, **opts)
         assert res.stopped == "exhausted" and res.best.candidate == b.best.candidate
         reach = [k for k, rule in opt.pruned_candidates if rule == "reach"]
         assert len(reach) >= 3
         assert all(b.evals[k].stage == "reach" for k in reach)
-        if opts["cost"] is None:  # without the bound every order is either evaluated or pruned
+        if opts:  # without the bound every order is either evaluated or pruned
             assert len(res.history) + len(opt.pruned_candidates) == len(b.cands)
-    _, res = run(b, "elimination", budget=100, cost=None, reach_pruning=False)
+    _, res = run(b, "elimination", budget=100, cost_bound=False, reach_pruning=False)
     assert len(res.history) == len(b.cands)
 
 
@@ -175,7 +175,7 @@ def test_elimination_base_grid():
     ms = load_module_set("robodesign_arm")
     bb = BaseBounds(lower=(-0.2, -0.1, 0.0, 0.0), upper=(0.2, 0.1, 0.0, 0.0))
     sp = SearchSpace(ms, base_bounds=bb, **RULES)
-    opt = load_optimizer("elimination")(sp, seed=0, base_grid=3)
+    opt = load_optimizer("elimination")(_problem(sp), seed=0, base_grid=3)
     first = [opt.ask() for _ in range(10)]
     assert first[0].order == first[8].order and first[9].order != first[0].order
     assert first[0].base == (0.0, 0.0)
@@ -185,7 +185,7 @@ def test_elimination_base_grid():
 # -- heuristic ----------------------------------------------------------------------------------------------------
 def test_heuristic_without_cost_is_complete(bench):
     """Without a cost bound (f = 0) the learned ranking drives the beam; widening makes it exhaustive."""
-    opt, res = run(bench, "heuristic", budget=100, cost=None, beam_width=2)
+    opt, res = run(bench, "heuristic", budget=100, cost_bound=False, beam_width=2)
     assert res.stopped == "exhausted" and len(res.history) == len(bench.cands)
     assert res.best.candidate == bench.best.candidate
     assert opt.ask() is None
@@ -207,6 +207,14 @@ def test_optuna_nsga2_multi_objective(bench):
 
 
 # -- orders and base poses together (synthetic evaluations: fast, free base dims) -----------------------------------
+def _problem(space: SearchSpace, cost: str = COST) -> Problem:
+    """A problem over a hand-made search space (its task is never evaluated: the evaluations are synthetic)."""
+    from robodesign.costs import parse_cost
+    from robodesign.task_io import load_task
+    return Problem(task=load_task("robodesign/pick_and_place"), module_set=space.module_set, cost=parse_cost(cost),
+                   space=space)
+
+
 def _synthetic(space):
     """Feasible iff the order holds a pitch joint (22 or 24); cost = mass/10 + distance of (x, y) to (0.1, -0.05)
     (the distance is 0 only off the nominal base and off the elimination grid)."""
@@ -228,11 +236,10 @@ def test_orders_and_base_poses_together(name):
     sp = SearchSpace(ms, base_bounds=bb, **RULES)
     assert sp.base_dims == 2
     opts = {**OPTIONS[name], **({"base_grid": 3} if name == "elimination" else {})}
-    if "cost" in opts:
-        opts["cost"] = "mass_0.1"  # a valid lower bound of the synthetic cost (the cost option must bound the study's cost)
+    problem = _problem(sp, "mass_0.1")  # the mass term of the synthetic cost: its bound is a valid lower bound
 
     def go():
-        opt = load_optimizer(name)(sp, seed=3, **opts)
+        opt = load_optimizer(name)(problem, seed=3, **opts)
         return Study(opt, SerialExecutor(_synthetic(sp)), Budget(evaluations=60)).run()
 
     res = go()
@@ -290,8 +297,8 @@ def test_batches(bench, name):
     """batch_size > 1 (asks before tells): still valid, never repeated, deterministic, and the optimum is found
     (the genetic algorithm fills a batch that outruns its generation with random immigrants)."""
     def go():
-        opt = load_optimizer(name)(bench.space, seed=0, **OPTIONS[name])
-        return Study(opt, SerialExecutor(lambda c: bench.ev(c, bench.space.base_bounds)),
+        opt = load_optimizer(name)(bench.problem, seed=0, **OPTIONS[name])
+        return Study(opt, SerialExecutor(bench.ev),
                      Budget(evaluations=len(bench.cands)), batch_size=5).run()
     res = go()
     keys = [e.candidate.key() for e in res.history]
@@ -308,7 +315,7 @@ def test_genetic_generations_limit(bench):
 
 def test_optuna_rejects_bad_objectives(bench):
     with pytest.raises(ValueError):
-        load_optimizer("optuna")(bench.space, multi_objective=True, objectives="score,speed")
+        load_optimizer("optuna")(bench.problem, multi_objective=True, objectives="score,speed")
 
 
 # -- base_pose: the base alone for a fixed order ---------------------------------------------------------------------
@@ -327,7 +334,7 @@ def test_base_pose_plugin_finds_the_synthetic_optimum():
     mass = 0.1 * sum(sp.module_info(m).mass for m in order)
 
     def go(seed):
-        opt = load_optimizer("base_pose")(sp, seed=seed, order=",".join(order))
+        opt = load_optimizer("base_pose")(_problem(sp), seed=seed, order=",".join(order))
         return Study(opt, SerialExecutor(_synthetic(sp)), Budget(evaluations=60)).run()
 
     res = go(0)
@@ -348,12 +355,12 @@ def test_base_pose_plugin_finds_the_synthetic_optimum():
 def test_base_pose_plugin_rejects_bad_options(bench):
     sp, order = _base_space()
     cls = load_optimizer("base_pose")
-    with pytest.raises(ValueError, match="give the module order"):
-        cls(sp)
+    with pytest.raises(ValueError, match="option 'order' is required"):
+        cls(_problem(sp))
     with pytest.raises(ValueError, match="may not follow"):
-        cls(sp, order="1,21,12")
+        cls(_problem(sp), order="1,21,12")
     with pytest.raises(ValueError, match="base pose is fixed"):
-        cls(bench.space, order=",".join(bench.best.candidate.order))     # bench: fixed base
+        cls(bench.problem, order=",".join(bench.best.candidate.order))     # bench: fixed base
 
 
 def test_base_pose_plugin_on_base_placement():
@@ -364,14 +371,15 @@ def test_base_pose_plugin_on_base_placement():
     from robodesign.paths import project_root
     from robodesign.solution import parse_solution
     task_file = project_root() / "assets" / "tasks" / "robodesign" / "base_placement.json"
-    ev = Evaluator(EvaluatorSpec(task=str(task_file), module_set="robodesign_arm", cost="cyc", seed=0))
-    sp = ev.search_space()
+    problem = Problem.build(task_file, "robodesign_arm", "cyc")
+    ev = Evaluator(EvaluatorSpec(problem, seed=0))
+    sp = problem.space
     assert sp.base_dims == 3                                            # x, y, yaw
     order = "2,7,22,3,23,15,24,10,23,15,23,10,24,10,12"
-    opt = load_optimizer("base_pose")(sp, seed=0, order=order)
-    res = Study(opt, SerialExecutor(lambda c: ev(c, sp.base_bounds)), Budget(evaluations=12)).run()
+    opt = load_optimizer("base_pose")(problem, seed=0, order=order)
+    res = Study(opt, SerialExecutor(ev), Budget(evaluations=12)).run()
     assert len(res.history) == 12
-    nominal = Evaluator(ev.spec)(sp.nominal_candidate(order.split(",")), sp.base_bounds)
+    nominal = Evaluator(ev.spec)(sp.nominal_candidate(order.split(",")))
     assert res.history[0].candidate == nominal.candidate and res.history[0].cost == nominal.cost
     assert nominal.feasible and res.best.feasible and res.best.cost <= nominal.cost
     sol = parse_solution(res.best.solution, "best")

@@ -28,7 +28,9 @@ ENTRY = "hill-test"
 
 HILL_CLIMBER = '''
 """A hill-climber: the minimal robodesign optimizer plugin."""
-from robodesign.optimize import Optimizer
+from dataclasses import dataclass
+
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import Candidate
 
 
@@ -36,9 +38,12 @@ class HillClimber(Optimizer):
     name = "hill"
     description = "first-improvement hill climbing: replace one module or nudge the base"
 
-    def __init__(self, space, seed=0, step=0.1, **options):
-        super().__init__(space, seed, **options)
-        self.step = float(step)      # base-pose step, as a fraction of each range
+    @dataclass(frozen=True)
+    class Options:
+        step: float = option(0.1, low=0.0, high=1.0, help="base-pose step, as a fraction of each range")
+
+    def __init__(self, problem, seed=0, **options):
+        super().__init__(problem, seed, **options)  # self.problem, self.space, self.cost, self.rng, self.options
         self.current = None          # the best evaluation so far (the point we climb from)
         self.seen = set()            # keys already asked: never ask a candidate twice
 
@@ -67,7 +72,8 @@ class HillClimber(Optimizer):
         if base and self.rng.random() < 0.5:     # nudge one free base parameter
             k = int(self.rng.integers(len(base)))
             i = bb.free[k]
-            base[k] = min(bb.upper[i], max(bb.lower[i], base[k] + self.rng.normal(0, self.step * (bb.upper[i] - bb.lower[i]))))
+            sigma = self.options.step * (bb.upper[i] - bb.lower[i])
+            base[k] = min(bb.upper[i], max(bb.lower[i], base[k] + self.rng.normal(0, sigma)))
             return Candidate(tuple(order), tuple(base)) if bb.valid(base) else None
         i = int(self.rng.integers(len(order)))   # replace module i by one that fits after order[:i]
         choices = [m for m in self.space.successors(order[:i]) if m != order[i]]
@@ -99,21 +105,29 @@ py-modules = ["{MODULE}"]
 
 CHECK = f'''
 import json, sys
+from robodesign.errors import InputError
 from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, available_optimizers, load_optimizer
+from robodesign.optimize import Budget, SerialExecutor, Study, available_optimizers, create_optimizer, load_optimizer
+from robodesign.problem import Problem
 eps = available_optimizers()
 cls = load_optimizer("{ENTRY}")
-ev = Evaluator(EvaluatorSpec(task=sys.argv[1], module_set="robodesign_arm", cost="Whit2"))
-space = ev.search_space(min_dof=3, max_dof=3, bases=("1",), end_effectors=("12",),
-                        exclude=("4", "5", "6", "7", "8", "9", "10", "11", "15"))
+rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10", "11", "15"])
+problem = Problem.build(sys.argv[1], "robodesign_arm", "Whit2", rules=rules)
+ev = Evaluator(EvaluatorSpec(problem))
 runs = []
 for _ in range(2):
-    opt = cls(space, seed=0)
-    res = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), Budget(evaluations=32)).run()
+    opt = create_optimizer("{ENTRY}", problem, seed=0, options={{"step": "0.05"}})
+    res = Study(opt, SerialExecutor(ev), Budget(evaluations=32)).run()
     runs.append([e.candidate.key() for e in res.history])
+try:
+    create_optimizer("{ENTRY}", problem, options={{"stpe": 0.2}})
+    typo = None
+except InputError as e:
+    typo = str(e)
 print(json.dumps({{"names": sorted(eps), "value": eps["{ENTRY}"].value, "cls": cls.__name__,
                   "feasible": res.best.feasible, "best": res.best.candidate.key(), "cost": res.best.cost,
-                  "n": len(res.history), "same": runs[0] == runs[1], "unique": len(set(runs[0])) == len(runs[0])}}))
+                  "n": len(res.history), "same": runs[0] == runs[1], "unique": len(set(runs[0])) == len(runs[0]),
+                  "step": opt.options.step, "typo": typo}}))
 '''
 
 
@@ -182,11 +196,17 @@ def test_external_plugin_is_discovered_and_runs(tmp_path):
         assert res["value"] == f"{MODULE}:HillClimber" and res["cls"] == "HillClimber"
         assert res["feasible"] and res["cost"] > 0
         assert res["same"] and res["unique"]
-        # the CLI lists it too
+        assert res["step"] == 0.05                                  # "0.05" from the CLI, converted to a float
+        assert res["typo"] == ("optimizer 'hill': unknown option 'stpe' (did you mean 'step'?) (valid options: "
+                               "step (float, default 0.1, in [0.0, 1.0]))")
+        # the CLI lists it too, with its options
         cli = subprocess.run([sys.executable, "-m", "robodesign.cli", "optimizers", "--json"], capture_output=True,
                              text=True, env=env, cwd=tmp_path, timeout=120)
         assert cli.returncode == 0, cli.stderr[-2000:]
         assert json.loads(cli.stdout)[ENTRY] == f"{MODULE}:HillClimber"
+        cli = subprocess.run([sys.executable, "-m", "robodesign.cli", "optimizers", "--verbose"], capture_output=True,
+                             text=True, env=env, cwd=tmp_path, timeout=120)
+        assert "--opt step (float, default 0.1, in [0.0, 1.0]): base-pose step" in cli.stdout
     finally:
         if installed:
             _pip("uninstall", "-y", "-q", DIST, timeout=120)
@@ -202,3 +222,51 @@ def test_docs_example_is_the_tested_plugin():
     blocks = [b.split("```", 1)[0] for b in doc.split("```python\n")[1:]]
     example = next(b for b in blocks if "class HillClimber" in b)
     assert example.strip() == textwrap.dedent(HILL_CLIMBER).strip()
+
+
+# -- the plugin API before Problem (deprecated, kept for one release) ----------------------------------------------
+LEGACY = '''
+from robodesign.optimize import Optimizer
+
+
+class LegacyRandom(Optimizer):
+    """Written against the old API: takes the search space, reads its options (and the cost) itself."""
+    name = "legacy"
+
+    def __init__(self, space, seed=0, tries=50, **options):
+        super().__init__(space, seed, **options)
+        self.tries = int(tries)
+        self.cost_option = options.get("cost")
+        self.seen = set()
+
+    def ask(self):
+        for _ in range(self.tries):
+            c = self.space.random_candidate(self.rng)
+            if c.key() not in self.seen:
+                self.seen.add(c.key())
+                return c
+        return None
+'''
+
+
+def test_plugins_written_against_the_old_api_still_run(tmp_path):
+    """Optimizer(space, seed, **options) plugins get the search space (and, as the CLI used to give them, the study's
+    cost as option ``cost``) with a DeprecationWarning; undeclared options reach them unchanged."""
+    import pytest
+    from robodesign.evaluator import Evaluator, EvaluatorSpec
+    from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
+    from robodesign.problem import Problem
+    ns: dict = {}
+    exec(LEGACY, ns)
+    rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10",
+                                                                                   "11", "15"])
+    problem = Problem.build(_task(tmp_path / "task.json"), "robodesign_arm", "Whit2", rules=rules)
+    with pytest.warns(DeprecationWarning, match="deprecated plugin API"):
+        opt = create_optimizer(ns["LegacyRandom"], problem, seed=0, options={"tries": "7"})
+    assert opt.tries == 7 and opt.cost_option == "Whit2" and opt.problem is problem and opt.space is problem.space
+    res = Study(opt, SerialExecutor(Evaluator(EvaluatorSpec(problem))), Budget(evaluations=4)).run()
+    assert len(res.history) == 4 and all(problem.space.validate(e.candidate) is None for e in res.history)
+    # constructing one directly with a SearchSpace still works, with a warning
+    with pytest.warns(DeprecationWarning, match="deprecated"):
+        old = ns["LegacyRandom"](problem.space, seed=0)
+    assert old.problem is None and old.cost is None and old.ask() is not None

@@ -11,24 +11,20 @@ Typical use, after a search over the modules: refine the base of the best design
     robodesign optimize robodesign/base_placement --modules robodesign_arm --dof 7 \\
         --optimizer base_pose --opt order=2,7,22,3,23,15,24,10,23,15,23,10,24,10,12 --budget 80evals
 
-Options (``--opt key=value``):
-
-=====================  ========  ==================================================================
-``order``              required  the module order, comma-separated (valid under the space's rules)
-``n_startup_trials``   8         TPE: random trials before the model is used
-``max_rejects``        1000      samples outside the tolerance in a row before ``ask`` gives up
-=====================  ========  ==================================================================
+Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them): ``order`` (required),
+``n_startup_trials``, ``max_rejects``.
 
 Deterministic for a seed.
 """
 from __future__ import annotations
 
 from collections import deque
-from typing import Optional
+from dataclasses import dataclass
+from typing import Optional, Tuple
 
 import optuna
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import BASE_PARAMS, Candidate
 
 _OUTSIDE = 1e300
@@ -38,12 +34,16 @@ class BasePoseSearch(Optimizer):
     name = "base_pose"
     description = "the base pose alone for a fixed module order (--opt order=...), TPE from the nominal base"
 
-    def __init__(self, space, seed: int = 0, order=None, n_startup_trials: int = 8, max_rejects: int = 1000,
-                 **options):
-        super().__init__(space, seed, **options)
-        if not order:
-            raise ValueError("base_pose: give the module order, e.g. --opt order=1,21,4,22,5,23,12")
-        self.order = tuple(m.strip() for m in order.split(",")) if isinstance(order, str) else tuple(map(str, order))
+    @dataclass(frozen=True)
+    class Options:
+        order: Tuple[str, ...] = option(help="the module order, comma-separated (valid under the space's rules)")
+        n_startup_trials: int = option(8, low=0, help="TPE: random trials before the model is used")
+        max_rejects: int = option(1000, low=1, help="samples outside the tolerance in a row before ask gives up")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
+        space = self.space
+        self.order = self.options.order
         why = space.validate_order(self.order)
         if why:
             raise ValueError(f"base_pose: order {','.join(self.order)}: {why} "
@@ -52,9 +52,10 @@ class BasePoseSearch(Optimizer):
         if not self.free:
             raise ValueError("base_pose: the base pose is fixed (the task's base placement has no tolerance, "
                              "or --fixed-base was given): nothing to search")
-        self.max_rejects = int(max_rejects)
+        self.max_rejects = self.options.max_rejects
+        n_startup_trials = self.options.n_startup_trials
         optuna.logging.set_verbosity(optuna.logging.WARNING)
-        sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=int(n_startup_trials), multivariate=True)
+        sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=n_startup_trials, multivariate=True)
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
         nominal = space.nominal_candidate(self.order)
         self.study.enqueue_trial({self._param(i): float(v) for i, v in zip(self.free, nominal.base)})

@@ -4,15 +4,15 @@ eliminated stage by stage as soon as a cheap test proves that they cannot be bet
 
 Enumeration order:
 
-* with ``cost`` set (the study's cost descriptor, e.g. ``--opt cost=Whit2``) and ``order_by="bound"``
-  (default): complete orders in non-decreasing :meth:`SearchSpace.cost_lower_bound` (a best-first
+* with ``cost_bound`` (default) and ``order_by="bound"`` (default): complete orders in non-decreasing :meth:`SearchSpace.cost_lower_bound` (a best-first
   traversal of the tree of partial orders; the bound of a prefix is the mass so far plus the lightest
   completion, plus the DoF term; it never decreases along a branch, so orders come out sorted without
   materialising the whole list). For ``mass``, ``numJ`` and ``Whit2`` the bound *is* the cost of a
   feasible order, so the first feasible order found is optimal. Ties: deeper prefix first, then
   enumeration order.
-* otherwise (``cost`` unset, time/energy costs whose bound is 0 everywhere, ``order_by="enumeration"``):
-  the space's deterministic depth-first ``enumerate_orders``.
+  The bound is that of the study's cost (``self.cost``, from the problem), so the pruning below is sound.
+* otherwise (``cost_bound=false``, a cost whose bound is ``-inf`` because of a negative weight,
+  ``order_by="enumeration"``): the space's deterministic depth-first ``enumerate_orders``.
 
 Each order is evaluated at the nominal base pose, or (``base_grid`` = k ≥ 2) at the nominal pose and then
 at every point of a k^d grid over the d free base dims (``linspace(lower, upper, k)`` per dim; points
@@ -21,8 +21,8 @@ outside ``base_bounds.valid`` are skipped since they fail the ``base`` stage).
 Pruning rules (a candidate is skipped without being asked). All of them are *sound*: a skipped
 candidate provably fails, or provably cannot score strictly better than the best feasible one found.
 
-1. **bound**: ``cost_lower_bound(order) ≥ best feasible score`` (needs ``cost``; it must be the cost the
-   study evaluates). In bound order every later order is pruned too, so the enumeration ends (None).
+1. **bound**: ``cost_lower_bound(order) ≥ best feasible score`` (with ``cost_bound``; the bound is of the
+   cost the study evaluates). In bound order every later order is pruned too, so the enumeration ends (None).
 2. **base**: a candidate whose evaluation failed at stage ``base`` had base parameters outside the task's
    base-placement tolerance; that stage depends only on the base pose, so every untried candidate with
    the same base parameters is skipped.
@@ -40,15 +40,10 @@ stages are randomised (IK restarts, sampling planners) and depend on the whole d
 does not prove anything about another candidate. Pruned candidates are counted per rule in
 ``self.pruned`` (``keep_pruned=True`` also keeps their keys in ``self.pruned_candidates``).
 
-Options (``--opt key=value``):
-
-=================  =========  ===========================================================================
-``cost``           None       the study's cost descriptor (enables bound ordering and rule 1)
-``base_grid``      1          grid points per free base dim (1: nominal base only)
-``order_by``       "bound"    "bound" or "enumeration"
-``reach_pruning``  True       apply rule 4
-``keep_pruned``    False      keep (key, rule) of every pruned candidate in ``self.pruned_candidates``
-=================  =========  ===========================================================================
+Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them): ``base_grid`` (1: nominal
+base only), ``order_by`` (``bound`` or ``enumeration``), ``cost_bound`` (rule 1 and bound order),
+``reach_pruning`` (rule 4), ``keep_pruned`` (keep (key, rule) of every pruned candidate in
+``self.pruned_candidates``).
 
 ``ask`` returns None when the enumeration is exhausted (and from then on).
 """
@@ -58,32 +53,38 @@ import heapq
 import itertools
 import math
 from collections import Counter, deque
+from dataclasses import dataclass
 from typing import Deque, Iterator, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import Candidate
-
-_TRUE = (True, 1, "1", "true", "True", "yes")
 
 
 class HierarchicalElimination(Optimizer):
     name = "elimination"
     description = "exhaustive enumeration in cost-bound order with sound stage-by-stage pruning"
 
-    def __init__(self, space, seed: int = 0, cost: Optional[str] = None, base_grid: int = 1,
-                 order_by: str = "bound", reach_pruning: bool = True, keep_pruned: bool = False, **options):
-        super().__init__(space, seed, **options)
-        self.cost = str(cost) if cost not in (None, "", "none", "None") else None
-        self.base_grid = max(1, int(base_grid))
-        if order_by not in ("bound", "enumeration"):
-            raise ValueError(f"elimination: order_by must be 'bound' or 'enumeration', got {order_by!r}")
-        self.reach_pruning = reach_pruning in _TRUE
-        self.keep_pruned = keep_pruned in _TRUE
+    @dataclass(frozen=True)
+    class Options:
+        base_grid: int = option(1, low=1, help="grid points per free base dim (1: the nominal base only)")
+        order_by: str = option("bound", choices=("bound", "enumeration"),
+                               help="complete orders by non-decreasing cost bound, or depth-first")
+        cost_bound: bool = option(True, help="order and prune by the lower bound of the study's cost (rule 1)")
+        reach_pruning: bool = option(True, help="skip designs that provably fail the reach stage (rule 4)")
+        keep_pruned: bool = option(False, help="keep (key, rule) of every pruned candidate in pruned_candidates")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
+        o = self.options
+        self.base_grid = o.base_grid
+        self.reach_pruning = o.reach_pruning
+        self.keep_pruned = o.keep_pruned
         # the bound is usable unless a negative weight makes it -inf
-        self.use_bound = self.cost is not None and math.isfinite(space.cost_lower_bound((), self.cost))
-        self.order_by = order_by if self.use_bound else "enumeration"
+        self.use_bound = (o.cost_bound and self.cost is not None
+                          and math.isfinite(self.space.cost_lower_bound((), self.cost)))
+        self.order_by = o.order_by if self.use_bound else "enumeration"
         self.invalid_base_points = 0
         self._orders = self._bound_order() if self.order_by == "bound" else self._enumeration_order()
         self._bases = self._base_points()

@@ -28,19 +28,9 @@ otherwise replaced by a random immigrant. If the study asks more candidates than
 left before telling (``batch_size`` > remaining), the extra candidates are random immigrants that
 join the current generation (so every evaluation is used for selection).
 
-Options (``--opt key=value``):
-
-=======================  ========  ================================================================
-``population_size``      20        individuals per generation
-``generations``          None      stop (ask returns None) after this many generations (None: never)
-``tournament_size``      3         tournament size of the selection
-``elite``                2         best individuals copied unchanged into the next generation
-``crossover_prob``       0.7       probability that a pair of parents is crossed over
-``mutation_prob``        0.5       probability that an offspring's order is mutated
-``base_mutation_prob``   0.5       probability that an offspring's base parameters are mutated
-``base_sigma``           0.1       σ of the Gaussian base mutation as a fraction of each range
-``max_idle_generations`` 25        stop after this many generations without a new candidate
-=======================  ========  ================================================================
+Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them with their defaults and
+ranges): ``population_size``, ``generations``, ``tournament_size``, ``elite``, ``crossover_prob``,
+``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``.
 
 Deterministic for a seed: every random choice comes from ``self.rng``; DEAP's selection operators,
 which draw from Python's ``random`` module, run with a private ``random`` state seeded from the
@@ -51,13 +41,14 @@ from __future__ import annotations
 import contextlib
 import random
 from collections import deque
+from dataclasses import dataclass
 from typing import Deque, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 from deap import base as deap_base
 from deap import tools
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import Candidate
 
 
@@ -90,21 +81,33 @@ class GeneticOptimizer(Optimizer):
     name = "genetic"
     description = "genetic algorithm (DEAP): connector-aware mutation/crossover of module orders + base pose"
 
-    def __init__(self, space, seed: int = 0, population_size: int = 20, generations: Optional[int] = None,
-                 tournament_size: int = 3, elite: int = 2, crossover_prob: float = 0.7, mutation_prob: float = 0.5,
-                 base_mutation_prob: float = 0.5, base_sigma: float = 0.1, max_idle_generations: int = 25,
-                 **options):
-        super().__init__(space, seed, **options)
-        self.population_size = max(2, int(population_size))
-        self.generations = None if generations in (None, "", "none", "None") else int(generations)
-        self.tournament_size = max(1, int(tournament_size))
-        self.elite = max(0, min(int(elite), self.population_size - 1))
-        self.crossover_prob = float(crossover_prob)
-        self.mutation_prob = float(mutation_prob)
-        self.base_mutation_prob = float(base_mutation_prob)
-        self.base_sigma = float(base_sigma)
-        self.max_idle_generations = max(1, int(max_idle_generations))
-        self._free = tuple(space.base_bounds.free)
+    @dataclass(frozen=True)
+    class Options:
+        population_size: int = option(20, low=2, help="individuals per generation")
+        generations: Optional[int] = option(None, low=1, help="stop after this many generations (none: never)")
+        tournament_size: int = option(3, low=1, help="tournament size of the selection")
+        elite: int = option(2, low=0, help="best individuals copied unchanged into the next generation "
+                                           "(at most population_size - 1)")
+        crossover_prob: float = option(0.7, low=0.0, high=1.0, help="probability that a pair of parents is crossed")
+        mutation_prob: float = option(0.5, low=0.0, high=1.0, help="probability that an offspring's order mutates")
+        base_mutation_prob: float = option(0.5, low=0.0, high=1.0,
+                                           help="probability that an offspring's base parameters mutate")
+        base_sigma: float = option(0.1, low=0.0, help="sigma of the Gaussian base mutation, as a fraction of each range")
+        max_idle_generations: int = option(25, low=1, help="stop after this many generations without a new candidate")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
+        o = self.options
+        self.population_size = o.population_size
+        self.generations = o.generations
+        self.tournament_size = o.tournament_size
+        self.elite = min(o.elite, self.population_size - 1)
+        self.crossover_prob = o.crossover_prob
+        self.mutation_prob = o.mutation_prob
+        self.base_mutation_prob = o.base_mutation_prob
+        self.base_sigma = o.base_sigma
+        self.max_idle_generations = o.max_idle_generations
+        self._free = tuple(self.space.base_bounds.free)
         self._py_random_state = random.Random(self.seed).getstate()
         self.toolbox = deap_base.Toolbox()
         self.toolbox.register("select", tools.selTournament, tournsize=self.tournament_size)

@@ -13,18 +13,18 @@ Ranking key of a prefix p (smaller first):
 0. demoted(p): p has ``demote_after`` or more evaluated designs below it and none of them was feasible
    (learned from tells; a demoted prefix only competes with other demoted prefixes, so each subtree
    gets a few tries before the beam moves on to its siblings; ``demote_after=0`` disables it).
-1. f(p) = g(p) + h(p): :meth:`SearchSpace.cost_lower_bound` of p for the study's cost (option ``cost``)
+1. f(p) = g(p) + h(p): :meth:`SearchSpace.cost_lower_bound` of p for the study's cost (``self.cost``)
    — g is the cost of the modules so far (e.g. mass so far), h the cheapest completion (e.g. the
    lightest completion; ``numJ`` at least ``min_dof``); admissible: it never exceeds the cost of any
    feasible design below p. For costs without order-determined terms (``cyc``, ``mechEnergy``, …) and
-   without ``cost`` it is 0 for every prefix: the lower bound of a cycle time is 0.
+   with ``cost_bound=false`` it is 0 for every prefix: the lower bound of a cycle time is 0.
 2. est(p): the best score told so far among the evaluated designs below p (or below its deepest
    ancestor that has any), i.e. what this subtree is known to achieve; infeasible designs score by the
    stage they reached, so subtrees whose designs fail early sink.
 3. a random rank (from ``self.rng``, redrawn each pass) for diversity among ties.
 
 Tells prune: (1) **bound pruning** (sound): a prefix with f(p) ≥ the best feasible score is never
-expanded again (with ``cost`` equal to the study's cost, nothing below it can be better); (2) **learned
+expanded again (the bound is of the study's cost, so nothing below it can be better); (2) **learned
 ranking** (heuristic, not sound): subtrees whose designs failed early rank low (est) and a narrow beam
 drops them; demoted prefixes (rule 0) make room for untried siblings; widening brings everything back,
 so the search is complete. Fully explored subtrees are closed
@@ -35,16 +35,9 @@ promising order (one that stays in the beam) is asked again in later passes with
 a Gaussian step (σ = ``base_sigma`` · range) from the order's best base pose so far — up to
 ``base_samples`` poses per order.
 
-Options (``--opt key=value``):
-
-================  =======  ======================================================================
-``cost``          None     the study's cost descriptor (enables f and bound pruning)
-``beam_width``    16       prefixes kept per level in the first pass
-``widen``         2        beam growth factor when a pass finds nothing new
-``base_samples``  3        base poses tried per order (free base dims only)
-``base_sigma``    0.15     σ of the base-pose steps as a fraction of each range
-``demote_after``  3        infeasible designs below a prefix (and no feasible one) that demote it
-================  =======  ======================================================================
+Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them): ``beam_width``, ``widen``,
+``base_samples``, ``base_sigma``, ``demote_after`` and ``cost_bound`` (f and bound pruning; on by default,
+with the study's cost from the problem).
 
 Deterministic for a seed; never asks a candidate twice.
 """
@@ -52,11 +45,12 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import dataclass
 from typing import Deque, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import Candidate
 
 Prefix = Tuple[str, ...]
@@ -66,17 +60,27 @@ class HeuristicSearch(Optimizer):
     name = "heuristic"
     description = "beam search over partial assemblies with an admissible cost bound and learned ranking"
 
-    def __init__(self, space, seed: int = 0, cost: Optional[str] = None, beam_width: int = 16, widen: float = 2,
-                 base_samples: int = 3, base_sigma: float = 0.15, demote_after: int = 3, **options):
-        super().__init__(space, seed, **options)
-        self.cost = str(cost) if cost not in (None, "", "none", "None") else None
-        self.beam_width = max(1, int(beam_width))
-        self.widen = max(1.01, float(widen))
-        self._free = tuple(space.base_bounds.free)
-        self.base_samples = max(1, int(base_samples)) if self._free else 1
-        self.base_sigma = float(base_sigma)
-        self.demote_after = max(0, int(demote_after))
-        self.use_bound = self.cost is not None and math.isfinite(space.cost_lower_bound((), self.cost))
+    @dataclass(frozen=True)
+    class Options:
+        beam_width: int = option(16, low=1, help="prefixes kept per level in the first pass")
+        widen: float = option(2.0, low=1.01, help="beam growth factor when a pass finds nothing new")
+        base_samples: int = option(3, low=1, help="base poses tried per order (free base dims only)")
+        base_sigma: float = option(0.15, low=0.0, help="sigma of the base-pose steps, as a fraction of each range")
+        demote_after: int = option(3, low=0, help="infeasible designs below a prefix (none feasible) that demote it; "
+                                                  "0: never")
+        cost_bound: bool = option(True, help="rank by and prune with the lower bound of the study's cost")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
+        o = self.options
+        self.beam_width = o.beam_width
+        self.widen = o.widen
+        self._free = tuple(self.space.base_bounds.free)
+        self.base_samples = o.base_samples if self._free else 1
+        self.base_sigma = o.base_sigma
+        self.demote_after = o.demote_after
+        self.use_bound = (o.cost_bound and self.cost is not None
+                          and math.isfinite(self.space.cost_lower_bound((), self.cost)))
         self.width = self.beam_width
         self.best_score = math.inf
         self.passes = 0

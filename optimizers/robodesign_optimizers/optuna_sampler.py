@@ -27,15 +27,8 @@ stored values at once (counts as a trial, not as an evaluation) and the sampler 
 ``max_duplicates`` times, after which a random unseen candidate is enqueued (``enqueue_trial``) so that
 the sampler learns from it too. When no unseen candidate can be found, ``ask`` returns None.
 
-Options (``--opt key=value``):
-
-=====================  ===============  ==============================================================
-``multi_objective``    False            NSGA-II with ``objectives`` instead of single-objective TPE
-``objectives``         "score,mass"     comma-separated objectives for NSGA-II
-``n_startup_trials``   10               TPE: random trials before the model is used
-``population_size``    20               NSGA-II population size
-``max_duplicates``     10               resamples of evaluated candidates before a random one is enqueued
-=====================  ===============  ==============================================================
+Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them): ``multi_objective``,
+``objectives``, ``n_startup_trials``, ``population_size``, ``max_duplicates``.
 
 Deterministic for a seed (the sampler is seeded with the optimizer's seed); optuna's logging is set to
 WARNING and its experimental-feature warnings are silenced.
@@ -43,48 +36,59 @@ WARNING and its experimental-feature warnings are silenced.
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import optuna
 from optuna.trial import TrialState
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import BASE_PARAMS, Candidate
 from robodesign.solve import STAGES
 
 OBJECTIVES = ("score", "mass", "modules", "dof")
-_TRUE = (True, 1, "1", "true", "True", "yes")
 
 
 class OptunaOptimizer(Optimizer):
     name = "optuna"
     description = "optuna TPE (single objective) or NSGA-II (multi_objective=True) via ask/tell"
 
-    def __init__(self, space, seed: int = 0, multi_objective: bool = False, objectives="score,mass",
-                 n_startup_trials: int = 10, population_size: int = 20, max_duplicates: int = 10, **options):
-        super().__init__(space, seed, **options)
-        self.multi_objective = multi_objective in _TRUE
-        objs = objectives.split(",") if isinstance(objectives, str) else list(objectives)
-        self.objectives = tuple(o.strip() for o in objs if o.strip())
+    @dataclass(frozen=True)
+    class Options:
+        multi_objective: bool = option(False, help="NSGA-II with `objectives` instead of single-objective TPE")
+        objectives: Tuple[str, ...] = option(("score", "mass"), help="NSGA-II objectives, comma-separated, at "
+                                             "least 2 of " + ", ".join(OBJECTIVES))
+        n_startup_trials: int = option(10, low=0, help="TPE: random trials before the model is used")
+        population_size: int = option(20, low=2, help="NSGA-II population size")
+        max_duplicates: int = option(10, low=1, help="resamples of evaluated candidates before a random one is "
+                                                     "enqueued")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
+        o = self.options
+        self.multi_objective = o.multi_objective
+        self.objectives = o.objectives
         if self.multi_objective:
-            bad = [o for o in self.objectives if o not in OBJECTIVES]
+            bad = [x for x in self.objectives if x not in OBJECTIVES]
             if bad or len(self.objectives) < 2:
-                raise ValueError(f"optuna: objectives must be ≥ 2 of {', '.join(OBJECTIVES)}, got {objectives!r}")
-        self.max_duplicates = max(1, int(max_duplicates))
+                raise ValueError(f"optuna: objectives must be ≥ 2 of {', '.join(OBJECTIVES)}, "
+                                 f"got {','.join(self.objectives)!r}")
+        self.max_duplicates = o.max_duplicates
+        population_size, n_startup_trials = o.population_size, o.n_startup_trials
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             if self.multi_objective:
-                sampler = optuna.samplers.NSGAIISampler(population_size=int(population_size), seed=self.seed)
+                sampler = optuna.samplers.NSGAIISampler(population_size=population_size, seed=self.seed)
                 self.study = optuna.create_study(directions=["minimize"] * len(self.objectives), sampler=sampler)
             else:
-                sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=int(n_startup_trials),
+                sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=n_startup_trials,
                                                      multivariate=True, group=True)
                 self.study = optuna.create_study(direction="minimize", sampler=sampler)
         self._names: Dict[int, List[Tuple[str, ...]]] = {}   # position → choice sets seen (in order)
         self._pending: Dict[str, optuna.trial.Trial] = {}      # key → trial asked, not yet told
         self._values: Dict[str, Tuple[List[float], float]] = {}  # key → (objective values, constraint)
-        self._free = tuple(space.base_bounds.free)
+        self._free = tuple(self.space.base_bounds.free)
         self._completable: Dict[Tuple[str, ...], bool] = {}
         self._exhausted = False
 

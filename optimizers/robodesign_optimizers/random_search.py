@@ -2,9 +2,10 @@
 and base poses; never proposes the same candidate twice (up to ``max_duplicates`` retries)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Optional
 
-from robodesign.optimize import Optimizer
+from robodesign.optimize import Optimizer, option
 from robodesign.search_space import Candidate
 
 
@@ -12,13 +13,16 @@ class RandomSearch(Optimizer):
     name = "random"
     description = "uniformly random valid designs (baseline)"
 
-    def __init__(self, space, seed: int = 0, max_duplicates: int = 100, **options):
-        super().__init__(space, seed, **options)
-        self.max_duplicates = int(max_duplicates)
+    @dataclass(frozen=True)
+    class Options:
+        max_duplicates: int = option(100, low=1, help="draws of an already asked design before ask gives up")
+
+    def __init__(self, problem, seed: int = 0, **options):
+        super().__init__(problem, seed, **options)
         self.seen = set()
 
     def ask(self) -> Optional[Candidate]:
-        for _ in range(self.max_duplicates):
+        for _ in range(self.options.max_duplicates):
             c = self.space.random_candidate(self.rng)
             if c.key() not in self.seen:
                 self.seen.add(c.key())

@@ -274,7 +274,10 @@ def build_parser() -> argparse.ArgumentParser:
     op.set_defaults(func=commands.cmd_optimize)
 
     ol = sub.add_parser("optimizers", help="list installed optimizer plugins")
-    ol.add_argument("--json", action="store_true", help="print {name: entry point} as one JSON object")
+    ol.add_argument("--verbose", "-v", action="store_true",
+                    help="also list each plugin's options (type, default, range, help)")
+    ol.add_argument("--json", action="store_true", help="print {name: entry point} as one JSON object "
+                    "(with --verbose: description and options too)")
     ol.set_defaults(func=commands.cmd_optimizers)
 
     run = sub.add_parser("run", help="run an experiment config (default: the built-in demo); resumable")

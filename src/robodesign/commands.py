@@ -113,64 +113,65 @@ def cmd_solve(args) -> int:
 
 
 def cmd_optimizers(args) -> int:
-    from .optimize import available_optimizers
+    from dataclasses import asdict
+    from .optimize import available_optimizers, option_specs
     eps = available_optimizers()
-    if args.json:
-        print(json.dumps({n: ep.value for n, ep in sorted(eps.items())}))
-        return 0
-    if not eps:
-        print("no optimizer plugins installed (pip install -e ./optimizers)")
-        return 0
+    plugins = {}
     for name, ep in sorted(eps.items()):
-        try:
+        try:  # a broken third-party plugin must not break the listing
             cls = ep.load()
             desc = getattr(cls, "description", "") or (cls.__doc__ or "").strip().splitlines()[0]
-        except Exception as e:  # a broken third-party plugin must not break the listing
-            desc = f"(cannot be loaded: {e})"
-        print(f"{name:12s} {ep.value:55s} {desc}")
+            opts = option_specs(cls)
+        except Exception as e:
+            desc, opts = f"(cannot be loaded: {e})", []
+        plugins[name] = (ep.value, desc, opts)
+    if args.json:
+        if getattr(args, "verbose", False):
+            print(json.dumps({n: {"entry_point": v, "description": d, "options": [asdict(o) for o in opts]}
+                              for n, (v, d, opts) in plugins.items()}))
+        else:
+            print(json.dumps({n: v for n, (v, _, _) in plugins.items()}))
+        return 0
+    if not plugins:
+        print("no optimizer plugins installed (pip install -e ./optimizers)")
+        return 0
+    for name, (value, desc, opts) in plugins.items():
+        print(f"{name:12s} {value:55s} {desc}")
+        if getattr(args, "verbose", False):
+            for o in opts:
+                print(f"    --opt {o.describe()}")
+            if not opts:
+                print("    (no declared options)")
     return 0
 
 
 def cmd_optimize(args) -> int:
+    from .cli_args import print_input_warnings
     from .costs import parse_cost
     from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
-    from .optimize import Budget, SerialExecutor, Study, load_optimizer
-    from .task_io import load_task, resolve_task_path
-    parse_cost(args.cost, path="--cost")
+    from .optimize import Budget, SerialExecutor, Study, create_optimizer
+    from .problem import Problem
     budget = Budget.parse(args.budget)
-    task_path = str(resolve_task_path(args.task))
-    from .cli_args import print_input_warnings
-    print_input_warnings(load_task(task_path))  # validate early
-    spec = EvaluatorSpec(task=task_path, module_set=args.modules, cost=args.cost,
-                         settings=evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
-                         seed=args.seed)
-    ev = Evaluator(spec)
     rules = {}
     if args.dof:
         lo, _, hi = args.dof.partition("-")
         rules["min_dof"], rules["max_dof"] = int(lo), int(hi or lo)
     if args.max_links is not None:
         rules["max_links_between"] = args.max_links
-    space = ev.search_space(**rules)
-    if args.fixed_base:
-        from .search_space import BaseBounds
-        from dataclasses import replace
-        space = replace(space, base_bounds=BaseBounds(nominal=space.base_bounds.nominal))
-    options = _parse_options(args.opt)
-    options.setdefault("cost", args.cost)  # bound-based plugins (elimination, heuristic) use the study's cost
-    cls = load_optimizer(args.optimizer)
-    try:
-        opt = cls(space, seed=args.seed, **options)
-    except (TypeError, ValueError) as e:  # bad --opt values: the plugin's own message, no traceback
-        msg = str(e).removeprefix(f"{args.optimizer}: ")
-        raise InputError(f"optimizer {args.optimizer!r}: {msg}") from None
+    problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
+                            base_search=not args.fixed_base)
+    print_input_warnings(problem.task)
+    ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(planner=args.planner,
+                                                              optimize_trajectory=args.optimize_trajectory),
+                                 seed=args.seed))
+    opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=_parse_options(args.opt))
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
 
     def on_evaluation(i, e, best):
         walls.append(time.perf_counter() - progress.t0)
         progress(i, e, best)
-    study = Study(opt, SerialExecutor(lambda c: ev(c, space.base_bounds)), budget, on_evaluation=on_evaluation)
+    study = Study(opt, SerialExecutor(ev), budget, on_evaluation=on_evaluation)
     res = study.run()
     progress.close()
     from .experiment.suites import record_of_run
@@ -186,7 +187,7 @@ def cmd_optimize(args) -> int:
     summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
                "stopped": res.stopped, "feasible": bool(best and best.feasible),
                "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
-                                                  "base_pose": space.base_pose(best.candidate).tolist(),
+                                                  "base_pose": problem.base_pose(best.candidate).tolist(),
                                                   "cost": best.cost, "stage": best.stage, "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
                "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
@@ -196,7 +197,7 @@ def cmd_optimize(args) -> int:
         print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}); "
               f"{sum(e.feasible for e in res.history)} feasible")
         if best is not None and best.feasible:
-            bp = space.base_pose(best.candidate)
+            bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
             print(f"base pose    xyz {np.round(bp[:3, 3], 4).tolist()}  yaw {np.degrees(np.arctan2(bp[1, 0], bp[0, 0])):.1f}°")
             print(f"cost         {args.cost} = {best.cost:.6g}")

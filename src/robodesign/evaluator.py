@@ -1,8 +1,9 @@
 """The shared evaluator: Candidate → Evaluation, through the staged solve pipeline.
 
-A candidate's evaluation is a pure function of (candidate, task, module set, cost, settings, seed):
-the per-candidate seed is derived from the study seed and the candidate key, so results do not
-depend on evaluation order, executor or process. Results are cached per candidate key.
+A candidate's evaluation is a pure function of (candidate, problem, settings, seed), where the
+:class:`~robodesign.problem.Problem` fixes the task, module set, cost and base-pose bounds: the
+per-candidate seed is derived from the study seed and the candidate key, so results do not depend on
+evaluation order, executor or process. The cache key covers all of them (:meth:`Evaluator.cache_key`).
 
 Score (smaller is better): a feasible candidate scores the checker's cost of its checked solution
 (one judge). An infeasible one scores ``INFEASIBLE + (stages left)·STAGE_PENALTY − goals reached``,
@@ -12,13 +13,14 @@ further (more stages, more goals) rank better — optimizers still learn from th
 from __future__ import annotations
 
 import hashlib
+import json
 import time
-from dataclasses import asdict, dataclass, field
-from typing import Dict, List, Optional, Union
-
+from dataclasses import asdict, dataclass, field, replace
+from typing import Dict, List, Optional
 
 from .module_spec import ModuleSet
-from .search_space import Candidate, SearchSpace
+from .problem import Problem
+from .search_space import Candidate
 from .solve import STAGES, SolveSettings, solve
 from .task_spec import Task
 
@@ -72,64 +74,61 @@ def evaluation_settings(**overrides) -> SolveSettings:
     return SolveSettings(**{"ik_restarts": 150, **overrides})
 
 
-@dataclass
+@dataclass(frozen=True)
 class EvaluatorSpec:
-    """Everything an evaluator needs, as plain data (picklable; heavy objects are rebuilt per process)."""
-    task: Union[str, Task]
-    module_set: Union[str, ModuleSet]
-    cost: str = "cyc"
+    """Everything an evaluator needs, as plain data (picklable: a problem built from files travels as
+    their references and is reloaded once per process)."""
+    problem: Problem
     settings: SolveSettings = field(default_factory=evaluation_settings)
     seed: int = 0
     keep_solutions: bool = True
 
+    def fingerprint(self) -> str:
+        """A hash of everything besides the candidate that changes an evaluation: the problem (task, module
+        set, cost, base bounds), the solve settings and the study seed."""
+        d = {"problem": self.problem.fingerprint(), "settings": asdict(self.settings), "seed": int(self.seed),
+             "solution": bool(self.keep_solutions)}
+        return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
 
 class Evaluator:
-    def __init__(self, spec: EvaluatorSpec):
+    """Candidate → Evaluation for one :class:`EvaluatorSpec`. ``cache`` (a dict, may be shared between
+    evaluators) maps :meth:`cache_key` → Evaluation."""
+
+    def __init__(self, spec: EvaluatorSpec, cache: Optional[Dict[str, Evaluation]] = None):
         self.spec = spec
-        self._task: Optional[Task] = None
-        self._ms: Optional[ModuleSet] = None
-        self.cache: Dict[str, Evaluation] = {}
+        self.problem = spec.problem
+        self.cache: Dict[str, Evaluation] = {} if cache is None else cache
+        self._context = spec.fingerprint()
 
     @property
     def task(self) -> Task:
-        if self._task is None:
-            from .task_io import load_task
-            self._task = self.spec.task if isinstance(self.spec.task, Task) else load_task(self.spec.task)
-        return self._task
+        return self.problem.task
 
     @property
     def module_set(self) -> ModuleSet:
-        if self._ms is None:
-            from .module_io import load_module_set
-            ms = self.spec.module_set
-            self._ms = ms if isinstance(ms, ModuleSet) else load_module_set(ms)
-        return self._ms
+        return self.problem.module_set
 
-    def search_space(self, **rules) -> SearchSpace:
-        """The search space of this task and module set; base bounds from the task's base placement."""
-        from .search_space import BaseBounds
-        bb = BaseBounds.from_tolerance(self.task.base_placement)
-        return SearchSpace(self.module_set, base_bounds=bb, **rules)
+    def cache_key(self, candidate: Candidate) -> str:
+        """The candidate's key under this evaluator's problem, settings and seed."""
+        return f"{self._context}|{candidate.key()}"
 
-    def __call__(self, candidate: Candidate, base_bounds=None) -> Evaluation:
-        key = candidate.key()
+    def __call__(self, candidate: Candidate) -> Evaluation:
+        key = self.cache_key(candidate)
         hit = self.cache.get(key)
         if hit is not None:
             return hit
-        ev = self.evaluate(candidate, base_bounds)
+        ev = self.evaluate(candidate)
         self.cache[key] = ev
         return ev
 
-    def evaluate(self, candidate: Candidate, base_bounds=None) -> Evaluation:
+    def evaluate(self, candidate: Candidate) -> Evaluation:
         t0 = time.perf_counter()
         seed = candidate_seed(self.spec.seed, candidate.key())
-        task = self.task
-        if base_bounds is None:
-            from .search_space import BaseBounds
-            base_bounds = BaseBounds.from_tolerance(task.base_placement)
-        base = base_bounds.pose(candidate.base) if candidate.base else task.nominal_base_pose
-        settings = SolveSettings(**{**asdict(self.spec.settings), "seed": seed})
-        res = solve(task, self.module_set, list(candidate.order), base, cost=self.spec.cost, settings=settings)
+        problem = self.problem
+        settings = replace(self.spec.settings, seed=seed)
+        res = solve(problem.task, problem.module_set, list(candidate.order), problem.base_pose(candidate),
+                    cost=problem.cost_descriptor, settings=settings)
         feasible = res.feasible
         cost = res.cost if feasible else None
         ev = Evaluation(candidate=candidate, feasible=feasible, cost=cost,

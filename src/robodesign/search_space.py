@@ -277,8 +277,9 @@ class SearchSpace:
         the lightest valid order."""
         return self._prefix_completion(prefix)[1]
 
-    def cost_lower_bound(self, prefix: Sequence[str], cost: str) -> float:
-        """A lower bound of cost ``cost`` (a cost descriptor such as ``"Whit2"``, ``"mass"``, ``"cyc"``) of
+    def cost_lower_bound(self, prefix: Sequence[str], cost) -> float:
+        """A lower bound of cost ``cost`` (a CostFunction, e.g. ``problem.cost``, or a descriptor such as
+        ``"Whit2"``, ``"mass"``, ``"cyc"``) of
         every feasible design whose order starts with ``prefix`` (any base pose; ``inf`` if ``prefix`` has no
         valid completion).
 
@@ -290,7 +291,7 @@ class SearchSpace:
         """
         from .costs import cost_terms
         prefix = tuple(str(x) for x in prefix)
-        terms = _cost_terms(str(cost))
+        terms = cost.terms if hasattr(cost, "terms") else _cost_terms(str(cost))
         count, lightest = self._prefix_completion(prefix)
         if count == 0:
             return math.inf

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple
 
@@ -24,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 from ..errors import InputError, format_json_path
 from ..optimize import Budget
+from ..problem import Problem
 from ..solve import SolveSettings
 
 DEFAULT_BUDGET = "50evals"
@@ -443,57 +444,33 @@ def load_config(path, display: Optional[str] = None) -> Tuple[ExperimentConfig, 
 # resolution
 # ------------------------------------------------------------------------------------------------
 @dataclass
-class Problem:
-    """One (task, module set, cost, rules, base search) combination: the 'task' of a run."""
+class ProblemEntry:
+    """One named problem of an experiment (a task entry or benchmark ID with its cost, rules and base
+    search): the :class:`~robodesign.problem.Problem` every run of it optimizes, built once."""
     name: str
-    task_id: str
-    task_ref: str          # what Evaluator/load_task gets: a built-in task ID or an absolute path
-    modules_ref: str       # a built-in module set name or an absolute folder
-    module_set_name: str
-    cost: str
-    rules: Dict[str, Any]
+    problem: Problem
     base_search: bool
     where: str             # config path of the entry, for messages
     suite: Optional[str] = None  # the suite (task family) the task belongs to
-    _space: Any = field(default=None, repr=False)
-    _models: Any = field(default=None, repr=False)  # (Task, ModuleSet) loaded in this process
 
-    def task_and_modules(self):
-        if self._models is None:
-            from ..module_io import load_module_set
-            from ..task_io import load_task
-            self._models = (load_task(self.task_ref), load_module_set(self.modules_ref))
-        return self._models
+    @property
+    def task_id(self) -> str:
+        return self.problem.task.id
+
+    @property
+    def cost(self) -> str:
+        return self.problem.cost_descriptor
 
     def evaluator_spec(self, seed: int, solve: SolveSettings):
         from ..evaluator import EvaluatorSpec
-        return EvaluatorSpec(task=self.task_ref, module_set=self.modules_ref, cost=self.cost, settings=solve,
-                             seed=int(seed))
-
-    def search_space(self, evaluator=None):
-        """The search space (built once; loads the task and module set in this process)."""
-        if self._space is None:
-            from ..evaluator import Evaluator, EvaluatorSpec
-            from ..search_space import BaseBounds, SearchSpace
-            ev = evaluator or Evaluator(EvaluatorSpec(task=self.task_ref, module_set=self.modules_ref))
-            if evaluator is None:
-                ev._task, ev._ms = self.task_and_modules()
-            rules = dict(self.rules)
-            for k in ("bases", "end_effectors"):
-                if rules.get(k) is not None:
-                    rules[k] = tuple(rules[k])
-            rules["exclude"] = tuple(rules.get("exclude") or ())
-            if self.base_search:
-                self._space = ev.search_space(**rules)
-            else:
-                bb = BaseBounds.from_tolerance(ev.task.base_placement)
-                self._space = SearchSpace(ev.module_set, base_bounds=BaseBounds(nominal=bb.nominal), **rules)
-        return self._space
+        return EvaluatorSpec(self.problem, settings=solve, seed=int(seed))
 
     def to_json(self) -> dict:
-        return {"name": self.name, "task_id": self.task_id, "task": self.task_ref, "modules": self.modules_ref,
-                "module_set": self.module_set_name, "cost": self.cost, "rules": self.rules,
-                "base_search": self.base_search, "suite": self.suite}
+        p = self.problem
+        return {"name": self.name, "task_id": p.task.id, "task": p.task_ref, "modules": p.modules_ref,
+                "module_set": p.module_set.name, "cost": p.cost_descriptor, "rules": p.rules(),
+                "base_search": self.base_search, "suite": self.suite, "base_bounds": p.to_json()["base_bounds"],
+                "fingerprint": p.fingerprint()}
 
 
 @dataclass
@@ -508,7 +485,7 @@ class OptimizerRun:
 
 @dataclass
 class RunSpec:
-    problem: Problem
+    problem: ProblemEntry
     optimizer: OptimizerRun
     seed: int
 
@@ -527,7 +504,7 @@ class ResolvedExperiment:
     name: str
     file: str               # display name of the config file
     base_dir: Path          # relative paths were resolved against this folder
-    problems: List[Problem]
+    problems: List[ProblemEntry]
     optimizers: List[OptimizerRun]
     seeds: List[int]
     solve: SolveSettings
@@ -543,7 +520,7 @@ class ResolvedExperiment:
     def eval_seed(self, run_seed: int) -> int:
         return self.config.eval_seed if self.config.eval_seed is not None else int(run_seed)
 
-    def spec_id(self, problem: Problem, run_seed: int) -> str:
+    def spec_id(self, problem: ProblemEntry, run_seed: int) -> str:
         return f"{problem.name}#{self.eval_seed(run_seed)}"
 
     def evaluator_specs(self) -> Dict[str, Any]:
@@ -668,8 +645,8 @@ def _slug(s: str) -> str:
 def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_optimizers: bool = True,
                    default_name: Optional[str] = None) -> ResolvedExperiment:
     """Resolve tasks, module sets and optimizers; load each task and module set once (parse errors
-    surface here) and instantiate each optimizer with its options on the first problem's search space."""
-    from ..evaluator import Evaluator, EvaluatorSpec
+    surface here), build each problem once and instantiate each optimizer with its options on the first
+    problem."""
     from ..module_io import load_module_set
     from ..paths import DEFAULT_MODULE_SET
     from ..task_io import load_task
@@ -724,12 +701,10 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             raise InputError(f"{e}", file=display, path=r["where"]) from None
 
     # names: the task ID; disambiguated by cost / module set / base search when several entries share it
-    problems: List[Problem] = []
     for r in raw:
-        task = tasks[r["task_ref"]]
-        ms = sets[r["modules_ref"]]
-        r["task_id"] = task.id
-        r["ms_name"] = ms.name
+        r["task_id"] = tasks[r["task_ref"]].id
+        r["ms_name"] = sets[r["modules_ref"]].name
+    problems: List[ProblemEntry] = []
     for r in raw:
         if r["name"]:
             name = r["name"] if r["n_costs"] == 1 else f"{r['name']}-{r['cost']}"
@@ -743,34 +718,22 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             if len({o["base_search"] for o in same}) > 1 and not r["base_search"]:
                 name += "-fixed_base"
         name = _slug(name).strip("/")
-        rules = r["rules"].model_dump()
-        problems.append(Problem(name=name, task_id=r["task_id"], task_ref=r["task_ref"], modules_ref=r["modules_ref"],
-                                module_set_name=r["ms_name"], cost=r["cost"], rules=rules,
-                                base_search=bool(r["base_search"]), where=format_json_path(r["where"]),
-                                suite=r.get("suite")))
-    seen: Dict[str, Problem] = {}
-    for p in problems:
-        if p.name in seen:
-            raise InputError(f"two entries resolve to the same run name {p.name!r} ({seen[p.name].where} and "
-                             f"{p.where}): give one of them a distinct 'name'", file=display, path=p.where)
-        seen[p.name] = p
-
-    # rules against the module set
-    for p, r in zip(problems, raw):
-        ms = sets[p.modules_ref]
-        rpath = list(r["where"]) + ["rules"] if r["entry"].rules is not None else ["rules"]
-        for key, kind in (("bases", "base"), ("end_effectors", "eef"), ("exclude", None)):
-            for j, mid in enumerate(p.rules.get(key) or ()):
-                if mid not in ms:
-                    raise InputError(f"module {mid!r} is not in module set {ms.name!r}", file=display,
-                                     path=rpath + [key, j])
-                if kind and ms[mid].kind != kind:
-                    raise InputError(f"module {mid!r} is a {ms[mid].kind} module, not a {kind} module",
-                                     file=display, path=rpath + [key, j])
-        ev = Evaluator(EvaluatorSpec(task=p.task_ref, module_set=p.modules_ref))
-        ev._task, ev._ms = tasks[p.task_ref], ms
-        p._models = (tasks[p.task_ref], ms)
-        p.search_space(ev)
+        where = format_json_path(r["where"])
+        for p in problems:
+            if p.name == name:
+                raise InputError(f"two entries resolve to the same run name {name!r} ({p.where} and {where}): "
+                                 "give one of them a distinct 'name'", file=display, path=where)
+        rules_path = list(r["where"]) + ["rules"] if r["entry"].rules is not None else ["rules"]
+        try:
+            problem = Problem.build(tasks[r["task_ref"]], sets[r["modules_ref"]], r["cost"],
+                                    rules=r["rules"].model_dump(), base_search=bool(r["base_search"]))
+        except InputError as e:  # a rule naming a module that is not in the set (or not of that kind)
+            path = e.json_path.removeprefix("rules").lstrip(".")
+            raise InputError(e.reason, file=display, path=format_json_path(rules_path) + (f".{path}" if path else "")
+                             ) from None
+        problem = dataclasses.replace(problem, task_ref=r["task_ref"], modules_ref=r["modules_ref"])
+        problems.append(ProblemEntry(name=name, problem=problem, base_search=bool(r["base_search"]), where=where,
+                                     suite=r.get("suite")))
 
     # optimizers
     opts: List[OptimizerRun] = []
@@ -779,7 +742,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
         opts.append(OptimizerRun(label=o.key, name=o.name, options=dict(o.options), budget=Budget.parse(budget_text),
                                  budget_text=budget_text, batch_size=o.batch_size or cfg.batch_size))
         if check_optimizers:
-            check_optimizer(o.name, o.options, problems[0].search_space(), display, ["optimizers", i])
+            check_optimizer(o.name, o.options, problems[0].problem, display, ["optimizers", i])
 
     solve = SolveSettings(**cfg.solve.model_dump())
     name = cfg.name or default_name or Path(display).stem
@@ -787,8 +750,10 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
                               optimizers=opts, seeds=list(cfg.seeds), solve=solve, executor=cfg.executor)
 
 
-def check_optimizer(name: str, options: dict, space, display: str, path: list) -> None:
-    from ..optimize import available_optimizers, load_optimizer
+def check_optimizer(name: str, options: dict, problem: Problem, display: str, path: list) -> None:
+    """Instantiate optimizer ``name`` with ``options`` once, so that an unknown plugin or a bad option is an
+    error naming the config file and field before anything runs."""
+    from ..optimize import OptionError, available_optimizers, create_optimizer, load_optimizer
     if name not in available_optimizers():
         known = ", ".join(sorted(available_optimizers())) or "none installed"
         raise InputError(f"unknown optimizer {name!r} (installed: {known})", file=display, path=path + ["name"])
@@ -800,12 +765,11 @@ def check_optimizer(name: str, options: dict, space, display: str, path: list) -
         raise InputError(f"optimizer {name!r} is registered but cannot be loaded: {type(e).__name__}: {e}",
                          file=display, path=path + ["name"]) from None
     try:
-        cls(space, seed=0, **options)
-    except TypeError as e:
-        raise InputError(f"optimizer {name!r} does not accept these options: {e}", file=display,
-                         path=path + ["options"]) from None
-    except (ValueError, KeyError) as e:
-        raise InputError(f"optimizer {name!r}: bad option: {e}", file=display, path=path + ["options"]) from None
+        create_optimizer(cls, problem, seed=0, options=options)
+    except OptionError as e:
+        raise InputError(e.reason, file=display, path=path + ["options", e.option]) from None
+    except InputError as e:
+        raise InputError(e.reason, file=display, path=path + ["options"]) from None
 
 
 def load_experiment(path, display: Optional[str] = None, base_dir: Optional[Path] = None,

@@ -3,7 +3,8 @@
 An *evaluator pool* is created once per experiment with the :class:`~robodesign.evaluator.EvaluatorSpec`
 of every (task, evaluation seed) the runs need, keyed by a spec id. Each worker (the main process, a
 spawned process, a Ray actor) builds its :class:`~robodesign.evaluator.Evaluator` objects **once**, when it
-starts; tasks and module sets (the heavy models) are loaded once per worker and shared between specs.
+starts; the specs' problems travel as file references, so tasks and module sets (the heavy models) are
+loaded once per worker and shared between specs.
 ``pool.bind(spec_id)`` gives the object a :class:`~robodesign.optimize.Study` uses as its executor
 (``map(candidates) -> list[Evaluation]`` in the order given, ``close()``).
 
@@ -37,18 +38,8 @@ MAX_ATTEMPTS = 4  # per candidate, counting the first
 
 
 def build_evaluators(specs: Dict[str, EvaluatorSpec]) -> Dict[str, Evaluator]:
-    """One Evaluator per spec; each task and module set is loaded once and shared."""
-    shared: Dict[tuple, tuple] = {}
-    out: Dict[str, Evaluator] = {}
-    for sid, spec in specs.items():
-        ev = Evaluator(spec)
-        k = (str(spec.task), str(spec.module_set))
-        if k in shared:
-            ev._task, ev._ms = shared[k]
-        else:
-            shared[k] = (ev.task, ev.module_set)  # loads them now
-        out[sid] = ev
-    return out
+    """One Evaluator per spec (the problems' tasks and module sets are loaded once per process)."""
+    return {sid: Evaluator(spec) for sid, spec in specs.items()}
 
 
 class BoundExecutor:
@@ -110,13 +101,7 @@ class SerialPool(EvaluatorPool):
         ev = self.evaluators.get(spec_id)
         if ev is None:
             t0 = time.perf_counter()
-            for sid, e in build_evaluators({spec_id: self.specs[spec_id]}).items():
-                # share the heavy models with already built evaluators of the same task/module set
-                for other in self.evaluators.values():
-                    if (str(other.spec.task), str(other.spec.module_set)) == (str(e.spec.task), str(e.spec.module_set)):
-                        e._task, e._ms = other._task, other._ms
-                        break
-                self.evaluators[sid] = ev = e
+            ev = self.evaluators[spec_id] = Evaluator(self.specs[spec_id])
             self.startup_seconds += time.perf_counter() - t0
         return ev
 

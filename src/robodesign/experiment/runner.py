@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Dict, Optional
 
 from ..errors import InputError
-from ..optimize import Budget, Study, load_optimizer
+from ..optimize import Budget, Study, create_optimizer
 from .config import ResolvedExperiment, RunSpec, load_experiment
 from .storage import DB_FILE, ExperimentDB
 
@@ -140,12 +140,8 @@ def default_out_dir(name: str, root: Path = Path("results")) -> Path:
     return p
 
 
-def problem_dir(problem_name: str) -> str:
-    return problem_name
-
-
 def best_paths(out: Path, problem: str, optimizer: str, seed: int):
-    d = out / "best" / problem_dir(problem)
+    d = out / "best" / problem
     return d / f"{optimizer}-seed{seed}.json", d / f"{optimizer}-seed{seed}.verdict.json"
 
 
@@ -280,9 +276,9 @@ def write_best(out: Path, db: ExperimentDB, run: RunSpec) -> Optional[dict]:
     tmp.write_text(json.dumps(json.loads(best["solution"]), indent=1))
     tmp.replace(sol_path)
     t0 = time.perf_counter()
-    task, ms = run.problem.task_and_modules()
+    problem = run.problem.problem
     try:
-        verdict = check(task, load_solution(sol_path), ms)
+        verdict = check(problem.task, load_solution(sol_path), problem.module_set)
         v = verdict.to_json()
     except Exception as e:  # noqa: BLE001 - record, never crash the experiment on the re-check
         v = {"valid": False, "violations": [{"constraint": "error", "message": f"{type(e).__name__}: {e}"}],
@@ -515,8 +511,7 @@ def best_of_problem(db: ExperimentDB, problem: str) -> Optional[dict]:
 
 
 def _run_one(exp: ResolvedExperiment, r: RunSpec, k: int, n: int, db: ExperimentDB, pool, progress) -> int:
-    space = r.problem.search_space()
-    opt = load_optimizer(r.optimizer.name)(space, seed=r.seed, **r.optimizer.options)
+    opt = create_optimizer(r.optimizer.name, r.problem.problem, seed=r.seed, options=r.optimizer.options)
     storage = db.storage(r.run_id)
     budget = r.optimizer.budget
     if budget.seconds is not None:
