@@ -149,8 +149,8 @@ def test_elimination_bounds_with_the_problems_cost():
                                                                                  for m in lightest))
     assert sp.cost_lower_bound(first.order, p.cost) == pytest.approx(
         0.025 * 3 + 0.1 * sum(sp.module_info(m).mass for m in lightest))
-    # with a cost whose bound is -inf (negative weight on an unbounded term) it enumerates instead
-    assert create_optimizer("elimination", p.with_(cost="cyc_-1")).order_by == "enumeration"
+    # with a cost whose bound is -inf (a reward: negative weight on fulfillN) it enumerates instead
+    assert create_optimizer("elimination", p.with_(cost="cyc,fulfillN_-1")).order_by == "enumeration"
 
 
 def test_experiment_gives_elimination_the_cost_without_a_config_line(tmp_path):
