@@ -85,7 +85,7 @@ def test_suite_folder_errors_name_the_field(tmp_path, capsys):
     assert "suites[0]: give the suite a 'folder'" in capsys.readouterr().err
     cfg.write_text("name: x\nsuites:\n  - name: s\n    generate: {family: nosuch, count: 2}\noptimizers: [random]\n")
     assert main(["run", str(cfg), "--out", str(tmp_path / "o")]) == 2
-    assert "suites[0].generate: unknown generator family 'nosuch'" in capsys.readouterr().err
+    assert "suites[0].generate[0]: unknown generator family 'nosuch'" in capsys.readouterr().err
 
 
 FAMILIES = {  # family → generator options of a small suite

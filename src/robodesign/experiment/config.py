@@ -192,7 +192,12 @@ class SuiteEntry(_Overrides):
     summarized together in the report (solved share, best costs, time to the first feasible design)."""
     name: str
     folder: Optional[str] = None
-    generate: Optional[SuiteGenerate] = None
+    generate: Optional[List[SuiteGenerate]] = None  # one block or a list (e.g. several structures of a family)
+
+    @field_validator("generate", mode="before")
+    @classmethod
+    def _one_or_list(cls, v):
+        return [v] if isinstance(v, dict) else v
 
     @field_validator("name")
     @classmethod
@@ -592,10 +597,11 @@ SUITE_MANIFEST = ".suite.json"  # in a generated suite's folder: what was genera
 
 
 def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> List[Path]:
-    """The task files of a suite, sorted. With ``generate``, the folder (default ``generated/<name>``
-    beside the config) holds exactly what that generator call writes: generated on first use (the
-    generators are deterministic, so a folder cut short by a kill is completed with identical bytes) and
-    recorded in ``.suite.json``; a folder generated with other arguments is an error, never overwritten."""
+    """The task files of a suite. A plain folder: its ``*.json`` files, sorted. With ``generate``, the
+    folder (default ``generated/<name>`` beside the config) holds exactly what those generator calls write,
+    in call order: generated on first use (the generators are deterministic, so a folder cut short by a
+    kill is completed with identical bytes) and recorded in ``.suite.json``; a folder generated with other
+    arguments is an error, never overwritten."""
     import json
     folder = Path(su.folder or f"generated/{su.name}")
     folder = folder if folder.is_absolute() else (base / folder).resolve()
@@ -607,35 +613,37 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         if not files:
             raise InputError(f"no task files (*.json) in {folder}", file=display, path=where + ["folder"])
         return files
-    want = {"family": su.generate.family, "count": su.generate.count, "seed": su.generate.seed,
-            "options": su.generate.options}
+    want = [g.model_dump() for g in su.generate]
     manifest = folder / SUITE_MANIFEST
     if manifest.is_file():
         try:
             have = json.loads(manifest.read_text())
         except ValueError as e:
             raise InputError(f"unreadable {manifest}: {e}", file=display, path=where + ["folder"]) from None
-        if {k: have.get(k) for k in want} != want:
-            got = ", ".join(f"{k} {have.get(k)!r}" for k in want)
-            raise InputError(f"{folder} holds tasks generated with other arguments ({got}): delete it or give the "
-                             "suite another folder", file=display, path=where + ["generate"])
+        if have.get("generate") != want:
+            raise InputError(f"{folder} holds tasks generated with other arguments ({have.get('generate')}): delete "
+                             "it or give the suite another folder", file=display, path=where + ["generate"])
         files = [folder / n for n in have.get("files", [])]
         if files and all(p.is_file() for p in files):
             return files
     from ..generate import generate, get_family
-    options = dict(su.generate.options)
-    for k, v in options.items():  # a file option (e.g. liu2020 machine) is relative to the config file
-        if v is not None and get_family(su.generate.family).option(k).path and not Path(str(v)).is_absolute():
-            options[k] = str((base / str(v)).resolve())
-    try:
-        files = generate(su.generate.family, folder, count=su.generate.count, seed=su.generate.seed,
-                         options=options)
-    except InputError as e:
-        raise InputError(str(e), file=display, path=where + ["generate"]) from None
+    files = []
+    for k, g in enumerate(su.generate):
+        options = dict(g.options)
+        for name, v in options.items():  # a file option (e.g. liu2020 machine) is relative to the config file
+            if v is not None and get_family(g.family).option(name).path and not Path(str(v)).is_absolute():
+                options[name] = str((base / str(v)).resolve())
+        try:
+            files += generate(g.family, folder, count=g.count, seed=g.seed, options=options)
+        except InputError as e:
+            raise InputError(str(e), file=display, path=where + ["generate", k]) from None
+    if len({p.name for p in files}) != len(files):
+        raise InputError("two generate blocks write the same task file: give them different options or seeds",
+                         file=display, path=where + ["generate"])
     tmp = manifest.with_name(manifest.name + ".tmp")
-    tmp.write_text(json.dumps({**want, "files": [p.name for p in files]}, indent=1))
+    tmp.write_text(json.dumps({"generate": want, "files": [p.name for p in files]}, indent=1))
     tmp.replace(manifest)
-    return sorted(files)
+    return files
 
 
 def _slug(s: str) -> str:
