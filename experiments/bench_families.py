@@ -40,15 +40,19 @@ sys.path.insert(0, str(ROOT / "src"))
 from robodesign.experiment.config import SuiteEntry, suite_task_files  # noqa: E402
 from robodesign.experiment.suites import SuiteRecord, cell, stage_counts_text, summarize_suites  # noqa: E402
 
-# variant → (generator family, options, Mayer & Althoff 2024 median best cycle time [s], their setting)
+BPO_STRUCTURES = ("x", "cross", "house", "oven", "random")
+BPO_DIFFICULTIES = ("easy", "medium", "hard")
+# variant → (generator family, option sets (the tasks are spread evenly over them), Mayer & Althoff 2024
+# median best cycle time [s], their setting)
 VARIANTS = {
-    "whitman2020_g3o3": ("whitman2020", {"goals": 3, "obstacles": 3, "base": "xyz_any_rot"}, 8.8,
+    "whitman2020_g3o3": ("whitman2020", [{"goals": 3, "obstacles": 3, "base": "xyz_any_rot"}], 8.8,
                          "Whitman 3 goals / 3 obstacles, free base"),
-    "whitman2020_g5o5": ("whitman2020", {"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}, 18.9,
+    "whitman2020_g5o5": ("whitman2020", [{"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}], 18.9,
                          "Whitman 5 goals / 5 obstacles, free base"),
-    "liu2020": ("liu2020", {"machine": "<cobra>/tasks/assets/DMU_125P_compress.stl"}, 12.0,
+    "liu2020": ("liu2020", [{"machine": "<cobra>/tasks/assets/DMU_125P_compress.stl"}], 12.0,
                 "Liu case 2b (machine tending), DMU 125P mesh of the CoBRA data"),
-    "bpo2024": ("bpo2024", {}, 11.4, "edge cases"),
+    "bpo2024": ("bpo2024", [{"structure": s, "difficulty": d} for s in BPO_STRUCTURES for d in BPO_DIFFICULTIES],
+                11.4, "edge cases: 5 structures x 3 difficulties"),
 }
 COBRA = ROOT.parent / "shared" / "cobra"  # the CoBRA reference data beside the checkout (--cobra)
 SETS = {"builtin": "robodesign_arm", "IMPROV": "<cobra>/modules/IMPROV"}
@@ -62,12 +66,17 @@ def _rd() -> list:
 
 
 def task_files(variant: str, count: int, seed: int) -> list:
-    family, options, _, _ = VARIANTS[variant]
-    options = {k: v.replace("<cobra>", str(COBRA)) if isinstance(v, str) else v for k, v in options.items()}
-    su = SuiteEntry.model_validate({"name": variant, "folder": str(ROOT / "results" / "tasks" / f"{variant}_s{seed}_n{count}"),
-                                    "generate": {"family": family, "count": count, "seed": seed,
-                                                 "options": options}})
-    return suite_task_files(su, ROOT, "bench_families", ["suites", 0])
+    """``count`` task files of a variant, generated on first use (robodesign.experiment.config's suite
+    folders: deterministic, recorded in .suite.json), interleaved over its option sets."""
+    family, option_sets, _, _ = VARIANTS[variant]
+    per = -(-count // len(option_sets))
+    blocks = [{"family": family, "count": per, "seed": seed,
+               "options": {k: v.replace("<cobra>", str(COBRA)) if isinstance(v, str) else v for k, v in o.items()}}
+              for o in option_sets]
+    su = SuiteEntry.model_validate({"name": variant, "generate": blocks,
+                                    "folder": str(ROOT / "results" / "tasks" / f"{variant}_s{seed}_n{count}")})
+    files = suite_task_files(su, ROOT, "bench_families", ["suites", 0])
+    return [files[b * per + k] for k in range(per) for b in range(len(blocks))][:count]
 
 
 def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, budget: str, optimizer: str,
