@@ -265,6 +265,36 @@ def test_successors_follow_free_connectors():
         assert sp.validate_order(order) is None
 
 
+def test_one_chaining_rule_for_orders_and_assemblies():
+    """The search space and Assembly.from_order apply one rule (assembly.chain_step): extending a valid order by any
+    module assembles iff chain_step attaches it (robodesign_arm and the IMPROV set)."""
+    from robodesign.assembly import Assembly, chain_step, free_connectors
+    from robodesign.errors import AssemblyError
+    from conftest import IMPROV
+    for ms in (load_module_set("robodesign_arm"), load_module_set(IMPROV)):
+        sp = SearchSpace(ms, min_dof=1, max_dof=7, max_links_between=2)
+        rng = np.random.default_rng(1)
+        checked = 0
+        for _ in range(6):
+            order = sp.random_order(rng)
+            for n in range(1, len(order)):
+                prefix = order[:n]
+                free = free_connectors(ms, prefix[0])
+                for prev, mid in zip(prefix, prefix[1:]):
+                    free = chain_step(ms, prev, free, mid)
+                for m in ms:
+                    if m.kind == "base":
+                        continue
+                    try:
+                        Assembly.from_order(ms, prefix + (m.id,))
+                        assembles = True
+                    except AssemblyError:
+                        assembles = False
+                    assert assembles == (chain_step(ms, prefix[-1], free, m.id) is not None), (prefix, m.id)
+                    checked += 1
+        assert checked > 500
+
+
 def test_counts_and_bounds_match_brute_force(bench):
     sp = bench.space
     orders = [c.order for c in bench.cands]

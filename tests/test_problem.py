@@ -33,6 +33,7 @@ def test_build_derives_the_base_bounds_from_the_task_once():
     assert p.base_bounds.tolerance is p.task.base_placement
     fixed = Problem.build("robodesign/base_placement", "robodesign_arm", "cyc", base_search=False)
     assert fixed.space.base_dims == 0
+    assert fixed.with_(base_search=True).base_bounds.free == (0, 1, 3)
     assert (fixed.base_pose(fixed.space.nominal_candidate(("1",))) == p.task.nominal_base_pose).all()
     # the candidate's base parameters are decoded by the problem: nominal pose ∘ (x, y, z, yaw) offsets
     c = p.space.nominal_candidate(("1",))

@@ -50,24 +50,15 @@ class Assembly:
         if len(bases) != 1:
             raise AssemblyError(f"the first module {order[0]!r} ({first.name}) must have exactly one base connector, "
                                 f"it has {len(bases)}")
-        used = {(0, bases[0].id)}
+        free = [free_connectors(ms, order[0])]  # per instance: connectors a later module may attach to
         connections: List[Connection] = []
         for i in range(1, len(order)):
             new = ms[order[i]]
-            cands = []
-            reasons = []
-            for k in range(i):
-                for c_old in ms[order[k]].connectors:
-                    if (k, c_old.id) in used or c_old.type == "base":
-                        continue
-                    for c_new in new.connectors:
-                        ok, why = c_new.mates_with(c_old)
-                        if ok:
-                            cands.append((k, c_old, c_new))
-                        elif k == i - 1:
-                            reasons.append(f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): {why}")
+            cands = [(k, c_old, c_new) for k in range(i) for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
             prev = ms[order[i - 1]]
             if not cands:
+                reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): {c_new.mates_with(c_old)[1]}"
+                           for c_old in prev.connectors if c_old.id in free[i - 1] for c_new in new.connectors]
                 detail = "; ".join(reasons[:4]) or f"module {order[i-1]!r} has no free connector left"
                 raise AssemblyError(f"modules {order[i-1]!r} ({prev.name}) → {order[i]!r} ({new.name}) at positions "
                                     f"{i-1}→{i} do not connect: {detail}")
@@ -80,8 +71,8 @@ class Assembly:
                 raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
                                     f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
                                     f"form a chain")
-            used.add((k, c_old.id))
-            used.add((i, c_new.id))
+            free[k] = tuple(c for c in free[k] if c != c_old.id)
+            free.append(free_connectors(ms, order[i], used=(c_new.id,)))
             connections.append((i, c_new.id, k, c_old.id))
         return Assembly(tuple(order), tuple(connections), (0, bases[0].id))
 
@@ -166,18 +157,36 @@ def _natural(s: str):
     return (0, int(s), "") if s.isdigit() else (1, 0, s)
 
 
+# -- the serial-chaining rule (module orders; used by Assembly.from_order and the search space) ------------
+def free_connectors(ms: ModuleSet, module_id: str, used: Sequence[str] = ()) -> Tuple[str, ...]:
+    """IDs of the connectors of ``module_id`` that a later module of a serial order may attach to: all but
+    its base connector and the ``used`` ones."""
+    return tuple(c.id for c in ms[module_id].connectors if c.type != "base" and c.id not in used)
+
+
+def chain_pairs(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> List[Tuple[Connector, Connector]]:
+    """The serial-chaining rule: the (connector of ``prev_id``, connector of ``next_id``) pairs that mate, over
+    the ``free`` connectors of ``prev_id``. In a module order, a module attaches to the previous one iff
+    exactly one pair mates (and none with an earlier module); its free connectors are then the others."""
+    new = ms[next_id]
+    return [(c_old, c_new) for c_old in ms[prev_id].connectors if c_old.id in free and c_old.type != "base"
+            for c_new in new.connectors if c_new.mates_with(c_old)[0]]
+
+
+def chain_step(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> Optional[Tuple[str, ...]]:
+    """Free connectors of ``next_id`` after attaching it to ``prev_id`` (whose free connectors are ``free``)
+    by the chaining rule; None if it does not attach with exactly one connector pair (none: it does not
+    connect; several: ambiguous, :meth:`Assembly.from_order` rejects it)."""
+    pairs = chain_pairs(ms, prev_id, free, next_id)
+    if len(pairs) != 1:
+        return None
+    return free_connectors(ms, next_id, used=(pairs[0][1].id,))
+
+
 def next_compatible(ms: ModuleSet, module_id: str, exclude_kinds: Sequence[str] = ("base",)) -> List[str]:
     """IDs of modules that can follow ``module_id`` in a serial order (one connector pair mates)."""
-    prev = ms[module_id]
-    out = []
-    for m in ms:
-        if m.kind in exclude_kinds:
-            continue
-        n = sum(1 for c_old in prev.connectors if c_old.type != "base" for c_new in m.connectors
-                if c_new.mates_with(c_old)[0])
-        if n >= 1:
-            out.append(m.id)
-    return out
+    free = free_connectors(ms, module_id)
+    return [m.id for m in ms if m.kind not in exclude_kinds and chain_pairs(ms, module_id, free, m.id)]
 
 
 def random_serial_order(ms: ModuleSet, rng, dof: int = 6, max_links_between: int = 1,

@@ -367,20 +367,3 @@ def _winding_number(verts: np.ndarray, tris: np.ndarray, p: np.ndarray) -> float
     den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", a, c) * lb
            + np.einsum("ij,ij->i", b, c) * la)
     return float(2.0 * np.arctan2(num, den).sum() / (4.0 * np.pi))
-
-
-def bounding_radius(spec: GeometrySpec) -> float:
-    """Radius of a sphere about the spec's pose origin that contains the geometry."""
-    if spec.kind == "box":
-        return 0.5 * float(np.linalg.norm(spec.size))
-    if spec.kind == "cylinder":
-        return float(np.hypot(spec.size[0], spec.size[1] / 2))
-    if spec.kind == "sphere":
-        return spec.size[0]
-    if spec.kind == "mesh":
-        r = 0.0
-        for v, _ in load_mesh_arrays(str(spec.file), tuple(spec.scale)):
-            if len(v):
-                r = max(r, float(np.linalg.norm(v, axis=1).max()))
-        return r
-    return 0.0

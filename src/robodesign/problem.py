@@ -77,9 +77,7 @@ class Problem:
         if cf.is_empty:
             raise InputError("empty cost function", path="cost")
         if base_bounds is None:
-            base_bounds = BaseBounds.from_tolerance(task.base_placement)
-            if not base_search:
-                base_bounds = BaseBounds(nominal=base_bounds.nominal)
+            base_bounds = _task_base_bounds(task, base_search)
         space = SearchSpace(module_set, base_bounds=base_bounds, **_rules(rules, module_set))
         return cls(task=task, module_set=module_set, cost=cf, space=space, task_ref=task_ref,
                    modules_ref=modules_ref)
@@ -110,8 +108,8 @@ class Problem:
         space_changes = {}
         if "rules" in changes:
             space_changes.update(_rules(changes.pop("rules"), self.module_set))
-        if "base_search" in changes and not changes.pop("base_search"):
-            space_changes["base_bounds"] = BaseBounds(nominal=self.base_bounds.nominal)
+        if "base_search" in changes:
+            space_changes["base_bounds"] = _task_base_bounds(self.task, changes.pop("base_search"))
         if "base_bounds" in changes:
             space_changes["base_bounds"] = changes.pop("base_bounds")
         if space_changes:
@@ -144,6 +142,13 @@ class Problem:
             return (Problem, tuple(getattr(self, f.name) for f in fields(self)))
         rules = {k: getattr(self.space, k) for k in RULES}
         return (_restore, (self.task_ref, self.modules_ref, self.cost, rules, self.base_bounds))
+
+
+def _task_base_bounds(task: Task, base_search: bool) -> BaseBounds:
+    """The base-pose bounds of ``task`` (the one place they are derived): its base-placement tolerance, or
+    with ``base_search=False`` its nominal base pose alone."""
+    bb = BaseBounds.from_tolerance(task.base_placement)
+    return bb if base_search else BaseBounds(nominal=bb.nominal)
 
 
 def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:

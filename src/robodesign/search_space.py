@@ -11,8 +11,8 @@ an admissible lower bound of a cost for every completion of a partial order
 (:meth:`SearchSpace.reach_bound`).
 
 Chaining: a serial order attaches each module to a *free* connector of the previous one (the one not
-used by its own attachment), exactly as :meth:`Assembly.from_order` does; ``successors`` follows
-that rule, so every order it generates assembles.
+used by its own attachment); ``successors`` applies the rule of :func:`robodesign.assembly.chain_step`,
+the one :meth:`Assembly.from_order` applies, so every order it generates assembles.
 
 A :class:`Candidate` is plain data: ``order`` (module IDs, base first) and ``base`` (offsets
 x, y, z [m], yaw [rad] relative to the nominal base pose; empty when the base is fixed).
@@ -26,7 +26,7 @@ from typing import Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .assembly import Assembly
+from .assembly import Assembly, chain_step, free_connectors, next_compatible
 from .errors import AssemblyError, InputError
 from .module_spec import ModuleSet
 from .spatial import homogeneous, rot_z
@@ -52,11 +52,6 @@ class Candidate:
     def key(self) -> str:
         b = ",".join(f"{v:.6f}" for v in self.base)
         return ",".join(self.order) + (f"@{b}" if b else "")
-
-    @staticmethod
-    def from_key(key: str) -> "Candidate":
-        order, _, base = key.partition("@")
-        return Candidate(tuple(order.split(",")), tuple(float(x) for x in base.split(",")) if base else ())
 
     def to_json(self) -> dict:
         return {"order": list(self.order), "base": list(self.base)}
@@ -98,7 +93,7 @@ class BaseBounds:
         return tuple(0.0 for _ in free)
 
     @staticmethod
-    def from_tolerance(tp, default_span: float = 0.0) -> "BaseBounds":
+    def from_tolerance(tp) -> "BaseBounds":
         """Bounds from a base-placement ToleratedPose: x/y/z intervals (nominal or world frame), r_cyl or
         r_sph as a box, yaw from N_z or Theta_R. An unconstrained tolerance gives a fixed base."""
         if tp is None:
@@ -186,7 +181,7 @@ class SearchSpace:
         """IDs of the free connectors of ``prefix[-1]`` after chaining ``prefix`` serially (None if a step
         does not mate with exactly one connector pair)."""
         ms = self.module_set
-        free = _base_free(ms, str(prefix[0]))
+        free = free_connectors(ms, str(prefix[0]))
         for prev, mid in zip(prefix, prefix[1:]):
             free = _mate_step(ms, str(prev), free, str(mid))
             if free is None:
@@ -323,9 +318,6 @@ class SearchSpace:
         o, R = robot.reach_bound()
         return np.asarray(o, dtype=float), float(R)
 
-    def is_complete(self, order: Sequence[str]) -> bool:
-        return self.validate_order(order) is None
-
     def validate_order(self, order: Sequence[str]) -> Optional[str]:
         """None if ``order`` is a complete valid design under the rules, else the reason."""
         order = tuple(str(x) for x in order)
@@ -379,9 +371,8 @@ class SearchSpace:
             for s in reversed(succ):
                 stack.append(prefix + (s,))
 
-    def count_orders(self, limit: int = 10 ** 7) -> int:
-        """Number of valid orders (dynamic programming over (last module, free connectors, dof, links, length)).
-        ``limit`` is accepted for compatibility and ignored (counting is exact and cheap)."""
+    def count_orders(self) -> int:
+        """Number of valid orders (dynamic programming over (last module, free connectors, dof, links, length))."""
         return self.count_completions(())
 
     # -- candidates ----------------------------------------------------------------------------
@@ -409,17 +400,8 @@ class SearchSpace:
 @lru_cache(maxsize=4096)
 def _followers_cached(ms_id: int, mid: str, exclude, bases, eefs, ms_ref) -> Tuple[str, ...]:
     ms = ms_ref()
-    prev = ms[mid]
-    out = []
-    for m in ms:
-        if m.kind == "base" or m.id in exclude:
-            continue
-        if m.kind == "eef" and eefs is not None and m.id not in eefs:
-            continue
-        if any(c_new.mates_with(c_old)[0] for c_old in prev.connectors if c_old.type != "base"
-               for c_new in m.connectors):
-            out.append(m.id)
-    return tuple(out)
+    return tuple(m for m in next_compatible(ms, mid) if m not in exclude
+                 and not (ms[m].kind == "eef" and eefs is not None and m not in eefs))
 
 
 def _followers(ms: ModuleSet, mid: str, exclude, bases, eefs) -> Tuple[str, ...]:
@@ -427,25 +409,13 @@ def _followers(ms: ModuleSet, mid: str, exclude, bases, eefs) -> Tuple[str, ...]
     return _followers_cached(id(ms), mid, tuple(exclude), bases, eefs, weakref.ref(ms))
 
 
-def _base_free(ms: ModuleSet, mid: str) -> Tuple[str, ...]:
-    """Connectors of a base module that later modules may attach to (all but its base connector)."""
-    return tuple(c.id for c in ms[mid].connectors if c.type != "base")
-
-
 @lru_cache(maxsize=65536)
 def _mate_step_cached(ms_id: int, prev: str, free: Tuple[str, ...], mid: str, ms_ref) -> Optional[Tuple[str, ...]]:
-    ms = ms_ref()
-    old = [c for c in ms[prev].connectors if c.id in free and c.type != "base"]
-    pairs = [(c_old, c_new) for c_old in old for c_new in ms[mid].connectors if c_new.mates_with(c_old)[0]]
-    if len(pairs) != 1:  # none: does not connect; several: ambiguous (Assembly.from_order rejects it)
-        return None
-    used = pairs[0][1].id
-    return tuple(c.id for c in ms[mid].connectors if c.id != used and c.type != "base")
+    return chain_step(ms_ref(), prev, free, mid)
 
 
 def _mate_step(ms: ModuleSet, prev: str, free: Tuple[str, ...], mid: str) -> Optional[Tuple[str, ...]]:
-    """Free connectors of ``mid`` after attaching it to one of the ``free`` connectors of ``prev`` (None if
-    that does not work with exactly one connector pair)."""
+    """:func:`robodesign.assembly.chain_step`, cached per module set."""
     import weakref
     return _mate_step_cached(id(ms), prev, tuple(free), mid, weakref.ref(ms))
 

@@ -91,11 +91,6 @@ def pose_to_list(T: np.ndarray, decimals: int = 12) -> list:
     return [[float(round(x, decimals)) + 0.0 for x in row] for row in np.asarray(T)]
 
 
-def rotation_angle(R: np.ndarray) -> float:
-    c = (np.trace(R) - 1.0) / 2.0
-    return float(math.acos(max(-1.0, min(1.0, c))))
-
-
 def log3(R: np.ndarray) -> np.ndarray:
     """Rotation vector n·θ with θ in [0, π]."""
     import pinocchio as pin
