@@ -195,3 +195,37 @@ def test_cli_rejects_a_misspelt_option_and_lists_options():
     assert r.returncode == 0
     assert "    --opt population_size (int, default 20, ≥ 2): individuals per generation" in r.stdout
     assert "    --opt order (comma-separated strs, required): the module order" in r.stdout
+
+
+# -- the problem in the results store ------------------------------------------------------------------------------
+def test_fingerprint_follows_file_contents_not_paths(tmp_path):
+    import json
+    src = json.loads(BASE_PLACEMENT.read_text())
+    a = tmp_path / "a" / "robodesign" / "base_placement.json"
+    b = tmp_path / "b" / "robodesign" / "base_placement.json"
+    for f in (a, b):
+        f.parent.mkdir(parents=True)
+        f.write_text(json.dumps(src))
+        (f.parent.parent / "assets").symlink_to(BASE_PLACEMENT.parents[1] / "assets")
+    pa, pb = (Problem.build(f, "robodesign_arm", "cyc") for f in (a, b))
+    assert pa.task_ref != pb.task_ref and pa.fingerprint() == pb.fingerprint()  # moved, same contents
+    src["goals"][0]["goalPose"]["tolerance"][0] = [0.0, 0.002]
+    b.write_text(json.dumps(src))
+    assert Problem.build(b, "robodesign_arm", "cyc").fingerprint() != pa.fingerprint()  # edited
+
+
+def test_results_store_refuses_to_resume_a_changed_problem(tmp_path):
+    from robodesign.evaluator import Evaluation
+    from robodesign.experiment.storage import ExperimentDB
+    p = Problem.build("robodesign/pick_and_place", "robodesign_arm", "cyc")
+    db = ExperimentDB(tmp_path / "evaluations.sqlite")
+    db.ensure_run("r", "pick", "random", "random", 0, 0, "2evals", 1)
+    c = p.space.random_candidate(__import__("numpy").random.default_rng(0))
+    ev = Evaluation(candidate=c, feasible=False, cost=None, score=2e9, stage="ik", stage_index=3, goals_reached=0,
+                    seconds=0.1, seed=1)
+    db.storage("r", p).append(0, ev)
+    assert db.info("problem:r") == p.fingerprint()
+    assert [e.candidate for e in db.storage("r", p).load()] == [c]          # same problem: resumes
+    with pytest.raises(InputError, match="cannot resume run 'r': its problem changed"):
+        db.storage("r", p.with_(cost="Whit2")).load()
+    db.close()

@@ -127,14 +127,16 @@ class Problem:
                                 [[n, list(iv), fr] for n, iv, fr in bb.tolerance.entries]}}
 
     def fingerprint(self) -> str:
-        """A short hash of everything in the problem that changes a design's score: the task (its ID and
-        source), the module set, the cost terms and the base-pose bounds. Equal problems give equal
-        fingerprints in every process."""
+        """A short hash of everything in the problem that changes a design's score: the task and module-set
+        files (their contents, not where they are), the cost terms and the base-pose bounds. Equal problems
+        give equal fingerprints in every process and on every machine."""
         d = self.to_json()
         d.pop("rules")  # the rules restrict which designs are asked, not how one is scored
         d["cost"] = [[n, w] for n, w in self.cost.terms]
-        d["task_source"] = str(self.task.source or "")
-        d["modules_source"] = str(getattr(self.module_set, "source", "") or "")
+        d.pop("task_ref")
+        d.pop("modules_ref")  # where the files are does not change a score; what they hold does
+        d["task_file"] = _file_digest(self.task.source)
+        d["modules_file"] = _file_digest(self.module_set.source)
         return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
     def __reduce__(self):
@@ -177,6 +179,23 @@ def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:
     if lo > hi:
         raise InputError(f"min_dof ({lo}) is larger than max_dof ({hi})", path="rules")
     return out
+
+
+_DIGESTS: Dict[Tuple[str, int], str] = {}
+
+
+def _file_digest(path: Optional[str]) -> Optional[str]:
+    """SHA-256 of a file's bytes (cached per file version); None without a readable file."""
+    if not path:
+        return None
+    try:
+        p = Path(path)
+        key = (str(p.resolve()), p.stat().st_mtime_ns)
+    except OSError:
+        return None
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return _DIGESTS[key]
 
 
 def _ref(name_or_path) -> str:

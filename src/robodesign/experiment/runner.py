@@ -512,7 +512,7 @@ def best_of_problem(db: ExperimentDB, problem: str) -> Optional[dict]:
 
 def _run_one(exp: ResolvedExperiment, r: RunSpec, k: int, n: int, db: ExperimentDB, pool, progress) -> int:
     opt = create_optimizer(r.optimizer.name, r.problem.problem, seed=r.seed, options=r.optimizer.options)
-    storage = db.storage(r.run_id)
+    storage = db.storage(r.run_id, r.problem.problem)
     budget = r.optimizer.budget
     if budget.seconds is not None:
         # the time budget is the run's total wall time: a resumed run gets what is left of it

@@ -239,8 +239,17 @@ class ExperimentDB:
                                "ORDER BY cost, idx LIMIT 1", (run_id,)).fetchone()
         return dict(row) if row else None
 
-    def storage(self, run_id: str) -> "RunStorage":
-        return RunStorage(self, run_id)
+    def info(self, key: str) -> Optional[str]:
+        row = self.con.execute("SELECT value FROM info WHERE key=?", (key,)).fetchone()
+        return row[0] if row else None
+
+    def set_info(self, key: str, value: str) -> None:
+        self.con.execute("INSERT OR REPLACE INTO info (key, value) VALUES (?, ?)", (key, value))
+
+    def storage(self, run_id: str, problem=None) -> "RunStorage":
+        """The Study storage of run ``run_id``; with its :class:`~robodesign.problem.Problem`, the run's stored
+        evaluations are tied to that problem (see :class:`RunStorage`)."""
+        return RunStorage(self, run_id, problem)
 
 
 def row_to_evaluation(r: dict) -> Evaluation:
@@ -257,11 +266,17 @@ class RunStorage:
 
     ``wall`` of an evaluation is the run's wall-clock time when it was committed; a resumed session
     continues from the last stored value, so the anytime curves vs time exclude the time the run was dead.
+
+    Given the run's ``problem``, the storage records its fingerprint (``info`` key ``problem:<run id>``)
+    with the first evaluation, and ``load()`` refuses to resume the run when the problem's fingerprint
+    changed since (the task file, the module set, the cost or the base bounds differ): stored evaluations
+    would no longer be evaluations of this problem.
     """
 
-    def __init__(self, db: ExperimentDB, run_id: str):
+    def __init__(self, db: ExperimentDB, run_id: str, problem=None):
         self.db = db
         self.run_id = run_id
+        self.fingerprint = problem.fingerprint() if problem is not None else None
         self.n_stored = 0
         self.wall_offset = 0.0
         self._t0 = time.perf_counter()
@@ -270,6 +285,12 @@ class RunStorage:
     def load(self) -> List[Evaluation]:
         rows = [dict(r) for r in self.db.con.execute(
             "SELECT * FROM evaluations WHERE run_id=? ORDER BY idx", (self.run_id,))]
+        if self.fingerprint is not None and rows:
+            stored = self.db.info(f"problem:{self.run_id}")
+            if stored is not None and stored != self.fingerprint:
+                raise InputError(f"cannot resume run {self.run_id!r}: its problem changed since its evaluations were "
+                                 "stored (the task file, module set, cost or base bounds differ); start a new results "
+                                 "folder", file=str(self.db.path))
         for k, r in enumerate(rows):
             if r["idx"] != k:
                 raise RuntimeError(f"run {self.run_id!r}: stored evaluations are not contiguous (index {r['idx']} "
@@ -283,6 +304,8 @@ class RunStorage:
         return self.wall_offset + (time.perf_counter() - self._t0)
 
     def append(self, index: int, evaluation: Evaluation) -> None:
+        if index == 0 and self.fingerprint is not None:
+            self.db.set_info(f"problem:{self.run_id}", self.fingerprint)
         self.db.insert(self.run_id, index, evaluation, self.wall())
         if self.on_append is not None:
             self.on_append(index, evaluation)
