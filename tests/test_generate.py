@@ -124,15 +124,17 @@ def test_whitman_cells(whitman, opts, n):
         far[0, 3] = 1.02
         assert not bp.valid(far)
         parts = {c.type: c for c in task.constraints}
-        assert "tau" in parts["joint"].parts and {"collisionFree", "selfCollisionFree", "allGoalsFulfilled"} <= set(parts)
+        assert "tau" in parts["joint"].parts
+        assert {"collisionFree", "selfCollisionFree", "allGoalsFulfilled"} <= set(parts)
 
 
 def test_whitman_header_regenerates_the_file(whitman, tmp_path):
     f = _files(whitman[(5, "xyz_any_rot")])[2]
     tags = json.loads(f.read_text())["header"]["tags"]
-    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=1",
+    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=2",
               "robodesign-generate:seed=7", "robodesign-generate:index=2", "robodesign-generate:goals=5",
-              "robodesign-generate:obstacles=5", "robodesign-generate:base=xyz_any_rot"):
+              "robodesign-generate:obstacles=5", "robodesign-generate:base=xyz_any_rot",
+              "robodesign-generate:verify=solve"):
         assert t in tags
     out = regenerate(f, tmp_path)
     assert out.name == f.name and out.read_bytes() == f.read_bytes()
@@ -146,7 +148,7 @@ def test_whitman_solve_check_round_trip(whitman, ms):
     for key, folder in whitman.items():
         for f in _files(folder):
             task = load_task(f)
-            res = solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=0))
+            res = solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=0, plan_time=10.0))
             assert res.feasible, (f.name, res.stage, res.message)
             v = check(task, res.solution, ms)
             assert v.valid and v.costs["cyc"] == pytest.approx(res.solution.trajectory.t[-1])
@@ -200,7 +202,8 @@ def test_default_machine_stl_and_its_opening(tmp_path):
     assert fr.yaw == 0.0
     deep = np.array([r for r in fr.rays if r[2] >= 0.35])
     # the door: y in [-0.45, 0.45], z in [0.85, 1.55] (the boxes in machine._BOXES); behind it, the
-    # back wall (x = 1.5 from the front face), less where the vise (z < 0.95) or the spindle head (z > 1.4, |y| < 0.3) is in the way
+    # back wall (x = 1.5 from the front face), less where the vise (z < 0.95) or the spindle head
+    # (z > 1.4, |y| < 0.3) is in the way
     assert len(deep) > 0 and np.all(np.abs(deep[:, 0]) < 0.45) and np.all((deep[:, 1] > 0.85) & (deep[:, 1] < 1.55))
     free = deep[(deep[:, 1] > 1.0) & (deep[:, 1] < 1.35) & (np.abs(deep[:, 0]) < 0.4)]
     assert np.allclose(free[:, 2], 1.5, atol=1e-6)
@@ -271,7 +274,8 @@ def test_liu_solve_check_round_trip(liu, ms):
     for folder in liu.values():
         for f in _files(folder)[:2]:
             task = load_task(f)
-            results = [solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=s)) for s in range(3)]
+            results = [solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=s, plan_time=10.0))
+                       for s in range(3)]
             good = [r for r in results if r.feasible]
             assert good, (f.name, [(r.stage, r.message) for r in results])
             v = check(task, good[0].solution, ms)
@@ -290,3 +294,92 @@ def test_liu_bad_machine_input(tmp_path, capsys):
     assert main(["generate", "liu2020", "--out", str(d), "--machine", str(QUASER)]) == 0
     assert main(["generate", "liu2020", "--out", str(d), "--machine", str(fake)]) == 2
     assert "other content" in capsys.readouterr().err
+
+
+def test_verify_ik_skips_the_solve_but_keeps_the_goal_tests(tmp_path):
+    generate("whitman2020", tmp_path, 1, seed=7, options={"verify": "ik"})
+    raw = json.loads(_files(tmp_path)[0].read_text())
+    assert "robodesign-generate:verify=ik" in raw["header"]["tags"]
+    task = load_task(_files(tmp_path)[0])
+    for g in task.goals:
+        assert _point_distance(task, g.pose.nominal[:3, 3]) >= 0.06 - 1e-6
+
+
+# ---------------------------------------------------------------------------------------------------------
+# bpo2024 (edge cases)
+def test_bpo_structures_and_spots_by_hand():
+    from robodesign.generate.bpo2024 import STRUCTURES, spots
+    rng = np.random.default_rng(0)
+    sizes = {name: len(f(rng, "hard")) for name, f in STRUCTURES.items() if name != "random"}
+    # X: 5 + 5 - 1 (shared crossing); cross: 9 + plinth; house: 3 layers of a 4 x 5 ring (14) less a 2-cube door,
+    # a 4 x 5 roof and a 4-cube ridge; oven: 3 x 4 x 4 less the 2 x 2 x 2 cavity, plus 4 pillar cubes
+    assert sizes == {"x": 9, "cross": 10, "house": 3 * 14 - 2 + 20 + 4, "oven": 48 - 8 + 4}
+    x = frozenset(STRUCTURES["x"](rng, "hard"))
+    top = [c for score, c in spots(x, "hard") if score == 3.0]
+    # the four notches next to the crossing (0, 0, 2): each has three cubes as face neighbours
+    assert sorted(top) == [(0, -1, 2), (0, 0, 1), (0, 0, 3), (0, 1, 2)]
+    assert min(score for score, _ in spots(x, "hard")) >= 2.0
+    assert min(score for score, _ in spots(x, "easy")) == 1.0
+    oven = frozenset(STRUCTURES["oven"](rng, "hard"))
+    best = spots(oven, "hard")[0]
+    # the back cells of the 2 x 2 x 2 cavity: e.g. (1, -1, 3) has the back wall, the side wall and the oven floor
+    # as face neighbours (3) and 9 of its 12 edge neighbours filled (all but the three through the cavity)
+    assert best == (3 + 0.5 * 9, (1, -1, 3))
+    field = STRUCTURES["random"](np.random.default_rng(1), "hard")
+    assert len(field) == 14 and all(c[2] == 0 or (c[0], c[1], c[2] - 1) in field for c in field)  # stacked
+
+
+@pytest.fixture(scope="module")
+def bpo(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bpo")
+    generate("bpo2024", d, 3, seed=2)  # mixed: x, cross, house (easy)
+    h = tmp_path_factory.mktemp("bpo_hard")
+    generate("bpo2024", h, 2, seed=2, options={"structure": "oven", "difficulty": "hard"})
+    return d, h
+
+
+@pytest.mark.slow
+def test_bpo_cells(bpo):
+    d, h = bpo
+    assert [f.name for f in _files(d)] == ["bpo2024_cross_easy_s2_0001.json", "bpo2024_house_easy_s2_0002.json",
+                                           "bpo2024_x_easy_s2_0000.json"]
+    for folder, clearance, near in ((d, 0.08, 1), (h, 0.04, 2)):
+        for f in _files(folder):
+            task = load_task(f)
+            assert len(task.goals) == 3
+            for o in task.obstacles:
+                assert o.collision[0].size == (0.25, 0.25, 0.25)
+            for g in task.goals:
+                p = g.pose.nominal[:3, 3]
+                assert _point_distance(task, p) >= clearance - 1e-6
+                # in a spot of the structure: cubes within one cube edge (hard: at least two, a pocket)
+                close = [o for o in task.obstacles if _point_distance_one(o, p) <= 0.25 + 1e-6]
+                assert len(close) >= near
+            bp = task.constraint(BasePlacement).pose
+            far = np.eye(4)
+            far[:3, :3] = np.array([[-1, 0, 0], [0, 1, 0], [0, 0, -1.0]])  # upside down
+            far[:3, 3] = [-0.99, 0.99, -0.99]
+            assert bp.valid(far)
+            far[1, 3] = 1.01
+            assert not bp.valid(far)
+
+
+def _point_distance_one(obstacle, p):
+    class _One:
+        obstacles = [obstacle]
+    return _point_distance(_One, p)
+
+
+@pytest.mark.slow
+def test_bpo_deterministic_regenerates_and_round_trip(bpo, tmp_path, ms):
+    d, h = bpo
+    again = tmp_path / "again"
+    generate("bpo2024", again, 2, seed=2, options={"structure": "oven", "difficulty": "hard"})
+    assert _bytes(again) == _bytes(h)
+    f = _files(d)[1]
+    assert regenerate(f, tmp_path / "re").read_bytes() == f.read_bytes()
+    for f in _files(d) + _files(h):
+        task = load_task(f)
+        res = solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=0, plan_time=10.0))
+        assert res.feasible, (f.name, res.stage, res.message)
+        assert check(task, res.solution, ms).valid

@@ -247,3 +247,21 @@ class ReferenceArm:
             return False
         limit = self.robot.tau_max
         return any(np.all(np.abs(self.robot.gravity_torque(q)) <= limit) for q in r.solutions)
+
+VERIFY_PLAN_TIME = 10.0  # s per planning query of the verification solve
+
+
+def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:
+    """Whether the reference design at ``base_pose`` (default: the task's nominal base) solves the task and the
+    checker accepts the solution (``robodesign.solve.solve``, seed 0, ``VERIFY_PLAN_TIME`` per planning query).
+
+    OMPL is seeded, so the answer is the same on every run unless a planning query runs into the time limit:
+    a query that needs seconds on an idle machine could be cut on an overloaded one. The generous limit makes
+    that unlikely (a successful query returns at once; only failing cells pay the full limit)."""
+    from ..module_io import load_module_set
+    from ..solve import SolveSettings, solve
+    from ..task_io import parse_task
+    task = parse_task(clean(task_dict), folder / "_probe.json")
+    res = solve(task, load_module_set(REFERENCE_MODULE_SET), list(REFERENCE_ORDER), base_pose=base_pose,
+                settings=SolveSettings(seed=0, plan_time=VERIFY_PLAN_TIME))
+    return res.feasible

@@ -25,11 +25,11 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import InputError, RobodesignError
-from .common import PI, AABB, Provenance, ReferenceArm, header, rot_y, tolerated, transform
+from .common import PI, AABB, Provenance, ReferenceArm, header, rot_y, solved_by_reference, tolerated, transform
 from .machine import DEFAULT_NAME, MachineFrame, analyse, default_machine_stl
-from .registry import Family, GeneratedTask, Option, copy_file
+from .registry import VERIFY, Family, GeneratedTask, Option, copy_file
 
-VERSION = 1
+VERSION = 2
 BASE_Z = 0.30  # m, nominal base height (the robot on a stand)
 BASE_XY = 0.30  # m, base tolerance in x and y
 BASE_Z_RANGE = (-0.30, 0.30)  # about BASE_Z: 0 … 0.6 m above the floor
@@ -163,15 +163,17 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
         if place is None:
             continue
         goals["place"] = place
-        return GeneratedTask(tid, _cell(tid, prov, asset, scale, pose, trays, goals))
+        task = _cell(tid, prov, asset, scale, pose, trays, goals)
+        if opts["verify"] == "ik" or solved_by_reference(task, folder):
+            return GeneratedTask(tid, task)
     raise RobodesignError(f"liu2020: no reachable cell in {CELL_TRIES} draws for machine {name} "
                           f"(seed {prov.seed}, index {prov.index})")
 
 
 def _tray_goal(rng, arm: ReferenceArm, tray: AABB):
     for _ in range(GOAL_TRIES // 4):
-        p = np.array([rng.uniform(tray.lo[0] + 0.06, tray.hi[0] - 0.06), rng.uniform(tray.lo[1] + 0.06, tray.hi[1] - 0.06),
-                      tray.hi[2] + ABOVE_TRAY])
+        p = np.array([rng.uniform(tray.lo[0] + 0.06, tray.hi[0] - 0.06),
+                      rng.uniform(tray.lo[1] + 0.06, tray.hi[1] - 0.06), tray.hi[2] + ABOVE_TRAY])
         pose = _pose(p, TOOL_DOWN)
         if arm.reaches(pose):
             return pose
@@ -201,6 +203,7 @@ FAMILY = Family(
                                      "CNC housing written by the generator)", path=True),
         Option("machine_scale", str, "auto", "uniform scale of --machine to metres; auto: 0.001 if the mesh is "
                                              "larger than 20 units (millimetres), else 1"),
+        VERIFY,
     ),
     build=build,
 )

@@ -43,6 +43,12 @@ class Option:
         return v
 
 
+VERIFY = Option("verify", str, "solve",
+                "solve: the reference design (robodesign_arm, default order) must solve the whole task and pass the "
+                "checker; ik: every goal needs a collision-free, torque-feasible IK solution of it (strictly "
+                "deterministic, faster, but a task may be unsolvable as a whole)", choices=("solve", "ik"))
+
+
 @dataclass
 class GeneratedTask:
     task_id: str
@@ -82,8 +88,8 @@ class Family:
 
 
 def _families() -> Dict[str, Family]:
-    from . import liu2020, whitman2020
-    return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY)}
+    from . import bpo2024, liu2020, whitman2020
+    return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY, bpo2024.FAMILY)}
 
 
 def families() -> Dict[str, Family]:
@@ -93,7 +99,8 @@ def families() -> Dict[str, Family]:
 def get_family(name: str) -> Family:
     fams = _families()
     if name not in fams:
-        raise InputError(f"unknown generator family {name!r} (one of {', '.join(fams)}; see robodesign generate --list)")
+        raise InputError(f"unknown generator family {name!r} (one of {', '.join(fams)}; "
+                         f"see robodesign generate --list)")
     return fams[name]
 
 

@@ -20,10 +20,10 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import InputError, RobodesignError
-from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform
-from .registry import Family, GeneratedTask, Option
+from .common import PI, AABB, Provenance, ReferenceArm, header, solved_by_reference, tolerated, transform
+from .registry import VERIFY, Family, GeneratedTask, Option
 
-VERSION = 1
+VERSION = 2
 CUBE = 0.25  # m, obstacle edge
 POS_TOL = 0.005  # m, goal tolerance in x, y, z
 GOAL_R = (0.30, 0.90)  # m, horizontal distance of a goal from the base axis
@@ -111,9 +111,12 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
                 continue
             if arm.reaches(goal_pose(p)):
                 goals.append(p)
-        if len(goals) == n:
-            return GeneratedTask(tid, _cell(tid, prov, opts, cubes, goals))
-    raise RobodesignError(f"whitman2020: could not place {n} reachable goals among {m} cubes in {CELL_TRIES} cells "
+        if len(goals) < n:
+            continue
+        task = _cell(tid, prov, opts, cubes, goals)
+        if opts["verify"] == "ik" or solved_by_reference(task, folder, np.eye(4)):
+            return GeneratedTask(tid, task)
+    raise RobodesignError(f"whitman2020: no cell with {n} reachable goals among {m} cubes in {CELL_TRIES} draws "
                           f"(seed {prov.seed}, index {prov.index})")
 
 
@@ -128,6 +131,7 @@ FAMILY = Family(
                choices=("fixed", "xyz_any_rot")),
         Option("base_range", float, 1.0, "with --base xyz_any_rot: the base may move ± this many metres in x, y, z",
                minimum=0.0),
+        VERIFY,
     ),
     build=build,
 )
