@@ -182,7 +182,8 @@ def _canonical_constraint(c, f, path, w):
     if not c:
         return {"type": "alwaysTrue"}  # the reference reads {} as "always true" (and writes it so)
     out = dict(c)
-    known = _LENIENT_CONSTRAINT_KEYS.get(out.get("type"))
+    kind = out.get("type")
+    known = _LENIENT_CONSTRAINT_KEYS.get(kind) if isinstance(kind, str) else None  # schema reports a bad type
     if known:  # these two constraints ignore other keys in the reference; the others reject them
         for k in c:
             if k not in known:
