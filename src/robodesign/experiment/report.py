@@ -8,7 +8,10 @@ same report as an uninterrupted one).
   statistic that is +inf is left empty);
 * ``plots/<task>.png`` – both curves per task, one line (median) and band (min–max) per optimizer;
 * ``summary.csv`` / ``summary.md`` – per task × optimizer (see :data:`SUMMARY_COLUMNS`);
-* ``index.html`` – the tables, the plots and the best robots, with links to the files.
+* ``best/<task>/<optimizer>-seed<k>_view.html`` – the 3-D view (robodesign view) of a best solution: every
+  task's best robot always, further run bests up to :data:`VIEW_PAGES_MAX` pages in all;
+* ``index.html`` – the tables, the plots and the best robots, with links to the files and the 3-D views.
+  Tables scroll inside themselves, never the page, and headers wrap at ``_``: it fits a 1400 px window.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ SUMMARY_COLUMNS = ("task", "optimizer", "seeds", "evaluations", "best_cost_media
                    "best_cost_max", "feasible_rate", "seeds_feasible", "evals_to_first_feasible_median",
                    "time_to_best_s_median", "eval_seconds_mean", "best_run")
 TIME_POINTS = 200
+VIEW_PAGES_MAX = 30  # 3-D view pages per report (each ~1 MB, three.js is embedded); task bests always get one
 
 
 def _f(v, nd=6) -> str:
@@ -295,6 +299,11 @@ def _best_robots(db: ExperimentDB) -> List[dict]:
     return out
 
 
+def best_solution_path(b: dict) -> str:
+    """The best solution file of a "Best robots" row, relative to the results folder (runner.best_paths)."""
+    return f"best/{b['task']}/{b['optimizer']}-seed{b['seed']}.json"
+
+
 def base_pose_text(bp) -> str:
     if not bp:
         return "nominal"
@@ -305,14 +314,65 @@ def base_pose_text(bp) -> str:
     return f"xyz = ({T[0, 3]:.3f}, {T[1, 3]:.3f}, {T[2, 3]:.3f}) m, yaw = {yaw:.1f}°"
 
 
+def view_path(solution_rel: str) -> str:
+    """``best/t/random-seed0.json`` → ``best/t/random-seed0_view.html`` (relative to the results folder)."""
+    return solution_rel[:-len(".json")] + "_view.html"
+
+
+def write_views(out: Path, meta: dict, solutions: Sequence[str], verdicts: Dict[str, dict]) -> Dict[str, str]:
+    """Write the 3-D view page of each best solution (paths relative to ``out``, in priority order; at most
+    :data:`VIEW_PAGES_MAX`); returns ``{solution: view page}`` for the pages that exist. A page newer than
+    its solution is kept (a resumed experiment does not redo it); one that cannot be built is left out."""
+    from ..module_io import load_module_set
+    from ..solution import load_solution
+    from ..task_io import load_task
+    from ..viewer import solution_page
+    problems = {p.get("name"): p for p in meta.get("problems", [])}
+    views: Dict[str, str] = {}
+    for rel in list(dict.fromkeys(solutions))[:VIEW_PAGES_MAX]:
+        sol_file, page = out / rel, out / view_path(rel)
+        if not sol_file.is_file():
+            continue
+        if not page.is_file() or page.stat().st_mtime < sol_file.stat().st_mtime:
+            task_name = str(Path(rel).parent.relative_to("best"))
+            prob = problems.get(task_name, {})
+            try:
+                task = load_task(prob["task"]) if prob.get("task") else None
+                ms = load_module_set(prob["modules"]) if prob.get("modules") else None
+                html_page = solution_page(task, load_solution(sol_file), ms, verdict=verdicts.get(rel), plots=False,
+                                          title=f"{task_name}: {Path(rel).stem}")
+            except Exception:  # noqa: BLE001 - a missing asset costs the link, never the report
+                continue
+            tmp = page.with_suffix(".html.tmp")
+            tmp.write_text(html_page, encoding="utf-8")
+            tmp.replace(page)
+        views[rel] = view_path(rel)
+    return views
+
+
+_CSS = ("body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px}"
+        ".tbl{max-width:100%;overflow-x:auto;margin:.5em 0 1.5em}table{border-collapse:collapse}"
+        "td,th{border:1px solid #ccc;padding:3px 8px;font-size:13px;text-align:right}"
+        "th{background:#f3f3f3;vertical-align:bottom}td:first-child,td:nth-child(2){text-align:left}"
+        "code{font-size:12px;overflow-wrap:anywhere}img{max-width:100%;border:1px solid #eee}"
+        ".bad{color:#b00}.ok{color:#070}")
+
+
+def _th(name: str) -> str:
+    """A header cell that may wrap after each ``_`` (long column names stay readable in narrow tables)."""
+    return f"<th>{html.escape(name).replace('_', '_<wbr>')}</th>"
+
+
 def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str], best: List[dict],
-                verdicts: List[dict], suites_html: str = "") -> Path:
+                verdicts: List[dict], suites_html: str = "", views: Optional[Dict[str, str]] = None) -> Path:
     e = html.escape
+    views = views or {}
+
+    def view_link(sol: str) -> str:
+        return f" · <a href='{e(views[sol])}'>3D view</a>" if sol in views else ""
+
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{e(meta.get('name', 'experiment'))}</title>",
-             "<style>body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;"
-             "margin:.5em 0 1.5em}td,th{border:1px solid #ccc;padding:3px 8px;font-size:13px;text-align:right}"
-             "th{background:#f3f3f3}td:first-child,td:nth-child(2){text-align:left}code{font-size:12px}"
-             "img{max-width:100%;border:1px solid #eee}.bad{color:#b00}.ok{color:#070}</style></head><body>",
+             f"<style>{_CSS}</style></head><body>",
              f"<h1>Experiment {e(meta.get('name', ''))}</h1>"]
     m = meta.get("machine", {})
     v = meta.get("versions", {})
@@ -332,19 +392,19 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
         if "cost" not in b:
             parts.append(f"<tr><td>{e(b['task'])}</td><td colspan=6>no feasible design found</td></tr>")
             continue
-        sol = f"best/{b['task']}/{b['optimizer']}-seed{b['seed']}.json"
+        sol = best_solution_path(b)
         parts.append(f"<tr><td>{e(b['task'])}</td><td>{e(b['optimizer'])}</td><td>{b['seed']}</td>"
                      f"<td>{b['cost']:.6g} ({e(str(b.get('cost_function') or ''))})</td>"
                      f"<td><code>{e(','.join(b['order']))}</code></td><td>{e(base_pose_text(b.get('base_pose')))}</td>"
                      f"<td><a href='{e(sol)}'>solution</a> · <a href='{e(sol[:-5] + '.verdict.json')}'>verdict</a>"
-                     f"</td></tr>")
+                     f"{view_link(sol)}</td></tr>")
     parts.append("</table>")
     cols = list(SUMMARY_COLUMNS)
     by_task: Dict[str, List[dict]] = {}
     for s in summary:
         by_task.setdefault(s["task"], []).append(s)
     for task, rows in by_task.items():
-        parts.append(f"<h2>{e(task)}</h2><table><tr>" + "".join(f"<th>{e(c)}</th>" for c in cols[1:]) + "</tr>")
+        parts.append(f"<h2>{e(task)}</h2><table><tr>" + "".join(_th(c) for c in cols[1:]) + "</tr>")
         for s in sorted(rows, key=lambda s: (s["best_cost_median"], s["best_cost_min"])):
             parts.append("<tr>" + "".join(f"<td>{e(_fmt_cell(c, s[c]))}</td>" for c in cols[1:]) + "</tr>")
         parts.append("</table>")
@@ -355,7 +415,7 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
                      "<th>cost (stored)</th><th>agrees</th></tr>")
         for vd in verdicts:
             ok = vd.get("valid")
-            parts.append(f"<tr><td><a href='{e(vd['path'])}'>{e(vd['path'])}</a></td>"
+            parts.append(f"<tr><td><a href='{e(vd['path'])}'>{e(vd['path'])}</a>{view_link(vd['path'])}</td>"
                          f"<td class='{'ok' if ok else 'bad'}'>{'VALID' if ok else 'INVALID'}</td>"
                          f"<td>{_f(vd.get('cost'))}</td><td>{_f(vd.get('cost_stored'))}</td>"
                          f"<td class='{'ok' if vd.get('agrees') else 'bad'}'>{'yes' if vd.get('agrees') else 'NO'}</td>"
@@ -375,7 +435,9 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
     parts.append("</body></html>")
     p = out / "index.html"
     tmp = p.with_suffix(".html.tmp")
-    tmp.write_text("\n".join(parts), encoding="utf-8")
+    page = "\n".join(parts)  # every table (the suites' too) scrolls inside its own box, never the page
+    tmp.write_text(page.replace("<table", "<div class='tbl'><table").replace("</table>", "</table></div>"),
+                   encoding="utf-8")
     tmp.replace(p)
     return p
 
@@ -425,7 +487,10 @@ def write_report(out: Path, db: Optional[ExperimentDB] = None) -> Path:
                 continue
             vd["path"] = str(vp.with_name(vp.name.replace(".verdict.json", ".json")).relative_to(out))
             verdicts.append(vd)
-        return write_index(out, meta, summary, plots, _best_robots(db), verdicts, write_suites(out, meta, db))
+        best = _best_robots(db)
+        firsts = [best_solution_path(b) for b in best if "cost" in b]
+        views = write_views(out, meta, firsts + [vd["path"] for vd in verdicts], {vd["path"]: vd for vd in verdicts})
+        return write_index(out, meta, summary, plots, best, verdicts, write_suites(out, meta, db), views)
     finally:
         if own:
             db.close()
