@@ -289,3 +289,17 @@ def test_view_of_another_tasks_solution_warns_and_exits_1(capsys, tmp_path, ptp3
                    "shows it in a cell it was not planned for\n")
     code, out, err = run(capsys, "view", sol, "--task", PTP3, "--modules", IMPROV, "--no-plots", "--out", page)
     assert code == 0 and err == ""
+
+
+@pytest.mark.parametrize("text,message", [
+    ("name: " + "[" * 1000 + "]" * 1000 + "\n", f"cfg.yaml: YAML nested deeper than {MAX_DEPTH} levels"),
+    ("name: x\ntasks: " + "[" * 150 + "]" * 150 + "\n",
+     f"cfg.yaml: tasks[0][0][0][0][0]...: nested deeper than {MAX_DEPTH} levels"),
+    ("name: x\ntasks: [robodesign/pick_and_place]\noptimizers: [random]\nseeds: [.nan]\n",
+     "cfg.yaml: seeds[0]: NaN is not a valid value"),
+])
+def test_hostile_experiment_config_is_bad_input(capsys, tmp_path, text, message):
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(text)
+    code, _, err = run(capsys, "run", cfg, "--out", tmp_path / "res", "--progress", "none")
+    assert code == 2 and one_line_error(err) == f"{tmp_path}/{message}"

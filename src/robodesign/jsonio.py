@@ -166,6 +166,14 @@ def loads_json(text: str, display_name: str = "<string>") -> Any:
     return data
 
 
+def check_values(data: Any, display_name: str) -> Any:
+    """The checks of :func:`loads_json` (depth, NaN, NUL) on data read another way (YAML configs)."""
+    found = _problem(data, True)
+    if found is not None:
+        raise InputError(found[1], file=display_name, path=found[0])
+    return data
+
+
 def dumps_json(obj: Any, indent: int | None = 2) -> str:
     """JSON text; infinite floats are written as ``Infinity`` (CoBRA convention), NaN is refused."""
     return json.dumps(obj, indent=indent, allow_nan=True)

@@ -55,8 +55,11 @@ _UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
 
 
 def read_yaml(text: str, display: str) -> Any:
+    from ..jsonio import MAX_DEPTH, check_values
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)
+        return check_values(yaml.load(text, Loader=_UniqueKeyLoader), display)
+    except RecursionError:
+        raise InputError(f"YAML nested deeper than {MAX_DEPTH} levels", file=display) from None
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
