@@ -30,8 +30,7 @@ HILL_CLIMBER = '''
 """A hill-climber: the minimal robodesign optimizer plugin."""
 from dataclasses import dataclass
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import Candidate
+from robodesign.optimize import Candidate, Optimizer, option
 
 
 class HillClimber(Optimizer):
@@ -107,18 +106,19 @@ CHECK = f'''
 import json, sys
 from robodesign.errors import InputError
 from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, available_optimizers, create_optimizer, load_optimizer
+from robodesign.optimize import (Budget, SerialExecutor, Study, available_optimizers, create_optimizer, load_optimizer,
+                                 optimize)
 from robodesign.problem import Problem
 eps = available_optimizers()
 cls = load_optimizer("{ENTRY}")
 rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10", "11", "15"])
 problem = Problem.build(sys.argv[1], "robodesign_arm", "Whit2", rules=rules)
 ev = Evaluator(EvaluatorSpec(problem))
-runs = []
-for _ in range(2):
-    opt = create_optimizer("{ENTRY}", problem, seed=0, options={{"step": "0.05"}})
-    res = Study(opt, SerialExecutor(ev), Budget(evaluations=32)).run()
-    runs.append([e.candidate.key() for e in res.history])
+opt = create_optimizer("{ENTRY}", problem, seed=0, options={{"step": "0.05"}})
+res = Study(opt, SerialExecutor(ev), Budget(evaluations=32)).run()
+runs = [[e.candidate.key() for e in res.history]]
+res2 = optimize(problem, "{ENTRY}", "32evals", seed=0, options={{"step": 0.05}})   # the same study, one call
+runs.append([e.candidate.key() for e in res2.history])
 try:
     create_optimizer("{ENTRY}", problem, options={{"stpe": 0.2}})
     typo = None

@@ -24,8 +24,7 @@ from typing import Optional, Tuple
 
 import optuna
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import BASE_PARAMS, Candidate
+from robodesign.optimize import BASE_PARAMS, Candidate, Optimizer, option
 
 _OUTSIDE = 1e300
 

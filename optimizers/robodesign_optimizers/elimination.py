@@ -58,8 +58,7 @@ from typing import Deque, Iterator, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import Candidate
+from robodesign.optimize import Candidate, Optimizer, option
 
 
 class HierarchicalElimination(Optimizer):

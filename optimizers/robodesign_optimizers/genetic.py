@@ -48,8 +48,7 @@ import numpy as np
 from deap import base as deap_base
 from deap import tools
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import Candidate
+from robodesign.optimize import Candidate, Optimizer, option
 
 
 class _Fitness(deap_base.Fitness):

@@ -50,8 +50,7 @@ from typing import Deque, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import Candidate
+from robodesign.optimize import Candidate, Optimizer, option
 
 Prefix = Tuple[str, ...]
 

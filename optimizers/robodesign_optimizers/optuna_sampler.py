@@ -42,9 +42,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import optuna
 from optuna.trial import TrialState
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import BASE_PARAMS, Candidate
-from robodesign.solve import STAGES
+from robodesign.optimize import BASE_PARAMS, Candidate, Optimizer, STAGES, option
 
 OBJECTIVES = ("score", "mass", "modules", "dof")
 

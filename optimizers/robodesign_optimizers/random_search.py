@@ -5,8 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
-from robodesign.optimize import Optimizer, option
-from robodesign.search_space import Candidate
+from robodesign.optimize import Candidate, Optimizer, option
 
 
 class RandomSearch(Optimizer):

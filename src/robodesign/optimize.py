@@ -1,6 +1,7 @@
 """The optimizer plugin API and the study loop.
 
-Writing an optimizer (docs/plugins.md): subclass :class:`Optimizer`, implement ``ask()`` (return the
+Writing an optimizer (docs/plugins.md; everything a plugin uses is importable from this module, see
+``__all__``): subclass :class:`Optimizer`, implement ``ask()`` (return the
 next :class:`Candidate`, or ``None`` when the optimizer has nothing left to propose) and optionally
 ``tell(evaluation)``, declare its options as a dataclass ``Options`` of :func:`option` fields; register
 the class under the entry-point group ``robodesign.optimizers``. The optimizer sees the
@@ -35,7 +36,13 @@ from .costs import CostFunction
 from .errors import InputError
 from .evaluator import Evaluation
 from .problem import Problem
-from .search_space import Candidate, SearchSpace
+from .search_space import BASE_PARAMS, Candidate, SearchSpace
+from .solve import STAGES
+
+#: everything an optimizer plugin needs, importable from this module
+__all__ = ["Optimizer", "option", "OptionError", "Problem", "SearchSpace", "Candidate", "Evaluation", "STAGES",
+           "BASE_PARAMS", "create_optimizer", "load_optimizer", "available_optimizers", "option_specs",
+           "parse_options", "optimize", "Budget", "Study", "StudyResult", "SerialExecutor"]
 
 ENTRY_POINT_GROUP = "robodesign.optimizers"
 
@@ -450,3 +457,16 @@ class Study:
                 stopped = "exhausted"
                 break
         return StudyResult(best=opt.best, history=history, seconds=time.perf_counter() - t0, stopped=stopped)
+
+
+def optimize(problem: Problem, plugin: Union[str, Type[Optimizer]], budget: Union[str, Budget], *, seed: int = 0,
+             options: Optional[Mapping[str, Any]] = None, batch_size: int = 1, settings=None,
+             on_evaluation: Optional[Callable] = None) -> StudyResult:
+    """Search ``problem`` with optimizer ``plugin`` in this process: the Python twin of ``robodesign optimize``.
+    ``budget``: a :class:`Budget` or its text (``"200evals"``, ``"60s"``); ``settings``: the evaluations'
+    :class:`~robodesign.solve.SolveSettings` (default: :func:`~robodesign.evaluator.evaluation_settings`)."""
+    from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
+    opt = create_optimizer(plugin, problem, seed=seed, options=options)
+    ev = Evaluator(EvaluatorSpec(problem, settings if settings is not None else evaluation_settings(), seed=seed))
+    budget = budget if isinstance(budget, Budget) else Budget.parse(budget)
+    return Study(opt, SerialExecutor(ev), budget, batch_size=batch_size, on_evaluation=on_evaluation).run()
