@@ -161,19 +161,27 @@ def cmd_optimize(args) -> int:
     problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
                             base_search=not args.fixed_base)
     print_input_warnings(problem.task)
-    ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(planner=args.planner,
-                                                              optimize_trajectory=args.optimize_trajectory),
-                                 seed=args.seed))
+    spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
+                         seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=_parse_options(args.opt))
+    workers = _optimize_workers(args.workers, args.batch_size)
+    if workers == 1:  # in this process
+        executor = SerialExecutor(Evaluator(spec))
+    else:  # the experiments' process pool; results are the same for any number of workers
+        from .experiment.executors import ProcessPool
+        executor = ProcessPool({"optimize": spec}, workers).bind("optimize")
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
 
     def on_evaluation(i, e, best):
         walls.append(time.perf_counter() - progress.t0)
         progress(i, e, best)
-    study = Study(opt, SerialExecutor(ev), budget, on_evaluation=on_evaluation)
-    res = study.run()
-    progress.close()
+    try:
+        res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation).run()
+    finally:
+        progress.close()
+        if workers > 1:
+            executor.pool.close()
     from .experiment.suites import record_of_run
     run = record_of_run("", args.task, args.optimizer, args.seed, [
         {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
@@ -185,6 +193,7 @@ def cmd_optimize(args) -> int:
         sol = parse_solution(best.solution, "best")
         out = sol.write(args.out or "best_solution.json")
     summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
+               "workers": workers, "batch_size": args.batch_size,
                "stopped": res.stopped, "feasible": bool(best and best.feasible),
                "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
                                                   "base_pose": problem.base_pose(best.candidate).tolist(),
@@ -194,8 +203,8 @@ def cmd_optimize(args) -> int:
     if args.json:
         print(json.dumps(summary))
     else:
-        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}); "
-              f"{sum(e.feasible for e in res.history)} feasible")
+        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s), batches "
+              f"of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
@@ -210,6 +219,21 @@ def cmd_optimize(args) -> int:
                 print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
                       f"{stage_counts_text(run.stage_counts)})")
     return 0 if best is not None and best.feasible else 1
+
+
+def _optimize_workers(workers, batch_size: int) -> int:
+    """``--workers`` (default: every core this process may use), at most one per candidate of a batch."""
+    import os
+    if batch_size < 1:
+        raise InputError(f"--batch-size must be at least 1, got {batch_size}")
+    if workers is None:
+        try:
+            workers = len(os.sched_getaffinity(0))
+        except AttributeError:
+            workers = os.cpu_count() or 1
+    elif workers < 1:
+        raise InputError(f"--workers must be at least 1, got {workers}")
+    return max(1, min(int(workers), batch_size))
 
 
 class _Progress:

@@ -23,7 +23,8 @@ Decisions:
 * **Time limit**: ``time_limit`` bounds OMPL's solve; planners that overrun it (FMT/BFMT sample a fixed
   number of states) are stopped by the validity checker, which reports every state invalid from
   1.1·time_limit + 50 ms after the start of the solve. The straight-line check and post-processing
-  come on top.
+  come on top (the shortcuts are bounded by their count; a 120 s cap is only a safety net, so a busy
+  machine does not change the path).
 * **Determinism**: ``ou.RNG.setSeed(seed % (2³¹−2) + 1)`` before anything that samples is created
   (OMPL seeds each RNG instance from that generator; seed 0 is reserved by OMPL). The result is
   deterministic for a given seed as long as the planner stops on a solution rather than on the time
@@ -56,6 +57,7 @@ PLANNERS: Dict[str, str] = {
 }
 _LIMIT_SLACK = 1e-9
 _SHORTCUT_TRIES = 40
+_SHORTCUT_SAFETY_SECONDS = 120.0
 _GOAL_TOL = 1e-9            # OMPL goal threshold (the last waypoint is then set to q_goal exactly)
 
 
@@ -291,9 +293,12 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         ts = time.perf_counter()
         P = _shortcut(valid, raw, resolution, counter)
         rng = np.random.default_rng(seed)
-        # a fixed number of tries keeps the result deterministic; the time cap is only a safety net
+        # a fixed number of tries keeps the result deterministic; the time cap is only a safety net, far
+        # beyond what 40 tries take even on a machine loaded many times over (a cap of 1 s cut the tries
+        # short under load and made the same seed give different paths, and `optimize --workers 2` differ
+        # from `--workers 1`)
         P = _partial_shortcuts(valid, P, resolution, counter, rng, _SHORTCUT_TRIES,
-                               ts + max(1.0, float(time_limit)))
+                               ts + _SHORTCUT_SAFETY_SECONDS)
         stats["simplify_time"] = time.perf_counter() - ts
         candidates.insert(0, P)
     for P in candidates:
