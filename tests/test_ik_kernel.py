@@ -21,6 +21,14 @@ from conftest import IMPROV, PRIMITIVES, ROOT, TASKS
 
 pytestmark = pytest.mark.skipif(not ik_kernel.available(), reason="ROBODESIGN_JIT=0")
 
+
+@pytest.fixture(scope="module", autouse=True)
+def compiled_kernels():
+    """Compile (or load) the kernels in this process first: with a cold cache the solver would otherwise run
+    the Python loop until the background compilation ends, and the comparisons below would compare the Python
+    loop with itself."""
+    assert ik_kernel.warm_up() and ik_kernel.ready()
+
 BASE = homogeneous(rpy_to_matrix(0.3, -0.2, 1.0), [1.0, 2.0, 0.5])
 
 

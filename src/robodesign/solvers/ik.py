@@ -41,7 +41,8 @@ about 1 µs per iteration; it runs the descents of consecutive attempts in one c
 goal) for robots whose TCP chain has revolute/prismatic joints about ±z (every robodesign robot) and goals
 whose constraints have one interval each among x/y/z/N_x/N_y/N_z/r_sph/Theta_R/r_cyl; and the Python one
 (about 15 µs per iteration: ``pin.computeJointJacobians`` + ``updateFramePlacement`` +
-``getFrameJacobian(LOCAL)``) for everything else, for ``ROBODESIGN_JIT=0`` and under the ``_trace`` hook.
+``getFrameJacobian(LOCAL)``) for everything else, for ``ROBODESIGN_JIT=0``, under the ``_trace`` hook and
+while the kernels are still being compiled in the background on a cold cache (``ik_kernel.ready``).
 Same seed, same solutions (tests/test_ik_kernel.py).
 
 Collision repair: once more than 2 converged configurations were rejected for collision (collisions are
@@ -601,7 +602,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
     if gm.unconstrained:
         return None
     from . import ik_kernel
-    if not ik_kernel.available():
+    if not ik_kernel.ready():   # not compiled yet: the Python loop runs meanwhile (no cold-start stall)
         return None
     prog = gm.program()
     if prog is None:

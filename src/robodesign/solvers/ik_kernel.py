@@ -15,14 +15,28 @@ What it covers (everything else keeps the Python loop, which is the reference):
   tolerances or the R/P/Y, Euler and quaternion fall-backs.
 
 ``ROBODESIGN_JIT=0`` in the environment switches the kernel off (the Python loop then runs everything);
-tests compare both on the same inputs. The first call compiles (a few seconds) and caches the machine code
-next to this file (``__pycache__``), so later processes load it in about 0.1 s.
+tests compare both on the same inputs (same solutions to 1e-8).
+
+No cold-start stall (:func:`ready`): compiling the kernels takes about 5 s (on a quiet machine) and is
+cached on disk (numba's cache: ``__pycache__`` next to this file, or ``NUMBA_CACHE_DIR``), where later
+processes load it in about 0.1 s. A process that finds no compiled kernels in the cache does not wait
+for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``, niced) that
+compiles them into the cache, and runs the Python loop until that process has finished; from then on it
+uses the compiled loop. So the first command after an install is never slower than the pure-Python path,
+and long runs switch to the compiled loop after a few seconds. A stamp file beside numba's cache
+(``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python, CPU and
+source; concurrent processes serialise the compilation with a lock file beside it.
+``ROBODESIGN_JIT=wait`` compiles in the process at the first use instead (the old behaviour);
+:func:`warm_up` does the same on request.
 """
 from __future__ import annotations
 
 import math
 import os
+import subprocess
+import sys
 import weakref
+from pathlib import Path
 from typing import Optional
 
 import numpy as np
@@ -44,9 +58,13 @@ except Exception:  # pragma: no cover - numba is a dependency; without it the Py
         return (lambda f: f) if not args or not callable(args[0]) else args[0]
 
 
+def _jit_mode() -> str:
+    return os.environ.get("ROBODESIGN_JIT", "1").strip().lower()
+
+
 def available() -> bool:
     """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
-    if os.environ.get("ROBODESIGN_JIT", "1").strip().lower() in ("0", "false", "no", "off"):
+    if _jit_mode() in ("0", "false", "no", "off"):
         return False
     return _IMPORTED
 
@@ -539,9 +557,17 @@ def rows_of(tkind) -> int:
 
 
 def warm_up() -> bool:
-    """Compile (or load from the cache) every kernel now; False when the kernel is unavailable."""
+    """Compile (or load from the cache) every kernel now, in this process; False when the kernel is
+    unavailable. Afterwards :func:`ready` is True in this process."""
+    global _STATE
     if not available():
         return False
+    _warm_up_kernels()
+    _STATE = "ready"
+    return True
+
+
+def _warm_up_kernels() -> None:
     n = 2
     chain = np.tile(np.eye(4), (2, 1, 1))
     q = np.zeros(n)
@@ -551,4 +577,107 @@ def warm_up() -> bool:
     lm_batch(np.zeros((1, n)), 0, 1, 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
              np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
              np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
-    return True
+    lm_descend(np.zeros(n), 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
+               np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
+               np.array([0.02, 1e-6, 1.0, 0.9, 3.0]))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# readiness: compile in the background, never stall a command on the compilation
+# ---------------------------------------------------------------------------------------------------------
+_STATE: Optional[str] = None   # None (not looked at yet) | "compiling" | "ready" | "failed"
+_COMPILER: Optional[subprocess.Popen] = None
+_KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are compiled into them)
+
+
+def _cache_dir() -> Path:
+    """Where numba caches this module's kernels (``__pycache__`` beside it, ``NUMBA_CACHE_DIR`` or numba's
+    user-wide fall-back)."""
+    return Path(lm_batch._cache._cache_path)
+
+
+def stamp_path() -> Path:
+    return _cache_dir() / "robodesign_ik_kernel.ready"
+
+
+def _stamp_text() -> str:
+    import platform
+
+    import numba
+    from llvmlite import binding
+    src = Path(__file__).stat()
+    return (f"numba {numba.__version__}; python {sys.version.split()[0]} {sys.executable}; "
+            f"cpu {platform.machine()} {binding.get_host_cpu_name()}; source {src.st_size} {src.st_mtime_ns}")
+
+
+def compiled() -> bool:
+    """True when the cache holds the compiled kernels for this numba, Python, CPU and source (loading them
+    then takes about 0.1 s, no compilation)."""
+    try:
+        stamp = stamp_path()
+        if stamp.read_text() != _stamp_text():
+            return False
+        return all(any(stamp.parent.glob(f"ik_kernel.{k}-*.nbi")) for k in _KERNELS)
+    except (OSError, AttributeError):
+        return False
+
+
+def _start_compiler() -> Optional[subprocess.Popen]:
+    env = dict(os.environ)
+    src_root = str(Path(__file__).resolve().parents[2])   # the folder holding the robodesign package
+    env["PYTHONPATH"] = src_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    try:
+        return subprocess.Popen([sys.executable, "-m", "robodesign.solvers.ik_kernel"], env=env,
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                start_new_session=True)   # finishes the cache even if this command ends first
+    except OSError:
+        return None
+
+
+def ready() -> bool:
+    """True when the compiled loop can run now without a compilation stall. The first call in a process
+    with a cold cache starts the background compilation and answers False (the Python loop runs); later
+    calls answer True once it has finished (``ROBODESIGN_JIT=wait``: compile now, in this process)."""
+    global _STATE, _COMPILER
+    if _STATE == "ready":
+        return True
+    if _STATE == "failed" or not available():
+        return False
+    if _STATE is None:
+        if compiled():
+            _STATE = "ready"
+        elif _jit_mode() == "wait":
+            warm_up()
+        else:
+            _COMPILER = _start_compiler()
+            _STATE = "compiling" if _COMPILER is not None else "failed"
+        return _STATE == "ready"
+    code = _COMPILER.poll()
+    if code is None:
+        return False
+    _STATE = "ready" if code == 0 and compiled() else "failed"
+    return _STATE == "ready"
+
+
+def _compile_into_cache() -> int:
+    """The background compiler: compile every kernel into numba's cache and write the stamp (once, under a
+    lock shared with concurrent compilers)."""
+    import fcntl
+    try:
+        os.nice(10)   # the commands that wait for nothing come first
+    except OSError:
+        pass
+    stamp = stamp_path()
+    stamp.parent.mkdir(parents=True, exist_ok=True)
+    with open(stamp.with_suffix(".lock"), "a+") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not compiled():
+            _warm_up_kernels()
+            tmp = stamp.with_suffix(f".tmp{os.getpid()}")
+            tmp.write_text(_stamp_text())
+            tmp.replace(stamp)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_compile_into_cache() if available() else 1)
