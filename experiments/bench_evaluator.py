@@ -41,6 +41,8 @@ def main():
     space = SearchSpace(ms)
     rng = np.random.default_rng(args.seed)
     cands = [space.random_order(rng) for _ in range(args.n)]
+    from robodesign.solvers import ik_kernel
+    ik_kernel.warm_up()  # the compiled IK from the start, also on a cold cache (no-op with ROBODESIGN_JIT=0)
     solve(task, ms, cands[0], settings=SolveSettings(stop_after="ik"))  # warm-up (meshes)
     passed = {}
     for r in [int(x) for x in args.restarts.split(",")]:

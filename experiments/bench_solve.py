@@ -31,6 +31,8 @@ def main():
     args = ap.parse_args()
     task = load_task(SHARED / "tasks" / "simple" / "PTP_3.json")
     ms = load_module_set(SHARED / "modules" / "IMPROV")
+    from robodesign.solvers import ik_kernel
+    ik_kernel.warm_up()  # the compiled IK from the start, also on a cold cache (no-op with ROBODESIGN_JIT=0)
     solve(task, ms, ["1", "21", "4", "22", "5", "23", "12"])  # warm-up: meshes, imports
     rng = np.random.default_rng(args.seed)
     times, stages, plan_ok, plan_all = [], Counter(), 0, 0

@@ -33,7 +33,7 @@ def test_process_pool_gives_the_serial_history(tmp_path):
     serial = _history(SerialExecutor(ev), spec, space)
     with ProcessPool({"s": spec}, 2) as pool:
         parallel = _history(pool.bind("s"), spec, space)
-        assert len(pool.pids) == 2
+        assert pool.workers == 2
     assert len(serial) == 24 and parallel == serial
     assert len({k for k, *_ in serial}) > 8  # the genetic search moved beyond its first generation
 
