@@ -25,7 +25,8 @@ from pathlib import Path
 
 from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
 from robodesign.experiment.executors import ProcessPool
-from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
+from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.problem import Problem
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared" / "cobra"
@@ -40,17 +41,16 @@ class _Reached(Exception):
 
 def search(optimizer: str, seed: int, workers: int, evaluations: int, target=None) -> dict:
     t0 = time.perf_counter()
-    spec = EvaluatorSpec(task=str(TASK), module_set=str(IMPROV), cost="cyc", settings=evaluation_settings(), seed=seed)
-    ev = Evaluator(spec)
-    space = ev.search_space()
+    problem = Problem.build(str(TASK), str(IMPROV), "cyc")
+    spec = EvaluatorSpec(problem, evaluation_settings(), seed=seed)
     pool = None
     if workers == 1:
-        executor = SerialExecutor(ev)
+        executor = SerialExecutor(Evaluator(spec))
     else:
         pool = ProcessPool({"s": spec}, workers)
         executor = pool.bind("s")
     startup = time.perf_counter() - t0
-    opt = load_optimizer(optimizer)(space, seed=seed, cost="cyc")
+    opt = create_optimizer(optimizer, problem, seed=seed)
     hit = {}
 
     def on_eval(i, e, best):

@@ -9,7 +9,8 @@ from conftest import IMPROV, TASKS
 from robodesign.checker import check
 from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
 from robodesign.experiment.executors import ProcessPool
-from robodesign.optimize import Budget, SerialExecutor, Study, load_optimizer
+from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.problem import Problem
 from robodesign.solution import load_solution
 from robodesign.task_io import load_task
 
@@ -17,8 +18,8 @@ PTP3 = TASKS / "simple" / "PTP_3.json"
 RD = [sys.executable, "-m", "robodesign.cli"]
 
 
-def _history(executor, spec, space):
-    opt = load_optimizer("genetic")(space, seed=3, population_size=8)
+def _history(executor, problem):
+    opt = create_optimizer("genetic", problem, seed=3, options={"population_size": 8})
     res = Study(opt, executor, Budget(evaluations=24), batch_size=6).run()
     return [(e.candidate.key(), e.feasible, e.stage, e.cost, e.goals_reached) for e in res.history]
 
@@ -27,12 +28,11 @@ def _history(executor, spec, space):
 def test_process_pool_gives_the_serial_history(tmp_path):
     """Every evaluation (candidate, stage reached, cost) of a genetic run is the same on 2 worker processes
     as in this process."""
-    spec = EvaluatorSpec(task=str(PTP3), module_set=str(IMPROV), cost="cyc", settings=evaluation_settings(), seed=3)
-    ev = Evaluator(spec)
-    space = ev.search_space()
-    serial = _history(SerialExecutor(ev), spec, space)
+    problem = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    spec = EvaluatorSpec(problem, evaluation_settings(), seed=3)
+    serial = _history(SerialExecutor(Evaluator(spec)), problem)
     with ProcessPool({"s": spec}, 2) as pool:
-        parallel = _history(pool.bind("s"), spec, space)
+        parallel = _history(pool.bind("s"), problem)
         assert pool.workers == 2
     assert len(serial) == 24 and parallel == serial
     assert len({k for k, *_ in serial}) > 8  # the genetic search moved beyond its first generation
