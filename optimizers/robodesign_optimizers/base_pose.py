@@ -42,21 +42,19 @@ class BasePoseSearch(Optimizer):
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
         space = self.space
-        self.order = self.options.order
-        why = space.validate_order(self.order)
+        why = space.validate_order(self.options.order)
         if why:
-            raise ValueError(f"base_pose: order {','.join(self.order)}: {why} "
+            raise ValueError(f"base_pose: order {','.join(self.options.order)}: {why} "
                              f"(set the search-space rules, e.g. --dof, so that they admit it)")
         self.free = tuple(space.base_bounds.free)
         if not self.free:
             raise ValueError("base_pose: the base pose is fixed (the task's base placement has no tolerance, "
                              "or --fixed-base was given): nothing to search")
-        self.max_rejects = self.options.max_rejects
-        n_startup_trials = self.options.n_startup_trials
         optuna.logging.set_verbosity(optuna.logging.WARNING)
-        sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=n_startup_trials, multivariate=True)
+        sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=self.options.n_startup_trials,
+                                             multivariate=True)
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
-        nominal = space.nominal_candidate(self.order)
+        nominal = space.nominal_candidate(self.options.order)
         self.study.enqueue_trial({self._param(i): float(v) for i, v in zip(self.free, nominal.base)})
         self._pending = deque()               # (trial, key) asked, not yet told, in ask order
         self._scores = {}                     # key → score told (a resampled duplicate gets the same)
@@ -67,10 +65,10 @@ class BasePoseSearch(Optimizer):
 
     def ask(self) -> Optional[Candidate]:
         bb = self.space.base_bounds
-        for _ in range(self.max_rejects):
+        for _ in range(self.options.max_rejects):
             trial = self.study.ask()
             base = tuple(float(trial.suggest_float(self._param(i), bb.lower[i], bb.upper[i])) for i in self.free)
-            c = Candidate(self.order, base)
+            c = Candidate(self.options.order, base)
             key = c.key()
             if not bb.valid(base):
                 self.study.tell(trial, _OUTSIDE)

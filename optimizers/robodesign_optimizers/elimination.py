@@ -4,15 +4,15 @@ eliminated stage by stage as soon as a cheap test proves that they cannot be bet
 
 Enumeration order:
 
-* with ``cost_bound`` (default) and ``order_by="bound"`` (default): complete orders in non-decreasing :meth:`SearchSpace.cost_lower_bound` (a best-first
-  traversal of the tree of partial orders; the bound of a prefix is the mass so far plus the lightest
-  completion, plus the DoF term; it never decreases along a branch, so orders come out sorted without
-  materialising the whole list). For ``mass``, ``numJ`` and ``Whit2`` the bound *is* the cost of a
-  feasible order, so the first feasible order found is optimal. Ties: deeper prefix first, then
+* with ``cost_bound`` (default) and ``order_by="bound"`` (default): complete orders in non-decreasing
+  :meth:`SearchSpace.cost_lower_bound` of the study's cost (``self.cost``, from the problem), a
+  best-first traversal of the tree of partial orders: the bound of a prefix is the mass so far plus the
+  lightest completion, plus the DoF term; it never decreases along a branch, so orders come out sorted
+  without materialising the whole list. For ``mass``, ``numJ`` and ``Whit2`` the bound *is* the cost of
+  a feasible order, so the first feasible order found is optimal. Ties: deeper prefix first, then
   enumeration order.
-  The bound is that of the study's cost (``self.cost``, from the problem), so the pruning below is sound.
-* otherwise (``cost_bound=false``, a cost whose bound is ``-inf`` because of a negative weight,
-  ``order_by="enumeration"``): the space's deterministic depth-first ``enumerate_orders``.
+* otherwise (``cost_bound=false``, a cost whose bound is ``-inf`` because of a reward term with a
+  negative weight, ``order_by="enumeration"``): the space's deterministic depth-first ``enumerate_orders``.
 
 Each order is evaluated at the nominal base pose, or (``base_grid`` = k ≥ 2) at the nominal pose and then
 at every point of a k^d grid over the d free base dims (``linspace(lower, upper, k)`` per dim; points
@@ -21,8 +21,9 @@ outside ``base_bounds.valid`` are skipped since they fail the ``base`` stage).
 Pruning rules (a candidate is skipped without being asked). All of them are *sound*: a skipped
 candidate provably fails, or provably cannot score strictly better than the best feasible one found.
 
-1. **bound**: ``cost_lower_bound(order) ≥ best feasible score`` (with ``cost_bound``; the bound is of the
-   cost the study evaluates). In bound order every later order is pruned too, so the enumeration ends (None).
+1. **bound**: ``cost_lower_bound(order) ≥ best feasible score`` (with ``cost_bound``; sound because the
+   bound is of the cost the study evaluates). In bound order every later order is pruned too, so the
+   enumeration ends (None).
 2. **base**: a candidate whose evaluation failed at stage ``base`` had base parameters outside the task's
    base-placement tolerance; that stage depends only on the base pose, so every untried candidate with
    the same base parameters is skipped.
@@ -77,9 +78,6 @@ class HierarchicalElimination(Optimizer):
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
         o = self.options
-        self.base_grid = o.base_grid
-        self.reach_pruning = o.reach_pruning
-        self.keep_pruned = o.keep_pruned
         # the bound is usable unless a negative weight makes it -inf
         self.use_bound = (o.cost_bound and self.cost is not None
                           and math.isfinite(self.space.cost_lower_bound((), self.cost)))
@@ -134,8 +132,8 @@ class HierarchicalElimination(Optimizer):
         free = bb.free
         nominal = sp.nominal_candidate(()).base if free else ()
         points = [nominal]
-        if free and self.base_grid >= 2:
-            axes = [np.linspace(bb.lower[i], bb.upper[i], self.base_grid) for i in free]
+        if free and self.options.base_grid >= 2:
+            axes = [np.linspace(bb.lower[i], bb.upper[i], self.options.base_grid) for i in free]
             seen = {Candidate((), nominal).key()}
             for p in itertools.product(*axes):
                 p = tuple(float(v) for v in p)
@@ -152,7 +150,7 @@ class HierarchicalElimination(Optimizer):
     # -- ask / tell -----------------------------------------------------------------------------------
     def _prune(self, c: Candidate, rule: str) -> None:
         self.pruned[rule] += 1
-        if self.keep_pruned:
+        if self.options.keep_pruned:
             self.pruned_candidates.append((c.key(), rule))
 
     def ask(self) -> Optional[Candidate]:
@@ -185,7 +183,7 @@ class HierarchicalElimination(Optimizer):
             if c.order in self._bad_orders:                              # rule 3
                 self._prune(c, "assembly")
                 continue
-            if self.reach_pruning and self._reach_R and self._reach_dominated(c):  # rule 4
+            if self.options.reach_pruning and self._reach_R and self._reach_dominated(c):  # rule 4
                 self._reach_cache.pop(c.key(), None)
                 self._prune(c, "reach")
                 continue
@@ -219,7 +217,7 @@ class HierarchicalElimination(Optimizer):
             self._bad_bases.add(tuple(c.base))
         elif evaluation.stage == "assembly":
             self._bad_orders.add(tuple(c.order))
-        elif evaluation.stage == "reach" and self.reach_pruning:
+        elif evaluation.stage == "reach" and self.options.reach_pruning:
             o, R = self._reach(c)
             if o is not None:
                 self._reach_o.append(o)

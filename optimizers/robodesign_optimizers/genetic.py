@@ -91,25 +91,17 @@ class GeneticOptimizer(Optimizer):
         mutation_prob: float = option(0.5, low=0.0, high=1.0, help="probability that an offspring's order mutates")
         base_mutation_prob: float = option(0.5, low=0.0, high=1.0,
                                            help="probability that an offspring's base parameters mutate")
-        base_sigma: float = option(0.1, low=0.0, help="sigma of the Gaussian base mutation, as a fraction of each range")
+        base_sigma: float = option(0.1, low=0.0,
+                                   help="sigma of the Gaussian base mutation, as a fraction of each range")
         max_idle_generations: int = option(25, low=1, help="stop after this many generations without a new candidate")
 
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
-        o = self.options
-        self.population_size = o.population_size
-        self.generations = o.generations
-        self.tournament_size = o.tournament_size
-        self.elite = min(o.elite, self.population_size - 1)
-        self.crossover_prob = o.crossover_prob
-        self.mutation_prob = o.mutation_prob
-        self.base_mutation_prob = o.base_mutation_prob
-        self.base_sigma = o.base_sigma
-        self.max_idle_generations = o.max_idle_generations
+        self.elite = min(self.options.elite, self.options.population_size - 1)
         self._free = tuple(self.space.base_bounds.free)
         self._py_random_state = random.Random(self.seed).getstate()
         self.toolbox = deap_base.Toolbox()
-        self.toolbox.register("select", tools.selTournament, tournsize=self.tournament_size)
+        self.toolbox.register("select", tools.selTournament, tournsize=self.options.tournament_size)
         self.toolbox.register("elite", tools.selBest)
         self.toolbox.register("mate", self._crossover)
         self.toolbox.register("mutate", self._mutate)
@@ -150,12 +142,12 @@ class GeneticOptimizer(Optimizer):
                 self._waiting[imm.key()] = [imm]
                 return imm.candidate()
             # the generation is complete: breed the next one
-            if self.generations is not None and self.generation + 1 >= self.generations:
+            if self.options.generations is not None and self.generation + 1 >= self.options.generations:
                 self._done = True
                 return None
             fresh = self._breed()
             self._idle = 0 if fresh else self._idle + 1
-            if self._idle >= self.max_idle_generations:
+            if self._idle >= self.options.max_idle_generations:
                 self._done = True
                 return None
 
@@ -169,8 +161,8 @@ class GeneticOptimizer(Optimizer):
     def _initial_population(self) -> List[Individual]:
         pop: List[Individual] = []
         seen = set()
-        for _ in range(20 * self.population_size):
-            if len(pop) >= self.population_size:
+        for _ in range(20 * self.options.population_size):
+            if len(pop) >= self.options.population_size:
                 break
             c = self.space.random_candidate(self.rng)
             if c.key() in seen:
@@ -185,15 +177,15 @@ class GeneticOptimizer(Optimizer):
         if not pop:
             return 0
         elites = [ind.copy() for ind in self.toolbox.elite(pop, self.elite)]
-        n = self.population_size - len(elites)
+        n = self.options.population_size - len(elites)
         with self._deap_random():
             parents = self.toolbox.select(pop, n)
         offspring = [p.copy() for p in parents]
         for a, b in zip(offspring[::2], offspring[1::2]):
-            if self.rng.random() < self.crossover_prob:
+            if self.rng.random() < self.options.crossover_prob:
                 self.toolbox.mate(a, b)
         for ind in offspring:
-            self.toolbox.mutate(ind, p_order=self.mutation_prob, p_base=self.base_mutation_prob)
+            self.toolbox.mutate(ind, p_order=self.options.mutation_prob, p_base=self.options.base_mutation_prob)
         # duplicates of evaluated candidates (or of each other) are mutated again, then replaced by immigrants
         taken = {e.key() for e in elites}
         fresh = 0
@@ -320,7 +312,7 @@ class GeneticOptimizer(Optimizer):
             new = []
             for i, v in zip(self._free, ind.base):
                 lo, hi = bb.lower[i], bb.upper[i]
-                new.append(float(np.clip(v + self.rng.normal(0.0, self.base_sigma * (hi - lo)), lo, hi)))
+                new.append(float(np.clip(v + self.rng.normal(0.0, self.options.base_sigma * (hi - lo)), lo, hi)))
             if bb.valid(new):
                 ind.base = tuple(new)
                 return True

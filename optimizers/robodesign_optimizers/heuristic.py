@@ -72,15 +72,11 @@ class HeuristicSearch(Optimizer):
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
         o = self.options
-        self.beam_width = o.beam_width
-        self.widen = o.widen
         self._free = tuple(self.space.base_bounds.free)
         self.base_samples = o.base_samples if self._free else 1
-        self.base_sigma = o.base_sigma
-        self.demote_after = o.demote_after
         self.use_bound = (o.cost_bound and self.cost is not None
                           and math.isfinite(self.space.cost_lower_bound((), self.cost)))
-        self.width = self.beam_width
+        self.width = o.beam_width
         self.best_score = math.inf
         self.passes = 0
         self._lb: Dict[Prefix, float] = {}
@@ -128,7 +124,7 @@ class HeuristicSearch(Optimizer):
 
     def _demoted(self, p: Prefix) -> bool:
         n, feasible = self._tried.get(p, (0, 0))
-        return self.demote_after > 0 and n >= self.demote_after and feasible == 0
+        return self.options.demote_after > 0 and n >= self.options.demote_after and feasible == 0
 
     def _progress_of(self, p: Prefix) -> int:
         for k in range(len(p), -1, -1):
@@ -188,7 +184,7 @@ class HeuristicSearch(Optimizer):
             bb = self.space.base_bounds
             center = self._best_base.get(order, (None, asked[0]))[1]
             for _ in range(30):
-                p = [float(np.clip(v + self.rng.normal(0.0, self.base_sigma * (bb.upper[i] - bb.lower[i])),
+                p = [float(np.clip(v + self.rng.normal(0.0, self.options.base_sigma * (bb.upper[i] - bb.lower[i])),
                                    bb.lower[i], bb.upper[i])) for i, v in zip(self._free, center)]
                 c = Candidate(order, tuple(p))
                 if bb.valid(p) and c.key() not in self._asked:
@@ -218,7 +214,7 @@ class HeuristicSearch(Optimizer):
                 self._queue.extend(new)
                 continue
             if cut:
-                self.width = int(math.ceil(self.width * self.widen))
+                self.width = int(math.ceil(self.width * self.options.widen))
                 continue
             self._exhausted = True
             return None

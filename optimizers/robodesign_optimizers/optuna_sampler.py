@@ -64,23 +64,19 @@ class OptunaOptimizer(Optimizer):
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
         o = self.options
-        self.multi_objective = o.multi_objective
-        self.objectives = o.objectives
-        if self.multi_objective:
-            bad = [x for x in self.objectives if x not in OBJECTIVES]
-            if bad or len(self.objectives) < 2:
+        if o.multi_objective:
+            bad = [x for x in o.objectives if x not in OBJECTIVES]
+            if bad or len(o.objectives) < 2:
                 raise ValueError(f"optuna: objectives must be ≥ 2 of {', '.join(OBJECTIVES)}, "
-                                 f"got {','.join(self.objectives)!r}")
-        self.max_duplicates = o.max_duplicates
-        population_size, n_startup_trials = o.population_size, o.n_startup_trials
+                                 f"got {','.join(o.objectives)!r}")
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-            if self.multi_objective:
-                sampler = optuna.samplers.NSGAIISampler(population_size=population_size, seed=self.seed)
-                self.study = optuna.create_study(directions=["minimize"] * len(self.objectives), sampler=sampler)
+            if o.multi_objective:
+                sampler = optuna.samplers.NSGAIISampler(population_size=o.population_size, seed=self.seed)
+                self.study = optuna.create_study(directions=["minimize"] * len(o.objectives), sampler=sampler)
             else:
-                sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=n_startup_trials,
+                sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=o.n_startup_trials,
                                                      multivariate=True, group=True)
                 self.study = optuna.create_study(direction="minimize", sampler=sampler)
         self._names: Dict[int, List[Tuple[str, ...]]] = {}   # position → choice sets seen (in order)
@@ -140,14 +136,14 @@ class OptunaOptimizer(Optimizer):
     # -- ask / tell ----------------------------------------------------------------------------------------
     def _tell_known(self, trial, key: str) -> None:
         values, constraint = self._values[key]
-        if self.multi_objective:
+        if self.options.multi_objective:
             trial.set_constraint("infeasibility", constraint)
-        self.study.tell(trial, values if self.multi_objective else values[0])
+        self.study.tell(trial, values if self.options.multi_objective else values[0])
 
     def ask(self) -> Optional[Candidate]:
         if self._exhausted:
             return None
-        for _ in range(self.max_duplicates):
+        for _ in range(self.options.max_duplicates):
             trial = self.study.ask()
             c = self._walk(trial)
             k = c.key()
@@ -179,7 +175,7 @@ class OptunaOptimizer(Optimizer):
     def _objective_values(self, ev) -> Tuple[List[float], float]:
         c = ev.candidate
         vals = []
-        for o in (self.objectives if self.multi_objective else ("score",)):
+        for o in (self.options.objectives if self.options.multi_objective else ("score",)):
             if o == "score":
                 vals.append(float(ev.score))
             elif o == "mass":

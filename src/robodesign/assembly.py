@@ -54,10 +54,12 @@ class Assembly:
         connections: List[Connection] = []
         for i in range(1, len(order)):
             new = ms[order[i]]
-            cands = [(k, c_old, c_new) for k in range(i) for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
+            cands = [(k, c_old, c_new) for k in range(i)
+                     for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
             prev = ms[order[i - 1]]
             if not cands:
-                reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): {c_new.mates_with(c_old)[1]}"
+                reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): "
+                           f"{c_new.mates_with(c_old)[1]}"
                            for c_old in prev.connectors if c_old.id in free[i - 1] for c_new in new.connectors]
                 detail = "; ".join(reasons[:4]) or f"module {order[i-1]!r} has no free connector left"
                 raise AssemblyError(f"modules {order[i-1]!r} ({prev.name}) → {order[i]!r} ({new.name}) at positions "
