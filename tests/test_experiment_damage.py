@@ -17,20 +17,10 @@ from robodesign.cli import main
 from robodesign.evaluator import Evaluation
 from robodesign.experiment.storage import DamagedDatabase, ExperimentDB
 from robodesign.search_space import Candidate
+from test_experiment import SMALL as SMALL_CONFIG
 
 RD = [sys.executable, "-m", "robodesign.cli"]
-
-SMALL = """
-name: small
-modules: robodesign_arm
-tasks: [robodesign/pick_and_place]
-cost: cyc
-optimizers: [random]
-budget: {budget}evals
-seeds: [0, 1]
-batch_size: 2
-executor: serial
-"""
+SMALL = SMALL_CONFIG.replace("{executor}", "serial")
 
 
 def rows(db):
