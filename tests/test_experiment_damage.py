@@ -91,6 +91,24 @@ def test_damaged_database_refuses_resume_and_restart_starts_over(finished, tmp_p
         assert (aside / "evaluations.sqlite").read_bytes() == damaged_bytes
 
 
+def test_database_with_fewer_evaluations_than_meta_records_is_refused_every_time(finished, tmp_path, capsys):
+    """An older copy of the database (here: the last 5 evaluations of seed 1 gone) is refused, and the refusal
+    leaves meta.json's record alone, so asking again is refused again."""
+    src, expected = finished
+    out = tmp_path / "res"
+    shutil.copytree(src, out)
+    con = sqlite3.connect(out / "evaluations.sqlite")
+    with con:
+        con.execute("DELETE FROM evaluations WHERE idx >= 1 AND run_id = (SELECT run_id FROM runs WHERE seed = 1)")
+    con.close()
+    for _ in range(2):
+        assert main(["run", "--resume", str(out), "--progress", "none", "--no-report"]) == 2
+        err = capsys.readouterr().err
+        assert "the results database holds only 7 evaluations, but meta.json records 12 stored evaluations" in err
+        assert json.loads((out / "meta.json").read_text())["stored_evaluations"] == 12
+    assert len(rows(out / "evaluations.sqlite")) == 7
+
+
 def test_restart_needs_resume(tmp_path, capsys):
     (tmp_path / "cfg.yaml").write_text(SMALL.format(budget=2))
     code = main(["run", str(tmp_path / "cfg.yaml"), "--restart", "--out", str(tmp_path / "r")])

@@ -380,6 +380,7 @@ def open_for_resume(out: Path, meta: dict) -> ExperimentDB:
     db = _open_db(path, out)
     held = db.count()
     if held < claimed:
+        db.on_checkpoint = None  # closing must not overwrite meta.json's record with the smaller count
         db.close()
         what = "holds no evaluations" if held == 0 else f"holds only {held} evaluations"
         why = " (its -wal file is gone: was the .sqlite copied or restored without it?)" if wal_lost else ""
