@@ -628,11 +628,12 @@ def test_cli_serve(tmp_path, seed_dir):
     port = free_port()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(Path(__file__).parents[1] / "src"),
                                                        os.environ.get("PYTHONPATH", "")]))
+    env.pop("ROBODESIGN_ADMIN_TOKEN", None)
     p = subprocess.Popen([sys.executable, "-m", "robodesign.cli", "serve", "--data", str(tmp_path / "d"),
                           "--seed", str(seed_dir), "--port", str(port), "--host", "127.0.0.1"],
                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env)
     try:
-        deadline = time.time() + 30
+        deadline = time.time() + 90  # the checker processes start first
         while True:
             try:
                 status, tasks = http("GET", f"http://127.0.0.1:{port}/api/tasks", timeout=2)
@@ -642,10 +643,17 @@ def test_cli_serve(tmp_path, seed_dir):
                 time.sleep(0.1)
         assert status == 200 and "toy/all" in [t["id"] for t in tasks]
         assert (tmp_path / "d" / "bench.db").is_file()
+        # checked in a checker process (serve's default)
+        status, body = http("POST", f"http://127.0.0.1:{port}/api/solutions", {"solution": sol_json(1.2),
+                                                                               "author": "CLI"})
+        assert status == 201 and body["cost"] == pytest.approx(4.2), body
+        # registration is an admin action and no token was configured
+        status, body = http("POST", f"http://127.0.0.1:{port}/api/tasks", task_json())
+        assert status == 403 and "disabled on this server" in body["detail"]
     finally:
         p.terminate()
-        out = p.communicate(timeout=20)[0].decode()
-    assert "seeded task toy/all" in out
+        out = p.communicate(timeout=60)[0].decode()
+    assert "seeded task toy/all" in out and "registering tasks and module sets is disabled" in out
 
 
 @pytest.mark.skipif(not (Path(__file__).parents[2] / "shared" / "cobra" / "tasks").is_dir(),
