@@ -487,9 +487,11 @@ class Bench:
         check_solution_size(data, sol, self.settings.limits, fname)
         if not sol.module_set:
             raise InputError("the solution names no moduleSet", file=fname, path=["moduleSet"])
-        for key, value, n in (("taskID", sol.task_id, 200), ("moduleSet", sol.module_set, 100),
-                              ("costFunction", sol.cost_function, 300)):
-            if len(value) > n:  # the database columns; checked before the cost is even parsed
+        S = db.SolutionRow
+        for key, value, col in (("taskID", sol.task_id, S.task_id), ("moduleSet", sol.module_set, S.module_set),
+                                ("costFunction", sol.cost_function, S.cost_function)):
+            n = col.type.length  # the database column's; checked before the cost is even parsed
+            if len(value) > n:
                 raise InputError(f"at most {n} characters are allowed (got {len(value)})", file=fname, path=[key])
         try:
             display, key = canonical_benchmark(sol.module_set, sol.cost_function, sol.task_id)
