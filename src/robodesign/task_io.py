@@ -1,9 +1,12 @@
 """Read and write CoBRA task files (``<package>/<task ID>.json``) into :mod:`robodesign.task_spec`.
 
-Errors name the file and the JSON path. A missing *collision* mesh is an error; a missing
-*visual* mesh is a warning (kept in ``Task.warnings`` and printed by the CLI). Asset paths are
-resolved relative to the task *package* folder (the folder the task ID's namespace starts in:
-``simple/PTP_2`` at ``tasks/simple/PTP_2.json`` → package ``tasks/``) and may not escape it.
+Reading is two steps: every variant of the format that the reference implementation reads is first
+brought into canonical form (``_canonical_task``; the list is in docs/formats.md), then schema-validated
+and parsed. Errors name the file and the JSON path. Unknown keys the reference ignores, and a missing or
+empty *visual* mesh, are warnings (``Task.warnings``, each once; printed by the CLI); a missing or broken
+*collision* mesh is an error. Asset paths are resolved relative to the task *package* folder (the folder
+the task ID's namespace starts in: ``simple/PTP_2`` at ``tasks/simple/PTP_2.json`` → package ``tasks/``)
+and may not escape it.
 """
 from __future__ import annotations
 
