@@ -71,7 +71,7 @@ def canonical_geometry_json(value, file: str, path: Sequence[PathPart], warnings
     if isinstance(kind, str) and kind.lower() in GEOMETRY_TYPES:
         kind = out["type"] = kind.lower()
     params = out.get("parameters")
-    if kind in _PARAMETERS and isinstance(params, dict):
+    if isinstance(kind, str) and kind in _PARAMETERS and isinstance(params, dict):
         known = _PARAMETERS[kind]
         for k in params:
             if k not in known:
