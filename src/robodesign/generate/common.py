@@ -92,6 +92,10 @@ class AABB:
         d = np.maximum(np.maximum(np.asarray(self.lo) - p, p - np.asarray(self.hi)), 0.0)
         return float(np.linalg.norm(d))
 
+    @property
+    def centre(self) -> np.ndarray:
+        return (np.asarray(self.lo) + np.asarray(self.hi)) / 2
+
     def overlaps(self, other: "AABB", gap: float = 0.0) -> bool:
         return all(self.lo[k] < other.hi[k] + gap and other.lo[k] < self.hi[k] + gap for k in range(3))
 
@@ -221,11 +225,16 @@ class ReferenceArm:
     def clearance(self, p) -> float:
         """Distance (coal) of point ``p`` from the cell's obstacles."""
         import coal
+        return self.distance(coal.Sphere(1e-6), transform(p))
+
+    def distance(self, shape, pose: np.ndarray) -> float:
+        """Distance (coal) of a coal shape at ``pose`` from the cell's obstacles (≤ 0 when they touch)."""
+        import coal
         from ..geometry import coal_shapes
         if not hasattr(self, "_obstacles"):
             self._obstacles = [coal.CollisionObject(s, coal.Transform3s(g.pose[:3, :3], g.pose[:3, 3]))
                                for o in self.task.obstacles for g in o.collision for s in coal_shapes(g)]
-        probe = coal.CollisionObject(coal.Sphere(1e-6), coal.Transform3s(np.eye(3), np.asarray(p, float)))
+        probe = coal.CollisionObject(shape, coal.Transform3s(pose[:3, :3], pose[:3, 3]))
         best = math.inf
         for obj in self._obstacles:
             res = coal.DistanceResult()

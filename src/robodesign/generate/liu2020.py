@@ -2,19 +2,16 @@
 modular robots", case 2b: load a part into a CNC machine's work area and unload it.
 
 The cell: a machine mesh (``--machine FILE``, copied into ``<out>/assets/``; default a box-built CNC
-housing the generator writes itself) turned so that its open side faces the robot (machine.analyse), its
-front face ``MACHINE_GAP`` m in front of the nominal base, shifted sideways so a randomly chosen part of the
-opening is in front of the robot; an input and an output tray left and right of the robot.
+housing the generator writes itself) turned so that its work area faces the robot (machine.analyse), placed
+so that the work area starts ``MACHINE_GAP`` m in front of the nominal base along a randomly drawn probe ray;
+an input and an output tray left and right of the robot.
 
 Goals, in order: ``pick`` above the input tray (tool down) → ``load`` inside the machine (tool pointing
 into it) → ``unload`` at another point inside the machine → ``place`` above the output tray. Positions
 ±5 mm; the tool axis within ±0.1 (N_x, N_y) of the nominal, the rotation about it free.
 The base is free in a region in front of the machine: x, y ± ``BASE_XY``, height 0–0.6 m above the floor
-(the stand is not modelled), any yaw.
-
-Machine goals lie on probe rays into the opening (free line of sight from the front), at least
-``GOAL_DEPTH[0]`` behind the machine's front face, ``GOAL_CLEARANCE`` from the mesh, and are reachable
-by the reference arm (common.ReferenceArm) from the nominal base; tray goals likewise.
+(the stand is not modelled), any yaw. Every goal is reachable by the reference arm (common.ReferenceArm)
+from the nominal base; with ``--verify solve`` the reference design solves the whole task.
 """
 from __future__ import annotations
 
@@ -26,15 +23,16 @@ import numpy as np
 
 from ..errors import InputError, RobodesignError
 from .common import PI, AABB, Provenance, ReferenceArm, header, rot_y, solved_by_reference, tolerated, transform
-from .machine import DEFAULT_NAME, MachineFrame, analyse, default_machine_stl
+from .machine import COVER_DOWN, COVER_UP, DEFAULT_NAME, STEP, MachineFrame, analyse, default_machine_stl
 from .registry import VERIFY, Family, GeneratedTask, Option, copy_file
 
-VERSION = 2
+VERSION = 3
 BASE_Z = 0.30  # m, nominal base height (the robot on a stand)
 BASE_XY = 0.30  # m, base tolerance in x and y
 BASE_Z_RANGE = (-0.30, 0.30)  # about BASE_Z: 0 … 0.6 m above the floor
-MACHINE_GAP = (0.40, 0.60)  # m, nominal base axis to the machine's front face
-GOAL_DEPTH = (0.15, 0.60)  # m behind the front face
+MACHINE_GAP = (0.40, 0.60)  # m, nominal base axis to the start of the work area
+GOAL_DEPTH = (0.10, 0.60)  # m behind the start of the work area
+BASE_COLUMN = 0.20  # m, radius of the space the robot and its stand need around the base axis
 GOAL_Z = (0.60, 1.30)  # m above the floor
 GOAL_CLEARANCE = 0.05  # m, goal point to the machine mesh
 OPENING_SHIFT = 0.20  # m, sideways offset of the chosen opening ray from the robot
@@ -48,7 +46,7 @@ POS_TOL = 0.005
 TOOL_DOWN = rot_y(PI)  # tool z axis to -z
 TOOL_INTO = rot_y(PI / 2)  # tool z axis to +x (into the machine)
 GOAL_TRIES = 120
-CELL_TRIES = 40
+CELL_TRIES = 300  # most draws end at the cheap room checks
 
 
 def _pose(p, R) -> dict:
@@ -89,9 +87,8 @@ def _cell(tid: str, prov: Provenance, mesh_ref: str, scale: float, machine_pose:
         "obstacles": [
             {"ID": "machine", "name": f"machine ({mesh_ref.split('/')[-1]})",
              "collision": [{"type": "mesh", "parameters": {"file": mesh_ref, "scale": scale}, "pose": machine_pose}]},
-            {"ID": "tray_in", "name": "input tray", "collision": [trays[0].geometry()]},
-            {"ID": "tray_out", "name": "output tray", "collision": [trays[1].geometry()]},
-        ],
+        ] + [{"ID": oid, "name": name, "collision": [t.geometry()]}
+             for (oid, name), t in zip((("tray_in", "input tray"), ("tray_out", "output tray")), trays)],
         "constraints": [
             {"type": "basePlacement", "pose": tolerated(transform((0, 0, BASE_Z)), x=rb, y=rb, z=BASE_Z_RANGE,
                                                         N_x=(-0.001, 0.001), N_y=(-0.001, 0.001), N_z=(-PI, PI))},
@@ -131,35 +128,52 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
     if scale is None:
         scale = _auto_scale(target)
     frame = analyse(str(target.resolve()), scale)
-    rays = np.array(frame.rays)
-    usable = rays[(rays[:, 2] >= GOAL_DEPTH[0] + 0.10) & (rays[:, 1] >= GOAL_Z[0]) & (rays[:, 1] <= GOAL_Z[1])]
-    if len(usable) == 0:
-        raise InputError(f"machine {name}: no opening found at working height (0.6–1.3 m) that is at least "
-                         f"{GOAL_DEPTH[0] + 0.1:.2f} m deep from any side")
+    pts = np.array(frame.points).reshape(-1, 3)
+    pts = pts[(pts[:, 2] >= GOAL_Z[0]) & (pts[:, 2] <= GOAL_Z[1])]
+    if len(pts) == 0:
+        raise InputError(f"machine {name}: no work area found at 0.6–1.3 m height (free space with the machine "
+                         f"above and below it, in line of sight from one side of its bounding box)")
+    # each probe ray (y, z) of the work area: where it enters the work area; anchors are entries with room behind
+    rows: Dict[tuple, List[float]] = {}
+    for x, y, z in pts:
+        rows.setdefault((y, z), []).append(x)
+    anchors = np.array([(min(xs), y, z) for (y, z), xs in sorted(rows.items())
+                        if max(xs) - min(xs) >= GOAL_DEPTH[0]]).reshape(-1, 3)
+    if len(anchors) == 0:
+        raise InputError(f"machine {name}: its work area is nowhere {GOAL_DEPTH[0]:.2f} m deep")
     rng = prov.rng()
     tid = task_id(prov, name)
+    # the machine alone in its analysed frame: the room for the robot and the trays is checked against it
+    placed = ReferenceArm(_cell(tid, prov, asset, scale, frame.matrix(), [], {}), folder)
+    column = coal_cylinder(BASE_COLUMN, BASE_Z + 0.4)
     for _ in range(CELL_TRIES):
+        anchor = anchors[rng.integers(len(anchors))]
+        entry = float(anchor[0])  # where the work area starts along the anchor's probe ray
         gap = rng.uniform(*MACHINE_GAP)
-        ray = usable[rng.integers(len(usable))]
-        dy = -ray[0] + rng.uniform(-OPENING_SHIFT, OPENING_SHIFT)  # world y = frame y + dy
-        pose = transform((gap, dy, 0.0)) @ frame.matrix()
+        shift = np.array([gap - entry, -anchor[1] + rng.uniform(-OPENING_SHIFT, OPENING_SHIFT), 0.0])
+        pose = transform(shift) @ frame.matrix()
+        if placed.distance(column, transform(np.array([0.0, 0.0, (BASE_Z + 0.4) / 2]) - shift)) <= 0.0:
+            continue  # the robot (and its stand) would stand inside the machine
         trays = _draw_trays(rng)
+        if any(placed.distance(coal_box(t), transform(t.centre - shift)) <= 0.02 for t in trays):
+            continue
         arm = ReferenceArm(_cell(tid, prov, asset, scale, pose, trays, {}), folder,
                            base_pose=transform((0, 0, BASE_Z)), seed=int(rng.integers(2 ** 31)))
         goals: Dict[str, dict] = {}
-        tray_in, tray_out = trays
-        pick = _tray_goal(rng, arm, tray_in)
+        pick = _tray_goal(rng, arm, trays[0])
         if pick is None:
             continue
         goals["pick"] = pick
+        near = pts[(np.abs(pts[:, 1] - anchor[1]) <= UNLOAD_WINDOW) & (pts[:, 0] >= entry + GOAL_DEPTH[0])
+                   & (pts[:, 0] <= entry + GOAL_DEPTH[1])]
         for gid in ("load", "unload"):
-            g = _machine_goal(rng, arm, usable, gap, dy, ray[0])
+            g = _machine_goal(rng, arm, near, shift, frame) if len(near) else None
             if g is None:
                 break
             goals[gid] = g
         if len(goals) < 3:
             continue
-        place = _tray_goal(rng, arm, tray_out)
+        place = _tray_goal(rng, arm, trays[1])
         if place is None:
             continue
         goals["place"] = place
@@ -168,6 +182,20 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
             return GeneratedTask(tid, task)
     raise RobodesignError(f"liu2020: no reachable cell in {CELL_TRIES} draws for machine {name} "
                           f"(seed {prov.seed}, index {prov.index})")
+
+
+def coal_cylinder(r: float, h: float):
+    import coal
+    return coal.Cylinder(r, h)
+
+
+def coal_box(b: AABB):
+    return coal_box_size(*(np.asarray(b.hi) - np.asarray(b.lo)))
+
+
+def coal_box_size(x: float, y: float, z: float):
+    import coal
+    return coal.Box(float(x), float(y), float(z))
 
 
 def _tray_goal(rng, arm: ReferenceArm, tray: AABB):
@@ -180,13 +208,15 @@ def _tray_goal(rng, arm: ReferenceArm, tray: AABB):
     return None
 
 
-def _machine_goal(rng, arm: ReferenceArm, usable: np.ndarray, gap: float, dy: float, y_ray: float):
-    near = usable[np.abs(usable[:, 0] - y_ray) <= UNLOAD_WINDOW]
+def _machine_goal(rng, arm: ReferenceArm, near: np.ndarray, shift: np.ndarray, frame: MachineFrame):
+    """A work-area grid point near the anchor, jittered within its grid cell, in world coordinates."""
     for _ in range(GOAL_TRIES):
-        y, z, depth = near[rng.integers(len(near))]
-        u = rng.uniform(GOAL_DEPTH[0], min(GOAL_DEPTH[1], depth - 0.10))
-        p = np.array([gap + u, y + dy, z])
+        p = near[rng.integers(len(near))] + shift + rng.uniform(-STEP / 2, STEP / 2, 3)
         if arm.clearance(p) < GOAL_CLEARANCE:
+            continue
+        # still inside after the jitter: machine above and below (thin vertical prisms, as in machine.analyse)
+        if arm.distance(coal_box_size(0.002, 0.002, COVER_UP), transform(p + [0, 0, COVER_UP / 2])) > 0 or \
+                arm.distance(coal_box_size(0.002, 0.002, COVER_DOWN), transform(p - [0, 0, COVER_DOWN / 2])) > 0:
             continue
         pose = _pose(p, TOOL_INTO)
         if arm.reaches(pose):

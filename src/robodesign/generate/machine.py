@@ -1,10 +1,18 @@
-"""Machine meshes for the machine-tending family: where a mesh's door opening is, and the default
-machine (a box-built CNC housing written as a binary STL by the generator itself).
+"""Machine meshes for the machine-tending family: where a mesh's work area is, and the default machine (a
+box-built CNC housing written as a binary STL by the generator itself).
 
-The opening is found by casting horizontal rays at working height (0.6–1.6 m above the machine's
-lowest point) into each of the four sides of the machine's bounding box: the side whose rays go deepest
-before they hit a triangle faces the robot. Rays that leave the box without a hit (a hole in an open
-mesh) are ignored. Everything is a pure function of the mesh's vertices, so it is deterministic.
+The work area is the free space inside the machine that a robot standing in front can reach straight in:
+on a grid (``STEP``) of the mesh's bounding box at working height (``WORK_Z`` above its lowest point), a point
+belongs to it when
+
+* a horizontal probe ray from the front face of the box (the side towards the robot) reaches it without
+  crossing a triangle (line of sight from the front), and
+* the mesh is both above it (within ``COVER_UP``: roof, spindle, housing) and below it (within
+  ``COVER_DOWN``: table, bed) — this is what tells the inside of a machine from the open air in front of it.
+
+The side of the box with the most work-area points faces the robot (the mesh is turned by a multiple of
+90°). The test is a pure function of the mesh's vertices (own vectorised ray-triangle tests), so it is
+deterministic.
 """
 from __future__ import annotations
 
@@ -16,20 +24,22 @@ from typing import List, Tuple
 
 import numpy as np
 
-RAY_STEP = 0.05  # m, grid of the ray probes
-RAY_Z = (0.6, 1.6)  # m above the machine's floor
-DEEP = 0.35  # m: a ray that goes this far inside counts for the opening
+STEP = 0.1  # m, grid of the probes
+WORK_Z = (0.6, 1.6)  # m above the machine's floor
+COVER_UP = 1.5  # m: mesh above a work-area point within this height
+COVER_DOWN = 1.0  # m: mesh below it within this depth
+MARGIN = 0.05  # m: a work-area point stays this far in front of the first triangle along its probe ray
 
 
 @dataclass(frozen=True)
 class MachineFrame:
-    """How the mesh is placed: yaw (multiple of π/2) turning its open side to -x, then a shift putting its
-    lowest point on the floor and its front face at x = 0; ``rays`` are the probes into the opening in
-    that frame: (y, z, depth) with depth the free distance behind the front face."""
+    """How the mesh is placed: turned by ``yaw`` (a multiple of π/2) so that its work area faces -x, then
+    shifted so that its lowest point is on the floor and its bounding box's front face at x = 0. ``points``
+    are the work-area points in that frame (x behind the front face, y, z above the floor)."""
     yaw: float
     shift: Tuple[float, float, float]
     size: Tuple[float, float, float]  # bounding-box extents after the yaw
-    rays: Tuple[Tuple[float, float, float], ...]
+    points: Tuple[Tuple[float, float, float], ...]
 
     def matrix(self) -> np.ndarray:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
@@ -63,6 +73,30 @@ def _ray_depths(V: np.ndarray, F: np.ndarray, origins: np.ndarray) -> np.ndarray
     return out
 
 
+def _covered(V: np.ndarray, F: np.ndarray, xy: np.ndarray, zs: np.ndarray) -> np.ndarray:
+    """(len(xy), len(zs)) booleans: the vertical line through xy[i] meets the mesh within COVER_UP above zs[j]
+    and within COVER_DOWN below it (2-D barycentric test of the triangles' footprints)."""
+    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    e1, e2 = (B - A)[:, :2], (C - A)[:, :2]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    ok = np.abs(det) > 1e-12
+    A, B, C, e1, e2, det = A[ok], B[ok], C[ok], e1[ok], e2[ok], det[ok]
+    out = np.zeros((len(xy), len(zs)), dtype=bool)
+    for k0 in range(0, len(xy), 256):
+        P = xy[k0:k0 + 256, None, :] - A[None, :, :2]
+        u = (P[..., 0] * e2[:, 1] - P[..., 1] * e2[:, 0]) / det
+        v = (e1[:, 0] * P[..., 1] - e1[:, 1] * P[..., 0]) / det
+        inside = (u >= 0) & (v >= 0) & (u + v <= 1)
+        z = A[:, 2] + u * (B[:, 2] - A[:, 2]) + v * (C[:, 2] - A[:, 2])
+        z = np.where(inside, z, np.nan)[:, :, None]  # (c, m, 1)
+        dz = z - zs[None, None, :]
+        with np.errstate(invalid="ignore"):
+            up = np.any((dz > 0) & (dz <= COVER_UP), axis=1)
+            down = np.any((dz < 0) & (dz >= -COVER_DOWN), axis=1)
+        out[k0:k0 + 256] = up & down
+    return out
+
+
 def _rotz(V: np.ndarray, yaw: float) -> np.ndarray:
     c, s = math.cos(yaw), math.sin(yaw)
     return V @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T
@@ -70,7 +104,7 @@ def _rotz(V: np.ndarray, yaw: float) -> np.ndarray:
 
 @lru_cache(maxsize=16)
 def analyse(file: str, scale: float) -> MachineFrame:
-    """Place the machine mesh (file, uniform scale) with its deepest opening towards the robot (-x side)."""
+    """Place the machine mesh (file, uniform scale) with its work area towards the robot (-x side)."""
     from ..geometry import load_mesh_arrays
     parts = load_mesh_arrays(file, (scale, scale, scale))
     V0 = np.concatenate([v for v, _ in parts])
@@ -81,18 +115,20 @@ def analyse(file: str, scale: float) -> MachineFrame:
         yaw = quarter * math.pi / 2
         V = _rotz(V0, yaw)
         lo, hi = V.min(axis=0), V.max(axis=0)
-        ys = np.arange(lo[1] + RAY_STEP, hi[1] - RAY_STEP / 2, RAY_STEP)
-        zs = lo[2] + np.arange(RAY_Z[0], min(RAY_Z[1], hi[2] - lo[2]) + 1e-9, RAY_STEP)
+        ys = np.arange(lo[1] + STEP / 2, hi[1], STEP)
+        zs = lo[2] + np.arange(WORK_Z[0], min(WORK_Z[1], hi[2] - lo[2]) + 1e-9, STEP)
+        xs = lo[0] + np.arange(STEP / 2, hi[0] - lo[0], STEP)
         Y, Z = np.meshgrid(ys, zs, indexing="ij")
         O = np.stack([np.full(Y.size, lo[0] - 0.01), Y.ravel(), Z.ravel()], axis=1)
-        depth = _ray_depths(V, F, O) - 0.01
-        keep = np.isfinite(depth)
-        score = int(np.sum(depth[keep] >= DEEP))
-        if best is None or score > best[0]:
-            shift = (-lo[0], 0.0, -lo[2])
-            rays = tuple((float(y), float(z - lo[2]), float(d)) for y, z, d in zip(O[keep, 1], O[keep, 2], depth[keep]))
-            best = (score, MachineFrame(yaw, shift, tuple(float(x) for x in hi - lo), rays))
-    return best[1]
+        depth = (_ray_depths(V, F, O) - 0.01).reshape(Y.shape)  # (ny, nz), from the front face
+        X2, Y2 = np.meshgrid(xs, ys, indexing="ij")
+        cov = _covered(V, F, np.stack([X2.ravel(), Y2.ravel()], axis=1), zs).reshape(len(xs), len(ys), len(zs))
+        sight = (xs - lo[0])[:, None, None] <= depth[None, :, :] - MARGIN
+        ix, iy, iz = np.nonzero(cov & sight)
+        pts = tuple((float(xs[a] - lo[0]), float(ys[b]), float(zs[c] - lo[2])) for a, b, c in zip(ix, iy, iz))
+        if best is None or len(pts) > len(best.points):
+            best = MachineFrame(yaw, (float(-lo[0]), 0.0, float(-lo[2])), tuple(float(x) for x in hi - lo), pts)
+    return best
 
 
 # ---------------------------------------------------------------------------------------------------------
