@@ -279,8 +279,8 @@ def test_obstacle_collision_at_samples_and_between_samples(setup, tmp_path):
     task = load_task(f)
     T2 = np.array([0.0, 0.01])
     Q2 = np.vstack([qa, qb])
-    sol = solution(T2, Q2, np.zeros((2, 2)), np.zeros((2, 2)), {})
-    from robodesign.robot import Robot
+    DQ2 = np.tile((qb - qa) / 0.01, (2, 1))  # one motion: constant velocity from qa to qb
+    sol = solution(T2, Q2, DQ2, np.zeros((2, 2)), {})
     from robodesign.cell import build_robot
     r = build_robot(task, ms, sol.assembly(ms), np.eye(4))
     assert not r.in_collision(qa) and not r.in_collision(qb)  # both samples are free ...

@@ -4,8 +4,11 @@
 constraint or goal, at which time/sample, the value and the bound) and every cost. The same code
 judges uploads, solver output and optimizer candidates. Semantics (docs/checker.md):
 
-* Per-sample constraints are checked at every sample. Collisions are checked *between* samples too:
-  the motion between samples is the linear interpolation of q, certified by :mod:`robodesign.sweep`.
+* The samples must describe one motion: q the integral of dq and dq of ddq over every step, within the
+  tolerances of :func:`robodesign.quantities.step_residuals` (the reference does not check this).
+* Per-sample constraints are checked at every sample. Collisions and joint limits are checked *between*
+  samples too: the motion between samples is the linear interpolation of q (and of dq), collisions are
+  certified by :mod:`robodesign.sweep`, velocity and acceleration are the step's Δq/h and Δdq/h.
 * ``ddq`` limits are enforced (the reference never checks them).
 * Torques are drivetrain torques τ = RNEA + k²I_m q̈ + f_v q̇ + f_c σ(q̇) under the task's gravity,
   with the wrench of a follow goal applied at the TCP during that goal.
@@ -98,7 +101,8 @@ def _num(v):
 @dataclass
 class CheckSettings:
     max_violations_per_constraint: int = 20
-    between_samples: bool = True  # certify collision freedom between samples
+    between_samples: bool = True  # certify collision freedom and joint limits between samples
+    one_motion: bool = True  # q must be the integral of dq, dq of ddq (off: accept files as the reference does)
     all_costs: bool = True  # compute every built-in cost, not only the solution's
 
 
@@ -135,6 +139,8 @@ def check(task: Task, solution: Solution, module_set=None, settings: Optional[Ch
     limit = settings.max_violations_per_constraint
     for c in task.constraints:
         violations += _check_constraint(c, tq, None, settings)[: limit]
+    if settings.one_motion:
+        violations += _one_motion_violations(tq, limit)
     # goal-level constraints (over each goal's window)
     for g in task.goals:
         if not g.constraints or g.id not in tq.goal_windows:
@@ -204,6 +210,41 @@ def _limit_violations(name, values, bound, tq: TrajectoryQuantities, k0: int, k1
     return out
 
 
+def _one_motion_violations(tq: TrajectoryQuantities, limit: int) -> List[Violation]:
+    """Steps over which q is not the integral of dq or dq not the integral of ddq (quantities.step_residuals)."""
+    st = tq.steps
+    out = []
+    for name, res, tol, what, of in (("trajectory.q", st.q, st.q_tol, "q", "dq"),
+                                     ("trajectory.dq", st.dq, st.dq_tol, "dq", "ddq")):
+        ks, js = np.nonzero(np.abs(res) > tol)
+        for k, j in list(zip(ks, js))[:limit]:
+            k, j = int(k), int(j)
+            out.append(Violation(name, f"{what} is not the integral of {of} between samples {k} and {k + 1}: "
+                                       f"they differ by {res[k, j]:.6g} (allowed {tol[k, j]:.3g})",
+                                 sample=k, time=float(tq.t[k]), value=float(res[k, j]), bound=float(tol[k, j]),
+                                 joint=j))
+        if len(ks) > limit:
+            out.append(Violation(name, f"... and {len(ks) - limit} more steps"))
+    return out
+
+
+def _between_sample_violations(name, means, bound, tq: TrajectoryQuantities, k0: int, k1: int,
+                               limit: int) -> List[Violation]:
+    """Steps k0 → k0+1 … k1−1 → k1 whose mean velocity/acceleration (linear interpolation) exceeds ``bound``."""
+    vals = means[k0:k1]
+    ks, js = np.nonzero(np.abs(vals) > bound * (1 + LIMIT_RTOL))
+    out = []
+    for k, j in list(zip(ks, js))[:limit]:
+        kk, j = int(k + k0), int(j)
+        v = float(means[kk, j])
+        out.append(Violation(name, f"|{name.split('.')[-1]}| = {abs(v):.6g} between samples {kk} and {kk + 1} "
+                                   f"exceeds the limit {bound[j]:.6g}", sample=kk, time=float(tq.t[kk]), value=v,
+                             bound=float(bound[j]), joint=j))
+    if len(ks) > limit:
+        out.append(Violation(name, f"... and {len(ks) - limit} more steps over the limit"))
+    return out
+
+
 def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, settings: CheckSettings) -> List[Violation]:
     """Violations of ``c`` over the samples of ``window`` ((k0, k1) inclusive; None: the whole trajectory)."""
     r = tq.robot
@@ -216,8 +257,13 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
             out += _limit_violations("joint.q", tq.q, r.q_upper, tq, k0, k1, limit, lower=r.q_lower, abs_tol=Q_ATOL)
         if "dq" in c.parts:
             out += _limit_violations("joint.dq", tq.dq, r.dq_max, tq, k0, k1, limit)
+            if settings.between_samples:
+                out += _between_sample_violations("joint.dq", tq.steps.mean_velocity, r.dq_max, tq, k0, k1, limit)
         if "ddq" in c.parts:
             out += _limit_violations("joint.ddq", tq.ddq, r.ddq_max, tq, k0, k1, limit)
+            if settings.between_samples:
+                out += _between_sample_violations("joint.ddq", tq.steps.mean_acceleration, r.ddq_max, tq, k0, k1,
+                                                  limit)
         if "tau" in c.parts:
             out += _limit_violations("joint.tau", tq.torques, r.tau_max, tq, k0, k1, limit)
         return out

@@ -17,11 +17,15 @@ inverse dynamics:
   and link-side torques (:meth:`Robot.drivetrain_torques <robodesign.robot.Robot.drivetrain_torques>`)
   under those wrenches.
 
+* :attr:`~TrajectoryQuantities.steps`: per step, whether q is the integral of dq and dq of ddq
+  (:class:`StepResiduals`), and the mean velocity and acceleration between the samples.
+
 Between samples q is interpolated linearly (:meth:`~TrajectoryQuantities.q_at`), the rule the checker uses
-for collisions and for timed follow poses.
+for collisions, timed follow poses and the limits between samples.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cached_property
 from typing import Dict, Optional, Tuple
 
@@ -35,6 +39,60 @@ from .task_spec import At, Follow, Goal, Leave, Pause, Reach, ReturnTo, Task
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
 TIME_RTOL = 1e-5
 WINDOW_TIME_TOL = 1e-9  # slack when a window's start or end time is compared with the samples [s]
+
+
+# q must be the integral of dq, and dq of ddq, over every step (docs/checker.md, "One motion"). With h the
+# step and A a joint's largest acceleration in the file (max |ddq| and max |Δdq|/h over the trajectory):
+#   |Δq − h·(dq_k + dq_k+1)/2| ≤ Q_RULE_FACTOR·A·h²             (trapezoid rule for q)
+#   |Δdq − h·(ddq_k + ddq_k+1)/2| ≤ h·|ddq_k+1 − ddq_k|/2 + DQ_RULE_FACTOR·A·h
+# The exact motion of samples with |q̈| ≤ A is within A·h²/4 of the first rule; robodesign's solvers write
+# samples that meet both rules to rounding (ddq_k is the acceleration over [t_k, t_k+1]); the reference's
+# numpy.gradient-filled trapezoids (Trajectory.from_mstraj) reach 0.50·A·h² and 0.25·A·h (worst over random
+# via points, step sizes and blend times, experiments/consistency_tolerances.py). The factors keep 20 % over.
+Q_RULE_FACTOR = 0.6
+DQ_RULE_FACTOR = 0.3
+RULE_ATOL = 1e-9  # absolute slack of both rules (rounding) [rad, m, rad/s, m/s]
+RULE_RTOL = 1e-9  # relative slack (of |Δq| resp. |Δdq|)
+
+
+@dataclass(frozen=True)
+class StepResiduals:
+    """Per step k (samples k → k+1) and joint: how far the samples are from describing one motion.
+
+    ``q``/``dq``: residual of the q rule and of the dq rule (module constants), ``q_tol``/``dq_tol``: what
+    each may be, of which ``dq_hull`` = h·|ddq_k+1 − ddq_k|/2 is exact (ddq_k may be the acceleration before,
+    after or around sample k); arrays (N−1, dof). ``mean_velocity`` = Δq/h and ``mean_acceleration`` = Δdq/h: the
+    velocity and acceleration of the motion between the samples under the linear interpolation of q and dq.
+    """
+    q: np.ndarray
+    q_tol: np.ndarray
+    dq: np.ndarray
+    dq_tol: np.ndarray
+    dq_hull: np.ndarray
+    mean_velocity: np.ndarray
+    mean_acceleration: np.ndarray
+
+    @property
+    def worst_ratio(self) -> Tuple[float, float]:
+        """The largest share of the slack a step uses, q rule and dq rule: |r_q| / q_tol and
+        (|r_dq| − dq_hull) / (dq_tol − dq_hull) (≤ 1: the samples are one motion; ~0: the rules hold exactly)."""
+        return (float(np.max(np.abs(self.q) / self.q_tol, initial=0.0)),
+                float(np.max((np.abs(self.dq) - self.dq_hull) / (self.dq_tol - self.dq_hull), initial=0.0)))
+
+
+def step_residuals(t, q, dq, ddq) -> StepResiduals:
+    """The :class:`StepResiduals` of samples ``t`` (N,), ``q``, ``dq``, ``ddq`` (N, dof)."""
+    t, q, dq, ddq = (np.asarray(x, dtype=float) for x in (t, q, dq, ddq))
+    h = np.diff(t)[:, None]
+    d_q, d_dq = np.diff(q, axis=0), np.diff(dq, axis=0)
+    mean_v, mean_a = d_q / h, d_dq / h
+    A = np.max(np.abs(np.concatenate([ddq, mean_a])), axis=0, initial=0.0)  # per joint
+    r_q = d_q - h * (dq[1:] + dq[:-1]) / 2
+    r_dq = d_dq - h * (ddq[1:] + ddq[:-1]) / 2
+    q_tol = Q_RULE_FACTOR * A * h ** 2 + RULE_ATOL + RULE_RTOL * np.abs(d_q)
+    hull = h * np.abs(np.diff(ddq, axis=0)) / 2
+    dq_tol = hull + DQ_RULE_FACTOR * A * h + RULE_ATOL + RULE_RTOL * np.abs(d_dq)
+    return StepResiduals(r_q, q_tol, r_dq, dq_tol, hull, mean_v, mean_a)
 
 
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
@@ -65,6 +123,11 @@ class TrajectoryQuantities:
     @property
     def n(self) -> int:
         return len(self.t)
+
+    @cached_property
+    def steps(self) -> StepResiduals:
+        """Consistency of q, dq, ddq over every step (:func:`step_residuals`)."""
+        return step_residuals(self.t, self.q, self.dq, self.ddq)
 
     # -- kinematics ---------------------------------------------------------------------------------
     @cached_property
