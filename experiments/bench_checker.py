@@ -17,6 +17,7 @@ import numpy as np
 from robodesign import load_module_set
 from robodesign.checker import CheckSettings, check
 from robodesign.solution import SolutionTrajectory
+from robodesign.solvers.timing import JointTrajectory
 from robodesign.solve import SolveSettings, solve
 from robodesign.task_io import load_task
 
@@ -24,20 +25,16 @@ SHARED = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 
 
 def stretched(sol, n_target: int, dt: float):
+    """The same motion slowed down by an integer factor m, sampled every dt (about n_target samples): the
+    samples are exact samples of the solver's piecewise-quadratic motion (JointTrajectory.interpolate), so
+    the stretched solution is one motion (docs/checker.md) and its goal times stay on samples."""
     tr = sol.trajectory
-    k = (n_target - 1) * dt / tr.t[-1]
-    t_new = np.arange(n_target) * dt
-    q = np.stack([np.interp(t_new / k, tr.t, tr.q[:, j]) for j in range(tr.q.shape[1])], axis=1)
-    # exact derivatives of the stretched motion: dq(t) = q'(t/k)/k, ddq = q''(t/k)/k²
-    dq = np.stack([np.interp(t_new / k, tr.t, tr.dq[:, j]) for j in range(tr.q.shape[1])], axis=1) / k
-    ddq = np.stack([np.interp(t_new / k, tr.t, tr.ddq[:, j]) for j in range(tr.q.shape[1])], axis=1) / k ** 2
-    g2t = {g: round(v * k / dt) * dt for g, v in tr.goal2time.items()}
-    # snap the goal samples exactly onto the original rest states
-    for g, v in tr.goal2time.items():
-        i = int(round(g2t[g] / dt))
-        j = int(np.argmin(np.abs(tr.t - v)))
-        q[i], dq[i], ddq[i] = tr.q[j], tr.dq[j] / k, tr.ddq[j] / k ** 2
-    return sol.with_(trajectory=SolutionTrajectory(t_new, q, dq, ddq, g2t))
+    m = max(1, int(round((n_target - 1) / (tr.n - 1))))
+    t_new = np.arange(m * (tr.n - 1) + 1) * dt
+    q, dq, ddq = JointTrajectory(tr.t, tr.q, tr.dq, tr.ddq).interpolate(t_new / m)
+    index = {g: int(np.argmin(np.abs(tr.t - v))) for g, v in tr.goal2time.items()}
+    g2t = {g: float(t_new[m * i]) for g, i in index.items()}
+    return sol.with_(trajectory=SolutionTrajectory(t_new, q, dq / m, ddq / m ** 2, g2t))
 
 
 def main():
