@@ -23,7 +23,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional
 
 import numpy as np
 
@@ -230,7 +230,8 @@ def _one_motion_violations(tq: TrajectoryQuantities, limit: int) -> List[Violati
 
 def _between_sample_violations(name, means, bound, tq: TrajectoryQuantities, k0: int, k1: int,
                                limit: int) -> List[Violation]:
-    """Steps k0 → k0+1 … k1−1 → k1 whose mean velocity/acceleration (linear interpolation) exceeds ``bound``."""
+    """Steps k0 → k0+1 … k1−1 → k1 whose mean velocity or acceleration (linear interpolation) exceeds
+    ``bound``."""
     vals = means[k0:k1]
     ks, js = np.nonzero(np.abs(vals) > bound * (1 + LIMIT_RTOL))
     out = []
@@ -272,7 +273,8 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
     if isinstance(c, BasePlacement):
         if c.pose is None or c.pose.valid(r.base_pose):
             return []
-        return [Violation("basePlacement", "base pose outside its tolerance: " + _describe(c.pose.violations(r.base_pose)))]
+        return [Violation("basePlacement",
+                          "base pose outside its tolerance: " + _describe(c.pose.violations(r.base_pose)))]
     if isinstance(c, EndEffectorConstraint):
         out = []
         if math.isfinite(c.v_max) or c.v_min > 0 or math.isfinite(c.o_max) or c.o_min > 0:
@@ -320,8 +322,9 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
         tt = float(tq.t[k] + e.s * (tq.t[min(k + 1, tq.n - 1)] - tq.t[k]))
         kind = "robot–obstacle" if e.environment else "self"
         between = f" between samples {k} and {k + 1}" if e.s > 0 else ""
+        margin = r.safety_margin if e.environment else 0.0
         out.append(Violation(c.type, f"{kind} collision {e.first} ↔ {e.second}{between} "
-                                     f"(distance {e.distance:.4g} m, margin {r.safety_margin if e.environment else 0:.3g})",
+                                     f"(distance {e.distance:.4g} m, margin {margin:.3g})",
                              sample=k, time=tt, value=e.distance))
     if len(events) > limit:
         out.append(Violation(c.type, f"... and {len(events) - limit} more collisions"))

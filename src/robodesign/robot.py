@@ -11,7 +11,8 @@ Conventions (docs/formats.md):
   module mounted "backwards" (entered through its child body) gets the same joint about −z so q
   keeps its meaning.
 * The TCP is the free ``eef`` connector (or the last free connector in breadth-first order).
-* Drivetrain torque (:meth:`Robot.drivetrain_torques`, the one formula) τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
+* Drivetrain torque (:meth:`Robot.drivetrain_torques`, the one formula)
+  τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
   (the smooth sign of the reference, so costs are comparable); k²·I_m is pinocchio's ``armature``.
 """
 from __future__ import annotations
@@ -72,6 +73,7 @@ class Robot:
         self._reach = None
         self.obstacles: List[Obstacle] = []
         self._obstacle_ids: List[int] = []
+        self.safety_margin = 0.0  # of robot–obstacle pairs (set_obstacles)
         if base_pose is not None:
             self.set_base_pose(base_pose)
 
@@ -458,7 +460,8 @@ class Robot:
     def forward_dynamics(self, q, dq, tau) -> np.ndarray:
         """q̈ from drivetrain torque (inverse of :meth:`drivetrain_torques`)."""
         dq = np.asarray(dq, float)
-        return pin.aba(self.model, self.data, self._q(q), dq, np.asarray(tau, float) - self.friction_torques(dq)).copy()
+        tau_link = np.asarray(tau, float) - self.friction_torques(dq)
+        return pin.aba(self.model, self.data, self._q(q), dq, tau_link).copy()
 
     # ------------------------------------------------------------------------------------------
     # collision

@@ -42,7 +42,8 @@ def check_name(name: str, what: str = "module set name") -> str:
     return name
 
 
-def _dangerous(name: str) -> Optional[str]:
+def dangerous_name(name: str) -> Optional[str]:
+    """Why a file name inside an upload is unsafe (NUL, absolute, escaping its folder, ...), None if it is not."""
     if "\x00" in name:
         return "contains a NUL character"
     n = name.replace("\\", "/")
@@ -55,7 +56,7 @@ def _dangerous(name: str) -> Optional[str]:
 
 def safe_relpath(name: str) -> Optional[str]:
     """``name`` normalized to ``a/b/c.stl`` if every segment is safe, else None (never raises)."""
-    if not isinstance(name, str) or _dangerous(name):
+    if not isinstance(name, str) or dangerous_name(name):
         return None
     segs = [s for s in name.replace("\\", "/").split("/") if s not in ("", ".")]
     if not segs or not all(SAFE_SEGMENT.match(s) for s in segs):
@@ -141,7 +142,7 @@ class ZipSource(FileSource):
         self.members: Dict[str, zipfile.ZipInfo] = {}
         declared = 0
         for info in infos:
-            bad = _dangerous(info.filename)
+            bad = dangerous_name(info.filename)
             if bad:
                 raise InputError(f"zip entry {info.filename!r} {bad}; the archive is rejected", file=display)
             mode = info.external_attr >> 16

@@ -38,7 +38,7 @@ from ..solution import Solution, parse_solution
 from ..task_io import parse_task, validate_task_json
 from ..task_spec import Task
 from . import db
-from .safefiles import (_dangerous, DictSource, FileSource, FolderSource, TooLarge, ZipSource, assert_no_symlinks,
+from .safefiles import (dangerous_name, DictSource, FileSource, FolderSource, TooLarge, ZipSource, assert_no_symlinks,
                         check_mesh_refs, check_name, safe_relpath, task_id_segments, write_new_file)
 
 log = logging.getLogger("robodesign.web")
@@ -804,7 +804,7 @@ def files_source(files: Dict[str, bytes]) -> DictSource:
     """Multipart asset files keyed by their (client-given) relative names; unsafe names are dropped."""
     out = {}
     for name, content in files.items():
-        bad = _dangerous(name)
+        bad = dangerous_name(name)
         if bad:
             raise InputError(f"uploaded file name {name!r} {bad}; the upload is rejected")
         rel = safe_relpath(name)
