@@ -405,3 +405,31 @@ def test_bpo_deterministic_regenerates_and_round_trip(bpo, tmp_path, ms):
         res = solve(task, ms, list(REFERENCE_ORDER), settings=SolveSettings(seed=0, plan_time=10.0))
         assert res.feasible, (f.name, res.stage, res.message)
         assert check(task, res.solution, ms).valid
+
+
+def test_regenerate_refuses_tampered_provenance(liu, tmp_path, capsys):
+    f = _files(liu["quaser"])[0]
+    raw = json.loads(f.read_text())
+    tags = raw["header"]["tags"]
+    secret = tmp_path / "secret.stl"  # a file outside the task's folder must never be read through the tags
+    secret.write_bytes(QUASER.read_bytes())
+    cases = {
+        "escape.json": [t.replace("machine=QUASER_MV205_v3_compressed.stl", f"machine=../../{secret.name}")
+                        for t in tags],
+        "negative.json": [t.replace("seed=5", "seed=-1") for t in tags],
+        "unknown.json": tags + ["robodesign-generate:goals=3"],  # an option liu2020 does not have
+        "noversion.json": [t for t in tags if "version=" not in t],
+    }
+    for name, new in cases.items():
+        bad = liu["quaser"] / name
+        bad.write_text(json.dumps({**raw, "header": {**raw["header"], "tags": new}}))
+        try:
+            assert main(["generate", "--from", str(bad), "--out", str(tmp_path / "o")]) == 2, name
+        finally:
+            bad.unlink()
+        err = capsys.readouterr().err
+        assert name in err and "header" in err, err
+    bad = tmp_path / "list.json"
+    bad.write_text(json.dumps({"header": ["x"], "obstacles": []}))
+    assert main(["generate", "--from", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert not (tmp_path / "o").exists()

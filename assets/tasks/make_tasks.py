@@ -18,7 +18,6 @@ unless ``SOLVE_SETUP`` says otherwise.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -26,6 +25,9 @@ from pathlib import Path
 from typing import List, Optional, Sequence
 
 import numpy as np
+
+# the writer (floats rounded to 10 decimals, fixed layout) is shared with `robodesign generate`
+from robodesign.generate.common import clean as _clean, dumps
 
 HERE = Path(__file__).resolve().parent
 PACKAGE = "robodesign"
@@ -391,50 +393,6 @@ def base_pose(name: str) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------------------
 # writing
 # ---------------------------------------------------------------------------------------------------------
-def _clean(obj):
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, (float, np.floating)):
-        v = round(float(obj), 10)
-        return int(v) if v.is_integer() and abs(v) < 1e9 else v  # also turns -0.0 into 0
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    return obj
-
-
-def _is_numbers(v) -> bool:
-    return isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
-
-
-def _inline(v) -> bool:
-    """Number lists and matrices (lists of number lists) are written on one line."""
-    return _is_numbers(v) or (isinstance(v, list) and v and all(_is_numbers(x) for x in v)
-                              and len(v) <= 4) or (isinstance(v, list) and all(isinstance(x, str) for x in v))
-
-
-def dumps(obj, indent: int = 0) -> str:
-    pad, pad1 = "  " * indent, "  " * (indent + 1)
-    if isinstance(obj, dict):
-        if not obj:
-            return "{}"
-        if len(obj) <= 4 and all(isinstance(v, (int, float, str)) for v in obj.values()):
-            return json.dumps(obj, separators=(", ", ": "))  # e.g. box parameters
-        items = [f"{pad1}{json.dumps(k)}: {dumps(v, indent + 1)}" for k, v in obj.items()]
-        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
-    if isinstance(obj, list):
-        if not obj:
-            return "[]"
-        if _inline(obj):
-            return json.dumps(obj, separators=(", ", ": "))
-        items = [f"{pad1}{dumps(v, indent + 1)}" for v in obj]
-        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
-    return json.dumps(obj)
-
-
 def task_path(name: str) -> Path:
     return HERE / PACKAGE / f"{name}.json"
 

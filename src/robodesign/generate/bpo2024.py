@@ -21,7 +21,8 @@ from typing import Callable, Dict, FrozenSet, List, Set, Tuple
 import numpy as np
 
 from ..errors import RobodesignError
-from .common import PI, Provenance, ReferenceArm, header, rot_z, solved_by_reference, tolerated, transform
+from ..spatial import rot_z
+from .common import PI, Provenance, ReferenceArm, header, tolerated, transform, verified
 from .registry import VERIFY, Family, GeneratedTask, Option
 
 VERSION = 1
@@ -197,7 +198,7 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
         if len(goals) < N_GOALS:
             continue
         task = _cell(tid, prov, opts, cubes, yaw, goals)
-        if opts["verify"] == "ik" or solved_by_reference(task, folder):
+        if verified(task, opts, folder):
             return GeneratedTask(tid, task)
     raise RobodesignError(f"bpo2024: no cell of structure {opts['structure']} ({difficulty}) with {N_GOALS} reachable "
                           f"goals in {CELL_TRIES} draws (seed {prov.seed}, index {prov.index})")

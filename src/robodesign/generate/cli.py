@@ -42,7 +42,7 @@ def cmd_generate(args) -> int:
             raise InputError("--from takes the family and its options from the task's header: give no others")
         if not args.out:
             raise InputError("--out is required")
-        print(regenerate(Path(args.from_task), Path(args.out), machine=None))
+        print(regenerate(Path(args.from_task), Path(args.out)))
         return 0
     if not args.family:
         raise InputError("name a family (robodesign generate --list shows them)")

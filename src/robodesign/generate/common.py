@@ -18,6 +18,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from ..errors import InputError
+from ..spatial import homogeneous
 
 PI = math.pi
 DATE = "2026-01-01"  # fixed: the date is part of the bytes
@@ -33,27 +34,8 @@ REFERENCE_ORDER = ("1", "21", "22", "4", "22", "3", "23", "24", "23", "12")
 
 # ---------------------------------------------------------------------------------------------------------
 # poses and geometry (plain JSON-ready dicts)
-def rot_x(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]], dtype=float)
-
-
-def rot_y(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]], dtype=float)
-
-
-def rot_z(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]], dtype=float)
-
-
 def transform(p=(0.0, 0.0, 0.0), R: Optional[np.ndarray] = None) -> np.ndarray:
-    M = np.eye(4)
-    if R is not None:
-        M[:3, :3] = R
-    M[:3, 3] = p
-    return M
+    return homogeneous(R, p)
 
 
 def tolerated(nominal: np.ndarray, **tol) -> dict:
@@ -135,6 +117,8 @@ class Provenance:
         except ValueError:
             raise InputError("version, seed and index tags must be integers", file=file,
                              path=["header", "tags"]) from None
+        if seed < 0 or index < 0:
+            raise InputError("seed and index tags must be non-negative", file=file, path=["header", "tags"])
         family = kv.pop("generator")
         return cls(family, version, seed, index, tuple(sorted(kv.items())))
 
@@ -258,6 +242,11 @@ class ReferenceArm:
         return any(np.all(np.abs(self.robot.gravity_torque(q)) <= limit) for q in r.solutions)
 
 VERIFY_PLAN_TIME = 10.0  # s per planning query of the verification solve
+
+
+def verified(task_dict: dict, opts: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:
+    """The ``--verify`` decision for a task whose goals passed the goal tests: always true for ``ik``."""
+    return opts["verify"] == "ik" or solved_by_reference(task_dict, folder, base_pose)
 
 
 def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:

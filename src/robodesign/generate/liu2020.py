@@ -22,7 +22,8 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import InputError, RobodesignError
-from .common import PI, AABB, Provenance, ReferenceArm, header, rot_y, solved_by_reference, tolerated, transform
+from ..spatial import rot_y
+from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform, verified
 from .machine import COVER_DOWN, COVER_UP, DEFAULT_NAME, STEP, MachineFrame, analyse, default_machine_stl
 from .registry import VERIFY, Family, GeneratedTask, Option, copy_file
 
@@ -178,7 +179,7 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
             continue
         goals["place"] = place
         task = _cell(tid, prov, asset, scale, pose, trays, goals)
-        if opts["verify"] == "ik" or solved_by_reference(task, folder):
+        if verified(task, opts, folder):
             return GeneratedTask(tid, task)
     raise RobodesignError(f"liu2020: no reachable cell in {CELL_TRIES} draws for machine {name} "
                           f"(seed {prov.seed}, index {prov.index})")

@@ -6,9 +6,9 @@ folder of tasks; ``regenerate()`` rebuilds one task from the provenance tags in 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 from ..errors import InputError
 from .common import Provenance, task_text
@@ -52,8 +52,7 @@ VERIFY = Option("verify", str, "solve",
 @dataclass
 class GeneratedTask:
     task_id: str
-    task: dict  # JSON-ready task
-    assets: Dict[str, bytes] = field(default_factory=dict)  # path relative to the output folder → content
+    task: dict  # JSON-ready task (assets such as meshes are written by the family's build into <out>/assets/)
 
     @property
     def text(self) -> str:
@@ -87,17 +86,14 @@ class Family:
                 for o in self.options}
 
 
-def _families() -> Dict[str, Family]:
+def families() -> Dict[str, Family]:
+    """name → Family, in the order of ``robodesign generate --list``."""
     from . import bpo2024, liu2020, whitman2020
     return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY, bpo2024.FAMILY)}
 
 
-def families() -> Dict[str, Family]:
-    return _families()
-
-
 def get_family(name: str) -> Family:
-    fams = _families()
+    fams = families()
     if name not in fams:
         raise InputError(f"unknown generator family {name!r} (one of {', '.join(fams)}; "
                          f"see robodesign generate --list)")
@@ -122,11 +118,6 @@ def build_one(family: Family, values: Dict[str, object], seed: int, index: int, 
 
 def write_task(gen: GeneratedTask, folder: Path) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
-    for rel, content in sorted(gen.assets.items()):
-        p = folder / rel
-        p.parent.mkdir(parents=True, exist_ok=True)
-        if not p.exists() or p.read_bytes() != content:
-            p.write_bytes(content)
     out = folder / gen.filename
     out.write_text(gen.text, encoding="utf-8")
     return out
@@ -151,16 +142,17 @@ def generate(family_name: str, out: Path, count: int, seed: int, options: Option
     return files
 
 
-def regenerate(task_file: Path, out: Path, machine: Optional[Path] = None) -> Path:
+def regenerate(task_file: Path, out: Path) -> Path:
     """Rebuild one generated task from its header's provenance tags into folder ``out``.
 
-    A family that reads a user file (liu2020 ``--machine``) finds it next to the task (the copy the generator
-    made) unless ``machine`` is given."""
+    A family that reads a user file (liu2020 ``--machine``) takes the copy the generator made in ``assets/``
+    beside the task."""
     from ..jsonio import load_json
     task_file = Path(task_file)
     data = load_json(task_file, display_name=task_file.name)
-    tags = (data.get("header") or {}).get("tags") or [] if isinstance(data, dict) else []
-    prov = Provenance.from_tags(tags, task_file.name)
+    head = data.get("header") if isinstance(data, dict) else None
+    tags = head.get("tags") if isinstance(head, dict) else None
+    prov = Provenance.from_tags(tags if isinstance(tags, list) else [], task_file.name)
     family = get_family(prov.family)
     if prov.version != family.version:
         raise InputError(f"written by {prov.family} generator version {prov.version}, this is version "
@@ -169,13 +161,18 @@ def regenerate(task_file: Path, out: Path, machine: Optional[Path] = None) -> Pa
     given: Dict[str, object] = dict(prov.options)
     for o in family.options:
         if o.path and o.name in given:
-            src = Path(machine) if machine else _find_asset(task_file, str(given[o.name]))
-            given[o.name] = str(src)
-    values = family.resolve(given)
+            given[o.name] = str(_find_asset(task_file, str(given[o.name])))
+    try:
+        values = family.resolve(given)
+    except InputError as e:
+        raise InputError(str(e), file=task_file.name, path=["header", "tags"]) from None
     return write_task(build_one(family, values, prov.seed, prov.index, Path(out)), Path(out))
 
 
 def _find_asset(task_file: Path, name: str) -> Path:
+    if not name or name != Path(name).name or name in (".", ".."):
+        raise InputError(f"the file named in the provenance tags, {name!r}, must be a plain file name",
+                         file=task_file.name, path=["header", "tags"])
     for cand in (task_file.parent / "assets" / name, task_file.parent / name):
         if cand.is_file():
             return cand
@@ -191,5 +188,5 @@ def copy_file(src: Path) -> bytes:
     return src.read_bytes()
 
 
-__all__ = ["Family", "GeneratedTask", "Option", "families", "get_family", "generate", "regenerate", "copy_file",
-           "build_one", "write_task", "shutil"]
+__all__ = ["Family", "GeneratedTask", "Option", "VERIFY", "families", "get_family", "generate", "regenerate",
+           "copy_file", "build_one", "write_task"]

@@ -20,7 +20,7 @@ from typing import Dict, List
 import numpy as np
 
 from ..errors import InputError, RobodesignError
-from .common import PI, AABB, Provenance, ReferenceArm, header, solved_by_reference, tolerated, transform
+from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform, verified
 from .registry import VERIFY, Family, GeneratedTask, Option
 
 VERSION = 2
@@ -114,7 +114,7 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
         if len(goals) < n:
             continue
         task = _cell(tid, prov, opts, cubes, goals)
-        if opts["verify"] == "ik" or solved_by_reference(task, folder, np.eye(4)):
+        if verified(task, opts, folder, np.eye(4)):
             return GeneratedTask(tid, task)
     raise RobodesignError(f"whitman2020: no cell with {n} reachable goals among {m} cubes in {CELL_TRIES} draws "
                           f"(seed {prov.seed}, index {prov.index})")
