@@ -109,7 +109,7 @@ def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, bud
         row["stopped_at"] = res.get("stopped_at") or ""
         row["stage_counts"] = stage_counts_text(res.get("stage_counts") or {})
         if not res.get("feasible") and res.get("best"):
-            row["message"] = f"best candidate failed at {res['best'].get('stage')}"
+            row["message"] = f"best candidate failed at {res['best'].get('stage')}: {res['best'].get('message', '')}"[:300]
     elif row["exit_optimize"] not in (None, 0, 1) and not row["message"]:
         row["message"] = (p.stderr.strip().splitlines() or ["?"])[-1][:300]
     if row.get("exit_optimize") == 0 and sol.is_file():

@@ -197,7 +197,8 @@ def cmd_optimize(args) -> int:
                "stopped": res.stopped, "feasible": bool(best and best.feasible),
                "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
                                                   "base_pose": problem.base_pose(best.candidate).tolist(),
-                                                  "cost": best.cost, "stage": best.stage, "costs": best.costs},
+                                                  "cost": best.cost, "stage": best.stage, "message": best.message,
+                                                  "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
                "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
     if args.json:
