@@ -40,8 +40,6 @@ sys.path.insert(0, str(ROOT / "src"))
 from robodesign.experiment.config import SuiteEntry, suite_task_files  # noqa: E402
 from robodesign.experiment.suites import SuiteRecord, cell, stage_counts_text, summarize_suites  # noqa: E402
 
-BPO_STRUCTURES = ("x", "cross", "house", "oven", "random")
-BPO_DIFFICULTIES = ("easy", "medium", "hard")
 # variant → (generator family, option sets (the tasks are spread evenly over them), Mayer & Althoff 2024
 # median best cycle time [s], their setting)
 VARIANTS = {
@@ -51,8 +49,8 @@ VARIANTS = {
                          "Whitman 5 goals / 5 obstacles, free base"),
     "liu2020": ("liu2020", [{"machine": "<cobra>/tasks/assets/DMU_125P_compress.stl"}], 12.0,
                 "Liu case 2b (machine tending), DMU 125P mesh of the CoBRA data"),
-    "bpo2024": ("bpo2024", [{"structure": s, "difficulty": d} for s in BPO_STRUCTURES for d in BPO_DIFFICULTIES],
-                11.4, "edge cases: 5 structures x 3 difficulties"),
+    "bpo2024": ("bpo2024", [{"structure": "mixed", "difficulty": "mixed"}], 11.4,
+                "edge cases: x, cross, house, oven, random field by task index, 5 easy / 5 medium / 5 hard"),
 }
 COBRA = ROOT.parent / "shared" / "cobra"  # the CoBRA reference data beside the checkout (--cobra)
 SETS = {"builtin": "robodesign_arm", "IMPROV": "<cobra>/modules/IMPROV"}
