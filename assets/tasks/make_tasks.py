@@ -366,12 +366,60 @@ def timed_follow() -> dict:
     }
 
 
+# ---------------------------------------------------------------------------------------------------------
+# 6. wait_for_shuttle — a moving obstacle parks over the place station: the robot must wait for it
+# ---------------------------------------------------------------------------------------------------------
+WS_TABLE_TOP = 0.20
+WS_PICK = (0.50, 0.35, WS_TABLE_TOP + 0.10)
+WS_PLACE = (0.50, -0.35, WS_TABLE_TOP + 0.10)
+WS_SHUTTLE = 0.30  # cube edge
+WS_PARKED_UNTIL = 2.0  # s: the shuttle covers the place station until then ...
+WS_LEAVE = 1.0  # s: ... then drives off along +x in this time, and stays out of reach
+WS_STEP = 0.1  # s between shuttle poses
+
+
+def shuttle_motion() -> dict:
+    """The shuttle sits over the place station until ``WS_PARKED_UNTIL``, then drives 1.5 m along +x in
+    ``WS_LEAVE`` s (one pose every ``WS_STEP`` s, applied to its pose at t = 0) and stays there."""
+    n = int(round((WS_PARKED_UNTIL + WS_LEAVE) / WS_STEP)) + 1
+    ts = np.arange(n) * WS_STEP
+    xs = np.clip((ts - WS_PARKED_UNTIL) / WS_LEAVE, 0.0, 1.0) * 1.5
+    return {"t": WS_STEP, "pose": [T((x, 0.0, 0.0)) for x in xs]}
+
+
+def wait_for_shuttle() -> dict:
+    top = WS_TABLE_TOP
+    tol = dict(r_sph=(0.0, 0.005), N_x=(-0.05, 0.05), N_y=(-0.05, 0.05))
+    return {
+        "header": header("wait_for_shuttle", "Place a part once the shuttle has left the station",
+                         ["movingObstacle", "wait"]),
+        "obstacles": [
+            obstacle("table", "table", [box_between((0.30, -0.60, 0.0), (0.75, 0.60, top))]),
+            obstacle("shuttle", "shuttle parked over the place station (moving)",
+                     [box((WS_PLACE[0], WS_PLACE[1], top + WS_SHUTTLE / 2 + 0.002), (WS_SHUTTLE,) * 3)],
+                     trajectory=shuttle_motion()),
+        ],
+        "constraints": [
+            {"type": "joint", "parts": ["q", "dq", "tau"]},
+            {"type": "selfCollisionFree"},
+            {"type": "collisionFree", "safety_margin": 0.005},
+            {"type": "allGoalsFulfilled"},
+            {"type": "allGoalsFulfilledInOrder", "order": ["pick", "place"]},
+        ],
+        "goals": [
+            {"ID": "pick", "type": "reach", "goalPose": tolerated(T(WS_PICK, TOOL_DOWN), **tol)},
+            {"ID": "place", "type": "reach", "goalPose": tolerated(T(WS_PLACE, TOOL_DOWN), **tol)},
+        ],
+    }
+
+
 TASKS = {
     "pick_and_place": pick_and_place,
     "machine_tending": machine_tending,
     "welding_seam": welding_seam,
     "base_placement": base_placement,
     "timed_follow": timed_follow,
+    "wait_for_shuttle": wait_for_shuttle,
 }
 
 # How each task is solved (by make_tasks.py and tests/test_builtin_tasks.py): module order, base
@@ -382,6 +430,7 @@ SOLVE_SETUP = {
     "welding_seam": {"order": DEFAULT_ORDER, "base": (0.0, 0.0, 0.0), "yaw": 0.0, "seed": 0},
     "base_placement": {"order": DEFAULT_ORDER, "base": BP_BASE, "yaw": 0.0, "seed": 0},
     "timed_follow": {"order": DEFAULT_ORDER, "base": (0.0, 0.0, 0.0), "yaw": 0.0, "seed": 0},
+    "wait_for_shuttle": {"order": DEFAULT_ORDER, "base": (0.0, 0.0, 0.0), "yaw": 0.0, "seed": 0},
 }
 
 

@@ -1,0 +1,331 @@
+"""Collaborative tasks and solutions: several robots in one cell (benchmark IDs ``[R1,R2]:[C1,C2]:C-Θ``).
+
+A collaborative task is a CoBRA task with a top-level ``"robots"`` list; each goal may name the robot
+that must achieve it (``"robot": "left"``), otherwise any robot may. A collaborative solution holds one
+CoBRA solution per robot on a common time base. The JSON forms and the exact semantics are in
+docs/collaborative.md; in short:
+
+* every robot is judged by the single-robot checker on the task restricted to its goals (the goals
+  assigned to it plus the "any robot" goals its ``goal2time`` claims) with its own base placement;
+* every goal is achieved by the robot it is assigned to, an "any robot" goal by at least one robot;
+* no two robots come closer than the task's ``collisionFree`` safety margin, certified between samples
+  (both robots move linearly in joint space between the common samples);
+* each robot has its own cost; the verdict reports the tuple in the order of the task's robots.
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from .checker import CheckSettings, Verdict, Violation, check
+from .errors import InputError
+from .jsonio import dumps_json, load_json
+from .module_spec import ModuleSet
+from .solution import Solution, parse_solution
+from .task_io import parse_task, resolve_task_path
+from .task_spec import CollisionFree, GoalsInOrder, Task
+
+ANY = None  # goal assignment: any robot
+
+
+@dataclass(frozen=True, eq=False)
+class CollabTask:
+    """The shared cell (``task``: obstacles, every goal, task-level constraints) plus one view per robot
+    (``robot_tasks[id]``: the same task with the robot's own base placement)."""
+    task: Task
+    robot_ids: Tuple[str, ...]
+    robot_names: Dict[str, str]
+    robot_tasks: Dict[str, Task]
+    assignment: Dict[str, Optional[str]]  # goal ID → robot ID, or None for "any robot"
+
+    @property
+    def id(self) -> str:
+        return self.task.id
+
+    def goals_of(self, rid: str) -> Tuple[str, ...]:
+        """Goal IDs assigned to robot ``rid`` (not the "any robot" goals)."""
+        return tuple(g.id for g in self.task.goals if self.assignment[g.id] == rid)
+
+    @property
+    def any_goals(self) -> Tuple[str, ...]:
+        return tuple(g.id for g in self.task.goals if self.assignment[g.id] is ANY)
+
+    def task_for(self, rid: str, goal_ids) -> Task:
+        """Robot ``rid``'s view restricted to the goals ``goal_ids`` (file order kept; an order constraint
+        keeps the listed goals among them)."""
+        keep = set(goal_ids)
+        t = self.robot_tasks[rid]
+        cons = tuple(replace(c, order=tuple(g for g in c.order if g in keep)) if isinstance(c, GoalsInOrder) else c
+                     for c in t.constraints)
+        return replace(t, goals=tuple(g for g in t.goals if g.id in keep), constraints=cons)
+
+    @property
+    def safety_margin(self) -> Optional[float]:
+        """Robot–robot distance that counts as a collision (None: robots may touch, no collisionFree)."""
+        cf = [c.safety_margin for c in self.task.constraints if isinstance(c, CollisionFree)]
+        return max(cf) if cf else None
+
+
+def is_collaborative(data) -> bool:
+    return isinstance(data, dict) and isinstance(data.get("robots"), list)
+
+
+def load_collab_task(name_or_path: Union[str, Path]) -> CollabTask:
+    f = resolve_task_path(name_or_path)
+    return parse_collab_task(load_json(f, display_name=f.name), f)
+
+
+def parse_collab_task(data, file: Path) -> CollabTask:
+    fname = Path(file).name
+    if not is_collaborative(data):
+        raise InputError("a collaborative task needs a 'robots' list", file=fname, path=["robots"])
+    robots = data["robots"]
+    if not robots:
+        raise InputError("needs at least one robot", file=fname, path=["robots"])
+    base = copy.deepcopy(data)
+    del base["robots"]
+    ids: List[str] = []
+    names: Dict[str, str] = {}
+    placements: Dict[str, Optional[dict]] = {}
+    for i, r in enumerate(robots):
+        if not isinstance(r, dict) or not isinstance(r.get("ID"), (str, int)) or isinstance(r.get("ID"), bool):
+            raise InputError("each robot needs an 'ID' (string)", file=fname, path=["robots", i, "ID"])
+        rid = str(r["ID"])
+        if rid in ids:
+            raise InputError(f"duplicate robot ID {rid!r}", file=fname, path=["robots", i, "ID"])
+        ids.append(rid)
+        names[rid] = str(r.get("name") or rid)
+        bp = r.get("basePlacement")
+        if bp is not None and not isinstance(bp, dict):
+            raise InputError("basePlacement must be a tolerated pose object", file=fname,
+                             path=["robots", i, "basePlacement"])
+        placements[rid] = bp
+    assignment: Dict[str, Optional[str]] = {}
+    for i, g in enumerate(base.get("goals", [])):
+        if isinstance(g, dict) and "robot" in g:
+            rid = g.pop("robot")
+            if rid is not None and rid != "any" and str(rid) not in ids:
+                raise InputError(f"unknown robot {rid!r} (robots: {', '.join(ids)})", file=fname,
+                                 path=["goals", i, "robot"])
+            assignment[str(g.get("ID"))] = None if rid in (None, "any") else str(rid)
+    task = parse_task(base, Path(file))
+    for g in task.goals:
+        assignment.setdefault(g.id, ANY)
+    robot_tasks = {}
+    for k, rid in enumerate(ids):
+        if placements[rid] is None:
+            robot_tasks[rid] = task
+            continue
+        d = copy.deepcopy(base)
+        cons = [c for c in d.get("constraints", []) if not (isinstance(c, dict) and c.get("type") == "basePlacement")]
+        cons.append({"type": "basePlacement", "pose": placements[rid]})
+        if "constraints" not in d:  # keep the default constraint set, plus the base placement
+            from .task_spec import default_constraints
+            t = parse_task({**d, "constraints": [{"type": "basePlacement", "pose": placements[rid]}]}, Path(file))
+            robot_tasks[rid] = replace(task, constraints=tuple(default_constraints()) + t.constraints)
+            continue
+        d["constraints"] = cons
+        try:
+            robot_tasks[rid] = parse_task(d, Path(file))
+        except InputError as e:  # name the robot's field, not the synthesized constraint
+            raise InputError(e.reason, file=fname, path=f"robots[{k}].basePlacement") from None
+    for g in task.goals:  # a returnTo must stay with the robot of its target
+        target = getattr(g, "return_to", None)
+        if target is not None and assignment[g.id] != assignment.get(target):
+            raise InputError(f"returnTo goal {g.id!r} and its target {target!r} are assigned to different robots",
+                             file=fname, path=["goals"])
+    return CollabTask(task, tuple(ids), names, robot_tasks, assignment)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# solutions
+# ---------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class CollabSolution:
+    task_id: str
+    robots: Tuple[Tuple[str, Solution], ...]  # (robot ID, its solution), all on one time base
+    computation_time: float = -1.0
+    notes: str = ""
+    source: Optional[str] = None
+
+    def solution(self, rid: str) -> Solution:
+        for r, s in self.robots:
+            if r == rid:
+                return s
+        raise KeyError(rid)
+
+    @property
+    def cost_functions(self) -> Tuple[str, ...]:
+        return tuple(s.cost_function for _, s in self.robots)
+
+    def to_json(self) -> dict:
+        out = {"taskID": self.task_id, "collaborative": True, "computationTime": self.computation_time,
+               "robots": []}
+        if self.notes:
+            out["notes"] = self.notes
+        for rid, s in self.robots:
+            d = s.to_json()
+            d.pop("taskID", None)
+            out["robots"].append({"ID": rid, **d})
+        return out
+
+    def write(self, path) -> Path:
+        p = Path(path)
+        p.parent.mkdir(parents=True, exist_ok=True)
+        tmp = p.with_suffix(p.suffix + ".tmp")
+        tmp.write_text(dumps_json(self.to_json()))
+        tmp.replace(p)
+        return p
+
+
+def load_collab_solution(path) -> CollabSolution:
+    p = Path(path)
+    return parse_collab_solution(load_json(p, display_name=p.name), p.name, source=str(p))
+
+
+def parse_collab_solution(data, fname: str, source: Optional[str] = None) -> CollabSolution:
+    if not is_collaborative(data):
+        raise InputError("a collaborative solution needs a 'robots' list", file=fname, path=["robots"])
+    tid = data.get("taskID", data.get("taskId"))
+    if not isinstance(tid, str):
+        raise InputError("expected the task ID (a string)", file=fname, path=["taskID"])
+    out = []
+    seen = set()
+    for i, r in enumerate(data["robots"]):
+        if not isinstance(r, dict) or not isinstance(r.get("ID"), str):
+            raise InputError("each robot needs an 'ID' (string)", file=fname, path=["robots", i, "ID"])
+        if r["ID"] in seen:
+            raise InputError(f"duplicate robot ID {r['ID']!r}", file=fname, path=["robots", i, "ID"])
+        seen.add(r["ID"])
+        body = {k: v for k, v in r.items() if k != "ID"}
+        body["taskID"] = tid
+        try:
+            sol = parse_solution(body, fname, source=source)
+        except InputError as e:
+            inner = f".{e.json_path}" if e.json_path else ""
+            raise InputError(e.reason, file=fname, path=f"robots[{i}]{inner}") from None
+        out.append((r["ID"], sol))
+    if not out:
+        raise InputError("needs at least one robot", file=fname, path=["robots"])
+    t0 = out[0][1].trajectory.t
+    for i, (rid, s) in enumerate(out[1:], start=1):
+        t = s.trajectory.t
+        if len(t) != len(t0) or np.max(np.abs(t - t0)) > 1e-9:
+            raise InputError(f"robot {rid!r} is not on the common time base of robot {out[0][0]!r} "
+                             "(every robot's trajectory.t must be the same)", file=fname,
+                             path=["robots", i, "trajectory", "t"])
+    ct = data.get("computationTime", -1.0)
+    return CollabSolution(tid, tuple(out), float(ct) if isinstance(ct, (int, float)) and not isinstance(ct, bool)
+                          else -1.0, str(data.get("notes") or ""), source)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# the judge
+# ---------------------------------------------------------------------------------------------------------
+@dataclass
+class CollabVerdict:
+    valid: bool
+    violations: List[Tuple[Optional[str], Violation]]  # (robot ID or None for the cell, violation)
+    robots: Dict[str, Verdict]
+    costs: Tuple[Optional[float], ...]  # one per robot, in the task's robot order
+    cost_functions: Tuple[str, ...]
+    goal_robot: Dict[str, Optional[str]] = field(default_factory=dict)  # goal → robot that achieved it
+
+    @property
+    def total_cost(self) -> Optional[float]:
+        """Sum of the robots' costs (the leaderboard's primary key; docs/collaborative.md)."""
+        return None if any(c is None for c in self.costs) else float(sum(self.costs))
+
+    def to_json(self) -> dict:
+        return {"valid": self.valid, "collaborative": True,
+                "violations": [{"robot": r, **v.to_json()} for r, v in self.violations],
+                "costs": [None if c is None else float(c) for c in self.costs], "totalCost": self.total_cost,
+                "costFunctions": list(self.cost_functions), "goals": self.goal_robot,
+                "robots": {rid: v.to_json() for rid, v in self.robots.items()}}
+
+
+def _robot_of(module_sets, rid: str):
+    if module_sets is None or isinstance(module_sets, (str, Path, ModuleSet)):
+        return module_sets
+    return module_sets.get(rid)
+
+
+def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
+                 settings: Optional[CheckSettings] = None) -> CollabVerdict:
+    """Judge a collaborative solution. ``module_sets``: one module set (name, path or ModuleSet) for
+    every robot, a dict robot ID → module set, or None (each robot's ``moduleSet``)."""
+    from .cell import build_robot
+    from .pair_sweep import RobotPairSweep
+    viol: List[Tuple[Optional[str], Violation]] = []
+    if csol.task_id != ctask.id:
+        viol.append((None, Violation("taskID", f"solution is for task {csol.task_id!r}, not {ctask.id!r}")))
+    sol_ids = [r for r, _ in csol.robots]
+    for rid in sol_ids:
+        if rid not in ctask.robot_ids:
+            viol.append((rid, Violation("robots", f"the task has no robot {rid!r} (robots: {', '.join(ctask.robot_ids)})")))
+    for rid in ctask.robot_ids:
+        if rid not in sol_ids:
+            viol.append((rid, Violation("robots", f"robot {rid!r} has no trajectory in the solution")))
+    if viol:
+        return CollabVerdict(False, viol, {}, tuple(None for _ in ctask.robot_ids), csol.cost_functions)
+    # who claims which goal
+    goal_robot: Dict[str, Optional[str]] = {}
+    claimed: Dict[str, List[str]] = {}
+    for rid, s in csol.robots:
+        for gid in s.trajectory.goal2time:
+            claimed.setdefault(gid, []).append(rid)
+    views: Dict[str, List[str]] = {rid: [] for rid in ctask.robot_ids}
+    for g in ctask.task.goals:
+        owner = ctask.assignment[g.id]
+        by = claimed.get(g.id, [])
+        if owner is not None:
+            for other in by:
+                if other != owner:
+                    viol.append((other, Violation("goalAssignment", f"goal {g.id} is assigned to robot {owner!r}")))
+            views[owner].append(g.id)
+            goal_robot[g.id] = owner
+        else:
+            for rid in by:
+                views[rid].append(g.id)
+            goal_robot[g.id] = by[0] if by else None
+    verdicts: Dict[str, Verdict] = {}
+    robots = {}
+    for rid in ctask.robot_ids:
+        s = csol.solution(rid)
+        t_r = ctask.task_for(rid, views[rid])
+        v = check(t_r, s, _robot_of(module_sets, rid), settings)
+        verdicts[rid] = v
+        viol += [(rid, x) for x in v.violations]
+        if not any(x.constraint == "validAssembly" for x in v.violations):
+            from .checker import resolve_module_set
+            ms = resolve_module_set(s, _robot_of(module_sets, rid))
+            robots[rid] = build_robot(t_r, ms, s.assembly(ms), s.base_pose)
+    any_missing = [g for g in ctask.any_goals if goal_robot.get(g) is None]
+    for g in any_missing:
+        viol.append((None, Violation("allGoalsFulfilled", f"goal {g} (any robot) is achieved by no robot")))
+    margin = ctask.safety_margin
+    if margin is not None:
+        t = csol.robots[0][1].trajectory.t
+        ids = [rid for rid in ctask.robot_ids if rid in robots]
+        for a in range(len(ids)):
+            for b in range(a + 1, len(ids)):
+                ra, rb = ids[a], ids[b]
+                qa, qb = csol.solution(ra).trajectory.q, csol.solution(rb).trajectory.q
+                if qa.shape[1] != robots[ra].dof or qb.shape[1] != robots[rb].dof:
+                    continue  # reported by the robot's own check
+                sweep = RobotPairSweep(robots[ra], robots[rb], margin=margin, names=(ra, rb))
+                events = sweep.check(np.hstack([qa, qb]), first_only=False)
+                for e in events[:20]:
+                    k = e.sample
+                    tt = float(t[k] + e.s * (t[min(k + 1, len(t) - 1)] - t[k]))
+                    between = f" between samples {k} and {k + 1}" if e.s > 0 else f" at sample {k}"
+                    viol.append((None, Violation("robotCollisionFree", f"robot–robot collision {e.first} ↔ "
+                                                 f"{e.second}{between} (distance {e.distance:.4g} m, margin {margin:.3g})",
+                                                 sample=k, time=tt, value=e.distance)))
+    costs = tuple(verdicts[rid].cost for rid in ctask.robot_ids)
+    return CollabVerdict(not viol, viol, verdicts, costs, tuple(csol.solution(r).cost_function for r in ctask.robot_ids),
+                         goal_robot)
