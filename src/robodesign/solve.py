@@ -12,15 +12,16 @@ configuration whose TCP is outside the space to leave and holds it for the durat
 at the configuration of the first pose goal (or a collision-free configuration if there is none).
 The returned cost is the checker's: one judge.
 
-Limitation: moving obstacles are planned around at their t = 0 pose only; the checker then judges the
-timed motion against the moving obstacles, so a collision with one fails the ``check`` stage.
+Moving obstacles (and other robots, passed as timed ``colliders``) are avoided in time: IK and planning
+see the static cell, and before each move the robot waits at rest until the timed move misses everything
+that moves (``solvers/schedule.py``, certified between samples with the checker's semantics).
 """
 from __future__ import annotations
 
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
@@ -31,6 +32,7 @@ from .costs import cost_term, parse_cost
 from .errors import RobodesignError
 from .module_spec import ModuleSet
 from .solution import Solution, SolutionTrajectory
+from .solvers.schedule import ScheduleError, check_hold, find_wait, moving_obstacles, static_cell
 from .task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
 from .tolerance import ToleratedPose
 
@@ -142,14 +144,18 @@ class _Fail(Exception):
 
 
 def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
-          cost: str = "cyc", settings: Optional[SolveSettings] = None) -> SolveResult:
+          cost: str = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = ()) -> SolveResult:
     """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
-    robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError."""
+    robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError.
+
+    IK and planning see the static cell; the task's moving obstacles and the extra timed ``colliders``
+    (e.g. another robot's motion, :class:`robodesign.solvers.schedule.OtherRobot`) are avoided in time:
+    before each move the robot waits at rest as long as needed (``solvers/schedule.py``)."""
     settings = settings or SolveSettings()
     parse_cost(cost)  # bad input, not an infeasible robot
     res = SolveResult(num_goals=len(task.goals))
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
-    run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res)
+    run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders)
     for name in STAGES:
         if name == "trajopt" and not settings.optimize_trajectory:
             continue
@@ -168,15 +174,18 @@ class _Pipeline:
     """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
     to stop the pipeline with its reason."""
 
-    def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res):
+    def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders=()):
         self.task, self.module_set, self.order_or_assembly = task, module_set, order_or_assembly
+        self.colliders = list(colliders)
         self.base_pose, self.cost, self.settings, self.res = base_pose, cost, settings, res
         self.rng = np.random.default_rng(settings.seed)
 
     def assembly(self) -> None:
         ms, a = self.module_set, self.order_or_assembly
         self.asm = a if isinstance(a, Assembly) else Assembly.from_order(ms, a)
-        self.robot = build_robot(self.task, ms, self.asm, self.base_pose)
+        self.robot = build_robot(static_cell(self.task), ms, self.asm, self.base_pose)
+        moving = moving_obstacles(self.task, ms, self.asm, self.base_pose)
+        self.colliders = ([moving] if moving is not None else []) + self.colliders
 
     def base(self) -> None:
         bp = self.task.base_placement
@@ -186,13 +195,14 @@ class _Pipeline:
     def reach(self) -> None:
         o, R = self.robot.reach_bound()
         for g in self.task.goals:
-            for pose in _goal_poses(g):
+            for pose in goal_poses(g):
                 d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
                 if d > R + _position_slack(pose):
                     raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
 
     def ik(self) -> None:
-        self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost)
+        self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost,
+                                   colliders=self.colliders)
         self.planner.solve_ik()
 
     def static_torque(self) -> None:
@@ -255,7 +265,7 @@ def _stop(res: SolveResult, settings: SolveSettings) -> bool:
     return settings.stop_after is not None and bool(res.stages) and res.stages[-1].name == settings.stop_after
 
 
-def _goal_poses(g) -> List[ToleratedPose]:
+def goal_poses(g) -> List[ToleratedPose]:
     if isinstance(g, (At, Reach)):
         return [g.pose]
     if isinstance(g, Follow):
@@ -278,8 +288,10 @@ class GoalPlanner:
     (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
     actions and paths of the goal sequence, and turns them into a motion."""
 
-    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc"):
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc",
+                 colliders: Sequence = ()):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
+        self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
         terms = dict(parse_cost(cost).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
         # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
@@ -500,10 +512,11 @@ class GoalPlanner:
                     seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing)
                     if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
                         seg = self._optimize_move(seg, cost)
-                    traj = traj.concatenate(seg)
+                    traj = self._append_after_wait(traj, seg, g)
                 if g is not None:
                     g2t[g.id] = float(traj.t[-1])
             elif kind == "hold":
+                self._check_hold(traj, arg, g)
                 if arg > 0:
                     traj = traj.hold(arg, dt)
                 g2t[g.id] = float(traj.t[-1])
@@ -515,9 +528,27 @@ class GoalPlanner:
                                             stop_at=list(range(len(path))))
                 else:
                     seg = _timed_follow(path, g.t, dt)
-                traj = traj.concatenate(seg)
+                traj = self._append_after_wait(traj, seg, g)
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
+
+    def _append_after_wait(self, traj, seg, g):
+        """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to
+        miss every moving part of the cell (moving obstacles, other robots)."""
+        if not self.colliders:
+            return traj.concatenate(seg)
+        try:
+            n = find_wait(self.colliders, float(traj.t[-1]), traj.q[-1], seg.t, seg.q, self.task.dt)
+        except ScheduleError as e:
+            raise _Fail(f"the move to {'goal ' + g.id if g else 'the next waypoint'}: {e}") from None
+        if n:
+            traj = traj.hold(n * self.task.dt, self.task.dt)
+        return traj.concatenate(seg)
+
+    def _check_hold(self, traj, duration: float, g) -> None:
+        why = check_hold(self.colliders, float(traj.t[-1]), traj.q[-1], duration, self.task.dt)
+        if why:
+            raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
 
     def _optimize_move(self, seg, cost: str):
         from .solvers.trajopt import optimize_trajectory

@@ -14,12 +14,12 @@ the rows of ``Q`` at the times ``t`` touches it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Dict, List, Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
-from ..robot import Obstacle, Robot
+from ..robot import Robot
 from ..sweep import CollisionEvent, SweepChecker
 
 
@@ -85,17 +85,15 @@ def moving_obstacle_events(robot: Robot, movers: Sequence[Mover], checker: Sweep
 
 
 class MovingObstacles:
-    """The task's moving obstacles as a timed collider of one robot (built apart from the planning robot,
-    which sees only the static cell)."""
+    """The task's moving obstacles as a timed collider of one robot. ``robot`` is a robot of its own whose
+    obstacles are exactly the moving obstacles' shapes at t = 0 (names start with their obstacle's ID, as
+    :func:`moving_obstacles` builds it); the planning robot sees only the static cell."""
 
-    def __init__(self, robot: Robot, obstacles: Sequence[Obstacle], specs: Sequence[object], margin: float = 0.0):
-        """``robot`` is a robot of its own (its obstacles are replaced by ``obstacles``, the moving shapes at
-        t = 0, whose names start with their obstacle's ID); ``specs`` are the task's moving ObstacleSpecs."""
+    def __init__(self, robot: Robot, specs: Sequence[object]):
         self.robot = robot
-        robot.set_obstacles(list(obstacles), safety_margin=margin)
         by_id = {sp.id: sp for sp in specs}
         self.movers = [Mover(i, np.array(ob.pose, dtype=float), by_id[ob.name.rsplit(".", 2)[0]])
-                       for i, ob in enumerate(obstacles)]
+                       for i, ob in enumerate(robot.obstacles)]
         self.checker = SweepChecker(robot, check_self=False, check_env=True)
         self.settles_at = max((float(sp.motion_t[-1]) for sp in specs), default=0.0)
 
@@ -103,6 +101,21 @@ class MovingObstacles:
         ev = moving_obstacle_events(self.robot, self.movers, self.checker, np.asarray(t, float),
                                     np.asarray(Q, float), first_only=True)
         return (ev[0].sample, f"{ev[0].first} ↔ {ev[0].second}") if ev else None
+
+
+def static_cell(task):
+    """The task without its moving obstacles (what the planner plans among)."""
+    return replace(task, obstacles=tuple(o for o in task.obstacles if not o.moving))
+
+
+def moving_obstacles(task, module_set, assembly, base_pose) -> Optional[MovingObstacles]:
+    """The task's moving obstacles as a timed collider of the robot (None if nothing moves)."""
+    from ..cell import build_robot
+    specs = [o for o in task.obstacles if o.moving]
+    if not specs:
+        return None
+    robot = build_robot(replace(task, obstacles=tuple(specs)), module_set, assembly, base_pose)
+    return MovingObstacles(robot, specs)
 
 
 class OtherRobot:
