@@ -422,6 +422,58 @@ TASKS = {
     "wait_for_shuttle": wait_for_shuttle,
 }
 
+# ---------------------------------------------------------------------------------------------------------
+# Collaborative tasks (package robodesign-collab/, docs/collaborative.md): several robots in one cell
+# ---------------------------------------------------------------------------------------------------------
+COLLAB_PACKAGE = "robodesign-collab"
+SC_BELT_TOP = 0.20
+SC_BASE_Y = 0.65  # the two arms stand on either side of the belt, facing it
+SC_Z = SC_BELT_TOP + 0.10
+
+
+def shared_conveyor() -> dict:
+    """Two arms on either side of a conveyor belt, both working over the belt: each has its own pick and
+    place goals, and one inspection goal above the middle of the belt may be done by either."""
+    tol = dict(r_sph=(0.0, 0.005), N_x=(-0.05, 0.05), N_y=(-0.05, 0.05))
+    base_tol = dict(r_sph=(0.0, 0.001), Theta_R=(0.0, 0.01))
+
+    def goal(gid, p, robot):
+        return {"ID": gid, "type": "reach", "robot": robot, "goalPose": tolerated(T(p, TOOL_DOWN), **tol)}
+    h = header("shared_conveyor", "Two arms share a conveyor belt", ["collaborative"])
+    h["ID"] = f"{COLLAB_PACKAGE}/shared_conveyor"
+    return {
+        "header": h,
+        "robots": [
+            {"ID": "left", "name": "arm at y = +0.65 m", "basePlacement": tolerated(T((0.0, SC_BASE_Y, 0.0), rz(-PI / 2)),
+                                                                                   **base_tol)},
+            {"ID": "right", "name": "arm at y = -0.65 m", "basePlacement": tolerated(T((0.0, -SC_BASE_Y, 0.0), rz(PI / 2)),
+                                                                                    **base_tol)},
+        ],
+        "obstacles": [obstacle("belt", "conveyor belt", [box_between((-0.9, -0.15, 0.0), (0.9, 0.15, SC_BELT_TOP))])],
+        "constraints": [
+            {"type": "joint", "parts": ["q", "dq", "tau"]},
+            {"type": "selfCollisionFree"},
+            {"type": "collisionFree", "safety_margin": 0.01},
+            {"type": "allGoalsFulfilled"},
+        ],
+        "goals": [
+            goal("left_pick", (-0.30, 0.0, SC_Z), "left"),
+            goal("left_place", (0.30, 0.0, SC_Z), "left"),
+            goal("right_pick", (0.30, 0.0, SC_Z), "right"),
+            goal("right_place", (-0.30, 0.0, SC_Z), "right"),
+            goal("inspect", (0.0, 0.0, SC_Z + 0.15), None),
+        ],
+    }
+
+
+COLLAB_TASKS = {"shared_conveyor": shared_conveyor}
+COLLAB_SOLVE_SETUP = {"shared_conveyor": {"left": DEFAULT_ORDER, "right": DEFAULT_ORDER, "seed": 0}}
+
+
+def collab_task_path(name: str) -> Path:
+    return HERE / COLLAB_PACKAGE / f"{name}.json"
+
+
 # How each task is solved (by make_tasks.py and tests/test_builtin_tasks.py): module order, base
 # position (x, y, z), yaw [rad] and solver seed.
 SOLVE_SETUP = {
@@ -447,12 +499,12 @@ def task_path(name: str) -> Path:
 
 
 def write_tasks(names: Optional[Sequence[str]] = None) -> List[tuple]:
-    """Write the task files; [(path, changed)]."""
+    """Write the task files (single-robot and collaborative); [(path, changed)]."""
     out = []
-    (HERE / PACKAGE).mkdir(parents=True, exist_ok=True)
-    for name in names or TASKS:
-        text = dumps(_clean(TASKS[name]())) + "\n"
-        p = task_path(name)
+    for name in names or [*TASKS, *COLLAB_TASKS]:
+        make, p = (TASKS[name], task_path(name)) if name in TASKS else (COLLAB_TASKS[name], collab_task_path(name))
+        text = dumps(_clean(make())) + "\n"
+        p.parent.mkdir(parents=True, exist_ok=True)
         changed = not p.exists() or p.read_text() != text
         if changed:
             p.write_text(text)
@@ -477,6 +529,21 @@ def solve_builtin(name: str, seed: Optional[int] = None, base: Optional[np.ndarr
     return task, res, time.perf_counter() - t0
 
 
+def solve_collab_builtin(name: str, seed: Optional[int] = None):
+    """Solve collaborative built-in task ``name`` with its COLLAB_SOLVE_SETUP robots (prioritized planning):
+    (CollabTask, CollabSolveResult, seconds)."""
+    from robodesign.collab import RobotSetup, load_collab_task, solve_collab
+    from robodesign.module_io import load_module_set
+    from robodesign.solve import SolveSettings
+    setup = COLLAB_SOLVE_SETUP[name]
+    ctask = load_collab_task(collab_task_path(name))
+    ms = load_module_set(MODULE_SET)
+    t0 = time.perf_counter()
+    res = solve_collab(ctask, [RobotSetup(rid, ms, tuple(setup[rid])) for rid in ctask.robot_ids],
+                       settings=SolveSettings(seed=setup["seed"] if seed is None else seed))
+    return ctask, res, time.perf_counter() - t0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--no-solve", action="store_true", help="only write the task files")
@@ -484,16 +551,28 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=None, help="folder to write the solutions to (never assets/)")
     ap.add_argument("tasks", nargs="*", help="task names (default: all)")
     a = ap.parse_args(argv)
-    names = a.tasks or list(TASKS)
+    names = a.tasks or [*TASKS, *COLLAB_TASKS]
     for n in names:
-        if n not in TASKS:
-            ap.error(f"unknown task {n!r} (one of {', '.join(TASKS)})")
+        if n not in TASKS and n not in COLLAB_TASKS:
+            ap.error(f"unknown task {n!r} (one of {', '.join([*TASKS, *COLLAB_TASKS])})")
     for p, changed in write_tasks(names):
         print(f"{'wrote' if changed else 'unchanged'} {p.relative_to(HERE)}")
     if a.no_solve:
         return 0
     failed = 0
     for n in names:
+        if n in COLLAB_TASKS:
+            for seed in [int(s) for s in a.seeds.split(",")] if a.seeds else [COLLAB_SOLVE_SETUP[n]["seed"]]:
+                ctask, cres, sec = solve_collab_builtin(n, seed)
+                if cres.feasible:
+                    print(f"{ctask.id:28s} seed {seed}: solved in {sec:5.1f} s (priority {', '.join(cres.priority)}), "
+                          f"costs {[round(c, 3) for c in cres.verdict.costs]}")
+                    if a.out:
+                        cres.solution.write(Path(a.out) / f"{n}.seed{seed}.json")
+                else:
+                    failed += 1
+                    print(f"{ctask.id:28s} seed {seed}: FAILED after {sec:.1f} s: {cres.message}")
+            continue
         seeds = [int(s) for s in a.seeds.split(",")] if a.seeds else [SOLVE_SETUP[n]["seed"]]
         for seed in seeds:
             task, res, sec = solve_builtin(n, seed)

@@ -329,3 +329,123 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
     costs = tuple(verdicts[rid].cost for rid in ctask.robot_ids)
     return CollabVerdict(not viol, viol, verdicts, costs, tuple(csol.solution(r).cost_function for r in ctask.robot_ids),
                          goal_robot)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# solving: prioritized planning
+# ---------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class RobotSetup:
+    """One robot of a collaborative solve: its module set, module order and base pose (None: the nominal
+    pose of its base placement)."""
+    id: str
+    module_set: ModuleSet
+    order: Tuple[str, ...]
+    base_pose: Optional[np.ndarray] = None
+
+
+@dataclass
+class CollabSolveResult:
+    solution: Optional[CollabSolution]
+    verdict: Optional[CollabVerdict]
+    priority: Tuple[str, ...]  # the order in which the robots were planned
+    results: Dict[str, object]  # robot ID → its SolveResult (of the last priority order tried)
+    assignment: Dict[str, str]  # goal → robot (the "any robot" goals resolved)
+    message: str = ""
+
+    @property
+    def feasible(self) -> bool:
+        return self.verdict is not None and self.verdict.valid
+
+
+def assign_goals(ctask: CollabTask, setups: Sequence[RobotSetup]) -> Dict[str, str]:
+    """Every goal's robot: the assigned one, or for an "any robot" goal the robot whose base is nearest
+    to the goal's nominal TCP position (goals without a pose go to the first robot)."""
+    from .solve import goal_poses
+    bases = {s.id: _base_of(ctask, s) for s in setups}
+    out = {}
+    for g in ctask.task.goals:
+        owner = ctask.assignment[g.id]
+        if owner is None:
+            poses = goal_poses(g)
+            if poses:
+                p = poses[0].nominal[:3, 3]
+                owner = min(bases, key=lambda r: float(np.linalg.norm(bases[r][:3, 3] - p)))
+            else:
+                owner = setups[0].id
+        out[g.id] = owner
+    return out
+
+
+def _base_of(ctask: CollabTask, s: RobotSetup) -> np.ndarray:
+    return np.asarray(s.base_pose, float) if s.base_pose is not None else ctask.robot_tasks[s.id].nominal_base_pose
+
+
+def _pad(sol: Solution, t: np.ndarray) -> Solution:
+    """Hold the last configuration until the common end time (``t`` extends the solution's own times)."""
+    from .solution import Trajectory as SolutionTrajectory
+    tr = sol.trajectory
+    n_extra = len(t) - tr.n
+    q = np.vstack([tr.q, np.repeat(tr.q[-1:], n_extra, axis=0)])
+    dq = np.vstack([tr.dq, np.zeros((n_extra, tr.q.shape[1]))])
+    ddq = np.vstack([tr.ddq, np.zeros((n_extra, tr.q.shape[1]))])
+    if n_extra:
+        ddq[tr.n - 1] = 0.0  # at rest from the last move's end on
+    return sol.with_(trajectory=SolutionTrajectory(np.array(t, dtype=float), q, dq, ddq, dict(tr.goal2time)))
+
+
+def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "cyc", settings=None,
+                 priorities: Optional[Sequence[Sequence[str]]] = None) -> CollabSolveResult:
+    """Prioritized planning: the robots are solved one after the other, each around the timed motions of
+    those before it (waiting where needed, ``solvers/schedule.py``); every robot then holds its last
+    configuration until the last one is done. Priority orders tried: ``priorities``, or the given order
+    and its reverse. The first combination the collaborative checker accepts is returned."""
+    from .cell import build_robot
+    from .solve import SolveSettings, solve
+    from .solvers.schedule import OtherRobot, static_cell
+    settings = settings or SolveSettings()
+    ids = [s.id for s in setups]
+    if sorted(ids) != sorted(ctask.robot_ids):
+        raise InputError(f"give one robot for each of the task's robots {list(ctask.robot_ids)}, got {ids}")
+    by_id = {s.id: s for s in setups}
+    assignment = assign_goals(ctask, setups)
+    orders = [tuple(p) for p in priorities] if priorities else list(dict.fromkeys([tuple(ids), tuple(reversed(ids))]))
+    margin = ctask.safety_margin or 0.0
+    message = ""
+    results: Dict[str, object] = {}
+    for order in orders:
+        done: List[Tuple[str, object, object]] = []  # (robot ID, its robot model, its SolveResult)
+        results = {}
+        for rid in order:
+            s = by_id[rid]
+            t_r = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
+            base = _base_of(ctask, s)
+            me = build_robot(static_cell(t_r), s.module_set, _assembly(s), base)
+            colliders = [OtherRobot(me, other, res.solution.trajectory.t, res.solution.trajectory.q, margin=margin,
+                                    names=(rid, oid)) for oid, other, res in done]
+            res = solve(t_r, s.module_set, list(s.order), base_pose=base, cost=cost, settings=settings,
+                        colliders=colliders)
+            results[rid] = res
+            if not res.feasible:
+                message = f"robot {rid} (planned after {[d[0] for d in done]}): {res.stage}: {res.message}"
+                break
+            done.append((rid, me, res))
+        else:
+            dt = ctask.task.dt
+            n = max(int(round(res.solution.trajectory.t[-1] / dt)) for _, _, res in done) + 1
+            t = np.arange(n) * dt
+            sols = {rid: _pad(res.solution, t) for rid, _, res in done}
+            csol = CollabSolution(ctask.id, tuple((rid, sols[rid]) for rid in ctask.robot_ids),
+                                  computation_time=sum(sum(st.seconds for st in r.stages) for r in results.values()),
+                                  notes=f"robodesign solve (prioritized: {', '.join(order)})")
+            verdict = check_collab(ctask, csol, {s.id: s.module_set for s in setups})
+            if verdict.valid:
+                return CollabSolveResult(csol, verdict, order, results, assignment)
+            message = f"priority {', '.join(order)}: " + "; ".join(
+                f"{r or 'cell'}: {v}" for r, v in verdict.violations[:3])
+    return CollabSolveResult(None, None, orders[-1], results, assignment, message)
+
+
+def _assembly(s: RobotSetup):
+    from .assembly import Assembly
+    return Assembly.from_order(s.module_set, list(s.order))
