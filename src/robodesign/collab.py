@@ -248,7 +248,8 @@ class CollabVerdict:
                 "robots": {rid: v.to_json() for rid, v in self.robots.items()}}
 
 
-def _robot_of(module_sets, rid: str):
+def robot_module_set(module_sets, rid: str):
+    """Robot ``rid``'s entry of ``module_sets`` (one set for all, a dict by robot ID, or None)."""
     if module_sets is None or isinstance(module_sets, (str, Path, ModuleSet)):
         return module_sets
     return module_sets.get(rid)
@@ -297,12 +298,12 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
     for rid in ctask.robot_ids:
         s = csol.solution(rid)
         t_r = ctask.task_for(rid, views[rid])
-        v = check(t_r, s, _robot_of(module_sets, rid), settings)
+        v = check(t_r, s, robot_module_set(module_sets, rid), settings)
         verdicts[rid] = v
         viol += [(rid, x) for x in v.violations]
         if not any(x.constraint == "validAssembly" for x in v.violations):
             from .checker import resolve_module_set
-            ms = resolve_module_set(s, _robot_of(module_sets, rid))
+            ms = resolve_module_set(s, robot_module_set(module_sets, rid))
             robots[rid] = build_robot(t_r, ms, s.assembly(ms), s.base_pose)
     any_missing = [g for g in ctask.any_goals if goal_robot.get(g) is None]
     for g in any_missing:

@@ -13,7 +13,7 @@ from .html import render_html
 from .plots import trajectory_plots
 from .scene import build_scene
 
-__all__ = ["build_scene", "render_html", "trajectory_plots", "solution_page", "task_page", "robot_page"]
+__all__ = ["build_scene", "render_html", "trajectory_plots", "solution_page", "collab_page", "task_page", "robot_page"]
 
 
 def _verdict_json(verdict):
@@ -71,6 +71,35 @@ def solution_page(task, solution, module_set=None, *, verdict=None, plots: Union
                 scene["messages"].append(f"plots failed: {e}")
     name = task.id if task is not None else solution.task_id
     return render_html(scene, images, title or f"{name}: {','.join(solution.module_order)}")
+
+
+def collab_page(ctask, csol, module_sets=None, *, verdict=None, fps: float = 25.0, include_collision: bool = False,
+                title: Optional[str] = None) -> str:
+    """The page of a collaborative solution (docs/collaborative.md): every robot in the shared cell,
+    animated together with the moving obstacles on the common time base. ``module_sets``: one module set
+    for every robot, a dict robot ID → module set, or None (each robot's ``moduleSet``)."""
+    from types import SimpleNamespace
+
+    from ..cell import build_robot, resolve_module_set
+    from ..collab import robot_module_set
+    robots = []
+    for rid, sol in csol.robots:
+        ms = resolve_module_set(sol, robot_module_set(module_sets, rid))
+        robots.append((rid, build_robot(ctask.robot_tasks.get(rid, ctask.task), ms, sol.assembly(ms), sol.base_pose),
+                       sol.trajectory))
+    g2t = {}
+    for _, _, tr in robots:
+        g2t.update(tr.goal2time)
+    first = robots[0]
+    tr0 = SimpleNamespace(t=first[2].t, q=first[2].q, goal2time=g2t)
+    info = {"solution": csol.source or "", "robots": [rid for rid, _, _ in robots],
+            "cost_function": ", ".join(csol.cost_functions)}
+    v = _verdict_json(verdict)
+    if v is not None:
+        info["verdict"] = v
+    scene = build_scene(ctask.task, first[1], tr0, fps=fps, include_collision=include_collision, info=info,
+                        others=[(rid, r, tr) for rid, r, tr in robots[1:]])
+    return render_html(scene, None, title or f"{ctask.id}: {', '.join(rid for rid, _, _ in robots)}")
 
 
 def task_page(task, *, include_collision: bool = False, title: Optional[str] = None) -> str:

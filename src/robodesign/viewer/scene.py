@@ -230,16 +230,69 @@ def tolerance_text(tp: ToleratedPose) -> List[str]:
 # ---------------------------------------------------------------------------------------------
 # the scene
 # ---------------------------------------------------------------------------------------------
+def _add_robot_nodes(robot, prefix: str, include_collision: bool, meshes: "_MeshTable", nodes: List[dict]
+                     ) -> List[Tuple[str, int]]:
+    """Append the nodes of ``robot`` (one per body, the TCP triad, the base triad) to ``nodes``, their ids
+    prefixed by ``prefix`` (``""`` for the only robot, ``"<robot ID>/"`` in a collaborative cell); returns
+    [(node id, frame id)] of the nodes that move with the joints."""
+    ms, asm = robot.module_set, robot.assembly
+    robot_nodes: List[Tuple[str, int]] = []
+    for i, mid in enumerate(asm.module_ids):
+        mod = ms[mid]
+        label = robot.instance_labels[i]
+        color = COLORS.get(mod.kind, COLORS["link"])
+        for body in mod.bodies:
+            frame = f"{label}.{body.id}"
+            geoms = []
+            visuals = body.visual
+            from_collision = False
+            if not visuals:
+                visuals, from_collision = body.collision, True
+            for g in visuals:
+                rec = geometry_record(g, meshes, "visual", color)
+                if rec is not None:
+                    if from_collision:
+                        rec["from_collision"] = True
+                    geoms.append(rec)
+            if include_collision:
+                for g in body.collision:
+                    rec = geometry_record(g, meshes, "collision", COLORS["collision"], 0.5)
+                    if rec is not None:
+                        geoms.append(rec)
+            nid = f"{prefix}robot/{frame}"
+            nodes.append({"id": nid, "name": prefix + frame, "group": "robot", "frame": frame, "module": str(mid),
+                          "module_name": mod.name, "instance": i, "kind": mod.kind, "geometries": geoms})
+            robot_nodes.append((nid, robot.frame_id(frame)))
+    nodes.append({"id": f"{prefix}robot/TCP", "name": prefix + "TCP", "group": "tcp", "frame": "TCP",
+                  "geometries": [_triad(TCP_TRIAD)]})
+    robot_nodes.append((f"{prefix}robot/TCP", robot.tcp_frame))
+    nodes.append({"id": f"{prefix}base", "name": prefix + "base pose", "group": "base", "pose": _pose(robot.base_pose),
+                  "geometries": [_triad(BASE_TRIAD)]})
+    return robot_nodes
+
+
+def _frame_poses(robot, q_frames, robot_nodes) -> List[List[np.ndarray]]:
+    """Per animation frame, the world pose of every node of ``robot_nodes``."""
+    out = []
+    for qf in q_frames:
+        robot.fk(qf)  # updates robot.data.oMf
+        oMf = robot.data.oMf
+        out.append([oMf[fid].homogeneous.copy() for _, fid in robot_nodes])
+    return out
+
+
 def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[float]] = None,
                 fps: float = DEFAULT_FPS, include_collision: bool = False, max_triangles: int = MAX_TRIANGLES,
-                info: Optional[dict] = None) -> dict:
+                info: Optional[dict] = None, others: Sequence[Tuple[str, object, object]] = ()) -> dict:
     """Scene data for :func:`robodesign.viewer.html.render_html` (see the module docstring).
 
     ``task``: a :class:`~robodesign.task_spec.Task` (obstacles, goals, base placement) or None.
     ``robot``: a :class:`~robodesign.robot.Robot` (at its ``base_pose``) or None.
     ``trajectory``: a :class:`~robodesign.solution.SolutionTrajectory` for ``robot``, or None for a static robot
     at ``q`` (default zeros). ``include_collision`` adds the collision geometry (hidden by default on
-    the page). Meshes with more than ``max_triangles`` triangles are decimated.
+    the page). Meshes with more than ``max_triangles`` triangles are decimated. ``others``: further robots
+    of a collaborative cell as ``(robot ID, Robot, trajectory on the same time base)``; they animate with
+    the first robot and the moving obstacles.
     """
     meshes = _MeshTable(max_triangles)
     nodes: List[dict] = []
@@ -260,37 +313,7 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
         info.setdefault("modules", list(asm.module_ids))
         info.setdefault("dof", int(robot.dof))
         info.setdefault("base_pose", _pose(robot.base_pose))
-        for i, mid in enumerate(asm.module_ids):
-            mod = ms[mid]
-            label = robot.instance_labels[i]
-            color = COLORS.get(mod.kind, COLORS["link"])
-            for body in mod.bodies:
-                frame = f"{label}.{body.id}"
-                geoms = []
-                visuals = body.visual
-                from_collision = False
-                if not visuals:
-                    visuals, from_collision = body.collision, True
-                for g in visuals:
-                    rec = geometry_record(g, meshes, "visual", color)
-                    if rec is not None:
-                        if from_collision:
-                            rec["from_collision"] = True
-                        geoms.append(rec)
-                if include_collision:
-                    for g in body.collision:
-                        rec = geometry_record(g, meshes, "collision", COLORS["collision"], 0.5)
-                        if rec is not None:
-                            geoms.append(rec)
-                nid = f"robot/{frame}"
-                nodes.append({"id": nid, "name": frame, "group": "robot", "frame": frame, "module": str(mid),
-                              "module_name": mod.name, "instance": i, "kind": mod.kind, "geometries": geoms})
-                robot_nodes.append((nid, robot.frame_id(frame)))
-        nodes.append({"id": "robot/TCP", "name": "TCP", "group": "tcp", "frame": "TCP",
-                      "geometries": [_triad(TCP_TRIAD)]})
-        robot_nodes.append(("robot/TCP", robot.tcp_frame))
-        nodes.append({"id": "base", "name": "base pose", "group": "base", "pose": _pose(robot.base_pose),
-                      "geometries": [_triad(BASE_TRIAD)]})
+        robot_nodes = _add_robot_nodes(robot, "", include_collision, meshes, nodes)
         focus.append(robot.base_pose[:3, 3])
 
         if trajectory is not None:
@@ -314,11 +337,20 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
             q_frames = [q0]
             info.setdefault("q", q0.tolist())
 
-        poses = []  # per frame, per robot node: 4x4
-        for qf in q_frames:
-            robot.fk(qf)  # updates robot.data.oMf
-            oMf = robot.data.oMf
-            poses.append([oMf[fid].homogeneous.copy() for _, fid in robot_nodes])
+        poses = _frame_poses(robot, q_frames, robot_nodes)  # per frame, per robot node: 4x4
+        for name, other, tr in others:  # further robots of a collaborative cell, on the same time base
+            o_nodes = _add_robot_nodes(other, f"{name}/", include_collision, meshes, nodes)
+            focus.append(other.base_pose[:3, 3])
+            if tr is not None and frames_t:
+                to, Qo = np.asarray(tr.t, dtype=float), np.asarray(tr.q, dtype=float)
+                if Qo.ndim != 2 or Qo.shape[1] != other.dof:
+                    raise ValueError(f"robot {name}: trajectory has {Qo.shape[-1]} joint columns, the robot {other.dof}")
+                qo = [_q_at(to, Qo, tt) for tt, _ in frames_t]
+            else:
+                qo = [np.zeros(other.dof)] * len(q_frames)
+            o_poses = _frame_poses(other, qo, o_nodes)
+            poses = [a + b for a, b in zip(poses, o_poses)]
+            robot_nodes = robot_nodes + o_nodes
         for j, (nid, _) in enumerate(robot_nodes):
             node = next(n for n in nodes if n["id"] == nid)
             node["pose"] = _pose(poses[0][j])

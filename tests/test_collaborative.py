@@ -1,0 +1,201 @@
+"""Collaborative tasks: two robots in one cell (format, robot–robot checking between samples, prioritized solve)."""
+import json
+import sys
+from pathlib import Path
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robodesign import load_module_set
+from robodesign.cell import build_robot
+from robodesign.collab import (CollabSolution, RobotSetup, check_collab, load_collab_solution, load_collab_task,
+                               parse_collab_task, solve_collab)
+from robodesign.errors import InputError
+from robodesign.pair_sweep import RobotPairSweep
+from robodesign.solvers.schedule import static_cell
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "assets" / "tasks"))
+import make_tasks as mt  # noqa: E402
+
+ORDER = tuple(mt.DEFAULT_ORDER)
+
+
+@pytest.fixture(scope="module")
+def ms():
+    return load_module_set("robodesign_arm")
+
+
+@pytest.fixture(scope="module")
+def ctask():
+    return load_collab_task(mt.collab_task_path("shared_conveyor"))
+
+
+@pytest.fixture(scope="module")
+def solved(ctask, ms):
+    return solve_collab(ctask, [RobotSetup(rid, ms, ORDER) for rid in ctask.robot_ids])
+
+
+def _robots(ctask, ms):
+    return {rid: build_robot(static_cell(ctask.robot_tasks[rid]), ms,
+                             __import__("robodesign.assembly", fromlist=["Assembly"]).Assembly.from_order(ms, list(ORDER)),
+                             ctask.robot_tasks[rid].nominal_base_pose) for rid in ctask.robot_ids}
+
+
+def _dense_min_distance(a, b, qa, qb):
+    """Independent: the smallest distance between any geometry of robot a at qa and of robot b at qb."""
+    out = np.inf
+    placements = []
+    for r, q in ((a, qa), (b, qb)):
+        data, gd = r.model.createData(), pin.GeometryData(r.geom_model)
+        pin.updateGeometryPlacements(r.model, data, r.geom_model, gd, q)
+        placements.append([(r.geom_model.geometryObjects[i].geometry, gd.oMg[i]) for i in range(r.n_collision_geometries)])
+    for ga, Ma in placements[0]:
+        for gb, Mb in placements[1]:
+            res = coal.DistanceResult()
+            d = coal.distance(ga, coal.Transform3s(Ma.rotation, Ma.translation), gb,
+                              coal.Transform3s(Mb.rotation, Mb.translation), coal.DistanceRequest(), res)
+            out = min(out, d)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------------
+# format
+# ---------------------------------------------------------------------------------------------------------
+def test_task_reads_robots_assignment_and_base_placements(ctask):
+    assert ctask.robot_ids == ("left", "right")
+    assert ctask.goals_of("left") == ("left_pick", "left_place")
+    assert ctask.goals_of("right") == ("right_pick", "right_place")
+    assert ctask.any_goals == ("inspect",)
+    assert ctask.safety_margin == 0.01
+    np.testing.assert_allclose(ctask.robot_tasks["left"].nominal_base_pose[:3, 3], [0, mt.SC_BASE_Y, 0])
+    np.testing.assert_allclose(ctask.robot_tasks["right"].nominal_base_pose[:3, 3], [0, -mt.SC_BASE_Y, 0])
+    view = ctask.task_for("left", ["left_pick", "inspect"])
+    assert [g.id for g in view.goals] == ["left_pick", "inspect"]
+
+
+def test_task_errors_name_the_field(tmp_path):
+    data = mt._clean(mt.shared_conveyor())
+    data["goals"][0]["robot"] = "middle"
+    p = tmp_path / "robodesign-collab" / "bad.json"
+    p.parent.mkdir()
+    with pytest.raises(InputError, match=r"bad.json: goals\[0\].robot: unknown robot 'middle'"):
+        parse_collab_task(data, p)
+    data = mt._clean(mt.shared_conveyor())
+    data["robots"][1]["ID"] = "left"
+    with pytest.raises(InputError, match=r"robots\[1\].ID: duplicate robot ID 'left'"):
+        parse_collab_task(data, p)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# robot–robot collisions between samples
+# ---------------------------------------------------------------------------------------------------------
+def test_pair_sweep_finds_the_first_contact_between_samples(ctask, ms):
+    """Both arms swing their first joint towards each other over 20 samples: the certified sweep reports
+    the first contact inside the step where a dense independent scan (200 sub-steps per step) first
+    finds the robots overlapping, no later than it."""
+    robots = _robots(ctask, ms)
+    a, b = robots["left"], robots["right"]
+    n = 21
+    qa0 = np.zeros(a.dof)
+    # pitch the shoulder so the arms reach out horizontally over the belt towards each other
+    Q = []
+    for k in range(n):
+        qa = qa0.copy()
+        qb = qa0.copy()
+        qa[1] = qb[1] = 1.5 * k / (n - 1)
+        Q.append(np.concatenate([qa, qb]))
+    Q = np.array(Q)
+    # choose the pitch sign that brings the TCPs towards the belt (y → 0)
+    if abs(a.fk(Q[-1, :a.dof])[1, 3]) > mt.SC_BASE_Y:
+        Q[:, 1] *= -1
+        Q[:, a.dof + 1] *= -1
+    sweep = RobotPairSweep(a, b, margin=0.0, names=("left", "right"))
+    events = sweep.check(Q, first_only=True)
+    assert events, "the arms should meet over the belt"
+    e = events[0]
+    t_sweep = e.sample + e.s
+    # independent dense scan
+    t_dense = None
+    for k in range(n - 1):
+        for s in np.linspace(0, 1, 201)[:-1]:
+            q = Q[k] + s * (Q[k + 1] - Q[k])
+            if _dense_min_distance(a, b, q[:a.dof], q[a.dof:]) <= 0:
+                t_dense = k + s
+                break
+        if t_dense is not None:
+            break
+    assert t_dense is not None
+    assert t_sweep <= t_dense + 1e-9  # never later than the first overlap (conservative)
+    assert t_dense - t_sweep <= 1.0 / 200 + 1e-6  # and the exact contact instant, within the scan's step
+    assert e.first.startswith("left:") and e.second.startswith("right:")
+
+
+def _swing(dof, joint, D, T, dt):
+    """Rest-to-rest bang-bang move of one joint by D in T seconds, sampled exactly (q quadratic, dq linear,
+    ddq piecewise constant: the integration rule of a CoBRA solution holds to rounding)."""
+    n = int(round(T / dt))
+    t = np.arange(n + 1) * dt
+    a = 4 * D / T ** 2
+    q = np.where(t <= T / 2, 0.5 * a * t ** 2, D - 0.5 * a * (T - t) ** 2)
+    dq = np.where(t <= T / 2, a * t, a * (T - t))
+    ddq = np.where(t < T / 2 - 1e-12, a, -a)
+    ddq[-1] = 0.0
+    Q, DQ, DDQ = (np.zeros((n + 1, dof)) for _ in range(3))
+    Q[:, joint], DQ[:, joint], DDQ[:, joint] = q, dq, ddq
+    return t, Q, DQ, DDQ
+
+
+def test_checker_finds_robot_robot_collision_at_the_right_time(ctask, ms):
+    """Both arms pitch their shoulders towards the belt at the same time (no waiting): the checker reports
+    the robot–robot collision between samples, at the instant a dense independent scan finds it."""
+    from robodesign.solution import Solution, SolutionTrajectory
+    robots = _robots(ctask, ms)
+    a = robots["left"]
+    D = 1.5 if abs(a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3]) < mt.SC_BASE_Y else -1.5
+    t, Q, DQ, DDQ = _swing(a.dof, 1, D, 2.0, ctask.task.dt)
+    sols = tuple((rid, Solution(task_id=ctask.id, cost_function="cyc", module_set="robodesign_arm",
+                                module_order=ORDER, base_pose=ctask.robot_tasks[rid].nominal_base_pose,
+                                trajectory=SolutionTrajectory(t, Q, DQ, DDQ, {})))
+                 for rid in ctask.robot_ids)
+    v = check_collab(ctask, CollabSolution(ctask.id, sols), ms)
+    hits = [x for r, x in v.violations if x.constraint == "robotCollisionFree"]
+    assert not v.valid and hits, [str(x) for _, x in v.violations][:5]
+    # independent: first time the two robots come within the margin, scanning 50 sub-steps per step
+    b = robots["right"]
+    t_dense = None
+    for k in range(len(t) - 1):
+        for s in np.linspace(0, 1, 51)[:-1]:
+            q = Q[k] + s * (Q[k + 1] - Q[k])
+            if _dense_min_distance(a, b, q, q) <= ctask.safety_margin:
+                t_dense = t[k] + s * (t[k + 1] - t[k])
+                break
+        if t_dense is not None:
+            break
+    assert t_dense is not None
+    first = min(hits, key=lambda x: x.time)
+    assert first.time <= t_dense + 1e-9
+    assert t_dense - first.time <= ctask.task.dt / 50 + 1e-6
+
+
+def test_prioritized_solve_is_valid_and_round_trips(ctask, ms, solved, tmp_path):
+    assert solved.feasible, solved.message
+    sol = solved.solution
+    # every goal achieved by its robot; the any-robot goal by the robot nearest to it
+    assert set(sol.solution("left").trajectory.goal2time) >= {"left_pick", "left_place"}
+    assert set(sol.solution("right").trajectory.goal2time) >= {"right_pick", "right_place"}
+    assert solved.verdict.goal_robot["inspect"] in ("left", "right")
+    # the robots never come closer than the margin (independent check at every sample)
+    robots = _robots(ctask, ms)
+    qa, qb = sol.solution("left").trajectory.q, sol.solution("right").trajectory.q
+    dmin = min(_dense_min_distance(robots["left"], robots["right"], qa[k], qb[k]) for k in range(0, len(qa), 5))
+    assert dmin > ctask.safety_margin
+    # one time base, JSON round trip unchanged
+    p = sol.write(tmp_path / "sol.json")
+    back = load_collab_solution(p)
+    assert back.to_json() == sol.to_json()
+    assert json.loads(p.read_text())["collaborative"] is True
+    v2 = check_collab(ctask, back, ms)
+    assert v2.valid and v2.costs == solved.verdict.costs
