@@ -66,8 +66,8 @@ def _dense_min_distance(a, b, qa, qb):
 # ---------------------------------------------------------------------------------------------------------
 def test_task_reads_robots_assignment_and_base_placements(ctask):
     assert ctask.robot_ids == ("left", "right")
-    assert ctask.goals_of("left") == ("left_pick", "left_place")
-    assert ctask.goals_of("right") == ("right_pick", "right_place")
+    assert ctask.goals_of("left") == ("left_pick", "left_place", "left_home")
+    assert ctask.goals_of("right") == ("right_pick", "right_place", "right_home")
     assert ctask.any_goals == ("inspect",)
     assert ctask.safety_margin == 0.01
     np.testing.assert_allclose(ctask.robot_tasks["left"].nominal_base_pose[:3, 3], [0, mt.SC_BASE_Y, 0])
@@ -108,8 +108,8 @@ def test_pair_sweep_finds_the_first_contact_between_samples(ctask, ms):
         qa[1] = qb[1] = 1.5 * k / (n - 1)
         Q.append(np.concatenate([qa, qb]))
     Q = np.array(Q)
-    # choose the pitch sign that brings the TCPs towards the belt (y → 0)
-    if abs(a.fk(Q[-1, :a.dof])[1, 3]) > mt.SC_BASE_Y:
+    # choose the pitch sign that brings the left arm's TCP towards the belt (y below its base's y)
+    if a.fk(Q[-1, :a.dof])[1, 3] > mt.SC_BASE_Y:
         Q[:, 1] *= -1
         Q[:, a.dof + 1] *= -1
     sweep = RobotPairSweep(a, b, margin=0.0, names=("left", "right"))
@@ -154,7 +154,7 @@ def test_checker_finds_robot_robot_collision_at_the_right_time(ctask, ms):
     from robodesign.solution import Solution, SolutionTrajectory
     robots = _robots(ctask, ms)
     a = robots["left"]
-    D = 1.5 if abs(a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3]) < mt.SC_BASE_Y else -1.5
+    D = 1.5 if a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3] < mt.SC_BASE_Y else -1.5  # towards the belt
     t, Q, DQ, DDQ = _swing(a.dof, 1, D, 2.0, ctask.task.dt)
     sols = tuple((rid, Solution(task_id=ctask.id, cost_function="cyc", module_set="robodesign_arm",
                                 module_order=ORDER, base_pose=ctask.robot_tasks[rid].nominal_base_pose,

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from robodesign import load_module_set
-from robodesign.checker import build_robot, check
+from robodesign.cell import build_robot
+from robodesign.checker import check
 from robodesign.solve import solve
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
 from robodesign.task_io import load_task, parse_task
@@ -137,7 +138,7 @@ def test_builtin_wait_for_shuttle_is_solved_only_by_waiting(ms):
     # the shuttle covers the station until WS_PARKED_UNTIL and needs WS_SHUTTLE / (1.5 m / WS_LEAVE s) to
     # clear its own width: the place goal cannot be reached before
     g2t = res.solution.trajectory.goal2time
-    assert g2t["place"] >= mt.WS_PARKED_UNTIL
+    assert g2t["place"] >= mt.SH_PARKED_UNTIL
     # a planner that sees the shuttle frozen at its t = 0 pose (the old solver) cannot solve the task
     shuttle = task.obstacles[1]
     frozen = replace(task, obstacles=(task.obstacles[0], replace(shuttle, motion_t=None, motion_poses=None)))

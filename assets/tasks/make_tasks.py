@@ -369,26 +369,26 @@ def timed_follow() -> dict:
 # ---------------------------------------------------------------------------------------------------------
 # 6. wait_for_shuttle — a moving obstacle parks over the place station: the robot must wait for it
 # ---------------------------------------------------------------------------------------------------------
-WS_TABLE_TOP = 0.20
-WS_PICK = (0.50, 0.35, WS_TABLE_TOP + 0.10)
-WS_PLACE = (0.50, -0.35, WS_TABLE_TOP + 0.10)
-WS_SHUTTLE = 0.30  # cube edge
-WS_PARKED_UNTIL = 2.0  # s: the shuttle covers the place station until then ...
-WS_LEAVE = 1.0  # s: ... then drives off along +x in this time, and stays out of reach
-WS_STEP = 0.1  # s between shuttle poses
+SH_TABLE_TOP = 0.20
+SH_PICK = (0.50, 0.35, SH_TABLE_TOP + 0.10)
+SH_PLACE = (0.50, -0.35, SH_TABLE_TOP + 0.10)
+SH_SHUTTLE = 0.30  # cube edge
+SH_PARKED_UNTIL = 2.0  # s: the shuttle covers the place station until then ...
+SH_LEAVE = 1.0  # s: ... then drives off along +x in this time, and stays out of reach
+SH_STEP = 0.1  # s between shuttle poses
 
 
 def shuttle_motion() -> dict:
-    """The shuttle sits over the place station until ``WS_PARKED_UNTIL``, then drives 1.5 m along +x in
-    ``WS_LEAVE`` s (one pose every ``WS_STEP`` s, applied to its pose at t = 0) and stays there."""
-    n = int(round((WS_PARKED_UNTIL + WS_LEAVE) / WS_STEP)) + 1
-    ts = np.arange(n) * WS_STEP
-    xs = np.clip((ts - WS_PARKED_UNTIL) / WS_LEAVE, 0.0, 1.0) * 1.5
-    return {"t": WS_STEP, "pose": [T((x, 0.0, 0.0)) for x in xs]}
+    """The shuttle sits over the place station until ``SH_PARKED_UNTIL``, then drives 1.5 m along +x in
+    ``SH_LEAVE`` s (one pose every ``SH_STEP`` s, applied to its pose at t = 0) and stays there."""
+    n = int(round((SH_PARKED_UNTIL + SH_LEAVE) / SH_STEP)) + 1
+    ts = np.arange(n) * SH_STEP
+    xs = np.clip((ts - SH_PARKED_UNTIL) / SH_LEAVE, 0.0, 1.0) * 1.5
+    return {"t": SH_STEP, "pose": [T((x, 0.0, 0.0)) for x in xs]}
 
 
 def wait_for_shuttle() -> dict:
-    top = WS_TABLE_TOP
+    top = SH_TABLE_TOP
     tol = dict(r_sph=(0.0, 0.005), N_x=(-0.05, 0.05), N_y=(-0.05, 0.05))
     return {
         "header": header("wait_for_shuttle", "Place a part once the shuttle has left the station",
@@ -396,7 +396,7 @@ def wait_for_shuttle() -> dict:
         "obstacles": [
             obstacle("table", "table", [box_between((0.30, -0.60, 0.0), (0.75, 0.60, top))]),
             obstacle("shuttle", "shuttle parked over the place station (moving)",
-                     [box((WS_PLACE[0], WS_PLACE[1], top + WS_SHUTTLE / 2 + 0.002), (WS_SHUTTLE,) * 3)],
+                     [box((SH_PLACE[0], SH_PLACE[1], top + SH_SHUTTLE / 2 + 0.002), (SH_SHUTTLE,) * 3)],
                      trajectory=shuttle_motion()),
         ],
         "constraints": [
@@ -407,8 +407,8 @@ def wait_for_shuttle() -> dict:
             {"type": "allGoalsFulfilledInOrder", "order": ["pick", "place"]},
         ],
         "goals": [
-            {"ID": "pick", "type": "reach", "goalPose": tolerated(T(WS_PICK, TOOL_DOWN), **tol)},
-            {"ID": "place", "type": "reach", "goalPose": tolerated(T(WS_PLACE, TOOL_DOWN), **tol)},
+            {"ID": "pick", "type": "reach", "goalPose": tolerated(T(SH_PICK, TOOL_DOWN), **tol)},
+            {"ID": "place", "type": "reach", "goalPose": tolerated(T(SH_PLACE, TOOL_DOWN), **tol)},
         ],
     }
 
@@ -427,7 +427,7 @@ TASKS = {
 # ---------------------------------------------------------------------------------------------------------
 COLLAB_PACKAGE = "robodesign-collab"
 SC_BELT_TOP = 0.20
-SC_BASE_Y = 0.65  # the two arms stand on either side of the belt, facing it
+SC_BASE_Y = 0.45  # the two arms stand on either side of the belt, facing it
 SC_Z = SC_BELT_TOP + 0.10
 
 
@@ -438,15 +438,18 @@ def shared_conveyor() -> dict:
     base_tol = dict(r_sph=(0.0, 0.001), Theta_R=(0.0, 0.01))
 
     def goal(gid, p, robot):
-        return {"ID": gid, "type": "reach", "robot": robot, "goalPose": tolerated(T(p, TOOL_DOWN), **tol)}
+        """Tool down, its x axis pointing back at the robot's base (the natural wrist posture)."""
+        by = SC_BASE_Y if robot == "left" else -SC_BASE_Y
+        R = rz(math.atan2(by - p[1], -p[0])) @ TOOL_DOWN
+        return {"ID": gid, "type": "reach", "robot": robot, "goalPose": tolerated(T(p, R), **tol)}
     h = header("shared_conveyor", "Two arms share a conveyor belt", ["collaborative"])
     h["ID"] = f"{COLLAB_PACKAGE}/shared_conveyor"
     return {
         "header": h,
         "robots": [
-            {"ID": "left", "name": "arm at y = +0.65 m", "basePlacement": tolerated(T((0.0, SC_BASE_Y, 0.0), rz(-PI / 2)),
+            {"ID": "left", "name": "arm at y = +0.45 m", "basePlacement": tolerated(T((0.0, SC_BASE_Y, 0.0), rz(-PI / 2)),
                                                                                    **base_tol)},
-            {"ID": "right", "name": "arm at y = -0.65 m", "basePlacement": tolerated(T((0.0, -SC_BASE_Y, 0.0), rz(PI / 2)),
+            {"ID": "right", "name": "arm at y = -0.45 m", "basePlacement": tolerated(T((0.0, -SC_BASE_Y, 0.0), rz(PI / 2)),
                                                                                     **base_tol)},
         ],
         "obstacles": [obstacle("belt", "conveyor belt", [box_between((-0.9, -0.15, 0.0), (0.9, 0.15, SC_BELT_TOP))])],
@@ -457,11 +460,14 @@ def shared_conveyor() -> dict:
             {"type": "allGoalsFulfilled"},
         ],
         "goals": [
-            goal("left_pick", (-0.30, 0.0, SC_Z), "left"),
-            goal("left_place", (0.30, 0.0, SC_Z), "left"),
-            goal("right_pick", (0.30, 0.0, SC_Z), "right"),
-            goal("right_place", (-0.30, 0.0, SC_Z), "right"),
-            goal("inspect", (0.0, 0.0, SC_Z + 0.15), None),
+            goal("left_pick", (-0.25, 0.0, SC_Z), "left"),
+            goal("left_place", (0.25, 0.0, SC_Z), "left"),
+            goal("right_pick", (0.25, 0.0, SC_Z), "right"),
+            goal("right_place", (-0.25, 0.0, SC_Z), "right"),
+            {"ID": "inspect", "type": "reach", "robot": None,  # any robot; the TCP within 1 cm, any orientation
+             "goalPose": tolerated(T((0.0, 0.0, SC_Z + 0.15)), r_sph=(0.0, 0.01))},
+            {"ID": "left_home", "type": "returnTo", "robot": "left"},  # back to the start, out of the way
+            {"ID": "right_home", "type": "returnTo", "robot": "right"},
         ],
     }
 

@@ -6,7 +6,7 @@ plotted robot are the same object.
 """
 from __future__ import annotations
 
-from typing import List, Optional, Union
+from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -17,6 +17,7 @@ from .module_io import load_module_set
 from .module_spec import ModuleSet
 from .robot import Obstacle, Robot
 from .solution import Solution
+from .sweep import CollisionEvent, SweepChecker
 from .task_spec import CollisionFree, Task
 
 
@@ -66,3 +67,66 @@ def solution_robot(task: Optional[Task], solution: Solution, module_set=None) ->
     the solution's). Raises AssemblyError for an invalid assembly, InputError for an unknown module set."""
     ms = resolve_module_set(solution, module_set)
     return build_robot(task, ms, solution.assembly(ms), solution.base_pose)
+
+
+def moving_obstacle_indices(robot: Robot, task: Task) -> List[int]:
+    """Indices into ``robot.obstacles`` of the collision objects of the task's moving obstacles."""
+    moving_ids = {ob.id for ob in task.obstacles if ob.moving}
+    return [i for i, ob in enumerate(robot.obstacles) if obstacle_spec_id(ob) in moving_ids]
+
+
+def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: np.ndarray, Q: np.ndarray, *,
+                           first_only: bool = False, between_samples: bool = True,
+                           checker: Optional[SweepChecker] = None) -> List[CollisionEvent]:
+    """Collisions of the motion through the rows of ``Q`` at the times ``t`` with the moving obstacles
+    ``moving`` (indices into ``robot.obstacles``, e.g. :func:`moving_obstacle_indices`); event samples index
+    the rows of ``Q``.
+
+    An obstacle's pose is the one in effect at a sample's time (zero-order hold,
+    ``ObstacleSpec.transform_at``) and is kept over the motion to the next sample; runs of samples with
+    unchanged obstacle poses are certified together by conservative advancement (``between_samples``; else
+    only the samples are checked). One event per pair and contact episode, or only the first event with
+    ``first_only``. ``checker``: a SweepChecker over exactly these robot–obstacle pairs, to reuse it.
+    """
+    specs = {ob.id: ob for ob in task.obstacles if ob.moving}
+    movers = [(i, specs[obstacle_spec_id(robot.obstacles[i])], np.array(robot.obstacles[i].pose, dtype=float))
+              for i in moving]  # (robot obstacle index, spec, t=0 world pose of the geometry)
+    chk = checker or SweepChecker(robot, check_self=False, check_env=True, obstacles=list(moving))
+    t = np.asarray(t, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    keys = [tuple(int(np.searchsorted(sp.motion_t, tk + 1e-12, side="right")) for sp in specs.values()) for tk in t]
+    events: List[CollisionEvent] = []
+    last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
+    a = 0
+    try:
+        while a < len(keys):
+            b = a
+            while b + 1 < len(keys) and keys[b + 1] == keys[a]:
+                b += 1
+            for i, sp, pose0 in movers:
+                robot.move_obstacle(i, sp.transform_at(float(t[a])) @ pose0)
+            if not between_samples:
+                hits = np.nonzero(chk.sample_collisions(Q[a:b + 1]))[0]
+                events += [CollisionEvent(int(k + a), 0.0, "", "", 0.0, True) for k in hits]
+                if first_only and events:
+                    return events[:1]
+                a = b + 1
+                continue
+            end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
+            Qr = Q[a:end + 1]
+            evs = chk.check(Qr, first_only=first_only)
+            for e in evs:
+                e = CollisionEvent(e.sample + a, e.s, e.first, e.second, e.distance, e.environment)
+                if first_only:
+                    return [e]
+                pair = (e.first, e.second)
+                if pair not in last or e.sample > last[pair] + 1:  # else: the episode of the previous run
+                    events.append(e)
+                last[pair] = e.sample
+            for pair in chk.in_contact(Qr[-1], {(e.first, e.second) for e in evs}):
+                last[pair] = end  # still in contact at the end of this run
+            a = b + 1
+    finally:
+        for i, _, pose0 in movers:
+            robot.move_obstacle(i, pose0)
+    return events

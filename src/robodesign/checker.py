@@ -19,7 +19,6 @@ judges uploads, solver output and optimizer candidates. Semantics (docs/checker.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -27,7 +26,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from .cell import obstacle_spec_id, solution_robot
+from .cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
 from .costs import CostContext, MissingQuantityError, known_costs, parse_cost
 from .errors import AssemblyError
 from .quantities import TrajectoryQuantities, find_time_index
@@ -304,9 +303,8 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     r = tq.robot
     env = isinstance(c, CollisionFree)
     Q = tq.q[k0:k1 + 1]
-    moving_ids = {ob.id for ob in tq.task.obstacles if ob.moving} if env else set()
-    moving = [i for i, ob in enumerate(r.obstacles) if obstacle_spec_id(ob) in moving_ids]
-    # pairs with moving obstacles are checked piecewise (_moving_obstacle_events), all others here
+    moving = moving_obstacle_indices(r, tq.task) if env else []
+    # pairs with moving obstacles are checked piecewise (cell.moving_obstacle_events), all others here
     static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
     checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
     if settings.between_samples:
@@ -314,7 +312,9 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     else:
         events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
     if moving:
-        events = sorted(events + _moving_obstacle_events(tq, k0, k1, moving, settings), key=lambda e: (e.sample, e.s))
+        events = sorted(events + moving_obstacle_events(r, tq.task, moving, tq.t[k0:k1 + 1], Q,
+                                                        between_samples=settings.between_samples),
+                        key=lambda e: (e.sample, e.s))
     limit = settings.max_violations_per_constraint
     out = []
     for e in events[:limit]:
@@ -329,52 +329,6 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     if len(events) > limit:
         out.append(Violation(c.type, f"... and {len(events) - limit} more collisions"))
     return out
-
-
-def _moving_obstacle_events(tq: TrajectoryQuantities, k0: int, k1: int, moving: List[int], settings: CheckSettings):
-    """Collisions with the moving obstacles ``moving`` (indices into ``robot.obstacles``) over samples k0..k1
-    (event samples relative to k0). An obstacle's pose is the one in effect at a sample's time (zero-order
-    hold, ``ObstacleSpec.transform_at``) and is kept over the motion to the next sample; runs of samples
-    with unchanged obstacle poses are certified together."""
-    robot = tq.robot
-    specs = {ob.id: ob for ob in tq.task.obstacles if ob.moving}
-    movers = [(i, specs[obstacle_spec_id(robot.obstacles[i])], np.array(robot.obstacles[i].pose, dtype=float))
-              for i in moving]  # (robot obstacle index, spec, t=0 world pose of the geometry)
-    chk = SweepChecker(robot, check_self=False, check_env=True, obstacles=moving)
-    t = tq.t
-    keys = [tuple(int(np.searchsorted(sp.motion_t, t[k] + 1e-12, side="right")) for sp in specs.values())
-            for k in range(k0, k1 + 1)]
-    events = []
-    last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
-    a = 0
-    try:
-        while a < len(keys):
-            b = a
-            while b + 1 < len(keys) and keys[b + 1] == keys[a]:
-                b += 1
-            for i, sp, pose0 in movers:
-                robot.move_obstacle(i, sp.transform_at(float(t[k0 + a])) @ pose0)
-            if not settings.between_samples:
-                hits = np.nonzero(chk.sample_collisions(tq.q[k0 + a:k0 + b + 1]))[0]
-                events += [CollisionEvent(int(k + a), 0.0, "", "", 0.0, True) for k in hits]
-                a = b + 1
-                continue
-            end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
-            Q = tq.q[k0 + a:k0 + end + 1]
-            evs = chk.check(Q, first_only=False)
-            for e in evs:
-                e = dataclasses.replace(e, sample=e.sample + a)
-                pair = (e.first, e.second)
-                if pair not in last or e.sample > last[pair] + 1:  # else: the episode of the previous run
-                    events.append(e)
-                last[pair] = e.sample
-            for pair in chk.in_contact(Q[-1], {(e.first, e.second) for e in evs}):
-                last[pair] = end  # still in contact at the end of this run
-            a = b + 1
-    finally:
-        for i, _, pose0 in movers:
-            robot.move_obstacle(i, pose0)
-    return events
 
 
 def _check_order(c: GoalsInOrder, g2t: Dict[str, float]) -> List[Violation]:

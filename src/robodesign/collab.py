@@ -21,11 +21,12 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from .cell import build_robot, resolve_module_set
 from .checker import CheckSettings, Verdict, Violation, check
 from .errors import InputError
 from .jsonio import dumps_json, load_json
 from .module_spec import ModuleSet
-from .solution import Solution, parse_solution
+from .solution import Solution, SolutionTrajectory, parse_solution
 from .task_io import parse_task, resolve_task_path
 from .task_spec import CollisionFree, GoalsInOrder, Task
 
@@ -259,7 +260,6 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
                  settings: Optional[CheckSettings] = None) -> CollabVerdict:
     """Judge a collaborative solution. ``module_sets``: one module set (name, path or ModuleSet) for
     every robot, a dict robot ID → module set, or None (each robot's ``moduleSet``)."""
-    from .cell import build_robot
     from .pair_sweep import RobotPairSweep
     viol: List[Tuple[Optional[str], Violation]] = []
     if csol.task_id != ctask.id:
@@ -302,7 +302,6 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
         verdicts[rid] = v
         viol += [(rid, x) for x in v.violations]
         if not any(x.constraint == "validAssembly" for x in v.violations):
-            from .checker import resolve_module_set
             ms = resolve_module_set(s, robot_module_set(module_sets, rid))
             robots[rid] = build_robot(t_r, ms, s.assembly(ms), s.base_pose)
     any_missing = [g for g in ctask.any_goals if goal_robot.get(g) is None]
@@ -384,7 +383,6 @@ def _base_of(ctask: CollabTask, s: RobotSetup) -> np.ndarray:
 
 def _pad(sol: Solution, t: np.ndarray) -> Solution:
     """Hold the last configuration until the common end time (``t`` extends the solution's own times)."""
-    from .solution import Trajectory as SolutionTrajectory
     tr = sol.trajectory
     n_extra = len(t) - tr.n
     q = np.vstack([tr.q, np.repeat(tr.q[-1:], n_extra, axis=0)])
@@ -397,11 +395,11 @@ def _pad(sol: Solution, t: np.ndarray) -> Solution:
 
 def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "cyc", settings=None,
                  priorities: Optional[Sequence[Sequence[str]]] = None) -> CollabSolveResult:
-    """Prioritized planning: the robots are solved one after the other, each around the timed motions of
-    those before it (waiting where needed, ``solvers/schedule.py``); every robot then holds its last
-    configuration until the last one is done. Priority orders tried: ``priorities``, or the given order
+    """Prioritized planning: the robots are solved one after the other, each starting from its home
+    configuration (zero joint angles where collision-free) and waiting, before each move, until the move
+    misses the timed motions of the robots before it (``solvers/schedule.py``); every robot then holds its
+    last configuration until the last one is done. Priority orders tried: ``priorities``, or the given order
     and its reverse. The first combination the collaborative checker accepts is returned."""
-    from .cell import build_robot
     from .solve import SolveSettings, solve
     from .solvers.schedule import OtherRobot, static_cell
     settings = settings or SolveSettings()
@@ -425,7 +423,7 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "c
             colliders = [OtherRobot(me, other, res.solution.trajectory.t, res.solution.trajectory.q, margin=margin,
                                     names=(rid, oid)) for oid, other, res in done]
             res = solve(t_r, s.module_set, list(s.order), base_pose=base, cost=cost, settings=settings,
-                        colliders=colliders)
+                        colliders=colliders, start=_home(me))
             results[rid] = res
             if not res.feasible:
                 message = f"robot {rid} (planned after {[d[0] for d in done]}): {res.stage}: {res.message}"
@@ -445,6 +443,13 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "c
             message = f"priority {', '.join(order)}: " + "; ".join(
                 f"{r or 'cell'}: {v}" for r, v in verdict.violations[:3])
     return CollabSolveResult(None, None, orders[-1], results, assignment, message)
+
+
+def _home(robot) -> Optional[np.ndarray]:
+    """Where a robot of a shared cell starts (and waits for the others): its zero configuration (clipped
+    into the joint limits) when that is collision-free, else the solver's default start."""
+    q = np.clip(np.zeros(robot.dof), robot.q_lower, robot.q_upper)
+    return None if robot.in_collision(q) else q
 
 
 def _assembly(s: RobotSetup):

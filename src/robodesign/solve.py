@@ -144,18 +144,21 @@ class _Fail(Exception):
 
 
 def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
-          cost: str = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = ()) -> SolveResult:
+          cost: str = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = (),
+          start: Optional[np.ndarray] = None) -> SolveResult:
     """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
     robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError.
 
     IK and planning see the static cell; the task's moving obstacles and the extra timed ``colliders``
     (e.g. another robot's motion, :class:`robodesign.solvers.schedule.OtherRobot`) are avoided in time:
-    before each move the robot waits at rest as long as needed (``solvers/schedule.py``)."""
+    before each move the robot waits at rest as long as needed (``solvers/schedule.py``). ``start``: the
+    configuration the motion starts from (default: that of the first pose goal); a ``returnTo`` the start
+    returns there."""
     settings = settings or SolveSettings()
     parse_cost(cost)  # bad input, not an infeasible robot
     res = SolveResult(num_goals=len(task.goals))
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
-    run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders)
+    run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders, start)
     for name in STAGES:
         if name == "trajopt" and not settings.optimize_trajectory:
             continue
@@ -174,9 +177,9 @@ class _Pipeline:
     """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
     to stop the pipeline with its reason."""
 
-    def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders=()):
+    def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders=(), start=None):
         self.task, self.module_set, self.order_or_assembly = task, module_set, order_or_assembly
-        self.colliders = list(colliders)
+        self.colliders, self.start = list(colliders), start
         self.base_pose, self.cost, self.settings, self.res = base_pose, cost, settings, res
         self.rng = np.random.default_rng(settings.seed)
 
@@ -202,7 +205,7 @@ class _Pipeline:
 
     def ik(self) -> None:
         self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost,
-                                   colliders=self.colliders)
+                                   colliders=self.colliders, start=self.start)
         self.planner.solve_ik()
 
     def static_torque(self) -> None:
@@ -289,9 +292,10 @@ class GoalPlanner:
     actions and paths of the goal sequence, and turns them into a motion."""
 
     def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc",
-                 colliders: Sequence = ()):
+                 colliders: Sequence = (), start: Optional[np.ndarray] = None):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
         self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
+        self.start = None if start is None else np.asarray(start, dtype=float)  # given start configuration
         terms = dict(parse_cost(cost).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
         # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
@@ -377,7 +381,11 @@ class GoalPlanner:
         self.choice = choice
         # the start configuration
         first_pose = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
-        if first_pose is None:
+        if self.start is not None:
+            if self.robot.in_collision(self.start):
+                raise _Fail("the start configuration is in collision")
+            q0 = self.start
+        elif first_pose is None:
             q0 = self._free_configuration()
         elif isinstance(first_pose, Follow):
             q0 = self.follow_ik[first_pose.id][0]
@@ -445,7 +453,7 @@ class GoalPlanner:
         first = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
         if first is None:
             return []
-        nodes = []
+        nodes = [] if self.start is None else [Fixed(self.start)]
         for g in self.order:
             if isinstance(g, (At, Reach)):
                 nodes.append(Free(g.id, np.asarray(self.ik[g.id])))
@@ -453,9 +461,11 @@ class GoalPlanner:
                 pts = self.follow_ik[g.id]
                 nodes += [Fixed(pts[0]), Jump(pts[-1])]
             elif isinstance(g, ReturnTo) and nodes:
-                if g.return_to is None:
+                if g.return_to is None and self.start is not None:
+                    nodes.append(Tied())
+                elif g.return_to is None:
                     nodes.append(Tied() if isinstance(first, (At, Reach)) else Fixed(self.follow_ik[first.id][0]))
-                elif g.return_to == first.id and isinstance(first, (At, Reach)):
+                elif g.return_to == first.id and isinstance(first, (At, Reach)) and self.start is None:
                     nodes.append(Tied())
                 elif g.return_to in self.follow_ik:
                     nodes.append(Fixed(self.follow_ik[g.return_to][-1]))
@@ -496,10 +506,33 @@ class GoalPlanner:
 
     # -- timing ----------------------------------------------------------------------------------
     def time_parameterize(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None):
+        """:meth:`timed_motion` avoiding what moves: each move waits at rest until it is free; if some wait
+        cannot help (the robot would be hit while it waits), the whole motion is instead delayed at its
+        start until it runs free of everything that moves."""
+        try:
+            return self.timed_motion(cost, slow, self.colliders)
+        except _Fail as per_move:
+            if not self.colliders:
+                raise
+            traj, g2t = self.timed_motion(cost, slow, ())
+            dt = self.task.dt
+            try:
+                n = find_wait(self.colliders, 0.0, traj.q[0], traj.t, traj.q, dt)
+            except ScheduleError:
+                raise per_move from None
+            if n == 0:
+                return traj, g2t
+            from .solvers.timing import JointTrajectory
+            return (JointTrajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
+                    {k: v + n * dt for k, v in g2t.items()})
+
+    def timed_motion(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None,
+                     colliders: Sequence = ()):
         """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
         optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
         whose optimization fails keeps its time-optimal TOPP-RA timing. ``slow`` maps goal IDs to a speed
-        factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²)."""
+        factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²). Before each
+        move the robot waits at rest until the move misses every timed collider of ``colliders``."""
         from .solvers.timing import JointTrajectory, time_parameterize
         dt = self.task.dt
         traj = JointTrajectory.at_rest(self.q0)
@@ -512,11 +545,11 @@ class GoalPlanner:
                     seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing)
                     if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
                         seg = self._optimize_move(seg, cost)
-                    traj = self._append_after_wait(traj, seg, g)
+                    traj = self._append_after_wait(traj, seg, g, colliders)
                 if g is not None:
                     g2t[g.id] = float(traj.t[-1])
             elif kind == "hold":
-                self._check_hold(traj, arg, g)
+                self._check_hold(traj, arg, g, colliders)
                 if arg > 0:
                     traj = traj.hold(arg, dt)
                 g2t[g.id] = float(traj.t[-1])
@@ -528,25 +561,25 @@ class GoalPlanner:
                                             stop_at=list(range(len(path))))
                 else:
                     seg = _timed_follow(path, g.t, dt)
-                traj = self._append_after_wait(traj, seg, g)
+                traj = self._append_after_wait(traj, seg, g, colliders)
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
 
-    def _append_after_wait(self, traj, seg, g):
+    def _append_after_wait(self, traj, seg, g, colliders):
         """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to
-        miss every moving part of the cell (moving obstacles, other robots)."""
-        if not self.colliders:
+        miss every timed collider (moving obstacles, other robots)."""
+        if not colliders:
             return traj.concatenate(seg)
         try:
-            n = find_wait(self.colliders, float(traj.t[-1]), traj.q[-1], seg.t, seg.q, self.task.dt)
+            n = find_wait(colliders, float(traj.t[-1]), traj.q[-1], seg.t, seg.q, self.task.dt)
         except ScheduleError as e:
             raise _Fail(f"the move to {'goal ' + g.id if g else 'the next waypoint'}: {e}") from None
         if n:
             traj = traj.hold(n * self.task.dt, self.task.dt)
         return traj.concatenate(seg)
 
-    def _check_hold(self, traj, duration: float, g) -> None:
-        why = check_hold(self.colliders, float(traj.t[-1]), traj.q[-1], duration, self.task.dt)
+    def _check_hold(self, traj, duration: float, g, colliders) -> None:
+        why = check_hold(colliders, float(traj.t[-1]), traj.q[-1], duration, self.task.dt)
         if why:
             raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
 

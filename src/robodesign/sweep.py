@@ -138,7 +138,7 @@ class SweepChecker:
     def check(self, Q: np.ndarray, first_only: bool = True) -> List[CollisionEvent]:
         """Collision events along the piecewise-linear motion through the rows of Q.
 
-        With ``first_only`` the search stops at the first event; otherwise one event is reported per pair
+        With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
         and contact episode (the pair is re-armed once it separates again).
         """
         Q = np.asarray(Q, dtype=float)
@@ -187,12 +187,14 @@ class SweepChecker:
                     s, dist2 = hit
                     events.append(CollisionEvent(k, s, *self.pair_names[c], dist2, bool(self.is_env[c])))
                     if first_only:
-                        return events
+                        continue  # another pair of this batch may touch earlier inside the same step
                     nxt = self._rearm(Q, k + 1, c, cum)
                     if nxt is not None:
                         heapq.heappush(heap, (nxt, c))
                 else:
                     heapq.heappush(heap, (k + 1, c))
+            if first_only and events:  # every pair was certified free up to sample k: the earliest is here
+                return [min(events, key=lambda e: e.s)]
         events.sort(key=lambda e: (e.sample, e.s))
         return events
 

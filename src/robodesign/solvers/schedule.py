@@ -14,13 +14,15 @@ the rows of ``Q`` at the times ``t`` touches it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Dict, List, Optional, Protocol, Sequence, Tuple
+from dataclasses import replace
+from typing import Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
+from ..cell import build_robot, moving_obstacle_events, moving_obstacle_indices
+from ..pair_sweep import RobotPairSweep
 from ..robot import Robot
-from ..sweep import CollisionEvent, SweepChecker
+from ..sweep import SweepChecker
 
 
 class TimedCollider(Protocol):
@@ -32,90 +34,34 @@ class TimedCollider(Protocol):
         ...
 
 
-@dataclass(frozen=True)
-class Mover:
-    """One collision shape of a moving obstacle: its index in the robot's obstacle list, its pose at
-    t = 0 and the obstacle's motion (``transform_at(t)`` is applied on the left, zero-order hold)."""
-    index: int
-    pose0: np.ndarray
-    spec: object  # task_spec.ObstacleSpec with motion_t / motion_poses
-
-
-def moving_obstacle_events(robot: Robot, movers: Sequence[Mover], checker: SweepChecker, t: np.ndarray,
-                           Q: np.ndarray, first_only: bool = False) -> List[CollisionEvent]:
-    """Collisions of the motion ``Q`` at times ``t`` with the moving obstacles ``movers``.
-
-    ``checker`` holds exactly the robot–mover pairs. The obstacle poses are those in effect at a sample's
-    time and are kept over the motion to the next sample; runs of samples with unchanged poses are
-    certified together (one event per pair and contact episode unless ``first_only``).
-    """
-    specs = list({id(m.spec): m.spec for m in movers}.values())
-    keys = [tuple(int(np.searchsorted(sp.motion_t, tk + 1e-12, side="right")) for sp in specs) for tk in t]
-    events: List[CollisionEvent] = []
-    last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
-    a = 0
-    try:
-        while a < len(keys):
-            b = a
-            while b + 1 < len(keys) and keys[b + 1] == keys[a]:
-                b += 1
-            for m in movers:
-                robot.move_obstacle(m.index, m.spec.transform_at(float(t[a])) @ m.pose0)
-            end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
-            Qr = Q[a:end + 1]
-            evs = checker.check(Qr, first_only=first_only)
-            for e in evs:
-                e = CollisionEvent(e.sample + a, e.s, e.first, e.second, e.distance, e.environment)
-                if first_only:
-                    return [e]
-                pair = (e.first, e.second)
-                if pair not in last or e.sample > last[pair] + 1:  # else: the episode of the previous run
-                    events.append(e)
-                last[pair] = e.sample
-            if not first_only:
-                for pair in {(e.first, e.second) for e in evs}:
-                    c = checker.pair_names.index(pair)
-                    if checker.distances(Qr[-1], [c])[0] <= checker.margins[c]:
-                        last[pair] = end  # still in contact at the end of this run
-            a = b + 1
-    finally:
-        for m in movers:
-            robot.move_obstacle(m.index, m.pose0)
-    return events
-
-
 class MovingObstacles:
-    """The task's moving obstacles as a timed collider of one robot. ``robot`` is a robot of its own whose
-    obstacles are exactly the moving obstacles' shapes at t = 0 (names start with their obstacle's ID, as
-    :func:`moving_obstacles` builds it); the planning robot sees only the static cell."""
+    """The task's moving obstacles as a timed collider of one robot: ``robot`` holds exactly the moving
+    obstacles' collision objects (as :func:`moving_obstacles` builds it); the planning robot sees only the
+    static cell."""
 
-    def __init__(self, robot: Robot, specs: Sequence[object]):
-        self.robot = robot
-        by_id = {sp.id: sp for sp in specs}
-        self.movers = [Mover(i, np.array(ob.pose, dtype=float), by_id[ob.name.rsplit(".", 2)[0]])
-                       for i, ob in enumerate(robot.obstacles)]
-        self.checker = SweepChecker(robot, check_self=False, check_env=True)
-        self.settles_at = max((float(sp.motion_t[-1]) for sp in specs), default=0.0)
+    def __init__(self, robot: Robot, task):
+        self.robot, self.task = robot, task
+        self.moving = moving_obstacle_indices(robot, task)
+        self.checker = SweepChecker(robot, check_self=False, check_env=True, obstacles=self.moving)
+        self.settles_at = max((float(o.motion_t[-1]) for o in task.obstacles if o.moving), default=0.0)
 
     def first_collision(self, t, Q) -> Optional[Tuple[int, str]]:
-        ev = moving_obstacle_events(self.robot, self.movers, self.checker, np.asarray(t, float),
-                                    np.asarray(Q, float), first_only=True)
+        ev = moving_obstacle_events(self.robot, self.task, self.moving, t, Q, first_only=True, checker=self.checker)
         return (ev[0].sample, f"{ev[0].first} ↔ {ev[0].second}") if ev else None
 
 
 def static_cell(task):
-    """The task without its moving obstacles (what the planner plans among)."""
+    """The task without its moving obstacles (what IK and the planner see)."""
     return replace(task, obstacles=tuple(o for o in task.obstacles if not o.moving))
 
 
 def moving_obstacles(task, module_set, assembly, base_pose) -> Optional[MovingObstacles]:
     """The task's moving obstacles as a timed collider of the robot (None if nothing moves)."""
-    from ..cell import build_robot
-    specs = [o for o in task.obstacles if o.moving]
-    if not specs:
+    moving = tuple(o for o in task.obstacles if o.moving)
+    if not moving:
         return None
-    robot = build_robot(replace(task, obstacles=tuple(specs)), module_set, assembly, base_pose)
-    return MovingObstacles(robot, specs)
+    only = replace(task, obstacles=moving)
+    return MovingObstacles(build_robot(only, module_set, assembly, base_pose), only)
 
 
 class OtherRobot:
@@ -125,7 +71,6 @@ class OtherRobot:
 
     def __init__(self, robot: Robot, other: Robot, t_other: np.ndarray, Q_other: np.ndarray, margin: float = 0.0,
                  names=("robot", "other")):
-        from ..pair_sweep import RobotPairSweep
         self.sweep = RobotPairSweep(robot, other, margin=margin, names=names)
         self.t_other = np.asarray(t_other, dtype=float)
         self.Q_other = np.asarray(Q_other, dtype=float)
