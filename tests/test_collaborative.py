@@ -206,3 +206,67 @@ def test_prioritized_solve_is_valid_and_round_trips(ctask, ms, solved, tmp_path)
     assert json.loads(p.read_text())["collaborative"] is True
     v2 = check_collab(ctask, back, ms)
     assert v2.valid and v2.costs == solved.verdict.costs
+
+
+# ---------------------------------------------------------------------------------------------------------
+# command line and viewer
+# ---------------------------------------------------------------------------------------------------------
+def _main(argv, capsys):
+    from robodesign.cli import main
+    code = main([str(a) for a in argv])
+    return code, capsys.readouterr()
+
+
+def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, capsys):
+    from robodesign.solution import Solution, SolutionTrajectory
+    task = mt.collab_task_path("shared_conveyor")
+    good = solved.solution.write(tmp_path / "good.json")
+    code, out = _main(["check", task, good], capsys)
+    assert code == 0 and "VALID" in out.out and "total" in out.out
+    # both arms pitch towards the belt at once: robot–robot collision → exit 1, named in the JSON verdict
+    robots = _robots(ctask, ms)
+    a = robots["left"]
+    D = 1.5 if a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3] < mt.SC_BASE_Y else -1.5
+    t, Q, DQ, DDQ = _swing(a.dof, 1, D, 2.0, ctask.task.dt)
+    bad = CollabSolution(ctask.id, tuple(
+        (rid, Solution(task_id=ctask.id, cost_function="cyc", module_set="robodesign_arm", module_order=ORDER,
+                       base_pose=ctask.robot_tasks[rid].nominal_base_pose,
+                       trajectory=SolutionTrajectory(t, Q, DQ, DDQ, {})))
+        for rid in ctask.robot_ids)).write(tmp_path / "bad.json")
+    code, out = _main(["check", task, bad, "--json"], capsys)
+    v = json.loads(out.out)
+    assert code == 1, (v, out.err) and v["collaborative"] and not v["valid"]
+    assert any(x["constraint"] == "robotCollisionFree" and x["robot"] is None for x in v["violations"])
+    # a collaborative solution against a single-robot task, an unknown robot, a broken time base: exit 2
+    code, out = _main(["check", "robodesign/pick_and_place", good], capsys)
+    assert code == 2 and "collaborative" in out.err
+    data = json.loads(Path(good).read_text())
+    data["robots"][1]["trajectory"]["t"][5] += 0.001
+    (tmp_path / "skew.json").write_text(json.dumps(data))
+    code, out = _main(["check", task, tmp_path / "skew.json"], capsys)
+    assert code == 2 and "robots[1].trajectory.t" in out.err and "common time base" in out.err
+    code, out = _main(["solve", task, "--modules", "robodesign_arm", "--robot", "middle=1,21", "--order", "1"], capsys)
+    assert code == 2 and "no robot 'middle'" in out.err
+
+
+def test_view_animates_both_robots_on_the_common_time_base(ctask, ms, solved, tmp_path):
+    from robodesign.viewer import collab_page
+    from robodesign.viewer.html import decode_page_data
+    import base64
+    page = collab_page(ctask, solved.solution, ms)
+    data = decode_page_data(page)
+    anim = data["animation"]
+    nodes = anim["nodes"]
+    F, N, _ = anim["shape"]
+    poses = np.frombuffer(base64.b64decode(anim["poses_b64"]), dtype="<f4").reshape(F, N, 12)
+    # the right robot's TCP node is animated, at the pose its own trajectory gives at every frame's time
+    j = nodes.index("right/robot/TCP")
+    right = _robots(ctask, ms)["right"]
+    tr = solved.solution.solution("right").trajectory
+    for f in (0, F // 3, F - 1):
+        tt = anim["t"][f]
+        k = int(np.argmin(np.abs(tr.t - tt)))
+        assert abs(tr.t[k] - tt) < 1e-9  # the frames are at samples of the common time base
+        T = right.fk(tr.q[k])
+        np.testing.assert_allclose(poses[f, j].reshape(3, 4), T[:3, :], atol=1e-5)
+    assert "robot/TCP" in nodes  # the first robot (left) keeps the plain ids

@@ -15,6 +15,7 @@ With ``--json``, stdout is JSON on every path: on exit 2 or 3 it is
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 import json
 import math
 import os
@@ -87,11 +88,17 @@ def cmd_run(args) -> int:
 def cmd_check(args) -> int:
     from .checker import check
     from .cli_args import module_set_for_solution, print_input_warnings
-    from .solution import load_solution
+    from .collab import is_collaborative
+    from .jsonio import load_json
+    from .solution import parse_solution
     from .task_io import load_task
+    data = load_json(args.solution, display_name=Path(args.solution).name)
+    if is_collaborative(data):  # several robots in one cell: docs/collaborative.md
+        from .collab_commands import check_command
+        return check_command(args, data)
     task = load_task(args.task)
     print_input_warnings(task)
-    sol = load_solution(args.solution)
+    sol = parse_solution(data, Path(args.solution).name, source=str(args.solution))
     ms = module_set_for_solution(sol, args.modules)
     print_input_warnings(ms)
     verdict = check(task, sol, module_set=ms)
@@ -229,7 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--urdf", help="also write the robot as URDF to this file")
     r.set_defaults(func=cmd_robot)
 
-    c = sub.add_parser("check", help="check a CoBRA solution against a task (exit 0 valid, 1 invalid, 2 bad input)")
+    c = sub.add_parser("check", help="check a CoBRA solution (or a collaborative one) against a task (exit 0 valid, "
+                                     "1 invalid, 2 bad input)")
     c.add_argument("task", help="task JSON file (or a built-in task name)")
     c.add_argument("solution", help="solution JSON file")
     c.add_argument("--modules", help="module set folder or built-in name (default: the solution's moduleSet)")
@@ -237,10 +245,14 @@ def build_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_check)
 
     from . import commands
-    so = sub.add_parser("solve", help="plan a checked solution of a task for one robot")
+    so = sub.add_parser("solve", help="plan a checked solution of a task for one robot (or for every robot of a "
+                                      "collaborative task)")
     so.add_argument("task", help="task JSON file or built-in task ID")
     so.add_argument("--modules", required=True, help="module set folder or built-in name")
-    so.add_argument("--order", required=True, help="comma-separated module IDs, base first")
+    so.add_argument("--order", help="comma-separated module IDs, base first (required for a single-robot task; "
+                                    "for a collaborative task: every robot not given by --robot)")
+    so.add_argument("--robot", action="append", default=[], metavar="ID=ORDER",
+                    help="a collaborative task's robot and its module order (repeatable; default: --order)")
     so.add_argument("--base-pose", help="x,y,z[,roll,pitch,yaw] or 16 numbers; default: the task's nominal base")
     so.add_argument("--cost", default="cyc", help="cost function, e.g. cyc, mechEnergy, Liu2, cyc_0.2,mechEnergy_1")
     so.add_argument("--planner", default="rrtconnect", help="OMPL planner (rrtconnect, rrtstar, prm, bitstar, kpiece, ...)")

@@ -63,14 +63,22 @@ def cmd_solve(args) -> int:
     from .solve import SolveSettings, solve
     from .solvers.planning import available_planners
     from .task_io import load_task
-    task = load_task(args.task)
-    ms = load_module_set(args.modules)
+    from .collab_commands import load_collab_task_file, solve_command
     mode = trajectory_mode(args.cost, args.trajectory, args.optimize_trajectory)
-    print_input_warnings(task, ms)
     if args.planner.lower() not in [p.lower() for p in available_planners()]:
         raise InputError(f"--planner: unknown planner {args.planner!r} (available: {', '.join(available_planners())})")
     if args.plan_time <= 0:
         raise InputError("--plan-time must be positive")
+    ctask = load_collab_task_file(args.task)
+    if ctask is not None:  # several robots in one cell: docs/collaborative.md
+        return solve_command(args, ctask, mode)
+    if args.robot:
+        raise InputError("--robot is for a collaborative task; this task has one robot: use --order")
+    if not args.order:
+        raise InputError("--order is required (comma-separated module IDs, base first)")
+    task = load_task(args.task)
+    ms = load_module_set(args.modules)
+    print_input_warnings(task, ms)
     order = parse_order(args.order)
     try:
         Assembly.from_order(ms, order)  # an order that cannot be assembled is bad input, as in `robodesign robot`

@@ -58,6 +58,12 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
 
     warnings: List[str] = []
     if solution is not None:
+        from ..collab import is_collaborative
+        from ..jsonio import load_json
+        data = load_json(solution, display_name=Path(solution).name)
+        if is_collaborative(data):  # several robots in one cell (docs/collaborative.md)
+            return _view_collab(solution, data, task, modules, out, check, fps, collision)
+    if solution is not None:
         from ..cli_args import module_set_for_solution
         from ..solution import load_solution
         from .plots import trajectory_plots
@@ -118,6 +124,35 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
         page = render_html(scene, None, name)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
+    return path, warnings
+
+
+def _view_collab(solution: str, data, task: Optional[str], modules: Optional[str], out: Optional[str], check: bool,
+                 fps: float, collision: bool) -> Tuple[Path, List[str]]:
+    """The page of a collaborative solution: every robot and the moving obstacles animate together."""
+    from ..cli_args import module_set_for_solution
+    from ..collab import check_collab, parse_collab_solution
+    from ..collab_commands import load_collab_task_file
+    from . import collab_page
+    csol = parse_collab_solution(data, Path(solution).name, source=str(solution))
+    ctask = load_collab_task_file(task or csol.task_id)
+    if ctask is None:
+        raise InputError("the solution is collaborative but the task is not: give the collaborative task (--task)")
+    warnings: List[str] = []
+    if csol.task_id != ctask.id:
+        warnings.append(f"the solution is for task {csol.task_id!r}, not {ctask.id!r}: the page shows it in a cell "
+                        "it was not planned for")
+    sets = {rid: module_set_for_solution(s, modules) for rid, s in csol.robots}
+    verdict = None
+    if check:
+        verdict = check_collab(ctask, csol, sets)
+        if not verdict.valid:
+            warnings.append(f"the checker finds the solution INVALID ({len(verdict.violations)} violation(s), "
+                            "listed on the page)")
+    path = Path(out) if out else Path(Path(solution).stem + "_view.html")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(collab_page(ctask, csol, sets, verdict=verdict, fps=fps, include_collision=collision),
+                    encoding="utf-8")
     return path, warnings
 
 

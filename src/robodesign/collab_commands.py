@@ -1,0 +1,112 @@
+"""The command line for collaborative tasks (docs/collaborative.md): ``robodesign check`` of a collaborative
+solution and ``robodesign solve`` of a collaborative task. ``cli.py`` and ``commands.py`` hand over here
+when the file they read is collaborative (a top-level ``"robots"`` list)."""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Dict, List, Optional
+
+from .collab import CollabTask, RobotSetup, check_collab, parse_collab_solution, parse_collab_task, solve_collab
+from .errors import InputError
+from .jsonio import load_json
+
+
+def _module_sets(csol, modules: Optional[str]) -> Dict[str, object]:
+    """Each robot's module set: ``--modules`` for all, else the robot's own ``moduleSet`` (found locally)."""
+    from .cli_args import module_set_for_solution
+    return {rid: module_set_for_solution(s, modules) for rid, s in csol.robots}
+
+
+def load_collab_task_file(name_or_path) -> Optional[CollabTask]:
+    """The collaborative task in that file, or None when the file holds a single-robot task."""
+    from .collab import is_collaborative
+    from .task_io import resolve_task_path
+    f = resolve_task_path(name_or_path)
+    data = load_json(f, display_name=f.name)
+    return parse_collab_task(data, f) if is_collaborative(data) else None
+
+
+def check_command(args, data) -> int:
+    """``robodesign check TASK SOLUTION`` for a collaborative solution (already read as ``data``)."""
+    ctask = load_collab_task_file(args.task)
+    if ctask is None:
+        raise InputError("the solution is collaborative (a 'robots' list) but the task is not: give the "
+                         "collaborative task", file=Path(args.task).name)
+    csol = parse_collab_solution(data, Path(args.solution).name, source=str(args.solution))
+    verdict = check_collab(ctask, csol, _module_sets(csol, args.modules))
+    if args.json:
+        print(json.dumps(verdict.to_json()))
+    else:
+        print(f"task      {ctask.id} (collaborative: {', '.join(ctask.robot_ids)})")
+        print(f"solution  {args.solution}")
+        print(f"verdict   {'VALID' if verdict.valid else 'INVALID'}")
+        for rid, cost, cf in zip(ctask.robot_ids, verdict.costs, verdict.cost_functions):
+            print(f"robot     {rid}: {cf} = " + ("—" if cost is None else f"{cost:.6g}"))
+        if verdict.total_cost is not None:
+            print(f"total     {verdict.total_cost:.6g}")
+        print("goals     " + ", ".join(f"{g}: {r or 'MISSED'}" for g, r in verdict.goal_robot.items()))
+        for rid, v in verdict.violations:
+            print(f"  - [{rid or 'cell'}] {v}")
+    return 0 if verdict.valid else 1
+
+
+def parse_robot_orders(ctask: CollabTask, robots: List[str], order: Optional[str]) -> Dict[str, List[str]]:
+    """``--robot ID=ORDER`` (repeatable) and ``--order`` (every robot not named) → robot ID → module order."""
+    from .cli_args import parse_order
+    out: Dict[str, List[str]] = {}
+    for item in robots or []:
+        rid, sep, o = item.partition("=")
+        if not sep or not rid or not o:
+            raise InputError(f"--robot: expected ID=ORDER (e.g. left=1,21,4,...), got {item!r}")
+        if rid not in ctask.robot_ids:
+            raise InputError(f"--robot: the task has no robot {rid!r} (robots: {', '.join(ctask.robot_ids)})")
+        out[rid] = parse_order(o)
+    for rid in ctask.robot_ids:
+        if rid not in out:
+            if order is None:
+                raise InputError(f"robot {rid!r} has no module order: give --robot {rid}=ORDER or --order for all")
+            out[rid] = parse_order(order)
+    return out
+
+
+def solve_command(args, ctask: CollabTask, mode: str) -> int:
+    """``robodesign solve`` of a collaborative task: prioritized planning (docs/collaborative.md)."""
+    from .assembly import Assembly
+    from .module_io import load_module_set
+    from .solve import SolveSettings
+    if args.base_pose:
+        raise InputError("--base-pose is for one robot; a collaborative task places each robot by its "
+                         "basePlacement")
+    ms = load_module_set(args.modules)
+    orders = parse_robot_orders(ctask, args.robot, args.order)
+    for rid, o in orders.items():
+        try:
+            Assembly.from_order(ms, o)
+        except InputError as e:
+            raise InputError(f"--robot {rid}: {e}") from None
+    settings = SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing,
+                             optimize_trajectory=mode == "optimize", seed=args.seed)
+    t0 = time.perf_counter()
+    res = solve_collab(ctask, [RobotSetup(rid, ms, tuple(orders[rid])) for rid in ctask.robot_ids], cost=args.cost,
+                       settings=settings)
+    elapsed = time.perf_counter() - t0
+    out = res.solution.write(args.out) if (res.solution is not None and args.out) else None
+    if args.json:
+        print(json.dumps({"feasible": res.feasible, "collaborative": True, "priority": list(res.priority),
+                          "message": res.message, "goals": res.assignment,
+                          "costs": list(res.verdict.costs) if res.verdict else None,
+                          "totalCost": res.verdict.total_cost if res.verdict else None,
+                          "solution": str(out) if out else None, "seconds": elapsed}))
+    else:
+        if res.feasible:
+            print(f"VALID solution of {ctask.id} (prioritized: {', '.join(res.priority)}; {elapsed:.2f} s)")
+            for rid, c, cf in zip(ctask.robot_ids, res.verdict.costs, res.verdict.cost_functions):
+                goals = [g for g, r in res.assignment.items() if r == rid]
+                print(f"  {rid}: {cf} = {c:.6g}  goals {', '.join(goals)}")
+        else:
+            print(f"no valid solution: {res.message}")
+        if out:
+            print(f"solution written to {out}")
+    return 0 if res.feasible else 1
