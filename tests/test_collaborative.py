@@ -270,3 +270,34 @@ def test_view_animates_both_robots_on_the_common_time_base(ctask, ms, solved, tm
         T = right.fk(tr.q[k])
         np.testing.assert_allclose(poses[f, j].reshape(3, 4), T[:3, :], atol=1e-5)
     assert "robot/TCP" in nodes  # the first robot (left) keeps the plain ids
+
+
+def test_cli_optimize_base_poses_of_a_fixed_design(tmp_path, capsys):
+    """``optimize`` on a collaborative task with the base_pose plugin (both robots: the default arm, bases
+    searched within their placements): a valid cell whose solution the checker accepts again."""
+    task = mt.collab_task_path("shared_conveyor")
+    out = tmp_path / "best.json"
+    code, o = _main(["optimize", task, "--modules", "robodesign_arm", "--optimizer", "base_pose",
+                     "--opt", "order=" + ",".join(ORDER), "--budget", "3evals", "--out", out, "--json"], capsys)
+    s = json.loads(o.out)
+    assert code == 0 and s["feasible"] and s["collaborative"], s
+    assert s["evaluations"] == {"left": 3, "right": 3}
+    assert s["totalCost"] == pytest.approx(sum(s["costs"]))
+    code, o = _main(["check", task, out, "--json"], capsys)
+    v = json.loads(o.out)
+    assert code == 0 and v["valid"] and v["costs"] == pytest.approx(s["costs"])
+
+
+@pytest.mark.slow
+def test_cli_optimize_designs_both_robots(tmp_path, capsys):
+    """The genetic plugin designs each robot (6 DoF) on its part of the cell; the best designs are combined
+    by prioritized planning into a valid cell."""
+    task = mt.collab_task_path("shared_conveyor")
+    out = tmp_path / "best.json"
+    code, o = _main(["optimize", task, "--modules", "robodesign_arm", "--optimizer", "genetic", "--dof", "6",
+                     "--budget", "40evals", "--seed", "0", "--out", out, "--json"], capsys)
+    s = json.loads(o.out)
+    assert code == 0 and s["feasible"], s
+    assert all(len(d) >= 1 for d in s["designs"].values())
+    code, o = _main(["check", task, out, "--json"], capsys)
+    assert code == 0 and json.loads(o.out)["valid"]

@@ -1,9 +1,10 @@
 """Parsing of CLI argument values (joint vectors, poses, module orders) with clear errors."""
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
-from typing import List
+from typing import Dict, List
 
 import numpy as np
 
@@ -77,3 +78,17 @@ def print_input_warnings(*loaded) -> None:
     for obj in loaded:
         for w in getattr(obj, "warnings", ()) or ():
             print(f"robodesign: warning: {w}", file=sys.stderr)
+
+
+def parse_options(items: List[str]) -> Dict[str, object]:
+    """``key=value`` pairs; values parsed as JSON when possible (numbers, booleans, lists)."""
+    out: Dict[str, object] = {}
+    for it in items or []:
+        k, sep, v = it.partition("=")
+        if not sep or not k:
+            raise InputError(f"--opt {it!r}: expected key=value")
+        try:
+            out[k] = json.loads(v)
+        except json.JSONDecodeError:
+            out[k] = v
+    return out

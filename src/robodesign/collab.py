@@ -396,7 +396,8 @@ def _pad(sol: Solution, t: np.ndarray) -> Solution:
 def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "cyc", settings=None,
                  priorities: Optional[Sequence[Sequence[str]]] = None) -> CollabSolveResult:
     """Prioritized planning: the robots are solved one after the other, each starting from its home
-    configuration (zero joint angles where collision-free) and waiting, before each move, until the move
+    configuration (zero joint angles where that is collision-free and holds against gravity, else its
+    first goal's configuration) and waiting, before each move, until the move
     misses the timed motions of the robots before it (``solvers/schedule.py``); every robot then holds its
     last configuration until the last one is done. Priority orders tried: ``priorities``, or the given order
     and its reverse. The first combination the collaborative checker accepts is returned."""
@@ -422,8 +423,11 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "c
             me = build_robot(static_cell(t_r), s.module_set, _assembly(s), base)
             colliders = [OtherRobot(me, other, res.solution.trajectory.t, res.solution.trajectory.q, margin=margin,
                                     names=(rid, oid)) for oid, other, res in done]
-            res = solve(t_r, s.module_set, list(s.order), base_pose=base, cost=cost, settings=settings,
-                        colliders=colliders, start=_home(me))
+            for start in _starts(me, settings.seed):
+                res = solve(t_r, s.module_set, list(s.order), base_pose=base, cost=cost, settings=settings,
+                            colliders=colliders, start=start)
+                if res.feasible:
+                    break
             results[rid] = res
             if not res.feasible:
                 message = f"robot {rid} (planned after {[d[0] for d in done]}): {res.stage}: {res.message}"
@@ -445,11 +449,24 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "c
     return CollabSolveResult(None, None, orders[-1], results, assignment, message)
 
 
-def _home(robot) -> Optional[np.ndarray]:
-    """Where a robot of a shared cell starts (and waits for the others): its zero configuration (clipped
-    into the joint limits) when that is collision-free, else the solver's default start."""
-    q = np.clip(np.zeros(robot.dof), robot.q_lower, robot.q_upper)
-    return None if robot.in_collision(q) else q
+def _starts(robot, seed: int = 0) -> list:
+    """Where a robot of a shared cell may start (and wait for the others), in the order tried: its zero
+    configuration (clipped into the joint limits), then the most folded of 200 seeded random configurations
+    (the TCP nearest to the base: the smallest footprint in the shared space), each only when it is
+    collision-free and gravity alone stays within the torque limits; last the solver's default (the
+    configuration of its first goal)."""
+    def ok(q):
+        return not robot.in_collision(q) and bool(np.all(np.abs(robot.gravity_torque(q)) <= robot.tau_max))
+    out = []
+    q0 = np.clip(np.zeros(robot.dof), robot.q_lower, robot.q_upper)
+    if ok(q0):
+        out.append(q0)
+    rng = np.random.default_rng(seed)
+    base = robot.base_pose[:3, 3]
+    park = [q for q in (robot.random_configuration(rng) for _ in range(200)) if ok(q)]
+    if park:
+        out.append(min(park, key=lambda q: float(np.linalg.norm(robot.fk(q)[:3, 3] - base))))
+    return out + [None]
 
 
 def _assembly(s: RobotSetup):

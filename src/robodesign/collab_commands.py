@@ -110,3 +110,48 @@ def solve_command(args, ctask: CollabTask, mode: str) -> int:
         if out:
             print(f"solution written to {out}")
     return 0 if res.feasible else 1
+
+
+def optimize_command(args, ctask: CollabTask) -> int:
+    """``robodesign optimize`` of a collaborative task: every robot's design is searched on its part of the
+    task (the budget applies per robot), then the best designs are combined by prioritized planning
+    (:mod:`robodesign.collab_optimize`)."""
+    from .collab_optimize import optimize_collab
+    from .cli_args import parse_options
+    from .module_io import load_module_set
+    from .optimize import Budget
+    from .commands import search_rules
+    if args.optimize_trajectory:
+        raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
+    budget = Budget.parse(args.budget)
+    ms = load_module_set(args.modules)
+
+    def on_robot(rid, res):
+        if not args.json:
+            feas = sum(e.feasible for e in res.history)
+            print(f"robot {rid}: {len(res.history)} evaluations in {res.seconds:.1f} s, {feas} feasible alone")
+    r = optimize_collab(ctask, ms, args.optimizer, args.cost, budget, seed=args.seed,
+                        options=parse_options(args.opt), on_robot=on_robot, rules=search_rules(args),
+                        base_search=not args.fixed_base)
+    out = r.result.solution.write(args.out or "best_solution.json") if r.feasible else None
+    if args.json:
+        print(json.dumps({"feasible": r.feasible, "collaborative": True, "evaluations": r.evaluations,
+                          "combinations_tried": r.combinations_tried, "seconds": r.seconds,
+                          "designs": {rid: [{"order": list(d.order), "cost_alone": d.cost} for d in ds]
+                                      for rid, ds in r.designs.items()},
+                          "costs": list(r.result.verdict.costs) if r.feasible else None,
+                          "totalCost": r.result.verdict.total_cost if r.feasible else None,
+                          "solution": str(out) if out else None, "notes": r.notes}))
+    else:
+        if r.feasible:
+            v = r.result.verdict
+            print(f"VALID design of {ctask.id} after {r.combinations_tried} combination(s) ({r.seconds:.1f} s; "
+                  f"prioritized: {', '.join(r.result.priority)})")
+            for rid, c in zip(ctask.robot_ids, v.costs):
+                s = r.result.solution.solution(rid)
+                print(f"  {rid}: {','.join(s.module_order)}  {args.cost} = {c:.6g}")
+            print(f"total cost   {v.total_cost:.6g}")
+            print(f"solution     {out} (checked valid)")
+        else:
+            print("no valid design of the cell: " + ("; ".join(r.notes[-3:]) or "no combination was accepted"))
+    return 0 if r.feasible else 1

@@ -43,9 +43,11 @@ class CollabOptimizeResult:
 
 def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, cost: str, budget, seed: int = 0,
                     options: Optional[dict] = None, top_k: int = 3, settings=None,
-                    on_robot: Optional[Callable[[str, object], None]] = None) -> CollabOptimizeResult:
+                    on_robot: Optional[Callable[[str, object], None]] = None, rules: Optional[dict] = None,
+                    base_search: bool = True) -> CollabOptimizeResult:
     """Optimize every robot's design on its part of ``ctask`` (``budget``: an ``optimize.Budget``, per robot),
-    then combine the ``top_k`` designs per robot by prioritized planning (best summed cost first)."""
+    then combine the ``top_k`` designs per robot by prioritized planning (best summed cost first). ``rules``
+    and ``base_search`` define every robot's search space as for :meth:`robodesign.problem.Problem.build`."""
     import time
 
     from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
@@ -58,7 +60,7 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
     evaluations: Dict[str, int] = {}
     for k, rid in enumerate(ctask.robot_ids):
         part = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
-        problem = Problem.build(part, module_set, cost)
+        problem = Problem.build(part, module_set, cost, rules=rules, base_search=base_search)
         ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(), seed=seed + k))
         opt = create_optimizer(optimizer, problem, seed=seed + k, options=dict(options or {}))
         res = Study(opt, SerialExecutor(ev), budget).run()

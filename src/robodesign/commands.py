@@ -11,20 +11,6 @@ import numpy as np
 from .errors import InputError
 
 
-def _parse_options(items: List[str]) -> Dict[str, object]:
-    """``key=value`` pairs; values parsed as JSON when possible (numbers, booleans, lists)."""
-    out: Dict[str, object] = {}
-    for it in items or []:
-        k, sep, v = it.partition("=")
-        if not sep or not k:
-            raise InputError(f"--opt {it!r}: expected key=value")
-        try:
-            out[k] = json.loads(v)
-        except json.JSONDecodeError:
-            out[k] = v
-    return out
-
-
 def _base_pose(text, task):
     from .cli_args import parse_base_pose
     return parse_base_pose(text) if text else task.nominal_base_pose
@@ -153,25 +139,35 @@ def cmd_optimizers(args) -> int:
     return 0
 
 
-def cmd_optimize(args) -> int:
-    from .cli_args import print_input_warnings
-    from .costs import parse_cost
-    from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
-    from .optimize import Budget, SerialExecutor, Study, create_optimizer
-    from .problem import Problem
-    budget = Budget.parse(args.budget)
+def search_rules(args) -> Dict[str, int]:
+    """The search-space rules of ``--dof`` and ``--max-links``."""
     rules = {}
     if args.dof:
         lo, _, hi = args.dof.partition("-")
         rules["min_dof"], rules["max_dof"] = int(lo), int(hi or lo)
     if args.max_links is not None:
         rules["max_links_between"] = args.max_links
+    return rules
+
+
+def cmd_optimize(args) -> int:
+    from .cli_args import parse_options, print_input_warnings
+    from .collab_commands import load_collab_task_file, optimize_command
+    ctask = load_collab_task_file(args.task)
+    if ctask is not None:  # several robots in one cell: docs/collaborative.md
+        return optimize_command(args, ctask)
+    from .costs import parse_cost
+    from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
+    from .optimize import Budget, SerialExecutor, Study, create_optimizer
+    from .problem import Problem
+    budget = Budget.parse(args.budget)
+    rules = search_rules(args)
     problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
                             base_search=not args.fixed_base)
     print_input_warnings(problem.task)
     spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
                          seed=args.seed)
-    opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=_parse_options(args.opt))
+    opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
     workers = _optimize_workers(args.workers, args.batch_size)
     if workers == 1:  # in this process
         executor = SerialExecutor(Evaluator(spec))
