@@ -12,7 +12,7 @@ from robodesign.cell import build_robot
 from robodesign.checker import check
 from robodesign.solve import solve
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
-from robodesign.task_io import load_task, parse_task
+from robodesign.task_io import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "assets" / "tasks"))

@@ -24,7 +24,7 @@ import numpy as np
 from .cell import build_robot, resolve_module_set
 from .checker import CheckSettings, Verdict, Violation, check
 from .errors import InputError
-from .jsonio import dumps_json, load_json
+from .jsonio import load_json, write_json
 from .module_spec import ModuleSet
 from .solution import Solution, SolutionTrajectory, parse_solution
 from .task_io import parse_task, resolve_task_path
@@ -175,12 +175,7 @@ class CollabSolution:
         return out
 
     def write(self, path) -> Path:
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        tmp = p.with_suffix(p.suffix + ".tmp")
-        tmp.write_text(dumps_json(self.to_json()))
-        tmp.replace(p)
-        return p
+        return write_json(path, self.to_json())
 
 
 def load_collab_solution(path) -> CollabSolution:

@@ -179,6 +179,17 @@ def dumps_json(obj: Any, indent: int | None = 2) -> str:
     return json.dumps(obj, indent=indent, allow_nan=True)
 
 
+def write_json(path: str | Path, obj: Any) -> Path:
+    """Write ``obj`` as JSON (:func:`dumps_json`) atomically: a temporary file beside it, then a rename, so a
+    reader never sees half a file; creates the parent folder."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    tmp = p.with_suffix(p.suffix + ".tmp")
+    tmp.write_text(dumps_json(obj))
+    tmp.replace(p)
+    return p
+
+
 def resolve_inside(root: Path, ref: str, file: str, path: Sequence[PathPart], follow_symlinks: bool = False) -> Path:
     """Resolve a file reference from a JSON file relative to ``root``; it must stay inside ``root``.
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from .assembly import Assembly
 from .errors import InputError, describe_value
-from .jsonio import check_finite, dumps_json, load_json
+from .jsonio import check_finite, load_json, write_json
 from .module_spec import ModuleSet
 from .schema import validate
 from .spatial import parse_pose, pose_to_list
@@ -91,12 +91,7 @@ class Solution:
         return out
 
     def write(self, path: Union[str, Path]) -> Path:
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        tmp = p.with_suffix(p.suffix + ".tmp")
-        tmp.write_text(dumps_json(self.to_json()))
-        tmp.replace(p)
-        return p
+        return write_json(path, self.to_json())
 
 
 def load_solution(path: Union[str, Path]) -> Solution:
