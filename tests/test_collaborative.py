@@ -240,6 +240,8 @@ def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, caps
     # a collaborative solution against a single-robot task, an unknown robot, a broken time base: exit 2
     code, out = _main(["check", "robodesign/pick_and_place", good], capsys)
     assert code == 2 and "collaborative" in out.err
+    code, out = _main(["check", task, mt.task_path("pick_and_place")], capsys)  # not a solution at all
+    assert code == 2 and "a collaborative solution needs a 'robots' list" in out.err
     data = json.loads(Path(good).read_text())
     data["robots"][1]["trajectory"]["t"][5] += 0.001
     (tmp_path / "skew.json").write_text(json.dumps(data))

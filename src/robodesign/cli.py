@@ -89,15 +89,19 @@ def cmd_check(args) -> int:
     from .checker import check
     from .cli_args import module_set_for_solution, print_input_warnings
     from .collab import is_collaborative
+    from .collab_commands import check_command, load_collab_task_file
     from .jsonio import load_json
     from .solution import parse_solution
     from .task_io import load_task
-    data = load_json(args.solution, display_name=Path(args.solution).name)
-    if is_collaborative(data):  # several robots in one cell: docs/collaborative.md
-        from .collab_commands import check_command
-        return check_command(args, data)
+    ctask = load_collab_task_file(args.task)
+    if ctask is not None:  # several robots in one cell: docs/collaborative.md
+        return check_command(args, ctask)
     task = load_task(args.task)
     print_input_warnings(task)
+    data = load_json(args.solution, display_name=Path(args.solution).name)
+    if is_collaborative(data):
+        raise InputError("the solution is collaborative (a 'robots' list) but the task is not: give the "
+                         "collaborative task", file=Path(args.task).name)
     sol = parse_solution(data, Path(args.solution).name, source=str(args.solution))
     ms = module_set_for_solution(sol, args.modules)
     print_input_warnings(ms)

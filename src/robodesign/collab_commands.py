@@ -28,13 +28,12 @@ def load_collab_task_file(name_or_path) -> Optional[CollabTask]:
     return parse_collab_task(data, f) if is_collaborative(data) else None
 
 
-def check_command(args, data) -> int:
-    """``robodesign check TASK SOLUTION`` for a collaborative solution (already read as ``data``)."""
-    ctask = load_collab_task_file(args.task)
-    if ctask is None:
-        raise InputError("the solution is collaborative (a 'robots' list) but the task is not: give the "
-                         "collaborative task", file=Path(args.task).name)
-    csol = parse_collab_solution(data, Path(args.solution).name, source=str(args.solution))
+def check_command(args, ctask: CollabTask) -> int:
+    """``robodesign check TASK SOLUTION`` of a collaborative task."""
+    from .cli_args import print_input_warnings
+    print_input_warnings(ctask.task)
+    csol = parse_collab_solution(load_json(args.solution, display_name=Path(args.solution).name),
+                                 Path(args.solution).name, source=str(args.solution))
     verdict = check_collab(ctask, csol, _module_sets(csol, args.modules))
     if args.json:
         print(json.dumps(verdict.to_json()))
@@ -73,6 +72,8 @@ def parse_robot_orders(ctask: CollabTask, robots: List[str], order: Optional[str
 
 def solve_command(args, ctask: CollabTask, mode: str) -> int:
     """``robodesign solve`` of a collaborative task: prioritized planning (docs/collaborative.md)."""
+    from .cli_args import print_input_warnings
+    print_input_warnings(ctask.task)
     from .assembly import Assembly
     from .module_io import load_module_set
     from .solve import SolveSettings
