@@ -87,3 +87,21 @@ def test_resolve_unknown_parts():
         resolve("C-ur5:cyc:simple/PTP_1", sets.get)
     with pytest.raises(InputError, match=r"unknown task 'simple/PTP_9'"):
         resolve("IMPROV:cyc:simple/PTP_9", sets.__getitem__, {}.__getitem__)
+
+
+def test_collaborative_cost_list_one_cost_per_robot():
+    b = BenchmarkID.parse("[M-robodesign_arm,M-IMPROV]:[cyc,Liu2]:robodesign-collab/shared_conveyor")
+    assert b.is_collaborative and [c.descriptor() for c in b.costs] == ["cyc", "cyc_0.2,mechEnergy"]
+    assert str(b) == "[M-robodesign_arm,M-IMPROV]:[cyc,Liu2]:robodesign-collab/shared_conveyor"
+    # a weighted sum inside the list in bracket notation; one cost for all robots
+    b = BenchmarkID.parse("[A,B]:[[(cyc|0.2),(mechEnergy|1)],mass]:t/x")
+    assert [c.descriptor() for c in b.costs] == ["cyc_0.2,mechEnergy", "mass"]
+    b = BenchmarkID.parse("[A,B]:cyc:t/x")
+    assert [c.descriptor() for c in b.costs] == ["cyc", "cyc"] and str(b) == "[A,B]:cyc:t/x"
+    b = BenchmarkID.parse("[A,B]:[(cyc|0.2),(mechEnergy|1)]:t/x")  # the term notation: one cost for both
+    assert [c.descriptor() for c in b.costs] == ["cyc_0.2,mechEnergy"] * 2
+    assert BenchmarkID.parse("A:cyc:t/x").costs == ()
+    with pytest.raises(InputError, match="3 costs for 2 robots"):
+        BenchmarkID.parse("[A,B]:[cyc,mass,numJ]:t/x")
+    with pytest.raises(InputError, match=r"cost of robot 2 \('nope'\)"):
+        BenchmarkID.parse("[A,B]:[cyc,nope]:t/x")

@@ -223,6 +223,7 @@ def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, caps
     good = solved.solution.write(tmp_path / "good.json")
     code, out = _main(["check", task, good], capsys)
     assert code == 0 and "VALID" in out.out and "total" in out.out
+    assert "benchmark [M-robodesign_arm,M-robodesign_arm]:cyc:robodesign-collab/shared_conveyor" in out.out
     # both arms pitch towards the belt at once: robot–robot collision → exit 1, named in the JSON verdict
     robots = _robots(ctask, ms)
     a = robots["left"]

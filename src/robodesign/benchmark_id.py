@@ -22,7 +22,10 @@ own, that accepts every form we know of and keeps each part unambiguous:
     Name        := [A-Za-z0-9_.-]+    (a module set / robot name, e.g. IMPROV, geometric_primitive_modules)
     Cost        := a cost descriptor in either notation of :mod:`robodesign.costs`
                    ("cyc_0.2,mechEnergy", "[(cyc|0.2),(mechEnergy|1)]", "Liu2"); it may contain "," "|"
-                   "(" ")" "[" "]" "_" but never ":"; an empty cost is rejected
+                   "(" ")" "[" "]" "_" but never ":"; an empty cost is rejected.
+                   With a robot list of n robots the cost part may also be a list "[C1,...,Cn]" of one
+                   cost per robot (e.g. "[cyc,Liu2]"; a weighted sum inside it in bracket notation);
+                   a single cost applies to every robot. ``BenchmarkID.costs`` holds the per-robot costs.
     Task        := Segment ("/" Segment)*   with Segment := [A-Za-z0-9_.-]+, not "." or ".."
                    (task IDs are namespaced with "/", e.g. simple/PTP_1)
 
@@ -86,8 +89,9 @@ class ResolvedBenchmark(NamedTuple):
 @dataclass(frozen=True)
 class BenchmarkID:
     robot: RobotSpec
-    cost: CostFunction
+    cost: CostFunction  # the cost (of the first robot when a collaborative ID gives one cost per robot)
     task: str
+    costs: Tuple[CostFunction, ...] = ()  # a collaborative ID's cost per robot, in the robot list's order
 
     @classmethod
     def parse(cls, text: Any, file: Optional[str] = None, path: Sequence[PathPart] | str | None = None) \
@@ -105,15 +109,22 @@ class BenchmarkID:
         robot = _parse_robot(robot_s, err)
         if not cost_s:
             raise err("the cost part is empty (expected e.g. cyc, Liu2 or [(cyc|0.2),(mechEnergy|1)])")
-        try:
-            cost = parse_cost(cost_s)
-        except InputError as e:
-            raise err(f"cost part: {e.reason}") from None
+        costs = _per_robot_costs(cost_s, robot, err)
+        if costs is None:
+            try:
+                cost = parse_cost(cost_s)
+            except InputError as e:
+                raise err(f"cost part: {e.reason}") from None
+            costs = (cost,) * len(robot.robots) if robot.collaborative else ()
         _check_task(task_s, err)
-        return cls(robot, cost, task_s)
+        return cls(robot, costs[0] if costs else cost, task_s, costs)
 
     def __str__(self) -> str:
-        return f"{self.robot}:{self.cost.name or self.cost.descriptor()}:{self.task}"
+        if self.costs and any(c.descriptor() != self.costs[0].descriptor() for c in self.costs):
+            cost = "[" + ",".join(_cost_text(c) for c in self.costs) + "]"
+        else:
+            cost = _cost_text(self.cost)
+        return f"{self.robot}:{cost}:{self.task}"
 
     @property
     def is_collaborative(self) -> bool:
@@ -122,6 +133,51 @@ class BenchmarkID:
     def resolve(self, module_set_lookup: Optional[Callable[[str], Any]] = None,
                 task_lookup: Optional[Callable[[str], Any]] = None) -> ResolvedBenchmark:
         return resolve(self, module_set_lookup, task_lookup)
+
+
+def _cost_text(c: CostFunction) -> str:
+    return c.name or c.descriptor()
+
+
+def _top_level_items(s: str) -> list:
+    """``s`` split at the commas outside brackets and parentheses."""
+    items, depth, cur = [], 0, ""
+    for ch in s:
+        if ch in "([":
+            depth += 1
+        elif ch in ")]":
+            depth -= 1
+        if ch == "," and depth == 0:
+            items.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return items + [cur]
+
+
+def _per_robot_costs(cost_s: str, robot: RobotSpec, err) -> Optional[Tuple[CostFunction, ...]]:
+    """A collaborative ID's cost list ``[C1,...,Cn]`` (one cost per robot, n = the number of robots), or None
+    when the cost part is one cost for every robot. An item is a cost name (``cyc``, ``Liu2``), a
+    ``name_weight`` term or the bracket notation ``[(cyc|0.2),(mechEnergy|1)]``; a list item that is a
+    weighted sum must use the bracket notation (``cyc_0.2,mechEnergy_1`` inside a list is ambiguous)."""
+    if not robot.collaborative or not (cost_s.startswith("[") and cost_s.endswith("]")):
+        return None
+    items = [x.strip() for x in _top_level_items(cost_s[1:-1])]
+    if any(x.startswith("(") for x in items):
+        return None  # the weighted-term notation [(cyc|0.2),(mechEnergy|1)]: one cost for every robot
+    n = len(robot.robots)
+    if len(items) != n:
+        raise err(f"cost part: {len(items)} costs for {n} robots (one per robot, or one cost for all; write a "
+                  "weighted sum inside a list as [(cyc|0.2),(mechEnergy|1)])")
+    out = []
+    for k, it in enumerate(items):
+        try:
+            out.append(parse_cost(it))
+        except InputError as e:
+            raise err(f"cost of robot {k + 1} ({it!r}): {e.reason}") from None
+        if out[-1].is_empty:
+            raise err(f"cost of robot {k + 1} is empty")
+    return tuple(out)
 
 
 def _parse_robot(s: str, err) -> RobotSpec:

@@ -163,6 +163,14 @@ class CollabSolution:
     def cost_functions(self) -> Tuple[str, ...]:
         return tuple(s.cost_function for _, s in self.robots)
 
+    def benchmark_id(self, order: Optional[Sequence[str]] = None) -> str:
+        """``[M-set1,M-set2]:[C1,C2]:task`` (robots in ``order``, default the solution's), canonical form."""
+        from .benchmark_id import BenchmarkID
+        sols = [self.solution(r) for r in (order or [r for r, _ in self.robots])]
+        robots = ",".join(f"M-{s.module_set}" for s in sols)
+        costs = ",".join(f"[{c}]" if "," in c and not c.startswith("[") else c for c in (s.cost_function for s in sols))
+        return str(BenchmarkID.parse(f"[{robots}]:[{costs}]:{self.task_id}"))
+
     def to_json(self) -> dict:
         out = {"taskID": self.task_id, "collaborative": True, "computationTime": self.computation_time,
                "robots": []}
@@ -230,6 +238,7 @@ class CollabVerdict:
     costs: Tuple[Optional[float], ...]  # one per robot, in the task's robot order
     cost_functions: Tuple[str, ...]
     goal_robot: Dict[str, Optional[str]] = field(default_factory=dict)  # goal → robot that achieved it
+    benchmark_id: str = ""  # [M-set1,M-set2]:[C1,C2]:task (empty when the solution cannot name one)
 
     @property
     def total_cost(self) -> Optional[float]:
@@ -240,7 +249,7 @@ class CollabVerdict:
         return {"valid": self.valid, "collaborative": True,
                 "violations": [{"robot": r, **v.to_json()} for r, v in self.violations],
                 "costs": [None if c is None else float(c) for c in self.costs], "totalCost": self.total_cost,
-                "costFunctions": list(self.cost_functions), "goals": self.goal_robot,
+                "costFunctions": list(self.cost_functions), "goals": self.goal_robot, "benchmarkID": self.benchmark_id,
                 "robots": {rid: v.to_json() for rid, v in self.robots.items()}}
 
 
@@ -322,8 +331,12 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
                                                  f"{e.second}{between} (distance {e.distance:.4g} m, margin {margin:.3g})",
                                                  sample=k, time=tt, value=e.distance)))
     costs = tuple(verdicts[rid].cost for rid in ctask.robot_ids)
+    try:
+        bid = csol.benchmark_id(ctask.robot_ids)
+    except InputError:  # e.g. a module set name the ID grammar does not allow: the verdict stands without it
+        bid = ""
     return CollabVerdict(not viol, viol, verdicts, costs, tuple(csol.solution(r).cost_function for r in ctask.robot_ids),
-                         goal_robot)
+                         goal_robot, bid)
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -41,6 +41,8 @@ def check_command(args, ctask: CollabTask) -> int:
         print(f"task      {ctask.id} (collaborative: {', '.join(ctask.robot_ids)})")
         print(f"solution  {args.solution}")
         print(f"verdict   {'VALID' if verdict.valid else 'INVALID'}")
+        if verdict.benchmark_id:
+            print(f"benchmark {verdict.benchmark_id}")
         for rid, cost, cf in zip(ctask.robot_ids, verdict.costs, verdict.cost_functions):
             print(f"robot     {rid}: {cf} = " + ("—" if cost is None else f"{cost:.6g}"))
         if verdict.total_cost is not None:
