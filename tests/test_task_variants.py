@@ -714,3 +714,16 @@ def test_viewer_shows_the_space_to_leave(tmp_path):
     assert geom["type"] == "box" and geom["size"] == [2.5, 1.0, 1.5] and geom["role"] == "tolerance"
     np.testing.assert_allclose(np.asarray(node["pose"]).reshape(4, 4) @ np.asarray(geom["pose"]).reshape(4, 4),
                                box_pose, atol=1e-12)
+
+
+def test_a_task_file_not_at_its_id_path_warns_where_meshes_resolve(tmp_path):
+    d = source("PTP_2")
+    pkg = tmp_path / "pkg"
+    write_task(pkg, d)                                   # pkg/simple/PTP_2.json: at its ID path
+    renamed = pkg / "simple" / "my copy.json"
+    renamed.write_text(json.dumps(d))
+    assert not any("header.ID" in w for w in load_task(pkg / "simple" / "PTP_2.json").warnings)
+    t = load_task(renamed)
+    assert t.root == pkg.resolve() and len(t.obstacles[0].collision) == 1
+    assert f"my copy.json: header.ID: the file is not at <package>/simple/PTP_2.json, so mesh paths resolve " \
+           f"against {pkg.resolve()}" in t.warnings[0]

@@ -10,6 +10,7 @@ and may not escape it.
 """
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Dict, Optional, Union
@@ -204,6 +205,11 @@ def parse_task(data, file: Path) -> Task:
     h = data["header"]
     tid = str(h["ID"])
     root = _package_root(file, tid)
+    stem = file.resolve().with_suffix("").as_posix()
+    if not (stem == tid or stem.endswith("/" + tid)) and '"file"' in json.dumps(data.get("obstacles", [])) + \
+            json.dumps(data.get("goals", [])):
+        warnings.add(fname, ["header", "ID"], f"the file is not at <package>/{tid}.json, so mesh paths resolve "
+                                              f"against {root} (the folder the ID's namespace implies)")
     ts = check_finite(h.get("timeStepSize", 0.01), fname, ["header", "timeStepSize"])
     if ts <= 0:
         raise InputError(f"must be positive, got {ts}", file=fname, path=["header", "timeStepSize"])
