@@ -3,12 +3,14 @@
 A check parses up to ``--max-upload-mb`` of JSON and runs the checker: seconds of CPU, partly in C code that holds
 Python's global interpreter lock. In processes (``robodesign serve``'s default) the checks never slow the threads
 that serve pages, a crash or a memory spike stays in the checker process (which is replaced), and several cores are
-used. Threads start faster (the default of :func:`robodesign.web.create_app`, used by most tests).
+used; they run at a lower priority (``nice`` +10) so that pages come first on a busy machine. Threads start
+faster (the default of :func:`robodesign.web.create_app`, used by most tests).
 """
 from __future__ import annotations
 
 import logging
 import multiprocessing
+import os
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -19,10 +21,15 @@ from .service import Bench, Settings
 log = logging.getLogger("robodesign.web")
 
 _worker_bench: Optional[Bench] = None  # the Bench of a checker process
+CHECKER_NICE = 10  # checker processes yield the CPU to the process that serves the pages
 
 
 def _init_worker(settings: Settings) -> None:
     global _worker_bench
+    try:
+        os.nice(CHECKER_NICE)
+    except OSError:  # not permitted here: the checks run at the server's priority
+        pass
     _worker_bench = Bench(settings, staging=False)
 
 
