@@ -24,7 +24,11 @@ def add_generate_arguments(p: argparse.ArgumentParser) -> None:
     for name, fams in seen.items():
         opt = next(o for f in families().values() for o in f.options if o.name == name)
         p.add_argument("--" + name.replace("_", "-"), dest="opt_" + name, default=None, metavar="VALUE",
-                       help=f"[{', '.join(fams)}] {opt.help} (default {opt.default})")
+                       help=f"[{', '.join(fams)}] {opt.help}{_default(opt)}")
+
+
+def _default(o) -> str:
+    return "" if o.default is None else f" (default {o.default})"
 
 
 def cmd_generate(args) -> int:
@@ -34,7 +38,7 @@ def cmd_generate(args) -> int:
             print(f"{fam.name}  (version {fam.version})  {fam.summary}")
             for o in fam.options:
                 ch = f" {{{'|'.join(o.choices)}}}" if o.choices else ""
-                print(f"    --{o.name.replace('_', '-')}{ch}  {o.help} (default {o.default})")
+                print(f"    --{o.name.replace('_', '-')}{ch}  {o.help}{_default(o)}")
         return 0
     given = {k[4:]: v for k, v in vars(args).items() if k.startswith("opt_") and v is not None}
     if args.from_task:

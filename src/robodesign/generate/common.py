@@ -136,7 +136,7 @@ def header(task_id: str, title: str, prov: Provenance, tags: Sequence[str] = ())
 
 
 # ---------------------------------------------------------------------------------------------------------
-# deterministic JSON (the layout of assets/tasks/make_tasks.py)
+# deterministic JSON (also used by assets/tasks/make_tasks.py for the built-in tasks)
 def clean(obj):
     """JSON-ready copy: arrays to lists, floats rounded to 10 decimals (integral ones to int, -0 to 0)."""
     if isinstance(obj, np.ndarray):
