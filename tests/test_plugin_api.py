@@ -111,7 +111,8 @@ from robodesign.optimize import (Budget, SerialExecutor, Study, available_optimi
 from robodesign.problem import Problem
 eps = available_optimizers()
 cls = load_optimizer("{ENTRY}")
-rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10", "11", "15"])
+rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"],
+             exclude=["4", "5", "6", "7", "8", "9", "10", "11", "15"])
 problem = Problem.build(sys.argv[1], "robodesign_arm", "Whit2", rules=rules)
 ev = Evaluator(EvaluatorSpec(problem))
 opt = create_optimizer("{ENTRY}", problem, seed=0, options={{"step": "0.05"}})
@@ -264,9 +265,31 @@ def test_plugins_written_against_the_old_api_still_run(tmp_path):
     with pytest.warns(DeprecationWarning, match="deprecated plugin API"):
         opt = create_optimizer(ns["LegacyRandom"], problem, seed=0, options={"tries": "7"})
     assert opt.tries == 7 and opt.cost_option == "Whit2" and opt.problem is problem and opt.space is problem.space
+    assert opt.cost is problem.cost
     res = Study(opt, SerialExecutor(Evaluator(EvaluatorSpec(problem))), Budget(evaluations=4)).run()
     assert len(res.history) == 4 and all(problem.space.validate(e.candidate) is None for e in res.history)
     # constructing one directly with a SearchSpace still works, with a warning
     with pytest.warns(DeprecationWarning, match="deprecated"):
         old = ns["LegacyRandom"](problem.space, seed=0)
     assert old.problem is None and old.cost is None and old.ask() is not None
+
+
+def test_an_old_plugin_that_sets_its_own_cost_attribute_still_runs(tmp_path):
+    """The old first-party pattern ``self.cost = str(cost)`` (from the injected cost option) keeps working."""
+    import pytest
+    from robodesign.optimize import Optimizer, create_optimizer
+    from robodesign.problem import Problem
+
+    class OldBound(Optimizer):
+        def __init__(self, space, seed=0, cost=None, **options):
+            super().__init__(space, seed, **options)
+            self.cost = str(cost) if cost not in (None, "none") else None
+
+        def ask(self):
+            return self.space.random_candidate(self.rng)
+
+    problem = Problem.build(_task(tmp_path / "task.json"), "robodesign_arm", "Whit2")
+    with pytest.warns(DeprecationWarning):
+        opt = create_optimizer(OldBound, problem)
+    assert opt.cost == "Whit2"
+    assert opt.space.cost_lower_bound((), opt.cost) == problem.space.cost_lower_bound((), problem.cost)

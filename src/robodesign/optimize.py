@@ -73,16 +73,13 @@ class Optimizer(ABC):
         else:
             self.problem = problem
             self.space = problem.space
+        #: the cost function the study evaluates (None only for a plugin built the deprecated way)
+        self.cost: Optional[CostFunction] = self.problem.cost if self.problem is not None else None
         self.seed = int(seed)
         self.rng = np.random.default_rng(self.seed)
         self.options = parse_options(type(self), options)
         self.history: List[Evaluation] = []
         self.best: Optional[Evaluation] = None
-
-    @property
-    def cost(self) -> Optional[CostFunction]:
-        """The cost function the study evaluates (None only for a plugin built the deprecated way)."""
-        return self.problem.cost if self.problem is not None else None
 
     @abstractmethod
     def ask(self) -> Optional[Candidate]:
@@ -299,6 +296,8 @@ def create_optimizer(plugin: Union[str, Type[Optimizer]], problem: Problem, seed
                 warnings.simplefilter("ignore", DeprecationWarning)  # warned once, above
                 opt = cls(problem.space, seed=seed, **options)
             opt.problem = problem
+            if opt.cost is None:  # unless the plugin set its own (from the cost option, say)
+                opt.cost = problem.cost
             return opt
         return cls(problem, seed=seed, **options)
     except OptionError:
