@@ -17,8 +17,6 @@ def _base_pose(text, task):
 
 
 TRAJECTORY_CHOICES = ("auto", "time-optimal", "optimize")
-# cost terms the trajectory optimizer lowers beyond what the time-optimal profile gives (solvers.trajopt)
-_TRAJOPT_TERMS = ("mechEnergy", "effort")
 
 
 def add_trajectory_arguments(p) -> None:
@@ -31,15 +29,18 @@ def add_trajectory_arguments(p) -> None:
 
 def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False) -> str:
     """"time-optimal" or "optimize" for a cost and the --trajectory / --optimize-trajectory options."""
-    from .costs import parse_cost
+    from .costs import cost_term, parse_cost
     if optimize_flag:
         if choice == "time-optimal":
             raise InputError("--optimize-trajectory contradicts --trajectory time-optimal")
         return "optimize"
     if choice != "auto":
         return choice
+    # optimize for the terms trajectory optimization lowers beyond the time-optimal profile: the modelled
+    # torque integrals (mechEnergy, effort)
     weights = parse_cost(cost, path="--cost").terms
-    return "optimize" if any(n in _TRAJOPT_TERMS and w > 0 for n, w in weights) else "time-optimal"
+    energy_like = [n for n, w in weights if w > 0 and cost_term(n).trajopt and cost_term(n).needs_torques]
+    return "optimize" if energy_like else "time-optimal"
 
 
 def cmd_solve(args) -> int:
