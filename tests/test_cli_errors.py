@@ -289,6 +289,17 @@ def test_view_of_another_tasks_solution_warns_and_exits_1(capsys, tmp_path, ptp3
                    "shows it in a cell it was not planned for\n")
     code, out, err = run(capsys, "view", sol, "--task", PTP3, "--modules", IMPROV, "--no-plots", "--out", page)
     assert code == 0 and err == ""
+    # --check: the rest trajectory reaches none of PTP_3's goals, so the page is written and the exit is 1
+    code, out, err = run(capsys, "view", sol, "--task", PTP3, "--modules", IMPROV, "--no-plots", "--check",
+                         "--out", page)
+    from robodesign.checker import check
+    from robodesign.module_io import load_module_set
+    from robodesign.solution import load_solution
+    from robodesign.task_io import load_task
+    verdict = check(load_task(PTP3), load_solution(sol), load_module_set(IMPROV))
+    assert not verdict.valid and code == 1 and "INVALID" in page.read_text()
+    assert err == (f"robodesign: warning: the checker finds the solution INVALID ({len(verdict.violations)} "
+                   "violation(s), listed on the page)\n")
 
 
 @pytest.mark.parametrize("text,message", [
