@@ -69,3 +69,29 @@ def test_bad_workers_and_batch_size(capsys, args, msg):
     code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "2evals", *args])
     err = capsys.readouterr().err
     assert code == 2 and msg in err and "Traceback" not in err
+
+
+def test_bound_executor_sends_each_candidate_to_the_workers_once():
+    """Repeats (within a batch or from an earlier one) come from the driver's cache, as in-process."""
+    from robodesign.evaluator import Evaluation
+    from robodesign.experiment.executors import EvaluatorPool
+    from robodesign.search_space import Candidate
+
+    class Counting(EvaluatorPool):
+        sent = []
+
+        def map(self, spec_id, candidates):
+            self.sent.append([c.key() for c in candidates])
+            return [Evaluation(candidate=c, feasible=False, cost=None, score=float(len(c.order)), stage="ik",
+                               stage_index=3, goals_reached=0, seconds=0.0, seed=0) for c in candidates]
+
+    a, b, c = (Candidate(tuple(o), ()) for o in (["1", "21", "12"], ["1", "22", "12"], ["1", "21", "4", "12"]))
+    ex = Counting({"s": None}).bind("s")
+    first = ex.map([a, b, a, c])
+    second = ex.map([c, b])
+    assert Counting.sent == [[a.key(), b.key(), c.key()]]
+    assert [e.candidate.key() for e in first] == [a.key(), b.key(), a.key(), c.key()] and first[0] is first[2]
+    assert second[0] is first[3] and second[1] is first[1] and [e.score for e in first] == [3.0, 3.0, 3.0, 4.0]
+    d = Candidate(("1", "23", "12"), ())
+    ex.map([a, d])
+    assert Counting.sent == [[a.key(), b.key(), c.key()], [d.key()]]

@@ -43,15 +43,25 @@ def build_evaluators(specs: Dict[str, EvaluatorSpec]) -> Dict[str, Evaluator]:
 
 
 class BoundExecutor:
-    """The executor a Study sees: one spec of a pool."""
+    """The executor a Study sees: one spec of a pool. A candidate evaluated before through this executor
+    (or twice in a batch) is not sent to a worker again: its evaluation is a pure function of the candidate,
+    so the result is the same, as with the in-process evaluator's cache (a worker's own cache misses when
+    the repeat lands on another worker)."""
 
     def __init__(self, pool: "EvaluatorPool", spec_id: str):
         self.pool = pool
         self.spec_id = spec_id
         self.name = pool.kind
+        self.cache: Dict[str, Evaluation] = {}
 
     def map(self, candidates: Sequence[Candidate]) -> List[Evaluation]:
-        return self.pool.map(self.spec_id, list(candidates))
+        todo: Dict[str, Candidate] = {}
+        for c in candidates:
+            if c.key() not in self.cache:
+                todo.setdefault(c.key(), c)
+        if todo:
+            self.cache.update(zip(todo, self.pool.map(self.spec_id, list(todo.values()))))
+        return [self.cache[c.key()] for c in candidates]
 
     def close(self) -> None:  # the pool outlives the runs; closed by its owner
         pass
