@@ -21,7 +21,8 @@ No cold-start stall (:func:`ready`): compiling the kernels takes about 5 s (on a
 cached on disk (numba's cache: ``__pycache__`` next to this file, or ``NUMBA_CACHE_DIR``), where later
 processes load it in about 0.1 s. A process that finds no compiled kernels in the cache does not wait
 for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``, niced) that
-compiles them into the cache, and runs the Python loop until that process has finished; from then on it
+compiles them into the cache (niced, in the command's session, its own process group), and runs the
+Python loop until that process has finished; from then on it
 uses the compiled loop. So the first command after an install is never slower than the pure-Python path,
 and long runs switch to the compiled loop after a few seconds. A stamp file beside numba's cache
 (``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python, CPU and
@@ -626,10 +627,15 @@ def _start_compiler() -> Optional[subprocess.Popen]:
     env = dict(os.environ)
     src_root = str(Path(__file__).resolve().parents[2])   # the folder holding the robodesign package
     env["PYTHONPATH"] = src_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    # its own process group (Ctrl-C on the command does not stop it: it finishes the cache even if the command
+    # ends first) but the command's session: Linux shares the CPU between sessions (autogroup), so a session
+    # of its own would take a whole share from a busy machine, while inside the command's session its nice
+    # value leaves the CPU to the command
+    group = {"process_group": 0} if sys.version_info >= (3, 11) else {"preexec_fn": os.setpgrp}
     try:
         return subprocess.Popen([sys.executable, "-m", "robodesign.solvers.ik_kernel"], env=env,
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                start_new_session=True)   # finishes the cache even if this command ends first
+                                **group)
     except OSError:
         return None
 
