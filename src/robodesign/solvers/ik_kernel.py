@@ -20,10 +20,9 @@ tests compare both on the same inputs (same solutions to 1e-8).
 No cold-start stall (:func:`ready`): compiling the kernels takes about 5 s (on a quiet machine) and is
 cached on disk (numba's cache: ``__pycache__`` next to this file, or ``NUMBA_CACHE_DIR``), where later
 processes load it in about 0.1 s. A process that finds no compiled kernels in the cache does not wait
-for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``, niced) that
-compiles them into the cache (niced, in the command's session, its own process group), and runs the
-Python loop until that process has finished; from then on it
-uses the compiled loop. So the first command after an install is never slower than the pure-Python path,
+for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``; niced, in the
+command's session, its own process group) that compiles them into the cache, and runs the Python loop
+until that process has finished; from then on it uses the compiled loop. So the first command after an install is never slower than the pure-Python path,
 and long runs switch to the compiled loop after a few seconds. A stamp file beside numba's cache
 (``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python, CPU and
 source; concurrent processes serialise the compilation with a lock file beside it.
