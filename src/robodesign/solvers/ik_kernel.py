@@ -22,7 +22,8 @@ cached on disk (numba's cache: ``__pycache__`` next to this file, or ``NUMBA_CAC
 processes load it in about 0.1 s. A process that finds no compiled kernels in the cache does not wait
 for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``; niced, in the
 command's session, its own process group) that compiles them into the cache, and runs the Python loop
-until that process has finished; from then on it uses the compiled loop. So the first command after an install is never slower than the pure-Python path,
+until that process has finished; from then on it uses the compiled loop. So the first command after an
+install is not held up by the compilation (tests/test_cold_start.py: within 20 % of the pure-Python path),
 and long runs switch to the compiled loop after a few seconds. A stamp file beside numba's cache
 (``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python, CPU and
 source; concurrent processes serialise the compilation with a lock file beside it.
