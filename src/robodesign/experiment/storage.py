@@ -8,8 +8,9 @@ without its ``-wal``) holds every evaluation but those of the last second of a k
 checkpoint ``on_checkpoint(count)`` reports the evaluations stored so far (the runner records the number
 in meta.json, where a resume compares it with what the database holds).
 
-Damage: :func:`open_db` turns an unreadable file (truncated, garbled, not SQLite) into an
-:class:`~robodesign.errors.InputError` naming the file and what to do, never a traceback.
+Damage: opening an unreadable file (truncated, garbled, not SQLite; SQLite's ``quick_check``) raises
+:class:`DamagedDatabase`, an :class:`~robodesign.errors.InputError` naming the file and what to do, never a
+traceback.
 
 Exact resume: :class:`RunStorage` is the ``storage`` of a :class:`robodesign.optimize.Study`. ``load()``
 returns the stored evaluations of the run in ask order; the study replays them through the (seeded,
@@ -110,7 +111,6 @@ class DamagedDatabase(InputError):
             f"run `sqlite3 {path} .recover | sqlite3 recovered.sqlite`; to start the experiment over in this "
             f"folder run `robodesign run --resume {folder} --restart` (the damaged file is moved aside, not "
             f"deleted)", file=str(path))
-        self.reason_text = reason
 
 
 class ExperimentDB:
