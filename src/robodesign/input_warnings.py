@@ -35,10 +35,6 @@ class InputWarnings:
         general = re.sub(r"\[\d+\]", "[*]", format_json_path(list(path) + [str(key)]))
         self.add(file, list(path) + [str(key)], f"unknown key {str(key)!r} ignored{hint}", dedup=f"{file}|{general}")
 
-    def extend(self, messages: Sequence[str]) -> None:
-        for m in messages:
-            self.add(None, [], m)
-
     @property
     def messages(self) -> Tuple[str, ...]:
         out = []
@@ -47,6 +43,3 @@ class InputWarnings:
             more = f" (and at {count - 1} more place{'s' if count > 2 else ''} like it)" if count > 1 else ""
             out.append(prefix + message + more)
         return tuple(out)
-
-    def __len__(self) -> int:
-        return len(self._items)
