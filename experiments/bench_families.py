@@ -47,8 +47,8 @@ VARIANTS = {
                          "Whitman 3 goals / 3 obstacles, free base"),
     "whitman2020_g5o5": ("whitman2020", [{"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}], 18.9,
                          "Whitman 5 goals / 5 obstacles, free base"),
-    "liu2020": ("liu2020", [{"machine": "<cobra>/tasks/assets/DMU_125P_compress.stl"}], 12.0,
-                "Liu case 2b (machine tending), DMU 125P mesh of the CoBRA data"),
+    "liu2020": ("liu2020", [{"machine": "<cobra>/tasks/assets/QUASER_MV205_v3_compressed.stl"}], 12.0,
+                "Liu case 2b (machine tending), QUASER MV205 mesh of the CoBRA data"),
     "bpo2024": ("bpo2024", [{"structure": "mixed", "difficulty": "mixed"}], 11.4,
                 "edge cases: x, cross, house, oven, random field by task index, 5 easy / 5 medium / 5 hard"),
 }
