@@ -75,3 +75,29 @@ def test_solve_cli_says_how_many_goals_it_achieved(tmp_path, capsys):
     code = main(["solve", str(p), "--modules", "robodesign_arm", "--order", ",".join(DEFAULT_ORDER)])
     assert code == 0
     assert "goals  2 of 2 achieved\n" in capsys.readouterr().out
+
+
+def test_solve_result_exposes_the_shared_trajectory_quantities():
+    """A solve result's ``quantities`` are what the motion does on the robot in its cell, as the checker reads
+    them: checked here against forward kinematics, the task's follow-goal force and Robot.drivetrain_torques."""
+    task = load_task(builtin_tasks_dir() / "robodesign" / "welding_seam.json")
+    ms = load_module_set("robodesign_arm")
+    res = solve(task, ms, list(DEFAULT_ORDER))
+    assert res.feasible, res.message
+    tq = res.quantities
+    assert tq is res.quantities  # computed once
+    tr = res.solution.trajectory
+    from robodesign.cell import solution_robot
+    robot = solution_robot(task, res.solution, ms)
+    for gid in ("seam_start", "retreat"):
+        k = int(np.argmin(np.abs(tr.t - tr.goal2time[gid])))
+        np.testing.assert_allclose(tq.tcp_poses[k], robot.fk(tr.q[k]), atol=1e-12)
+        assert task.goal(gid).pose.valid(tq.tcp_poses[k])
+    k0, k1 = tq.goal_windows["weld"]
+    weld = task.goal("weld")
+    assert k1 > k0 and abs(tr.t[k1] - tr.goal2time["weld"]) < 1e-9
+    np.testing.assert_allclose(tq.external_wrenches[k0:k1 + 1, :3], np.tile(weld.external_force, (k1 - k0 + 1, 1)))
+    assert not np.any(tq.external_wrenches[:k0]) and not np.any(tq.external_wrenches[k1 + 1:])
+    np.testing.assert_allclose(tq.torques, robot.drivetrain_torques(tr.q, tr.dq, tr.ddq, fext=tq.external_wrenches),
+                               atol=1e-9)
+    assert np.all(np.abs(tq.torques) <= robot.tau_max * (1 + 1e-9))  # the checker found it valid

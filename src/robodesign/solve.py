@@ -21,16 +21,18 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
 from .assembly import Assembly
-from .cell import build_robot
+from .cell import build_robot, solution_robot
 from .checker import Verdict, check
 from .costs import cost_term, parse_cost
 from .errors import RobodesignError
 from .module_spec import ModuleSet
+from .quantities import TrajectoryQuantities
 from .solution import Solution, SolutionTrajectory
 from .solvers.schedule import ScheduleError, check_hold, find_wait, moving_obstacles, static_cell
 from .task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
@@ -80,6 +82,19 @@ class SolveResult:
     verdict: Optional[Verdict] = None
     goals_reached: int = 0  # goals with an IK solution (how far the ik stage got)
     num_goals: int = 0
+    task: Optional[Task] = field(default=None, repr=False, compare=False)  # what was solved, for `quantities`
+    module_set: Optional[ModuleSet] = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def quantities(self) -> Optional[TrajectoryQuantities]:
+        """What the solution's motion does on the robot in its cell — TCP poses and twists, goal windows,
+        follow-goal wrenches, drivetrain torques — as the shared, lazily computed
+        :class:`~robodesign.quantities.TrajectoryQuantities` the checker and the viewer read (None without a
+        solution)."""
+        if self.solution is None or self.task is None:
+            return None
+        robot = solution_robot(self.task, self.solution, self.module_set)
+        return TrajectoryQuantities.from_solution(robot, self.solution, self.task)
 
     @property
     def goals_achieved(self) -> Optional[int]:
@@ -156,7 +171,7 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
     returns there."""
     settings = settings or SolveSettings()
     parse_cost(cost)  # bad input, not an infeasible robot
-    res = SolveResult(num_goals=len(task.goals))
+    res = SolveResult(num_goals=len(task.goals), task=task, module_set=module_set)
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
     run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders, start)
     for name in STAGES:
