@@ -45,13 +45,13 @@ def main() -> None:
                       ("task", COBRA / "tasks" / "simple" / "PTP_3.json"),
                       ("modules", COBRA / "modules" / "IMPROV")):
         print(f"  {ref.relative_to(COBRA)}: {fresh_load_ms(kind, ref, a.repeat):.0f} ms")
-    from robodesign.geometry import _read_stl  # noqa: the reader itself is what is measured
+    from robodesign.geometry import read_stl  # the reader itself is what is measured
     t = time.perf_counter()
     import trimesh
     print(f"import trimesh: {(time.perf_counter() - t) * 1e3:.0f} ms (not needed for STL any more)")
     for f in sorted((COBRA / "tasks" / "assets").glob("*.stl")):
         t = time.perf_counter()
-        v, tri = _read_stl(f)
+        v, tri = read_stl(f)
         ours = time.perf_counter() - t
         t = time.perf_counter()
         m = trimesh.load(str(f), force="mesh", process=False)

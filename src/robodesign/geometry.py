@@ -243,7 +243,7 @@ def load_mesh_arrays(file: str, scale: Tuple[float, float, float]) -> List[Tuple
     p = Path(file)
     if p.suffix.lower() == ".wrl":
         parts = read_wrl_parts(p)
-    elif p.suffix.lower() == ".stl" and (stl := _read_stl(p)) is not None:
+    elif p.suffix.lower() == ".stl" and (stl := read_stl(p)) is not None:
         parts = [stl]
     else:
         import trimesh
@@ -267,7 +267,7 @@ def _binary_stl_triangles(path: Path) -> Optional[int]:
 _STL_VERTEX = re.compile(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)")
 
 
-def _read_stl(path: Path) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+def read_stl(path: Path) -> Optional[Tuple[np.ndarray, np.ndarray]]:
     """Vertices (one per triangle corner, as trimesh reads them unprocessed) and triangles of a binary or
     ASCII STL, read with numpy (no trimesh import); None if the file is neither (the caller falls back)."""
     if _binary_stl_triangles(path) is not None:
