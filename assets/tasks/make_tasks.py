@@ -567,8 +567,10 @@ def main(argv=None) -> int:
         return 0
     failed = 0
     for n in names:
+        setup = COLLAB_SOLVE_SETUP[n] if n in COLLAB_TASKS else SOLVE_SETUP[n]
+        seeds = [int(s) for s in a.seeds.split(",")] if a.seeds else [setup["seed"]]
         if n in COLLAB_TASKS:
-            for seed in [int(s) for s in a.seeds.split(",")] if a.seeds else [COLLAB_SOLVE_SETUP[n]["seed"]]:
+            for seed in seeds:
                 ctask, cres, sec = solve_collab_builtin(n, seed)
                 if cres.feasible:
                     print(f"{ctask.id:28s} seed {seed}: solved in {sec:5.1f} s (priority {', '.join(cres.priority)}), "
@@ -579,11 +581,9 @@ def main(argv=None) -> int:
                     failed += 1
                     print(f"{ctask.id:28s} seed {seed}: FAILED after {sec:.1f} s: {cres.message}")
             continue
-        seeds = [int(s) for s in a.seeds.split(",")] if a.seeds else [SOLVE_SETUP[n]["seed"]]
         for seed in seeds:
             task, res, sec = solve_builtin(n, seed)
-            s = SOLVE_SETUP[n]
-            where = f"base {tuple(s['base'])} yaw {s['yaw']}"
+            where = f"base {tuple(setup['base'])} yaw {setup['yaw']}"
             if res.feasible:
                 print(f"{task.id:28s} seed {seed}: solved in {sec:5.1f} s, cyc {res.verdict.costs['cyc']:.2f} s, "
                       f"{len(res.solution.trajectory.t)} samples ({where})")
