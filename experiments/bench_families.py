@@ -4,7 +4,7 @@ family, for the built-in module set and the IMPROV set, against the Mayer & Alth
 For every family variant, ``--count`` tasks are generated (seeded; robodesign.generate, into
 results/tasks/<variant>_s<seed>_n<count>, shared with configs/*.yaml) and each task is given to
 
-    robodesign optimize TASK --modules SET --optimizer genetic --cost cyc --budget 60s --seed 0 --json
+    robodesign optimize TASK --modules SET --optimizer genetic --cost cyc --budget 60s --seed 0 --workers 1 --json
 
 (modules + base pose: the base is searched within the task's basePlacement tolerance), whose best
 solution is re-checked with `robodesign check`. Tasks are run round-robin (task 0 of every variant and set,
@@ -78,14 +78,14 @@ def task_files(variant: str, count: int, seed: int) -> list:
 
 
 def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, budget: str, optimizer: str,
-             seed: int) -> dict:
+             seed: int, workers: int = 1) -> dict:
     sol = out / "solutions" / variant / set_name / f"{task.stem}.json"
     sol.parent.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), str(ROOT / "optimizers"),
                                                         os.environ.get("PYTHONPATH", "")]))
     t0 = time.perf_counter()
     cmd = _rd() + ["optimize", str(task), "--modules", SETS[set_name], "--optimizer", optimizer, "--cost", "cyc",
-                   "--budget", budget, "--seed", str(seed), "--out", str(sol), "--json"]
+                   "--budget", budget, "--seed", str(seed), "--workers", str(workers), "--out", str(sol), "--json"]
     seconds = float(budget.rstrip("s")) if budget.endswith("s") and budget[:-1].replace(".", "").isdigit() else 600
     row = {"variant": variant, "family": VARIANTS[variant][0], "set": set_name, "task": task.stem, "index": index,
            "valid": False, "cyc": None, "stopped_at": "", "stage_counts": "", "evaluations": 0,
@@ -182,6 +182,8 @@ def main(argv=None) -> int:
     ap.add_argument("--budget", default="60s", help="robodesign optimize budget per task (default 60s)")
     ap.add_argument("--optimizer", default="genetic")
     ap.add_argument("--jobs", type=int, default=2, help="tasks at a time (default 2; the machine is shared)")
+    ap.add_argument("--workers", type=int, default=1,
+                    help="robodesign optimize --workers per task (default 1: --jobs tasks already fill the cores)")
     ap.add_argument("--variants", default=",".join(VARIANTS), help=f"comma-separated, of {', '.join(VARIANTS)}")
     ap.add_argument("--sets", default=",".join(SETS), help="comma-separated module sets: builtin, IMPROV")
     ap.add_argument("--out", default=str(ROOT / "experiments" / "results" / "families"))
@@ -214,7 +216,7 @@ def main(argv=None) -> int:
             for s in sets if (v, s, files[v][i].stem) not in done]
     meta = {"command": " ".join([Path(sys.argv[0]).name] + (argv if argv is not None else sys.argv[1:])),
             "count": args.count, "seed": args.seed, "budget": args.budget, "optimizer": args.optimizer,
-            "jobs": args.jobs, "cpus": os.cpu_count(), "load_avg_at_start": os.getloadavg(),
+            "jobs": args.jobs, "workers": args.workers, "cpus": os.cpu_count(), "load_avg_at_start": os.getloadavg(),
             "tasks_to_run_this_session": len(todo), "tasks_stored_before": len(rows)}
     print(f"{len(rows)} tasks stored, {len(todo)} to run ({args.jobs} at a time, {args.budget} each)", flush=True)
     lock = threading.Lock()
@@ -228,7 +230,7 @@ def main(argv=None) -> int:
         v, s, i, f = item
         if stop_at is not None and time.time() > stop_at:
             return
-        row = run_task(v, s, i, f, out, args.budget, args.optimizer, args.seed)
+        row = run_task(v, s, i, f, out, args.budget, args.optimizer, args.seed, args.workers)
         with lock:
             with open(jsonl, "a") as fh:
                 fh.write(json.dumps(row) + "\n")

@@ -48,11 +48,17 @@ SIZE_S = [0.075]
 
 LIMIT = math.radians(170.0)
 
-# Actuator figures (see README.md, "Sources of the figures").
-ACT_L = {"peakTorque": 120.0, "velocity": 2.1, "acceleration": 8.0,
-         "gearRatio": 160.0, "motorInertia": 4.5e-5, "frictionCoulomb": 5.0, "frictionViscous": 8.0}
-ACT_S = {"peakTorque": 39.0, "velocity": 3.1, "acceleration": 10.0,
-         "gearRatio": 100.0, "motorInertia": 1.5e-5, "frictionCoulomb": 1.8, "frictionViscous": 2.5}
+# Actuator figures (see README.md, "Which product each joint module follows" and "Sources of the figures").
+# Joint limits: those of the Franka Emika Panda's joints (libfranka rate_limiting.h, Franka "Robot and
+# interface specifications"): torque 87 / 12 Nm, speed 2.175 / 2.61 rad/s for joints 1-4 / 5-7, acceleration
+# per joint 15, 7.5, 10, 12.5, 15, 20, 20 rad/s^2. Module 21 follows Panda joint 1, 22 joint 2, 23 joint 5,
+# 24 joint 6. Never tune them to win a benchmark.
+DRIVE_L = {"gearRatio": 160.0, "motorInertia": 4.5e-5, "frictionCoulomb": 5.0, "frictionViscous": 8.0}
+DRIVE_S = {"gearRatio": 100.0, "motorInertia": 1.5e-5, "frictionCoulomb": 1.8, "frictionViscous": 2.5}
+ACT_L_INLINE = {"peakTorque": 87.0, "velocity": 2.175, "acceleration": 15.0, **DRIVE_L}  # Panda joint 1
+ACT_L_PITCH = {"peakTorque": 87.0, "velocity": 2.175, "acceleration": 7.5, **DRIVE_L}  # Panda joint 2
+ACT_S_INLINE = {"peakTorque": 12.0, "velocity": 2.61, "acceleration": 15.0, **DRIVE_S}  # Panda joint 5
+ACT_S_PITCH = {"peakTorque": 12.0, "velocity": 2.61, "acceleration": 20.0, **DRIVE_S}  # Panda joint 6
 
 # Aluminium tube links: outer radius = flange radius, wall 4 mm (L) / 3 mm (S).
 RHO_AL = 2700.0
@@ -350,11 +356,11 @@ def build() -> dict:
         gripper(),
         tool_flange("14", "tool_flange_L", SIZE_L, (0.05, 0.015, 0.2), (0.035, 0.08, 0.35), (0.01, 0.055, 0.05)),
         elbow_link("15", "elbow_S_90", 0.09, 0.09, SIZE_S, knuckle_mass=0.15),
-        joint_inline("21", "joint_L_inline", SIZE_L, ACT_L, housing=(0.055, 0.13, 2.55), flange=(0.05, 0.03, 0.45)),
-        joint_pitch("22", "joint_L_pitch", SIZE_L, ACT_L, neck=(0.05, 0.05, 0.45), drum=(0.062, 0.13, 2.4),
+        joint_inline("21", "joint_L_inline", SIZE_L, ACT_L_INLINE, housing=(0.055, 0.13, 2.55), flange=(0.05, 0.03, 0.45)),
+        joint_pitch("22", "joint_L_pitch", SIZE_L, ACT_L_PITCH, neck=(0.05, 0.05, 0.45), drum=(0.062, 0.13, 2.4),
                     out=(0.05, 0.06, 0.1, 0.35)),
-        joint_inline("23", "joint_S_inline", SIZE_S, ACT_S, housing=(0.042, 0.1, 1.0), flange=(0.0375, 0.025, 0.2)),
-        joint_pitch("24", "joint_S_pitch", SIZE_S, ACT_S, neck=(0.0375, 0.04, 0.2), drum=(0.046, 0.095, 1.05),
+        joint_inline("23", "joint_S_inline", SIZE_S, ACT_S_INLINE, housing=(0.042, 0.1, 1.0), flange=(0.0375, 0.025, 0.2)),
+        joint_pitch("24", "joint_S_pitch", SIZE_S, ACT_S_PITCH, neck=(0.0375, 0.04, 0.2), drum=(0.046, 0.095, 1.05),
                     out=(0.0375, 0.04, 0.075, 0.2)),
     ]
     return {"ignore_collisions": "rigid_via_joint", "modules": mods}
