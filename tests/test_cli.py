@@ -109,7 +109,7 @@ def test_optimizers_lists_the_five_plugins(capsys):
 def test_optimize_base_pose_cli(capsys, tmp_path):
     """The base of a fixed design on robodesign/base_placement: the best of 6 evaluations (the nominal base
     first) is reported with its checked solution; bad plugin options are one-line errors with exit code 2."""
-    order = "2,7,22,3,23,15,24,10,23,15,23,10,24,10,12"
+    order = "2,5,21,22,21,11,22,4,21,5,22,14"
     out_file = tmp_path / "best.json"
     code, out, _ = run(capsys, "optimize", "robodesign/base_placement", "--modules", "robodesign_arm",
                        "--optimizer", "base_pose", "--opt", f"order={order}", "--budget", "6evals",

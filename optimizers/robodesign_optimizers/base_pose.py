@@ -9,7 +9,7 @@ and drawn again; they are not evaluated.
 Typical use, after a search over the modules: refine the base of the best design(s)::
 
     robodesign optimize robodesign/base_placement --modules robodesign_arm --dof 7 \\
-        --optimizer base_pose --opt order=2,7,22,3,23,15,24,10,23,15,23,10,24,10,12 --budget 80evals
+        --optimizer base_pose --opt order=2,5,21,22,21,11,22,4,21,5,22,14 --budget 80evals
 
 Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them): ``order`` (required),
 ``n_startup_trials``, ``max_rejects``.
