@@ -121,7 +121,7 @@ class BenchmarkID:
 
     def __str__(self) -> str:
         if self.costs and any(c.descriptor() != self.costs[0].descriptor() for c in self.costs):
-            cost = "[" + ",".join(_cost_text(c) for c in self.costs) + "]"
+            cost = "[" + ",".join(_cost_item_text(c) for c in self.costs) + "]"
         else:
             cost = _cost_text(self.cost)
         return f"{self.robot}:{cost}:{self.task}"
@@ -137,6 +137,12 @@ class BenchmarkID:
 
 def _cost_text(c: CostFunction) -> str:
     return c.name or c.descriptor()
+
+
+def _cost_item_text(c: CostFunction) -> str:
+    """A cost inside a per-robot list: a weighted sum in bracket notation (its commas would split the list)."""
+    text = _cost_text(c)
+    return c.paper_notation() if "," in text else text
 
 
 def _top_level_items(s: str) -> list:

@@ -80,6 +80,18 @@ def load_collab_task(name_or_path: Union[str, Path]) -> CollabTask:
     return parse_collab_task(load_json(f, display_name=f.name), f)
 
 
+def shared_cell_json(data: dict) -> dict:
+    """A collaborative task file without what makes it collaborative (``robots``, the goals' ``robot``): the
+    shared cell as a single-robot task file (a copy; ``data`` is not changed)."""
+    base = copy.deepcopy(data)
+    base.pop("robots", None)
+    goals = base.get("goals")
+    for g in goals if isinstance(goals, list) else []:
+        if isinstance(g, dict):
+            g.pop("robot", None)
+    return base
+
+
 def parse_collab_task(data, file: Path) -> CollabTask:
     fname = Path(file).name
     if not is_collaborative(data):
@@ -87,8 +99,7 @@ def parse_collab_task(data, file: Path) -> CollabTask:
     robots = data["robots"]
     if not robots:
         raise InputError("needs at least one robot", file=fname, path=["robots"])
-    base = copy.deepcopy(data)
-    del base["robots"]
+    base = shared_cell_json(data)
     ids: List[str] = []
     names: Dict[str, str] = {}
     placements: Dict[str, Optional[dict]] = {}
@@ -106,9 +117,10 @@ def parse_collab_task(data, file: Path) -> CollabTask:
                              path=["robots", i, "basePlacement"])
         placements[rid] = bp
     assignment: Dict[str, Optional[str]] = {}
-    for i, g in enumerate(base.get("goals", [])):
+    goals = data.get("goals")
+    for i, g in enumerate(goals if isinstance(goals, list) else []):
         if isinstance(g, dict) and "robot" in g:
-            rid = g.pop("robot")
+            rid = g["robot"]
             if rid is not None and rid != "any" and str(rid) not in ids:
                 raise InputError(f"unknown robot {rid!r} (robots: {', '.join(ids)})", file=fname,
                                  path=["goals", i, "robot"])
@@ -165,11 +177,13 @@ class CollabSolution:
 
     def benchmark_id(self, order: Optional[Sequence[str]] = None) -> str:
         """``[M-set1,M-set2]:[C1,C2]:task`` (robots in ``order``, default the solution's), canonical form."""
-        from .benchmark_id import BenchmarkID
+        from .benchmark_id import BenchmarkID, RobotRef, RobotSpec
+        from .costs import parse_cost
         sols = [self.solution(r) for r in (order or [r for r, _ in self.robots])]
-        robots = ",".join(f"M-{s.module_set}" for s in sols)
-        costs = ",".join(f"[{c}]" if "," in c and not c.startswith("[") else c for c in (s.cost_function for s in sols))
-        return str(BenchmarkID.parse(f"[{robots}]:[{costs}]:{self.task_id}"))
+        costs = tuple(parse_cost(s.cost_function) for s in sols)
+        bid = BenchmarkID(RobotSpec(tuple(RobotRef(s.module_set, "M-") for s in sols), True), costs[0], self.task_id,
+                          costs)
+        return str(BenchmarkID.parse(str(bid)))  # checks the names and the task ID against the grammar
 
     def to_json(self) -> dict:
         out = {"taskID": self.task_id, "collaborative": True, "computationTime": self.computation_time,

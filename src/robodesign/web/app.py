@@ -405,10 +405,10 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.get("/tasks/{task_id:path}", response_class=HTMLResponse, include_in_schema=False)
     def task_page(task_id: str):
         row = bench.task_row(task_id)
-        task = bench.task(task_id)
-        warnings = [w.replace(str(bench.data), "<data>") for w in task.warnings]
-        return pages.task_page(row, task, bench.module_sets(), bench.cost_functions(),
-                               bench.counts_for_task(task_id), warnings)
+        parsed = bench.parsed_task(task_id)
+        warnings = [w.replace(str(bench.data), "<data>") for w in bench.task(task_id).warnings]
+        return pages.task_page(row, parsed, bench.module_sets(), bench.cost_functions(),
+                               bench.benchmark_counter(task_id), warnings)
 
     @app.get("/modulesets/{name}", response_class=HTMLResponse, include_in_schema=False)
     def moduleset_page(name: str):
@@ -420,13 +420,14 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         ms, cost, task = qp.get("moduleset", ""), qp.get("cost", ""), qp.get("task", "")
         if not (ms and cost and task):
             raise InputError("choose a module set, a cost and a task")
-        bid = f"M-{ms}:{cost}:{task}"
+        robots = json.loads(bench.task_row(task).robots or "[]")
+        bid = pages.benchmark_id_for(ms, cost, task, len(robots))  # a collaborative task: that set for every robot
         return RedirectResponse(pages.bid_url(bid), status_code=303)
 
     @app.get("/leaderboard/{bid:path}", response_class=HTMLResponse, include_in_schema=False)
     def leaderboard_page(bid: str):
-        display, ms, _key, tid, rows = bench.leaderboard(bid)
-        return pages.leaderboard(display, ms, tid, rows)
+        board, rows = bench.leaderboard(bid)
+        return pages.leaderboard(board, rows)
 
     @app.get("/solutions/{sid}", response_class=HTMLResponse, include_in_schema=False)
     def solution_page(sid: str):
@@ -442,9 +443,17 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         row = bench.solution_row(sid)
         html = viewer_cache.get(row.id)
         if html is None:
-            from ..viewer import solution_page as render
-            html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
-                          verdict=json.loads(row.verdict_json or "{}") or None)
+            verdict = json.loads(row.verdict_json or "{}") or None
+            if row.collaborative:  # every robot animating together on the common time base
+                from ..viewer import collab_page
+                csol = bench.solution(row.id)
+                html = collab_page(bench.collab_task(row.task_id), csol,
+                                   {rid: bench.module_set(s.module_set) for rid, s in csol.robots},
+                                   verdict=pages.collab_viewer_verdict(verdict))
+            else:
+                from ..viewer import solution_page as render
+                html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
+                              verdict=verdict)
             viewer_cache.put(row.id, html)
         return HTMLResponse(html, headers={"Content-Security-Policy": VIEWER_CSP})
 
@@ -479,9 +488,14 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     # ---------------------------------------------------------------- JSON API
     @app.get("/api/tasks")
     def api_tasks():
-        return [{"id": t.task_id, "name": t.name, "tags": json.loads(t.tags or "[]"), "goals": t.n_goals,
-                 "obstacles": t.n_obstacles, "assets": [a["path"] for a in json.loads(t.assets or "[]")],
-                 "origin": t.origin, "url": pages.task_url(t.task_id)} for t in bench.tasks()]
+        out = []
+        for t in bench.tasks():
+            robots = json.loads(t.robots or "[]")
+            out.append({"id": t.task_id, "name": t.name, "tags": json.loads(t.tags or "[]"), "goals": t.n_goals,
+                        "obstacles": t.n_obstacles, "assets": [a["path"] for a in json.loads(t.assets or "[]")],
+                        "origin": t.origin, "url": pages.task_url(t.task_id), "collaborative": bool(robots),
+                        **({"robots": robots} if robots else {})})
+        return out
 
     @app.get("/api/tasks/{task_id:path}")
     def api_task(task_id: str):
@@ -610,9 +624,13 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.get("/api/solutions")
     def api_solutions(request: Request):
         qp = request.query_params
+        collab = qp.get("collaborative", "")
+        if collab not in ("", "0", "1", "true", "false"):
+            raise InputError(f"query parameter collaborative: expected 1 or 0, got {collab[:40]!r}")
         rows = bench.list_solutions(task=qp.get("task") or None, cost=qp.get("cost") or None,
                                     moduleset=qp.get("moduleset") or None, min_cost=_float_param(request, "min_cost"),
-                                    max_cost=_float_param(request, "max_cost"))
+                                    max_cost=_float_param(request, "max_cost"),
+                                    collaborative=None if collab == "" else collab in ("1", "true"))
         return [solution_summary(r) for r in rows]
 
     @app.get("/api/solutions/{sid}")
@@ -633,13 +651,20 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.get("/api/leaderboard/{bid:path}")
     def api_leaderboard(bid: str):
-        display, ms, key, tid, rows = bench.leaderboard(bid)
+        board, rows = bench.leaderboard(bid)
         entries = []
         for k, r in enumerate(rows):
             s = solution_summary(r)
             s["rank"] = k + 1
             entries.append(s)
-        return {"benchmark_id": display, "task": tid, "module_set": ms, "cost_key": key, "entries": entries}
+        out = {"benchmark_id": board.display, "task": board.task_id, "collaborative": board.collaborative,
+               "entries": entries}
+        if board.collaborative:  # ordered by totalCost, ties by the cost tuple (docs/collaborative.md)
+            key = json.loads(board.robots_key)
+            out.update(module_sets=key["sets"], cost_keys=key["costs"], order="totalCost, then the cost tuple")
+        else:
+            out.update(module_set=board.module_set, cost_key=board.cost_key)
+        return out
 
     return app
 

@@ -10,7 +10,9 @@ import datetime as _dt
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
-from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, Index, inspect)
+from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, false, Index, inspect,
+                        text)
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.engine import Engine, make_url
 from sqlalchemy.orm import DeclarativeBase, Mapped, load_only, mapped_column, sessionmaker
 
@@ -38,6 +40,9 @@ class TaskRow(Base):
     assets: Mapped[str] = mapped_column(Text, default="[]")  # JSON [{path, size, sha256}]
     n_goals: Mapped[int] = mapped_column(Integer, default=0)
     n_obstacles: Mapped[int] = mapped_column(Integer, default=0)
+    # collaborative task: JSON [{"ID", "name"}] of its robots; "[]" single-robot; NULL: not yet known (a row of an
+    # older version, filled in by the site at startup)
+    robots: Mapped[Optional[str]] = mapped_column(Text, nullable=True)
     origin: Mapped[str] = mapped_column(String(20), default="upload")  # seed | upload
     created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
 
@@ -68,9 +73,14 @@ class SolutionRow(Base):
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     benchmark_id: Mapped[str] = mapped_column(String(600), index=True)  # canonical M-<set>:<cost>:<task>
     task_id: Mapped[str] = mapped_column(String(200), index=True)
-    module_set: Mapped[str] = mapped_column(String(100))
-    cost_function: Mapped[str] = mapped_column(String(300))  # as written in the solution
-    cost_key: Mapped[str] = mapped_column(String(300))  # canonical descriptor (matching key)
+    module_set: Mapped[str] = mapped_column(String(100))  # "" for a collaborative solution (see robots_key)
+    cost_function: Mapped[str] = mapped_column(String(300))  # as written (collaborative: the ID's cost part)
+    cost_key: Mapped[str] = mapped_column(String(300))  # canonical descriptor (matching key); "" collaborative
+    # collaborative solutions ([M-s1,M-s2]:[C1,C2]:task): the matching key {"sets": [...], "costs": [descriptors]}
+    # in the task's robot order, and the cost tuple (``cost`` holds totalCost, their sum)
+    collaborative: Mapped[bool] = mapped_column(Boolean, default=False, server_default=false())
+    robots_key: Mapped[str] = mapped_column(Text, default="", server_default=text("''"))
+    cost_tuple: Mapped[str] = mapped_column(Text, default="[]", server_default=text("'[]'"))
     author_name: Mapped[str] = mapped_column(String(200))
     author_email: Mapped[str] = mapped_column(String(200), default="")
     author_affiliation: Mapped[str] = mapped_column(String(300), default="")
@@ -92,13 +102,14 @@ Index("ix_solutions_board", SolutionRow.task_id, SolutionRow.module_set, Solutio
 
 # columns the listings read (never the stored files: json, solution_json, verdict_json, ...)
 TASK_LIST_COLUMNS = (TaskRow.id, TaskRow.task_id, TaskRow.name, TaskRow.tags, TaskRow.folder, TaskRow.assets,
-                     TaskRow.n_goals, TaskRow.n_obstacles, TaskRow.origin, TaskRow.created)
+                     TaskRow.n_goals, TaskRow.n_obstacles, TaskRow.robots, TaskRow.origin, TaskRow.created)
 MODULE_SET_LIST_COLUMNS = (ModuleSetRow.id, ModuleSetRow.name, ModuleSetRow.folder, ModuleSetRow.assets,
                            ModuleSetRow.module_ids, ModuleSetRow.origin, ModuleSetRow.created)
 SOLUTION_LIST_COLUMNS = (SolutionRow.id, SolutionRow.benchmark_id, SolutionRow.task_id, SolutionRow.module_set,
                          SolutionRow.cost_function, SolutionRow.cost_key, SolutionRow.author_name,
                          SolutionRow.author_affiliation, SolutionRow.valid, SolutionRow.cost, SolutionRow.n_modules,
-                         SolutionRow.dof, SolutionRow.created, SolutionRow.withdrawn)
+                         SolutionRow.dof, SolutionRow.created, SolutionRow.withdrawn, SolutionRow.collaborative,
+                         SolutionRow.robots_key, SolutionRow.cost_tuple)
 SOLUTION_PAGE_COLUMNS = SOLUTION_LIST_COLUMNS + (SolutionRow.verdict_json,)
 
 
@@ -159,8 +170,36 @@ def make_engine(url: str) -> Engine:
     return create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=20)
 
 
+def add_missing_columns(engine: Engine) -> list:
+    """Bring the tables of an older version up to date: every column of the model that a table lacks is added
+    (``ALTER TABLE ... ADD COLUMN`` with the column's server default; existing rows get it). Safe when several
+    processes start on one database at once (a column another process has just added is skipped).
+    → the added ``table.column`` names."""
+    added = []
+    for table in Base.metadata.sorted_tables:
+        have = {c["name"] for c in inspect(engine).get_columns(table.name)}
+        for col in table.columns:
+            if col.name in have:
+                continue
+            ddl = f"ALTER TABLE {table.name} ADD COLUMN {col.name} {col.type.compile(engine.dialect)}"
+            if col.server_default is not None:
+                default = col.server_default.arg
+                ddl += " DEFAULT " + (default if isinstance(default, str)
+                                      else str(default.compile(dialect=engine.dialect)))
+            try:
+                with engine.begin() as con:
+                    con.execute(text(ddl))
+            except DBAPIError:  # added meanwhile by another process starting on the same database
+                if col.name not in {c["name"] for c in inspect(engine).get_columns(table.name)}:
+                    raise
+                continue
+            added.append(f"{table.name}.{col.name}")
+    return added
+
+
 def make_sessionmaker(engine: Engine) -> sessionmaker:
     Base.metadata.create_all(engine)
+    add_missing_columns(engine)
     maker = sessionmaker(engine, expire_on_commit=False)
     event.listen(maker, "before_flush", _check_before_flush)
     return maker

@@ -63,6 +63,24 @@ def task_url(tid: str) -> str:
     return "/tasks/" + quote(tid, safe="/-_.")
 
 
+def benchmark_id_for(module_set: str, cost: str, tid: str, n_robots: int = 0) -> str:
+    """``M-<set>:<cost>:<task>``; for a collaborative task of ``n_robots`` the same set for every robot
+    ``[M-<set>,M-<set>]:<cost>:<task>``."""
+    robot = f"[{','.join(['M-' + module_set] * n_robots)}]" if n_robots else f"M-{module_set}"
+    return f"{robot}:{cost}:{tid}"
+
+
+def fmt_tuple(costs) -> str:
+    return "(" + ", ".join(fmt_cost(c) for c in costs or []) + ")"
+
+
+def robots_of(row: db.TaskRow) -> list:
+    try:
+        return json.loads(row.robots or "[]")
+    except (ValueError, TypeError):
+        return []
+
+
 def layout(title: str, body: str) -> str:
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
@@ -95,12 +113,18 @@ def index(tasks: List[db.TaskRow], msets: List[db.ModuleSetRow], costs: List[db.
           benchmarks: List[dict]) -> str:
     first_set = msets[0].name if msets else "<set>"
     bench_rows = [[f'<a class="mono" href="{e(bid_url(b["benchmark_id"]))}">{e(b["benchmark_id"])}</a>',
-                   str(b["solutions"]), fmt_cost(b["best_cost"])] for b in benchmarks]
-    task_rows = [[f'<a class="mono" href="{e(task_url(t.task_id))}">{e(t.task_id)}</a>', e(t.name), tags(t.tags),
-                  str(t.n_goals), str(t.n_obstacles),
-                  '<div class="links">' + "".join(
-                      f'<a class="mono small" href="{e(bid_url(f"M-{m.name}:cyc:{t.task_id}"))}">'
-                      f'M-{e(m.name)}:cyc:{e(t.task_id)}</a>' for m in msets) + "</div>"] for t in tasks]
+                   str(b["solutions"]), fmt_cost(b["best_cost"]) + (" <span class=\"muted small\">total</span>"
+                                                                   if b.get("collaborative") else "")]
+                  for b in benchmarks]
+    task_rows = []
+    for t in tasks:
+        n = len(robots_of(t))
+        bids = [benchmark_id_for(m.name, "cyc", t.task_id, n) for m in msets]
+        task_rows.append([f'<a class="mono" href="{e(task_url(t.task_id))}">{e(t.task_id)}</a>'
+                          + (f' <span class="tag collab">collaborative: {n} robots</span>' if n else ""),
+                          e(t.name), tags(t.tags), str(t.n_goals), str(t.n_obstacles),
+                          '<div class="links">' + "".join(f'<a class="mono small" href="{e(bid_url(b))}">{e(b)}</a>'
+                                                          for b in bids) + "</div>"])
     set_rows = [[f'<a class="mono" href="/modulesets/{e(quote(m.name))}">{e(m.name)}</a>',
                  str(len(json.loads(m.module_ids or "[]"))), e(m.origin)] for m in msets]
     cost_rows = [[f"<code>{e(c.name)}</code>", f"<code>{e(c.descriptor)}</code>", e(c.description)] for c in costs]
@@ -108,7 +132,10 @@ def index(tasks: List[db.TaskRow], msets: List[db.ModuleSetRow], costs: List[db.
     body = f"""<h1>Benchmarks</h1>
 <p class="muted">A benchmark ID <code>M-&lt;module set&gt;:&lt;cost&gt;:&lt;task&gt;</code> names a task, the module set
 the robot is assembled from and the cost to minimise, e.g. <code>M-{e(first_set)}:cyc:simple/PTP_1</code>.
-Every uploaded solution is checked by the robodesign checker; leaderboards rank valid solutions by cost (lower is better).</p>
+A collaborative task (several robots in one cell) has IDs with one module set and cost per robot,
+<code>[M-&lt;set 1&gt;,M-&lt;set 2&gt;]:[&lt;cost 1&gt;,&lt;cost 2&gt;]:&lt;task&gt;</code>.
+Every uploaded solution is checked by the robodesign checker; leaderboards rank valid solutions by cost (lower is better;
+collaborative: by the total cost, ties by the tuple of the robots' costs).</p>
 <div class="card"><form class="inline" method="get" action="/leaderboard">
 <b>Open a leaderboard:</b> M-<select name="moduleset" aria-label="module set">{opt(m.name for m in msets)}</select>
 : <select name="cost" aria-label="cost">{opt(c.name for c in costs)}</select>
@@ -125,11 +152,15 @@ Every uploaded solution is checked by the robodesign checker; leaderboards rank 
     return layout("Benchmarks", body)
 
 
-def task_page(row: db.TaskRow, task, msets: List[db.ModuleSetRow], costs: List[db.CostFunctionRow],
-              counts: dict, warnings: Iterable[str] = ()) -> str:
+def task_page(row: db.TaskRow, parsed, msets: List[db.ModuleSetRow], costs: List[db.CostFunctionRow],
+              count, warnings: Iterable[str] = ()) -> str:
+    """``parsed``: the Task, or the CollabTask of a collaborative task; ``count(benchmark ID)``: its solutions."""
+    ctask = parsed if hasattr(parsed, "robot_ids") else None
+    task = ctask.task if ctask else parsed
+    n_robots = len(ctask.robot_ids) if ctask else 0
     h = task.header
     goals = [[f"<code>{e(g.id)}</code>", e(type(g).__name__), e(", ".join(type(c).__name__ for c in g.constraints))]
-             for g in task.goals]
+             + ([e(ctask.assignment[g.id] or "any robot")] if ctask else []) for g in task.goals]
     cons = [[e(type(c).__name__), f"<code>{e(_short(c))}</code>"] for c in task.constraints]
     obstacles = [[f"<code>{e(o.id)}</code>", e(o.name), str(len(o.collision)),
                   "moving" if getattr(o, "motion_t", None) is not None else "static"] for o in task.obstacles]
@@ -140,21 +171,33 @@ def task_page(row: db.TaskRow, task, msets: List[db.ModuleSetRow], costs: List[d
     for m in msets:
         links = []
         for c in costs:
-            bid = f"M-{m.name}:{c.name}:{row.task_id}"
-            n = counts.get((m.name, c.descriptor), 0)
+            bid = benchmark_id_for(m.name, c.name, row.task_id, n_robots)
+            n = count(bid)
             links.append(f'<a class="mono small" title="{e(bid)}" href="{e(bid_url(bid))}">{e(c.name)}</a>'
                          + (f' <b>({n})</b>' if n else ""))
-        grid.append(f'<tr><td class="mono small">M-{e(m.name)}:&lt;cost&gt;:{e(row.task_id)}</td>'
+        grid.append(f'<tr><td class="mono small">{e(benchmark_id_for(m.name, "<cost>", row.task_id, n_robots))}</td>'
                     f'<td class="costs">{" · ".join(links)}</td></tr>')
+    robots = ""
+    if ctask:
+        rrows = []
+        for rid in ctask.robot_ids:
+            base = ctask.robot_tasks[rid].nominal_base_pose
+            rrows.append([f"<code>{e(rid)}</code>", e(ctask.robot_names[rid]),
+                          e("(" + ", ".join(f"{x:.3g}" for x in base[:3, 3]) + ")"),
+                          e(", ".join(ctask.goals_of(rid)) or "—")])
+        robots = f"""<h2>Robots</h2><p class="muted small">A collaborative task: the robots share the cell, each with
+its own module set, base, trajectory and cost; goals marked "any robot" may be achieved by either
+(docs/collaborative.md).</p>{table(["ID", "Name", "Base position [m]", "Its goals"], rrows)}"""
     warn = "".join(f'<li class="small">{e(w)}</li>' for w in warnings)
-    body = f"""<h1>Task <code>{e(row.task_id)}</code></h1>
+    kind = f' <span class="tag collab">collaborative: {n_robots} robots</span>' if ctask else ""
+    body = f"""<h1>Task <code>{e(row.task_id)}</code>{kind}</h1>
 <div class="card"><b>{e(h.name or row.task_id)}</b> {tags(row.tags)}<br>
 <span class="muted small">version {e(h.version)} · {e(h.date)} · {e(", ".join(h.author))}
 {(" · " + e(", ".join(h.affiliation))) if h.affiliation else ""} · time step {h.time_step:g} s ·
 gravity {e(list(h.gravity))}</span><br>
 <a class="small" href="/api/tasks/{e(quote(row.task_id, safe="/-_."))}">task JSON</a>
 {f'<ul>{warn}</ul>' if warn else ''}</div>
-<h2>Goals</h2>{table(["ID", "Type", "Goal constraints"], goals)}
+{robots}<h2>Goals</h2>{table(["ID", "Type", "Goal constraints"] + (["Robot"] if ctask else []), goals)}
 <h2>Constraints</h2>{table(["Type", "Details"], cons)}
 <h2>Obstacles</h2>{table(["ID", "Name", "Collision geometries", "Motion"], obstacles, num_cols=(2,))}
 <h2>Stored assets</h2>{table(["File", "Bytes", "SHA-256"], asset_rows, num_cols=(1,))}
@@ -193,40 +236,93 @@ def moduleset_page(row: db.ModuleSetRow, ms) -> str:
     return layout(f"Module set {row.name}", body)
 
 
-def leaderboard(bid: str, ms: str, tid: str, rows: List[db.SolutionRow]) -> str:
+def leaderboard(board, rows: List[db.SolutionRow]) -> str:
+    """``board``: the service's Board (display ID, task, module sets, collaborative or not)."""
+    bid, tid, collab = board.display, board.task_id, board.collaborative
     trs = []
     for k, r in enumerate(rows):
-        trs.append([str(k + 1), f"<b>{fmt_cost(r.cost)}</b>", e(r.author_name), e(r.author_affiliation),
-                    str(r.n_modules), str(r.dof), e(r.created.strftime("%Y-%m-%d %H:%M")),
-                    f'<a href="/solutions/{r.id}">#{r.id}</a>'])
+        link = f'<a href="/solutions/{r.id}">#{r.id}</a>'
+        if collab:
+            link += f' · <a class="small" href="/solutions/{r.id}/viewer">3D</a>'
+        trs.append([str(k + 1), f"<b>{fmt_cost(r.cost)}</b>"]
+                   + ([f'<span class="mono">{e(fmt_tuple(json.loads(r.cost_tuple or "[]")))}</span>'] if collab else [])
+                   + [e(r.author_name), e(r.author_affiliation), str(r.n_modules), str(r.dof),
+                      e(r.created.strftime("%Y-%m-%d %H:%M")), link])
+    sets = ", ".join(f'<a href="/modulesets/{e(quote(m))}">{e(m)}</a>' for m in dict.fromkeys(board.module_sets))
+    if collab:
+        head = ["Rank", "Total cost", "Cost tuple (per robot)"]
+        order = ("collaborative: valid solutions ranked by total cost (the sum of the robots' costs), ties broken by "
+                 "the cost tuple compared robot by robot, then the earlier upload")
+    else:
+        head, order = ["Rank", "Cost"], "valid solutions ranked by cost (ascending)"
+    n = len(head)
     body = f"""<h1>Leaderboard</h1>
 <p><code class="mono" id="benchmark-id">{e(bid)}</code></p>
-<p class="muted">Task <a href="{e(task_url(tid))}">{e(tid)}</a> · module set
-<a href="/modulesets/{e(quote(ms))}">{e(ms)}</a> · valid solutions ranked by cost (ascending) ·
-<a href="/api/leaderboard/{e(quote(bid, safe='/:-_.,'))}">JSON</a> · <a href="/upload">upload a solution</a></p>
-{table(["Rank", "Cost", "Author", "Affiliation", "Modules", "Joints", "Uploaded (UTC)", "Solution"], trs,
-       num_cols=(0, 1, 4, 5), row_class=lambda k: "rank1" if k == 0 else "")}"""
+<p class="muted">Task <a href="{e(task_url(tid))}">{e(tid)}</a> · module set{"s" if collab else ""} {sets} ·
+{order} · <a href="/api/leaderboard/{e(quote(bid, safe='/:-_.,'))}">JSON</a> · <a href="/upload">upload a
+solution</a></p>
+{table(head + ["Author", "Affiliation", "Modules", "Joints", "Uploaded (UTC)", "Solution"], trs,
+       num_cols=tuple(range(2)) + (n + 2, n + 3), row_class=lambda k: "rank1" if k == 0 else "")}"""
     return layout(f"Leaderboard {bid}", body)
+
+
+def robot_results(verdict: dict) -> str:
+    """The per-robot part of a collaborative verdict: each robot's cost function, cost, goals and violations."""
+    rows = []
+    cfs, costs = verdict.get("costFunctions") or [], verdict.get("costs") or []
+    for k, (rid, v) in enumerate((verdict.get("robots") or {}).items()):
+        cost = costs[k] if k < len(costs) else None
+        goals = ", ".join(f"{g}: {'ok' if ok else 'missed'}" for g, ok in (v.get("goals") or {}).items())
+        nviol = len(v.get("violations") or [])
+        rows.append([f"<code>{e(rid)}</code>", f"<code>{e(cfs[k] if k < len(cfs) else '')}</code>",
+                     fmt_cost(cost), e(goals or "—"),
+                     '<span class="ok">valid</span>' if v.get("valid") else f'<span class="bad">{nviol} violation(s)</span>'])
+    by = ", ".join(f"{g}: {r or 'nobody'}" for g, r in (verdict.get("goals") or {}).items())
+    return (table(["Robot", "Cost function", "Cost", "Goals", "Verdict"], rows, num_cols=(2,))
+            + f'<p class="small">cost tuple <b class="mono" id="cost-tuple">{e(fmt_tuple(verdict.get("costs")))}</b>'
+              f' · total cost <b id="total-cost">{fmt_cost(verdict.get("totalCost"))}</b>'
+              f'{" · goals achieved by " + e(by) if by else ""}</p>')
+
+
+def collab_viewer_verdict(verdict: Optional[dict]) -> Optional[dict]:
+    """A collaborative verdict in the form the viewer lists (valid, total cost, violations with their robot)."""
+    if not verdict:
+        return None
+    return {"valid": verdict.get("valid"), "cost": verdict.get("totalCost"),
+            "costFunction": "total cost " + fmt_tuple(verdict.get("costs")),
+            "violations": [{**x, "message": f"[{x.get('robot') or 'cell'}] {x.get('message')}"}
+                           for x in verdict.get("violations") or []]}
 
 
 def solution_page(row: db.SolutionRow, viewer: bool, viewer_note: str = "") -> str:
     v = json.loads(row.verdict_json or "{}")
-    costs = [[f"<code>{e(k)}</code>", fmt_cost(c)] for k, c in (v.get("costs") or {}).items()]
-    goals = ", ".join(f"{e(g)}: {'ok' if ok else 'missed'}" for g, ok in (v.get("goals") or {}).items())
+    if row.collaborative:  # the costs of every robot, one column each
+        rids = list(v.get("robots") or {})
+        per = [(v["robots"][r].get("costs") or {}) for r in rids]
+        names = list(dict.fromkeys(k for p in per for k in p))
+        costs = [[f"<code>{e(k)}</code>"] + [fmt_cost(p.get(k)) for p in per] for k in names]
+        cost_head = ["Cost"] + [f"robot {e(r)}" for r in rids]
+        goals = ", ".join(f"{e(g)}: {e(r or 'missed')}" for g, r in (v.get("goals") or {}).items())
+    else:
+        costs = [[f"<code>{e(k)}</code>", fmt_cost(c)] for k, c in (v.get("costs") or {}).items()]
+        cost_head = ["Cost", "Value"]
+        goals = ", ".join(f"{e(g)}: {'ok' if ok else 'missed'}" for g, ok in (v.get("goals") or {}).items())
     status = ('<span class="bad">withdrawn</span>' if row.withdrawn else '<span class="ok">valid</span>')
     frame = (f'<iframe class="viewer" title="3D viewer" src="/solutions/{row.id}/viewer" '
              f'sandbox="allow-scripts" loading="eager"></iframe>' if viewer
              else f'<p class="muted">{e(viewer_note or "The 3D viewer is not available on this server.")}</p>')
     body = f"""<h1>Solution #{row.id}</h1>
 <div class="card"><code class="mono">{e(row.benchmark_id)}</code> — {status}<br>
-cost <b id="cost">{fmt_cost(row.cost)}</b> ({e(row.cost_function)}) · by {e(row.author_name)}
+{"total " if row.collaborative else ""}cost <b id="cost">{fmt_cost(row.cost)}</b> ({e(row.cost_function)}) · by {e(row.author_name)}
 {(" · " + e(row.author_affiliation)) if row.author_affiliation else ""} · uploaded
 {e(row.created.strftime("%Y-%m-%d %H:%M"))} UTC<br>
 <span class="small">goals: {goals or "—"} · {row.n_modules} modules, {row.dof} joints ·
 <a href="{e(bid_url(row.benchmark_id))}">leaderboard</a> · <a href="/api/solutions/{row.id}/json">solution JSON</a> ·
 <a href="/api/solutions/{row.id}">verdict JSON</a></span></div>
-<h2>3D view</h2>{frame}
-<h2>Costs</h2>{table(["Cost", "Value"], costs, num_cols=(1,))}
+{"<h2>Robots</h2>" + robot_results(v) if row.collaborative else ""}
+<h2>3D view</h2>{frame}{f'<p class="small"><a href="/solutions/{row.id}/viewer">open the 3D view on its own page</a></p>'
+                        if viewer else ""}
+<h2>Costs</h2>{table(cost_head, costs, num_cols=tuple(range(1, len(cost_head))))}
 {'' if row.withdrawn else f'''<h2>Withdraw</h2><form class="stack" method="post" action="/solutions/{row.id}/withdraw">
 <label for="tok">Your token</label><input id="tok" type="password" name="token" required autocomplete="off">
 <button type="submit">Withdraw this solution</button></form>'''}"""
@@ -255,19 +351,25 @@ def upload_form(msg: str = "", values: Optional[dict] = None) -> str:
 
 
 def upload_result(res) -> str:
+    collab = res.collaborative
+    robots = robot_results(res.verdict) if collab else ""
     if res.valid:
+        view = (f' · <a href="/solutions/{res.id}/viewer">watch the robots move together</a>' if collab else "")
         msg = f"""<div class="card banner-ok" id="result"><p class="ok">Valid — accepted as solution #{res.id}.</p>
-<p>Benchmark <a class="mono" href="{e(bid_url(res.benchmark_id))}">{e(res.benchmark_id)}</a>, cost
-<b id="result-cost">{fmt_cost(res.cost)}</b>. <a href="/solutions/{res.id}">View the solution</a>.</p>
+<p>Benchmark <a class="mono" href="{e(bid_url(res.benchmark_id))}">{e(res.benchmark_id)}</a>, {"total " if collab else ""}cost
+<b id="result-cost">{fmt_cost(res.cost)}</b>. <a href="/solutions/{res.id}">View the solution</a>{view}.</p>
+{robots}
 <p>Your token (needed to withdraw it; it is shown only once):<br><code id="token">{e(res.token)}</code></p></div>"""
         return layout("Accepted", msg)
     viol = res.verdict.get("violations", [])
-    items = "".join(f'<tr><td><code>{e(x.get("constraint"))}</code></td><td>{e(x.get("goal", ""))}</td>'
+    items = "".join("<tr>" + (f'<td>{e(x.get("robot") or "cell")}</td>' if collab else "")
+                    + f'<td><code>{e(x.get("constraint"))}</code></td><td>{e(x.get("goal", ""))}</td>'
                     f'<td class="num">{e(x.get("sample", ""))}</td><td>{e(x.get("message"))}</td></tr>' for x in viol)
     msg = f"""<div class="card banner-bad" id="result"><p class="bad">Invalid — the solution was not accepted
 ({len(viol)} violation{'s' if len(viol) != 1 else ''}).</p>
-<p class="small">Benchmark <code>{e(res.benchmark_id)}</code></p>
-<table><thead><tr><th>Constraint</th><th>Goal</th><th class="num">Sample</th><th>Message</th></tr></thead>
+<p class="small">Benchmark <code>{e(res.benchmark_id)}</code></p>{robots}
+<table><thead><tr>{"<th>Robot</th>" if collab else ""}<th>Constraint</th><th>Goal</th><th class="num">Sample</th>
+<th>Message</th></tr></thead>
 <tbody>{items}</tbody></table></div>"""
     return layout("Rejected", msg)
 

@@ -21,13 +21,15 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 
 from ..benchmark_id import BenchmarkID, RobotRef, RobotSpec
 from ..checker import Verdict, check
+from ..collab import (CollabSolution, CollabTask, check_collab, is_collaborative, parse_collab_solution,
+                      parse_collab_task, shared_cell_json)
 from ..costs import known_costs, parse_cost
 from ..errors import InputError, RobodesignError
 from ..jsonio import loads_json
@@ -64,8 +66,10 @@ class Limits:
     notes_chars: int = 16_384  # ``notes``
     text_chars: int = 1_000  # every other free-text field: version, publication, processorName, date, list entries
     list_items: int = 100  # entries of author / email / affiliation / tags
-    trajectory_values: int = 500_000  # samples × joints of the trajectory
+    trajectory_values: int = 500_000  # samples × joints of the trajectory (of all robots together)
     modules: int = 1_000  # entries of moduleOrder / moduleConnection
+    robots: int = 16  # robots of a collaborative task or solution
+    robot_id_chars: int = 100  # a robot's ID in a collaborative task
 
 
 @dataclass
@@ -91,17 +95,25 @@ class SubmitResult:
     token: Optional[str] = None
     task_id: str = ""
     module_set: str = ""
+    costs: Optional[list] = None  # a collaborative solution's cost tuple (``cost`` is then totalCost, their sum)
+
+    @property
+    def collaborative(self) -> bool:
+        return self.costs is not None
 
     def to_json(self) -> dict:
         out = {"id": self.id, "valid": self.valid, "cost": self.cost, "benchmark_id": self.benchmark_id}
+        if self.collaborative:
+            out.update(collaborative=True, costs=self.costs, totalCost=self.cost)
         if self.valid:
             out["token"] = self.token
         else:
             out["violations"] = self.verdict.get("violations", [])
             out["verdict"] = self.verdict
             first = out["violations"][0] if out["violations"] else {}
+            robot = f" robot {first['robot']}:" if first.get("robot") else ""
             out["detail"] = (f"the solution is invalid: {len(out['violations'])} violation(s)"
-                             + (f", first [{first.get('constraint')}] {first.get('message')}" if first else ""))
+                             + (f", first{robot} [{first.get('constraint')}] {first.get('message')}" if first else ""))
         return out
 
 
@@ -152,21 +164,59 @@ def canonical_benchmark(module_set: str, cost_text: str, task_id: str) -> Tuple[
     return str(bid), cost.descriptor()
 
 
+def collab_benchmark_key(bid: BenchmarkID) -> str:
+    """The matching key of a collaborative benchmark: its module sets and per-robot cost descriptors in robot
+    order (``Liu2`` and ``cyc_0.2,mechEnergy`` mean the same cost; ``cyc`` for all is ``[cyc,cyc]``)."""
+    return json.dumps({"sets": list(bid.robot.names), "costs": [c.descriptor() for c in bid.costs]})
+
+
 MAX_BENCHMARK_ID = 600  # the solutions.benchmark_id column
 
 
-def parse_benchmark(text: str) -> Tuple[str, str, str, str]:
-    """→ (display ID, module set, cost key, task ID). Bare robot names mean ``M-``."""
+@dataclass(frozen=True)
+class Board:
+    """A leaderboard's benchmark: single-robot ``M-<set>:<cost>:<task>`` or collaborative
+    ``[M-<set1>,M-<set2>]:[C1,C2]:<task>`` (canonical ``display``)."""
+    display: str
+    task_id: str
+    module_sets: Tuple[str, ...]  # one per robot (one for a single-robot benchmark)
+    cost_key: str  # single-robot: the canonical descriptor; collaborative: "" (see robots_key)
+    robots_key: str = ""  # collaborative: collab_benchmark_key
+
+    @property
+    def collaborative(self) -> bool:
+        return bool(self.robots_key)
+
+    @property
+    def module_set(self) -> str:
+        return self.module_sets[0]
+
+
+def parse_benchmark(text: str) -> Board:
+    """A benchmark ID from a URL. Bare robot names mean ``M-``."""
     if len(text) > MAX_BENCHMARK_ID:
         raise InputError(f"benchmark ID of {len(text)} characters (at most {MAX_BENCHMARK_ID})")
     bid = BenchmarkID.parse(text)
-    if bid.robot.collaborative or len(bid.robot.robots) != 1:
-        raise InputError(f"benchmark ID {text!r}: collaborative (multi-robot) benchmarks are not hosted")
+    for r in bid.robot.robots:
+        if r.kind != "module_set":
+            raise NotFound(f"benchmark ID {text!r}: only module-set benchmarks (M-<set>) are hosted here")
+    if bid.robot.collaborative:
+        if any(c.is_empty for c in bid.costs):
+            raise InputError(f"benchmark ID {text!r}: a robot's cost is empty")
+        canon = BenchmarkID(RobotSpec(tuple(RobotRef(n, "M-") for n in bid.robot.names), True), bid.cost, bid.task,
+                            bid.costs)
+        return Board(str(canon), bid.task, bid.robot.names, "", collab_benchmark_key(bid))
     r = bid.robot.robots[0]
-    if r.kind != "module_set":
-        raise NotFound(f"benchmark ID {text!r}: only module-set benchmarks (M-<set>) are hosted here")
     display, key = canonical_benchmark(r.name, bid.cost.name or bid.cost.descriptor(), bid.task)
-    return display, r.name, key, bid.task
+    return Board(display, bid.task, (r.name,), key)
+
+
+def collab_rank_key(row) -> tuple:
+    """The order of a collaborative leaderboard (docs/collaborative.md): ``totalCost`` ascending, ties broken by the
+    cost tuple compared element by element, then the earlier upload."""
+    costs = json.loads(row.cost_tuple or "[]")
+    return (row.cost is None, row.cost if row.cost is not None else 0.0,
+            tuple(math.inf if c is None else c for c in costs), row.created, row.id)
 
 
 class Bench:
@@ -188,8 +238,25 @@ class Bench:
         self.engine = db.make_engine(self.db_url)
         self.Session = db.make_sessionmaker(self.engine)
         self._lock = threading.RLock()
-        self._tasks: Dict[str, Task] = {}
+        self._tasks: Dict[str, Union[Task, CollabTask]] = {}
         self._msets: Dict[str, ModuleSet] = {}
+        if staging:
+            self._fill_task_robots()
+
+    def _fill_task_robots(self) -> None:
+        """Task rows of an older version (before collaborative tasks) get their ``robots`` column."""
+        with self.Session() as s:
+            rows = list(s.scalars(select(db.TaskRow).where(db.TaskRow.robots.is_(None))))
+            for row in rows:
+                try:
+                    data = loads_json(row.json, "task.json")
+                except InputError:
+                    data = None
+                robots = data.get("robots") if is_collaborative(data) else []
+                row.robots = json.dumps([{"ID": str(r.get("ID")), "name": str(r.get("name") or r.get("ID"))}
+                                         for r in robots if isinstance(r, dict)])
+            if rows:
+                s.commit()
 
     def close(self):
         self.engine.dispose()
@@ -310,8 +377,13 @@ class Bench:
         return assets
 
     def add_task(self, text: str, source: FileSource, fname: str = "task.json", origin: str = "upload") -> dict:
-        """Validate (schema first), store the task file and its referenced meshes, register it."""
-        data = validate_task_json(loads_json(text, fname), fname)
+        """Validate (schema first), store the task file and its referenced meshes, register it. A collaborative task
+        (a ``robots`` list, docs/collaborative.md) is validated as its shared cell plus its robots."""
+        raw = loads_json(text, fname)
+        collab = is_collaborative(raw)
+        if collab:
+            self._check_robot_ids(raw["robots"], fname)
+        data = validate_task_json(shared_cell_json(raw) if collab else raw, fname)
         tid = str(data["header"]["ID"])
         segs = task_id_segments(tid, fname)
         header = data["header"]
@@ -328,7 +400,8 @@ class Bench:
             assets = self._store_refs(refs, source, pkg)
             task_file = pkg.joinpath(*segs[:-1], segs[-1] + ".json")
             write_new_file(pkg, "/".join(segs) + ".json", text.encode("utf-8"))
-            task = parse_task(loads_json(text, fname), task_file)  # the file as written: its warnings too
+            parsed = parse_task_file(loads_json(text, fname), task_file)  # the file as written: its warnings too
+            task = parsed.task if collab else parsed
             assert_no_symlinks(pkg)
             folder = Path("tasks") / f"{segs[-1]}-{secrets.token_hex(6)}"
             os.replace(pkg, self.data / folder)
@@ -338,9 +411,27 @@ class Bench:
         shutil.rmtree(stage, ignore_errors=True)
         row.tags, row.folder, row.assets = json.dumps(list(task.header.tags)), folder.as_posix(), json.dumps(assets)
         row.n_goals, row.n_obstacles = len(task.goals), len(task.obstacles)
+        robots = [{"ID": rid, "name": parsed.robot_names[rid]} for rid in parsed.robot_ids] if collab else []
+        row.robots = json.dumps(robots)
         self._commit_new(row, folder, f"task {tid!r} is already registered")
-        return {"id": tid, "name": row.name, "assets": [a["path"] for a in assets], "warnings": list(task.warnings),
-                "url": f"/tasks/{tid}"}
+        out = {"id": tid, "name": row.name, "assets": [a["path"] for a in assets], "warnings": list(task.warnings),
+               "url": f"/tasks/{tid}", "collaborative": collab}
+        if collab:
+            out["robots"] = robots
+            out["goals"] = {g: r or "any" for g, r in parsed.assignment.items()}
+        return out
+
+    def _check_robot_ids(self, robots: list, fname: str) -> None:
+        """The caps of a collaborative task's ``robots`` (the rest is checked by parse_collab_task)."""
+        lim = self.settings.limits
+        if len(robots) > lim.robots:
+            raise TooLarge(f"at most {lim.robots} robots are allowed (got {len(robots)})", file=fname, path=["robots"])
+        for i, r in enumerate(robots):
+            for key, n in (("ID", lim.robot_id_chars), ("name", db.TaskRow.name.type.length)):
+                v = r.get(key) if isinstance(r, dict) else None
+                if isinstance(v, str) and len(v) > n:
+                    raise InputError(f"at most {n} characters are allowed (got {len(v)})", file=fname,
+                                     path=["robots", i, key])
 
     def add_module_set(self, name: str, text: str, source: FileSource, origin: str = "upload") -> dict:
         check_name(name)
@@ -439,17 +530,29 @@ class Bench:
             raise NotFound(f"unknown module set {name!r}")
         return row
 
-    def task(self, tid: str) -> Task:
+    def parsed_task(self, tid: str) -> Union[Task, CollabTask]:
+        """The task (a CollabTask when it is collaborative), parsed once."""
         with self._lock:
             if tid in self._tasks:
                 return self._tasks[tid]
         row = self.task_row(tid, file=True)
         segs = tid.split("/")
         f = (self.data / row.folder).joinpath(*segs[:-1], segs[-1] + ".json")
-        task = parse_task(loads_json(row.json, f.name), f)
+        task = parse_task_file(loads_json(row.json, f.name), f)
         with self._lock:
             self._tasks[tid] = task
         return task
+
+    def task(self, tid: str) -> Task:
+        """The task; of a collaborative task its shared cell (every goal, the task-level constraints)."""
+        t = self.parsed_task(tid)
+        return t.task if isinstance(t, CollabTask) else t
+
+    def collab_task(self, tid: str) -> CollabTask:
+        t = self.parsed_task(tid)
+        if not isinstance(t, CollabTask):
+            raise InputError(f"task {tid!r} is a single-robot task, not collaborative")
+        return t
 
     def module_set(self, name: str) -> ModuleSet:
         with self._lock:
@@ -481,33 +584,84 @@ class Bench:
     # ----------------------------------------------------------------------------------------------------
     # solutions
     # ----------------------------------------------------------------------------------------------------
-    def prepare_solution(self, text: str, fname: str) -> Tuple[Solution, Task, ModuleSet, str, str]:
-        data = loads_json(text, fname)
+    def prepare_solution(self, text: str, fname: str, data=None) -> Tuple[Solution, Task, ModuleSet, str, str]:
+        """A single-robot solution → (solution, task, module set, display benchmark ID, cost key)."""
+        data = loads_json(text, fname) if data is None else data
         sol = parse_solution(data, fname)  # schema validation first
         check_solution_size(data, sol, self.settings.limits, fname)
+        display, key, ms = self._benchmark_part(sol, fname, [])
+        task = self._registered_task(sol.task_id, fname)
+        if isinstance(task, CollabTask):
+            raise InputError(f"task {sol.task_id!r} is collaborative (robots {', '.join(task.robot_ids)}): upload one "
+                             "trajectory per robot in a 'robots' list (docs/collaborative.md)", file=fname,
+                             path=["taskID"])
+        return sol, task, ms, display, key
+
+    def _benchmark_part(self, sol: Solution, fname: str, where: list) -> Tuple[str, str, ModuleSet]:
+        """One robot's part of the benchmark ID: lengths, set name and cost grammar, the registered module set
+        (``where``: the JSON path of the robot's solution) → (single-robot display ID, cost key, module set)."""
         if not sol.module_set:
-            raise InputError("the solution names no moduleSet", file=fname, path=["moduleSet"])
+            raise InputError("the solution names no moduleSet", file=fname, path=where + ["moduleSet"])
         S = db.SolutionRow
         for key, value, col in (("taskID", sol.task_id, S.task_id), ("moduleSet", sol.module_set, S.module_set),
                                 ("costFunction", sol.cost_function, S.cost_function)):
             n = col.type.length  # the database column's; checked before the cost is even parsed
             if len(value) > n:
-                raise InputError(f"at most {n} characters are allowed (got {len(value)})", file=fname, path=[key])
+                raise InputError(f"at most {n} characters are allowed (got {len(value)})", file=fname,
+                                 path=(["taskID"] if key == "taskID" else where + [key]))
         try:
             display, key = canonical_benchmark(sol.module_set, sol.cost_function, sol.task_id)
         except InputError as e:
-            raise InputError(e.reason, file=fname, path=e.json_path or ["costFunction"]) from None
-        try:
-            task = self.task(sol.task_id)
-        except NotFound:
-            raise InputError(f"unknown task {sol.task_id!r} (registered: {self._some(self.tasks(), 'task_id')})",
-                             file=fname, path=["taskID"]) from None
+            raise InputError(e.reason, file=fname, path=where + list(e.json_path or ["costFunction"])) from None
         try:
             ms = self.module_set(sol.module_set)
         except NotFound:
             raise InputError(f"unknown module set {sol.module_set!r} (registered: "
-                             f"{self._some(self.module_sets(), 'name')})", file=fname, path=["moduleSet"]) from None
-        return sol, task, ms, display, key
+                             f"{self._some(self.module_sets(), 'name')})", file=fname,
+                             path=where + ["moduleSet"]) from None
+        return display, key, ms
+
+    def _registered_task(self, tid: str, fname: str) -> Union[Task, CollabTask]:
+        try:
+            return self.parsed_task(tid)
+        except NotFound:
+            raise InputError(f"unknown task {tid!r} (registered: {self._some(self.tasks(), 'task_id')})",
+                             file=fname, path=["taskID"]) from None
+
+    def prepare_collab(self, data: dict, fname: str) -> Tuple[CollabSolution, CollabTask, Dict[str, ModuleSet], str,
+                                                               str]:
+        """A collaborative solution (docs/collaborative.md) → (solution, task, module set of every robot, display
+        benchmark ID ``[M-s1,M-s2]:[C1,C2]:task`` in the task's robot order, matching key). Its robots must be the
+        task's robots (count and IDs: 400 naming the field); each robot's ``moduleSet`` is looked up among the
+        registered sets, as ``robodesign check`` takes each robot's own ``moduleSet``."""
+        lim = self.settings.limits
+        if len(data["robots"]) > lim.robots:
+            raise TooLarge(f"at most {lim.robots} robots are allowed (got {len(data['robots'])})", file=fname,
+                           path=["robots"])
+        csol = parse_collab_solution(data, fname)  # every robot's solution schema-validated
+        check_text_sizes(data, lim, fname, [])
+        n_values = 0
+        for i, (rid, sol) in enumerate(csol.robots):
+            check_solution_size(data["robots"][i], sol, lim, fname, ["robots", i])
+            n_values += int(sol.trajectory.q.size)
+        if n_values > lim.trajectory_values:
+            raise TooLarge(f"{n_values} trajectory values (samples × joints of all robots); at most "
+                           f"{lim.trajectory_values} are allowed", file=fname, path=["robots"])
+        msets = {rid: self._benchmark_part(sol, fname, ["robots", i])[2] for i, (rid, sol) in enumerate(csol.robots)}
+        ctask = self._registered_task(csol.task_id, fname)
+        if not isinstance(ctask, CollabTask):
+            raise InputError(f"task {csol.task_id!r} is a single-robot task: upload a CoBRA solution without a "
+                             "'robots' list", file=fname, path=["taskID"])
+        ids = [rid for rid, _ in csol.robots]
+        if len(ids) != len(ctask.robot_ids):
+            raise InputError(f"the task has {len(ctask.robot_ids)} robots ({', '.join(ctask.robot_ids)}), the solution "
+                             f"gives {len(ids)}", file=fname, path=["robots"])
+        for i, rid in enumerate(ids):
+            if rid not in ctask.robot_ids:
+                raise InputError(f"the task has no robot {rid[:100]!r} (robots: {', '.join(ctask.robot_ids)})",
+                                 file=fname, path=["robots", i, "ID"])
+        display = csol.benchmark_id(ctask.robot_ids)
+        return csol, ctask, msets, display, collab_benchmark_key(BenchmarkID.parse(display))
 
     @staticmethod
     def _some(rows, attr, n=10) -> str:
@@ -518,43 +672,67 @@ class Bench:
                            email: Optional[str] = None, affiliation: Optional[str] = None,
                            token: Optional[str] = None) -> "Submission":
         """Everything that can be refused without running the checker: JSON, schema, sizes, lengths, the task,
-        module set and cost; the row to store is built and checked against the database's column rules."""
-        sol, task, ms, display, key = self.prepare_solution(text, fname)
-        author = (author or "").strip() or (sol.author[0] if sol.author else "")
+        module set and cost; the row to store is built and checked against the database's column rules. A solution
+        with a ``robots`` list is collaborative (:meth:`prepare_collab`)."""
+        data = loads_json(text, fname)
+        if is_collaborative(data):
+            sol, task, ms, display, robots_key = self.prepare_collab(data, fname)
+            robot_sols = [s for _, s in sol.robots]
+            row = db.SolutionRow(module_set="", cost_function=display.split(":")[1], cost_key="", collaborative=True,
+                                 robots_key=robots_key, n_modules=sum(len(s.module_order) for s in robot_sols))
+        else:
+            sol, task, ms, display, key = self.prepare_solution(text, fname, data)
+            robot_sols = [sol]
+            row = db.SolutionRow(module_set=sol.module_set, cost_function=sol.cost_function, cost_key=key,
+                                 n_modules=len(sol.module_order))
+
+        def first(attr):
+            return next((getattr(s, attr)[0] for s in robot_sols if getattr(s, attr)), "")
+        author = (author or "").strip() or first("author")
         if not author:
             raise InputError("the author name is required (form field 'author' or the solution's 'author')")
-        email = (email or "").strip() or (sol.email[0] if sol.email else "")
-        affiliation = (affiliation or "").strip() or (sol.affiliation[0] if sol.affiliation else "")
+        email = (email or "").strip() or first("email")
+        affiliation = (affiliation or "").strip() or first("affiliation")
         if token is not None and token != "" and not (8 <= len(token) <= 200):
             raise InputError("a chosen token must have 8 to 200 characters (or leave it empty to get a random one)")
-        row = db.SolutionRow(benchmark_id=display, task_id=sol.task_id, module_set=sol.module_set,
-                             cost_function=sol.cost_function, cost_key=key, author_name=author, author_email=email,
-                             author_affiliation=affiliation, token_hash="", valid=True, solution_json=text,
-                             n_modules=len(sol.module_order))
+        row.benchmark_id, row.task_id, row.solution_json, row.token_hash, row.valid = \
+            display, sol.task_id, text, "", True
+        row.author_name, row.author_email, row.author_affiliation = author, email, affiliation
         db.check_row(row, {"author_name": "author", "author_email": "email", "author_affiliation": "affiliation",
-                           "cost_key": "costFunction", "benchmark_id": "benchmark ID"})
+                           "cost_key": "costFunction", "cost_function": "costFunction", "benchmark_id": "benchmark ID"})
         if token and "\x00" in token:
             raise InputError("the token contains a NUL character")
         return Submission(sol, task, ms, row, token or None)
 
     def judge(self, sub: "Submission") -> SubmitResult:
-        """Run the checker on a prepared submission; store it when valid."""
+        """Run the checker on a prepared submission; store it when valid. A collaborative solution is judged by
+        :func:`robodesign.collab.check_collab`, the judge of ``robodesign check``; its ``cost`` is totalCost."""
         sol, row = sub.solution, sub.row
-        verdict: Verdict = check(sub.task, sol, sub.module_set)
-        vj = clean_json(verdict.to_json())
-        cost = vj.get("cost")
-        if not verdict.valid:
-            return SubmitResult(False, row.benchmark_id, vj, cost, task_id=sol.task_id, module_set=sol.module_set)
+        if isinstance(sol, CollabSolution):
+            cverdict = check_collab(sub.task, sol, sub.module_set)
+            vj = clean_json(cverdict.to_json())
+            cost, costs, valid = vj.get("totalCost"), vj.get("costs"), cverdict.valid
+            all_costs = {rid: v.get("costs", {}) for rid, v in vj.get("robots", {}).items()}
+            dof = sum(int(v.costs.get("numJ", 0) or 0) for v in cverdict.robots.values())
+        else:
+            verdict: Verdict = check(sub.task, sol, sub.module_set)
+            vj = clean_json(verdict.to_json())
+            cost, costs, valid = vj.get("cost"), None, verdict.valid
+            all_costs, dof = vj.get("costs", {}), int(verdict.costs.get("numJ", 0) or 0)
+        if not valid:
+            return SubmitResult(False, row.benchmark_id, vj, cost, task_id=sol.task_id, module_set=row.module_set,
+                                costs=costs)
         token = sub.token or secrets.token_urlsafe(24)
-        row.token_hash, row.cost = hash_token(token), cost
-        row.costs_json, row.verdict_json = json.dumps(vj.get("costs", {})), json.dumps(vj)
-        row.dof = int(verdict.costs.get("numJ", 0) or 0)
+        row.token_hash, row.cost, row.dof = hash_token(token), cost, dof
+        row.costs_json, row.verdict_json = json.dumps(all_costs), json.dumps(vj)
+        if costs is not None:
+            row.cost_tuple = json.dumps(costs)
         with self.Session() as s:
             s.add(row)
             s.commit()
             rid = row.id
         return SubmitResult(True, row.benchmark_id, vj, cost, id=rid, token=token, task_id=sol.task_id,
-                            module_set=sol.module_set)
+                            module_set=row.module_set, costs=costs)
 
     def submit_solution(self, text: str, fname: str = "solution.json", author: Optional[str] = None,
                         email: Optional[str] = None, affiliation: Optional[str] = None,
@@ -600,8 +778,11 @@ class Bench:
             raise NotFound(f"unknown solution {sid}")
         return text
 
-    def solution(self, sid: int) -> Solution:
-        return parse_solution(loads_json(self.solution_text(sid), f"solution-{sid}.json"), f"solution-{sid}.json")
+    def solution(self, sid: int) -> Union[Solution, CollabSolution]:
+        """The stored solution, parsed (a CollabSolution when it is collaborative)."""
+        name = f"solution-{sid}.json"
+        data = loads_json(self.solution_text(sid), name)
+        return parse_collab_solution(data, name) if is_collaborative(data) else parse_solution(data, name)
 
     def withdraw(self, sid: int, token: Optional[str]) -> dict:
         with self.Session() as s:
@@ -620,9 +801,13 @@ class Bench:
 
     def list_solutions(self, task: Optional[str] = None, cost: Optional[str] = None, moduleset: Optional[str] = None,
                        min_cost: Optional[float] = None, max_cost: Optional[float] = None,
-                       limit: int = 1000) -> List[db.SolutionRow]:
+                       limit: int = 1000, collaborative: Optional[bool] = None) -> List[db.SolutionRow]:
+        """Valid, non-withdrawn solutions, cheapest first (a collaborative one by its totalCost). ``moduleset`` and
+        ``cost`` match single-robot solutions only; ``collaborative``: only (True) or no (False) collaborative ones."""
         q = (select(db.SolutionRow).options(db.only(db.SOLUTION_LIST_COLUMNS))
              .where(db.SolutionRow.withdrawn.is_(False), db.SolutionRow.valid.is_(True)))
+        if collaborative is not None:
+            q = q.where(db.SolutionRow.collaborative.is_(bool(collaborative)))
         if task:
             q = q.where(db.SolutionRow.task_id == task)
         if moduleset:
@@ -639,48 +824,84 @@ class Bench:
         with self.Session() as s:
             return list(s.scalars(q.limit(limit)))
 
-    def leaderboard(self, bid_text: str) -> Tuple[str, str, str, str, List[db.SolutionRow]]:
-        display, ms, key, tid = parse_benchmark(bid_text)
+    def leaderboard(self, bid_text: str) -> Tuple[Board, List[db.SolutionRow]]:
+        """The valid, non-withdrawn solutions of a benchmark, best first: single-robot by cost; collaborative by
+        totalCost, ties broken by the cost tuple (:func:`collab_rank_key`). A single-robot ID never lists
+        collaborative solutions and vice versa (400 when the ID does not fit the task)."""
+        board = parse_benchmark(bid_text)
+        tid = board.task_id
         if not self._has_task(tid):
-            raise NotFound(f"benchmark {display!r}: unknown task {tid!r}")
-        if not self._has_module_set(ms):
-            raise NotFound(f"benchmark {display!r}: unknown module set {ms!r}")
-        q = (select(db.SolutionRow).options(db.only(db.SOLUTION_LIST_COLUMNS))
-             .where(db.SolutionRow.withdrawn.is_(False), db.SolutionRow.valid.is_(True),
-                    db.SolutionRow.task_id == tid, db.SolutionRow.module_set == ms, db.SolutionRow.cost_key == key)
-             .order_by(db.SolutionRow.cost.asc().nulls_last(), db.SolutionRow.created.asc(), db.SolutionRow.id.asc()))
+            raise NotFound(f"benchmark {board.display!r}: unknown task {tid!r}")
+        for ms in dict.fromkeys(board.module_sets):
+            if not self._has_module_set(ms):
+                raise NotFound(f"benchmark {board.display!r}: unknown module set {ms!r}")
+        robots = json.loads(self.task_row(tid).robots or "[]")
+        if board.collaborative and len(robots) != len(board.module_sets):
+            what = (f"{len(robots)} robots ({', '.join(r['ID'] for r in robots)})" if robots
+                    else "one robot (it is not collaborative)")
+            raise InputError(f"benchmark {board.display!r}: task {tid!r} has {what}, the ID lists "
+                             f"{len(board.module_sets)}")
+        if not board.collaborative and robots:
+            raise InputError(f"benchmark {board.display!r}: task {tid!r} is collaborative ({len(robots)} robots: "
+                             f"{', '.join(r['ID'] for r in robots)}); its benchmark IDs list one module set per robot, "
+                             f"e.g. [{','.join('M-' + board.module_set for _ in robots)}]:"
+                             f"{board.display.split(':')[1]}:{tid}")
+        S = db.SolutionRow
+        q = (select(S).options(db.only(db.SOLUTION_LIST_COLUMNS))
+             .where(S.withdrawn.is_(False), S.valid.is_(True), S.task_id == tid,
+                    S.collaborative.is_(board.collaborative)))
+        if board.collaborative:
+            q = q.where(S.robots_key == board.robots_key)
+        else:
+            q = q.where(S.module_set == board.module_set, S.cost_key == board.cost_key)
         with self.Session() as s:
             rows = list(s.scalars(q))
-        return display, ms, key, tid, rows
+        rows.sort(key=collab_rank_key)  # single-robot rows have an empty tuple: by cost, then upload
+        return board, rows
 
     def benchmarks(self) -> List[dict]:
         """Benchmarks with at least one (non-withdrawn) solution: ID, count, best cost. Solutions whose cost is
         written differently but means the same (``Liu2`` / ``cyc_0.2,mechEnergy``) count for one benchmark."""
         S = db.SolutionRow
-        q = (select(func.min(S.benchmark_id), S.task_id, S.module_set, S.cost_key, func.count(S.id), func.min(S.cost))
+        q = (select(func.min(S.benchmark_id), S.task_id, S.module_set, S.cost_key, S.robots_key, func.count(S.id),
+                    func.min(S.cost))
              .where(S.withdrawn.is_(False), S.valid.is_(True))
-             .group_by(S.task_id, S.module_set, S.cost_key)
-             .order_by(S.task_id, S.module_set, S.cost_key))
+             .group_by(S.task_id, S.module_set, S.cost_key, S.robots_key)
+             .order_by(S.task_id, S.module_set, S.cost_key, S.robots_key))
         with self.Session() as s:
-            return [{"benchmark_id": b, "task": t, "module_set": m, "solutions": n, "best_cost": c}
-                    for b, t, m, _k, n, c in s.execute(q)]
+            out = []
+            for b, t, m, _k, rk, n, c in s.execute(q):
+                sets = json.loads(rk)["sets"] if rk else [m]
+                out.append({"benchmark_id": b, "task": t, "module_set": m, "module_sets": sets, "solutions": n,
+                            "best_cost": c, "collaborative": bool(rk)})
+            return out
+
+    def benchmark_counter(self, tid: str):
+        """``count(benchmark ID) → number of solutions`` of task ``tid`` (IDs that mean the same count together)."""
+        counts = self.counts_for_task(tid)
+
+        def count(bid: str) -> int:
+            b = parse_benchmark(bid)
+            return counts.get(("", b.robots_key) if b.collaborative else (b.module_set, b.cost_key), 0)
+        return count
 
     def counts_for_task(self, tid: str) -> Dict[Tuple[str, str], int]:
-        """(module set, cost key) → number of solutions of task ``tid``."""
+        """(module set, cost key) → number of solutions of task ``tid``; of a collaborative task ("", robots key)."""
         S = db.SolutionRow
-        q = (select(S.module_set, S.cost_key, func.count(S.id))
+        q = (select(S.module_set, S.cost_key, S.robots_key, func.count(S.id))
              .where(S.withdrawn.is_(False), S.valid.is_(True), S.task_id == tid)
-             .group_by(S.module_set, S.cost_key))
+             .group_by(S.module_set, S.cost_key, S.robots_key))
         with self.Session() as s:
-            return {(m, k): n for m, k, n in s.execute(q)}
+            return {(m, rk or k): n for m, k, rk, n in s.execute(q)}
 
 
 @dataclass
 class Submission:
-    """A solution that passed every check but the checker itself: what :meth:`Bench.judge` needs."""
-    solution: Solution
-    task: Task
-    module_set: ModuleSet
+    """A solution that passed every check but the checker itself: what :meth:`Bench.judge` needs (collaborative: a
+    CollabSolution, its CollabTask and the module set of every robot by robot ID)."""
+    solution: Union[Solution, CollabSolution]
+    task: Union[Task, CollabTask]
+    module_set: Union[ModuleSet, Dict[str, ModuleSet]]
     row: db.SolutionRow
     token: Optional[str]
 
@@ -703,6 +924,11 @@ def unwrap_upload(text: str, fname: str, meta: Dict[str, Optional[str]], token: 
     return (sol if isinstance(sol, str) else json.dumps(sol)), meta, token
 
 
+def parse_task_file(data, file: Path) -> Union[Task, CollabTask]:
+    """A task file's JSON → Task, or CollabTask when it has a ``robots`` list."""
+    return parse_collab_task(data, file) if is_collaborative(data) else parse_task(data, file)
+
+
 def solution_id(sid) -> int:
     """A solution ID from a URL: a decimal integer the database can hold, else :class:`NotFound`."""
     text = str(sid)
@@ -711,33 +937,42 @@ def solution_id(sid) -> int:
     return int(text)
 
 
-def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str) -> None:
-    """The size caps of :class:`Limits` (413 naming the field)."""
-    if len(sol.notes) > limits.notes_chars:
-        raise TooLarge(f"at most {limits.notes_chars} characters are allowed (got {len(sol.notes)})",
-                       file=fname, path=["notes"])
+def check_text_sizes(data: dict, limits: Limits, fname: str, where: list) -> None:
+    """The caps of :class:`Limits` on the free text of a solution (``where``: its JSON path; 413 naming the field)."""
+    notes = data.get("notes")
+    if isinstance(notes, str) and len(notes) > limits.notes_chars:
+        raise TooLarge(f"at most {limits.notes_chars} characters are allowed (got {len(notes)})",
+                       file=fname, path=where + ["notes"])
     for key in ("version", "publication", "processorName", "date"):
         v = data.get(key)
         if isinstance(v, str) and len(v) > limits.text_chars:
             raise TooLarge(f"at most {limits.text_chars} characters are allowed (got {len(v)})", file=fname,
-                           path=[key])
+                           path=where + [key])
     for key in ("author", "email", "affiliation", "tags"):
         v = data.get(key)
-        v = [v] if isinstance(v, str) else (v or [])
+        v = [v] if isinstance(v, str) else (v if isinstance(v, list) else [])
         if len(v) > limits.list_items:
-            raise TooLarge(f"at most {limits.list_items} entries are allowed (got {len(v)})", file=fname, path=[key])
+            raise TooLarge(f"at most {limits.list_items} entries are allowed (got {len(v)})", file=fname,
+                           path=where + [key])
         for i, x in enumerate(v):
             if isinstance(x, str) and len(x) > limits.text_chars:
                 raise TooLarge(f"at most {limits.text_chars} characters are allowed (got {len(x)})", file=fname,
-                               path=[key, i])
+                               path=where + [key, i])
+
+
+def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str, where: list = ()) -> None:
+    """The size caps of :class:`Limits` on one robot's solution (``where``: its JSON path; 413 naming the field)."""
+    where = list(where)
+    check_text_sizes(data, limits, fname, where)
     for key in ("moduleOrder", "moduleConnection"):
         v = data.get(key) or []
         if len(v) > limits.modules:
-            raise TooLarge(f"at most {limits.modules} entries are allowed (got {len(v)})", file=fname, path=[key])
+            raise TooLarge(f"at most {limits.modules} entries are allowed (got {len(v)})", file=fname,
+                           path=where + [key])
     n = int(sol.trajectory.q.size)  # samples × joints
     if n > limits.trajectory_values:
         raise TooLarge(f"{len(sol.trajectory.q)} samples × {n // max(1, len(sol.trajectory.q))} joints = {n} values; "
-                       f"at most {limits.trajectory_values} are allowed", file=fname, path=["trajectory"])
+                       f"at most {limits.trajectory_values} are allowed", file=fname, path=where + ["trajectory"])
 
 
 STAGING_LOCK = ".lock"
@@ -792,12 +1027,19 @@ class _Prefixed(FileSource):
 
 
 def solution_summary(row: db.SolutionRow) -> dict:
-    return clean_json({
+    """A solution's public summary; a collaborative one adds ``costs`` (the tuple, in the task's robot order; its
+    ``cost`` is totalCost) and ``module_sets`` (one per robot)."""
+    out = {
         "id": row.id, "benchmark_id": row.benchmark_id, "task": row.task_id, "module_set": row.module_set,
         "cost_function": row.cost_function, "cost": row.cost, "valid": row.valid, "author": row.author_name,
         "affiliation": row.author_affiliation, "created": row.created.isoformat() + "Z",
         "withdrawn": row.withdrawn, "modules": row.n_modules, "url": f"/solutions/{row.id}",
-    })
+        "collaborative": bool(row.collaborative),
+    }
+    if row.collaborative:
+        out.update(costs=json.loads(row.cost_tuple or "[]"), totalCost=row.cost,
+                   module_sets=json.loads(row.robots_key)["sets"], viewer=f"/solutions/{row.id}/viewer")
+    return clean_json(out)
 
 
 def files_source(files: Dict[str, bytes]) -> DictSource:
