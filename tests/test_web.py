@@ -533,8 +533,8 @@ def test_query_by_cost_range(client, judge):
     r = client.get("/api/solutions", params={"cost": "cyc_x"})
     assert r.status_code == 400 and "not a number" in r.json()["detail"]
     b = client.get("/api/benchmarks").json()
-    assert b == [{"benchmark_id": BOARD, "task": "toy/all", "module_set": "toy", "solutions": 4,
-                  "best_cost": pytest.approx(3.5)}]
+    assert b == [{"benchmark_id": BOARD, "task": "toy/all", "module_set": "toy", "module_sets": ["toy"], "solutions": 4,
+                  "best_cost": pytest.approx(3.5), "collaborative": False}]
 
 
 def test_pages_and_listings(tmp_path, seed_dir):
@@ -542,7 +542,7 @@ def test_pages_and_listings(tmp_path, seed_dir):
     with TestClient(app, headers=ADMIN_HEADERS) as c:
         tasks = c.get("/api/tasks").json()
         ids = [t["id"] for t in tasks]
-        builtin = sorted("robodesign/" + f.stem for f in (ROOT / "assets" / "tasks" / "robodesign").glob("*.json"))
+        builtin = sorted(f"{f.parent.name}/{f.stem}" for f in (ROOT / "assets" / "tasks").glob("robodesign*/*.json"))
         assert sorted(ids) == sorted(["toy/all"] + builtin) and len(builtin) >= 5
         assert next(t for t in tasks if t["id"] == "toy/all")["goals"] == 6
         sets = [m["name"] for m in c.get("/api/modulesets").json()]
