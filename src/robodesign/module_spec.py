@@ -120,7 +120,7 @@ class Module:
                 return b
         raise KeyError(body_id)
 
-    @property
+    @cached_property
     def connectors(self) -> Tuple[Connector, ...]:
         return tuple(c for b in self.bodies for c in b.connectors)
 
@@ -130,7 +130,7 @@ class Module:
                 return c
         raise KeyError(con_id)
 
-    @property
+    @cached_property
     def dof(self) -> int:
         return sum(1 for j in self.joints if j.actuated)
 
@@ -138,15 +138,15 @@ class Module:
     def mass(self) -> float:
         return float(sum(b.mass for b in self.bodies))
 
-    @property
+    @cached_property
     def is_base(self) -> bool:
         return any(c.type == "base" for c in self.connectors)
 
-    @property
+    @cached_property
     def is_end_effector(self) -> bool:
         return any(c.type == "eef" for c in self.connectors)
 
-    @property
+    @cached_property
     def kind(self) -> str:
         """'base', 'eef', 'joint' or 'link' (for search-space rules)."""
         if self.is_base:
