@@ -1,4 +1,5 @@
-"""``robodesign optimize --workers N``: the same seed and batch size give the same result for any N."""
+"""``robodesign optimize --workers N``: the same seed and batch size give the same result for any N, with the
+candidates sent to the workers in chunks (fewer messages) and, for random search, asked ahead of the tells."""
 import json
 import subprocess
 import sys
@@ -8,7 +9,7 @@ import pytest
 from conftest import IMPROV, TASKS
 from robodesign.checker import check
 from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
-from robodesign.experiment.executors import ProcessPool
+from robodesign.experiment.executors import ProcessPool, auto_chunk_size, chunk_sizes
 from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
 from robodesign.problem import Problem
 from robodesign.solution import load_solution
@@ -38,6 +39,68 @@ def test_process_pool_gives_the_serial_history(tmp_path):
     assert len({k for k, *_ in serial}) > 8  # the genetic search moved beyond its first generation
 
 
+def _spy(pool):
+    """The sizes of the chunks ``pool`` sends to its workers, counted where they are handed to the
+    ProcessPoolExecutor (one message per call)."""
+    sent = []
+    submit = pool._pool.submit
+
+    def counting(fn, *args):
+        sent.append(len(args[1]))
+        return submit(fn, *args)
+    pool._pool.submit = counting
+    return sent
+
+
+@pytest.mark.slow
+def test_chunked_pool_gives_the_serial_history_in_fewer_messages():
+    """Batches (genetic) and the ask-ahead stream (random) give the serial evaluations, candidate by
+    candidate, whether each candidate travels alone or in chunks; chunks are fewer messages."""
+    problem = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    spec = EvaluatorSpec(problem, evaluation_settings(), seed=3)
+
+    def random_history(executor):
+        res = Study(create_optimizer("random", problem, seed=3), executor, Budget(evaluations=32),
+                    batch_size=16).run()
+        return [(e.candidate.key(), e.feasible, e.stage, e.cost, e.goals_reached) for e in res.history]
+
+    serial = {"genetic": _history(SerialExecutor(Evaluator(spec)), problem),
+              "random": random_history(SerialExecutor(Evaluator(spec)))}
+    assert len(serial["random"]) == 32 and len({k for k, *_ in serial["random"]}) == 32
+    with ProcessPool({"s": spec}, 2) as auto, ProcessPool({"s": spec}, 2, chunk_size=1) as single:
+        for pool in (auto, single):
+            sent = _spy(pool)
+            assert _history(pool.bind("s"), problem) == serial["genetic"]
+            genetic_sent = list(sent)
+            assert random_history(pool.bind("s")) == serial["random"]
+            pool.random_sent = sent[len(genetic_sent):]
+            pool.genetic_sent = genetic_sent
+        # genetic: 4 batches of 6 candidates; automatic chunks 2, 1, 1, 1, 1 per batch
+        assert auto.genetic_sent == [2, 1, 1, 1, 1] * 4 and single.genetic_sent == [1] * 24
+        # random: one stream of 32 candidates in chunks of 16 // (2 workers * 2) = 4
+        assert auto.random_sent == [4] * 8 and single.random_sent == [1] * 32
+        assert auto.messages == 20 + 8 and single.messages == 24 + 32
+        # random search is asked ahead of its tells: before the first evaluation of the first batch of 16
+        # is told, the stream has asked into the second batch
+        opt = create_optimizer("random", problem, seed=3)
+        asks, ask = [], opt.ask
+        opt.ask = lambda: (asks.append(1), ask())[1]
+        told = []
+        res = Study(opt, auto.bind("s"), Budget(evaluations=32), batch_size=16,
+                    on_evaluation=lambda i, e, best: told.append(len(asks))).run()
+        assert [e.candidate.key() for e in res.history] == [k for k, *_ in serial["random"]]
+        assert told[0] >= 20 and len(asks) == 32
+
+
+def test_chunk_sizes():
+    assert chunk_sizes(16, 2) == [4, 3, 3, 2, 1, 1, 1, 1]  # 8 messages instead of 16
+    assert chunk_sizes(6, 2) == [2, 1, 1, 1, 1]
+    assert chunk_sizes(16, 1) == [8, 4, 2, 1, 1]
+    assert chunk_sizes(10, 2, chunk_size=4) == [4, 4, 2] and chunk_sizes(3, 2, chunk_size=8) == [3]
+    assert chunk_sizes(0, 2) == []
+    assert (auto_chunk_size(16, 2), auto_chunk_size(8, 4), auto_chunk_size(64, 2), auto_chunk_size(1, 2)) == (4, 1, 16, 1)
+
+
 @pytest.mark.slow
 def test_cli_workers_2_equals_workers_1(tmp_path):
     outs = {}
@@ -50,6 +113,8 @@ def test_cli_workers_2_equals_workers_1(tmp_path):
         outs[w] = json.loads(r.stdout)
     one, two = outs[1], outs[2]
     assert (one["workers"], two["workers"]) == (1, 2) and one["batch_size"] == two["batch_size"] == 8
+    # 4 batches of 8 in chunks of 2, 2, 1, 1, 1, 1; in this process no message at all
+    assert (one["messages"], two["messages"]) == (0, 24)
     assert one["evaluations"] == two["evaluations"] == 32
     assert one["best"] == two["best"] and one["feasible"] == two["feasible"]
     if one["feasible"]:
@@ -63,7 +128,8 @@ def test_cli_workers_2_equals_workers_1(tmp_path):
 
 
 @pytest.mark.parametrize("args,msg", [(["--workers", "0"], "--workers must be at least 1, got 0"),
-                                      (["--batch-size", "0"], "--batch-size must be at least 1, got 0")])
+                                      (["--batch-size", "0"], "--batch-size must be at least 1, got 0"),
+                                      (["--chunk-size", "0"], "--chunk-size must be at least 1, got 0")])
 def test_bad_workers_and_batch_size(capsys, args, msg):
     from robodesign.cli import main
     code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "2evals", *args])
@@ -95,3 +161,57 @@ def test_bound_executor_sends_each_candidate_to_the_workers_once():
     d = Candidate(("1", "23", "12"), ())
     ex.map([a, d])
     assert Counting.sent == [[a.key(), b.key(), c.key()], [d.key()]]
+    # a stream answers repeats (earlier or in the stream itself) from the cache as well, in order
+    e, f = Candidate(("1", "24", "12"), ()), Candidate(("1", "21", "21", "12"), ())
+    out = list(ex.imap(iter([e, a, e, f, d]), batch_size=2))
+    assert Counting.sent[2:] == [[e.key(), f.key()]]  # the two new candidates, in one window of 2
+    assert [x.candidate.key() for x in out] == [e.key(), a.key(), e.key(), f.key(), d.key()]
+    assert out[0] is out[2] and out[1] is first[0] and [x.score for x in out] == [3.0, 3.0, 3.0, 4.0, 3.0]
+
+
+def test_ask_ahead_study_resumes_stored_evaluations_exactly():
+    """Random search (``independent_asks``) on a streaming executor: every evaluation is stored in ask order
+    as it is told; a study resumed from the first 7 stored evaluations replays them (none evaluated again)
+    and ends with the uninterrupted run's 12 evaluations; a stored candidate the optimizer does not ask
+    again is refused."""
+    from robodesign.errors import InputError
+    from robodesign.experiment.executors import SerialPool
+
+    class Memory:
+        def __init__(self, evaluations=()):
+            self.rows = list(evaluations)
+
+        def load(self):
+            return list(self.rows)
+
+        def append(self, index, ev):
+            assert index == len(self.rows)
+            self.rows.append(ev)
+
+    problem = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    spec = EvaluatorSpec(problem, evaluation_settings(), seed=5)
+
+    def run(storage, budget=12):
+        pool = SerialPool({"s": spec})
+        ex = pool.bind("s")
+        res = Study(create_optimizer("random", problem, seed=5), ex, Budget(evaluations=budget), batch_size=4,
+                    storage=storage).run()
+        return res, len(ex.cache)
+
+    full = Memory()
+    ref, evaluated = run(full)
+    assert evaluated == 12 and [e.candidate.key() for e in full.rows] == [e.candidate.key() for e in ref.history]
+    # the same candidates as random search asks in batches on the in-process executor
+    batched = Study(create_optimizer("random", problem, seed=5), SerialExecutor(Evaluator(spec)),
+                    Budget(evaluations=12), batch_size=4).run()
+    assert [(e.candidate.key(), e.stage, e.cost) for e in batched.history] == \
+        [(e.candidate.key(), e.stage, e.cost) for e in ref.history]
+    part = Memory(full.rows[:7])
+    resumed, evaluated = run(part)
+    assert evaluated == 5 and resumed.history[:7] == full.rows[:7]
+    assert [(e.candidate.key(), e.stage, e.cost) for e in resumed.history] == \
+        [(e.candidate.key(), e.stage, e.cost) for e in ref.history]
+    assert [e.candidate.key() for e in part.rows] == [e.candidate.key() for e in full.rows]
+    alien = Memory([full.rows[1]])
+    with pytest.raises(InputError, match="cannot resume: evaluation 0"):
+        run(alien)

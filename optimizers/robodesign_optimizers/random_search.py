@@ -11,6 +11,7 @@ from robodesign.optimize import Candidate, Optimizer, option
 class RandomSearch(Optimizer):
     name = "random"
     description = "uniformly random valid designs (baseline)"
+    independent_asks = True  # ask() reads only its own random state and what it asked before
 
     @dataclass(frozen=True)
     class Options:

@@ -281,6 +281,9 @@ def build_parser() -> argparse.ArgumentParser:
     op.add_argument("--batch-size", type=int, default=16,
                     help="candidates asked per step and evaluated in parallel; the same seed and batch size give "
                          "the same result for any --workers (default: %(default)s)")
+    op.add_argument("--chunk-size", type=int, metavar="N",
+                    help="candidates per message to a worker process (default: automatic from --batch-size and "
+                         "--workers: a batch of 16 on 2 workers goes in 8 messages, a stream in chunks of 4)")
     op.add_argument("--out", help="where to write the best checked solution (default best_solution.json)")
     op.add_argument("--opt", action="append", default=[], metavar="KEY=VALUE",
                     help="optimizer option (repeatable; default: none)")

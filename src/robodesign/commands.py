@@ -170,11 +170,13 @@ def cmd_optimize(args) -> int:
                          seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
     workers = _optimize_workers(args.workers, args.batch_size)
+    if args.chunk_size is not None and args.chunk_size < 1:
+        raise InputError(f"--chunk-size must be at least 1, got {args.chunk_size}")
     if workers == 1:  # in this process
         executor = SerialExecutor(Evaluator(spec))
     else:  # the experiments' process pool; results are the same for any number of workers
         from .experiment.executors import ProcessPool
-        executor = ProcessPool({"optimize": spec}, workers).bind("optimize")
+        executor = ProcessPool({"optimize": spec}, workers, args.chunk_size).bind("optimize")
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
 
@@ -199,6 +201,7 @@ def cmd_optimize(args) -> int:
         out = sol.write(args.out or "best_solution.json")
     summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
                "workers": workers, "batch_size": args.batch_size,
+               "messages": executor.pool.messages if workers > 1 else 0,
                "stopped": res.stopped, "feasible": bool(best and best.feasible),
                "best": None if best is None else {"order": list(best.candidate.order), "base": list(best.candidate.base),
                                                   "base_pose": problem.base_pose(best.candidate).tolist(),

@@ -14,7 +14,10 @@ space ``self.space``), its validated ``self.options`` and its own seeded ``self.
 Determinism: the study asks ``batch_size`` candidates, evaluates them (in parallel or not), and
 tells the results *in ask order*; evaluations are pure functions of the candidate. The same seed
 and batch size therefore give the same run on any executor, and a run can be resumed by replaying
-stored evaluations.
+stored evaluations. An optimizer whose ``ask()`` never depends on what it was told (class attribute
+``independent_asks = True``, e.g. random search) asks the same candidates whenever the tells arrive: on an
+executor that streams (``imap``, the process pool) the study then asks ahead of the evaluations, so the
+workers never wait at the end of a batch for its slowest candidate; the results are the same.
 """
 from __future__ import annotations
 
@@ -62,6 +65,9 @@ class Optimizer(ABC):
     #: the plugin's options: a dataclass whose fields (made with :func:`option`) are name, type, default,
     #: range or choices and help. None: the plugin takes no options.
     Options: ClassVar[Optional[type]] = None
+    #: True promises that ``ask()`` never depends on the evaluations told (random search): the study may
+    #: then ask ahead of them and keep parallel workers busy across batches, with the same results
+    independent_asks: ClassVar[bool] = False
 
     def __init__(self, problem: Problem, seed: int = 0, **options):
         if isinstance(problem, SearchSpace):  # the plugin API before Problem (one release)
@@ -408,6 +414,8 @@ class Study:
         self.on_evaluation = on_evaluation
 
     def run(self) -> StudyResult:
+        if getattr(self.optimizer, "independent_asks", False) and hasattr(self.executor, "imap"):
+            return self._run_ahead()
         t0 = time.perf_counter()
         stored = self.storage.load() if self.storage is not None else []
         history: List[Evaluation] = []
@@ -456,6 +464,53 @@ class Study:
                 stopped = "exhausted"
                 break
         return StudyResult(best=opt.best, history=history, seconds=time.perf_counter() - t0, stopped=stopped)
+
+    def _run_ahead(self) -> StudyResult:
+        """The loop for an optimizer with ``independent_asks``: stored evaluations are replayed, then the
+        candidates are asked as the executor's stream pulls them (ahead of the tells) and told, stored and
+        reported in ask order, as :meth:`run` does."""
+        t0 = time.perf_counter()
+        stored = self.storage.load() if self.storage is not None else []
+        history: List[Evaluation] = []
+        opt = self.optimizer
+        stopped = ["budget"]
+
+        def deliver(ev: Evaluation) -> None:
+            opt._observe(ev)
+            history.append(ev)
+            if self.on_evaluation is not None:
+                self.on_evaluation(len(history) - 1, ev, opt.best)
+
+        def ask(n: int, elapsed: float) -> Optional[Candidate]:
+            if self.budget.exhausted(n, elapsed):
+                return None
+            c = opt.ask()
+            if c is None:
+                stopped[0] = "exhausted"
+            return c
+
+        for idx, ev in enumerate(stored):  # replaying takes no time of the budget
+            c = ask(idx, 0.0)
+            if c is None:
+                break
+            if ev.candidate.key() != c.key():
+                raise InputError(f"cannot resume: evaluation {idx} was {ev.candidate.key()!r} "
+                                 f"but the optimizer now asks {c.key()!r} (different settings or seed?)")
+            deliver(ev)
+        else:
+            def fresh():
+                n = len(history)
+                while True:
+                    c = ask(n, time.perf_counter() - t0)
+                    if c is None:
+                        return
+                    n += 1
+                    yield c
+            for ev in self.executor.imap(fresh(), self.batch_size):
+                if self.storage is not None:
+                    self.storage.append(len(history), ev)
+                deliver(ev)
+        return StudyResult(best=opt.best, history=history, seconds=time.perf_counter() - t0, stopped=stopped[0])
 
 
 def optimize(problem: Problem, plugin: Union[str, Type[Optimizer]], budget: Union[str, Budget], *, seed: int = 0,

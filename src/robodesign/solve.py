@@ -188,6 +188,17 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
     return res
 
 
+def warm_up() -> None:
+    """Load now what :func:`solve` otherwise loads at its first use: the compiled IK kernels (when numba's
+    cache holds them, ~0.3 s; with a cold cache this starts their background compilation, as the first IK
+    would) and the time-scaling library (~0.3 s). Evaluator pools call it in every worker as it starts, so
+    that the first candidates a worker gets cost what the others do. Results never depend on it."""
+    from .solvers import ik_kernel, timing
+    if ik_kernel.ready():
+        ik_kernel.warm_up()
+    timing.preload()
+
+
 class _Pipeline:
     """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
     to stop the pipeline with its reason."""

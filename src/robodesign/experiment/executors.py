@@ -6,7 +6,16 @@ spawned process, a Ray actor) builds its :class:`~robodesign.evaluator.Evaluator
 starts; the specs' problems travel as file references, so tasks and module sets (the heavy models) are
 loaded once per worker and shared between specs.
 ``pool.bind(spec_id)`` gives the object a :class:`~robodesign.optimize.Study` uses as its executor
-(``map(candidates) -> list[Evaluation]`` in the order given, ``close()``).
+(``map(candidates) -> list[Evaluation]`` in the order given; ``imap(candidates, batch_size)``, the same as a
+stream that pulls candidates only as workers need them; ``close()``).
+
+Messages: the process pool sends candidates to its workers in *chunks*, several candidates per message, and
+gets the evaluations back per chunk (a PTP_3 candidate is often screened out in 1–2 ms, so one message per
+candidate would cost a noticeable share of the work). A batch is split by guided self-scheduling: each
+chunk takes ``ceil(remaining / (2·workers))`` candidates, so the big chunks go first and the last ones are
+single candidates that even out the workers at the end of the batch (16 candidates on 2 workers: 8
+messages instead of 16). A stream (``imap``) is cut into chunks of :func:`auto_chunk_size` (16 on 2
+workers: 4). ``chunk_size`` (``--chunk-size``; the experiment config's ``executor.chunk_size``) fixes it.
 
 Results do not depend on the executor: evaluations are pure functions of the candidate (per-candidate
 seeds) and the study tells them in ask order.
@@ -24,17 +33,51 @@ import multiprocessing
 import os
 import time
 from collections import deque
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from typing import Dict, List, Optional, Sequence
+from itertools import islice
+from typing import Dict, Iterable, Iterator, List, Optional, Sequence
 
 from ..errors import InputError
 from ..evaluator import Evaluation, Evaluator, EvaluatorSpec
 from ..search_space import Candidate
+from ..solve import warm_up
 
 log = logging.getLogger(__name__)
 
 MAX_ATTEMPTS = 4  # per candidate, counting the first
+#: candidates a stream (``imap``) may have evaluated ahead of the one the caller waits for: a long
+#: evaluation holds back the delivery of the later ones, not the workers
+MAX_AHEAD = 1024
+
+
+def auto_chunk_size(batch_size: int, workers: int) -> int:
+    """Candidates per message of a stream when no chunk size is set: about two messages per worker and batch
+    (a batch of 16 on 2 workers: 4), at least 1."""
+    return max(1, int(batch_size) // (2 * max(1, int(workers))))
+
+
+def chunk_sizes(n: int, workers: int, chunk_size: Optional[int] = None) -> List[int]:
+    """The sizes of the messages a batch of ``n`` candidates is sent in: ``chunk_size`` each when it is set,
+    else guided self-scheduling (each chunk ``ceil(remaining / (2·workers))``: 16 on 2 workers gives
+    4, 3, 3, 2, 1, 1, 1, 1)."""
+    out: List[int] = []
+    left = int(n)
+    while left > 0:
+        k = int(chunk_size) if chunk_size else -(-left // (2 * max(1, int(workers))))
+        out.append(min(k, left))
+        left -= out[-1]
+    return out
+
+
+def chunked(items: Iterable, size: int) -> Iterator[list]:
+    """Lists of ``size`` consecutive items (the last one shorter), pulled from ``items`` one list at a time."""
+    it = iter(items)
+    while True:
+        part = list(islice(it, size))
+        if not part:
+            return
+        yield part
 
 
 def build_evaluators(specs: Dict[str, EvaluatorSpec]) -> Dict[str, Evaluator]:
@@ -63,6 +106,33 @@ class BoundExecutor:
             self.cache.update(zip(todo, self.pool.map(self.spec_id, list(todo.values()))))
         return [self.cache[c.key()] for c in candidates]
 
+    def imap(self, candidates: Iterable[Candidate], batch_size: int = 1) -> Iterator[Evaluation]:
+        """The evaluations of ``candidates`` in their order, as a stream: candidates are pulled from the
+        iterable only as the workers need them (``batch_size`` sets the automatic chunk size). Repeats are
+        answered from the cache, as in :meth:`map`."""
+        waiting: deque = deque()  # keys pulled from ``candidates``, not yet delivered
+        sent = set()
+
+        def fresh():
+            for c in candidates:
+                k = c.key()
+                waiting.append(k)
+                if k not in self.cache and k not in sent:
+                    sent.add(k)
+                    yield c
+
+        results = self.pool.imap(self.spec_id, fresh(), batch_size)
+        while True:
+            # a repeat comes after its first occurrence, whose evaluation is then in the cache
+            while waiting and waiting[0] in self.cache:
+                yield self.cache[waiting.popleft()]
+            ev = next(results, None)
+            if ev is None:  # the stream is over: what is left (repeats pulled at its end) is cached
+                while waiting:
+                    yield self.cache[waiting.popleft()]
+                return
+            self.cache[ev.candidate.key()] = ev
+
     def close(self) -> None:  # the pool outlives the runs; closed by its owner
         pass
 
@@ -83,6 +153,12 @@ class EvaluatorPool:
 
     def map(self, spec_id: str, candidates: List[Candidate]) -> List[Evaluation]:
         raise NotImplementedError
+
+    def imap(self, spec_id: str, candidates: Iterable[Candidate], batch_size: int = 1) -> Iterator[Evaluation]:
+        """The evaluations of ``candidates`` in their order, pulling ``batch_size`` candidates at a time
+        (pools that keep their workers busy across batches override it)."""
+        for part in chunked(candidates, max(1, int(batch_size))):
+            yield from self.map(spec_id, part)
 
     def close(self) -> None:
         pass
@@ -143,10 +219,12 @@ def _init_worker(specs: Dict[str, EvaluatorSpec], parent_pid: Optional[int] = No
         _watch_parent(parent_pid)
     _WORKER.clear()
     _WORKER.update(build_evaluators(specs))
+    warm_up()  # the first candidates of this worker cost what the others do
 
 
-def _evaluate(spec_id: str, candidate: Candidate) -> Evaluation:
-    return _WORKER[spec_id](candidate)
+def _evaluate_chunk(spec_id: str, candidates: List[Candidate]) -> List[Evaluation]:
+    ev = _WORKER[spec_id]
+    return [ev(c) for c in candidates]
 
 
 def _ping() -> int:
@@ -154,14 +232,33 @@ def _ping() -> int:
     return os.getpid()
 
 
+class _Chunk:
+    """Consecutive candidates sent to a worker in one message, and the future of their evaluations."""
+    __slots__ = ("candidates", "future", "attempts")
+
+    def __init__(self, candidates: List[Candidate]):
+        self.candidates = candidates
+        self.future: Optional[Future] = None
+        self.attempts = 0
+
+    def evaluated(self) -> bool:
+        f = self.future
+        return f.done() and not f.cancelled() and f.exception() is None
+
+
 class ProcessPool(EvaluatorPool):
     """``concurrent.futures.ProcessPoolExecutor`` with the spawn context; each worker builds its
-    evaluators once in the initializer. A dead worker (``BrokenProcessPool``) is survived: the pool is
-    restarted and the candidates without a result are re-run."""
+    evaluators once in the initializer and warms up (:func:`~robodesign.solve.warm_up`). Candidates travel
+    in chunks (module docstring); ``messages`` counts the chunks sent. A dead worker
+    (``BrokenProcessPool``) is survived: the pool is restarted and the chunks without a result are re-run."""
     kind = "process"
 
-    def __init__(self, specs, workers: Optional[int] = None):
+    def __init__(self, specs, workers: Optional[int] = None, chunk_size: Optional[int] = None):
         super().__init__(specs, workers or max(1, os.cpu_count() or 1))
+        if chunk_size is not None and int(chunk_size) < 1:
+            raise InputError(f"chunk size must be at least 1, got {chunk_size}")
+        self.chunk_size = int(chunk_size) if chunk_size else None
+        self.messages = 0  # chunks sent to the workers (each answered by one message)
         self._pool: Optional[ProcessPoolExecutor] = None
         t0 = time.perf_counter()
         self._start()
@@ -182,41 +279,90 @@ class ProcessPool(EvaluatorPool):
             pass
         self._start()
 
+    def _submit(self, spec_id: str, chunk: _Chunk) -> None:
+        chunk.attempts += 1
+        self.messages += 1
+        try:
+            chunk.future = self._pool.submit(_evaluate_chunk, spec_id, chunk.candidates)
+        except BrokenProcessPool as e:  # answered like a chunk whose worker died
+            chunk.future = Future()
+            chunk.future.set_exception(e)
+
+    def _recover(self, spec_id: str, lost: List[_Chunk]) -> None:
+        """Restart the pool and send ``lost`` (chunks without a result) again."""
+        worst = max(lost, key=lambda c: c.attempts)
+        if worst.attempts >= MAX_ATTEMPTS:
+            raise RuntimeError(f"a worker process died {worst.attempts} times while evaluating "
+                               f"{worst.candidates[0].key()!r} (or the candidates sent with it); giving up")
+        self.failures += 1
+        log.warning("a worker process died; restarting the pool and re-running %d candidate(s)",
+                    sum(len(c.candidates) for c in lost))
+        self._restart()
+        for c in lost:
+            self._submit(spec_id, c)
+
+    def _stream(self, spec_id: str, parts: Iterator[List[Candidate]], in_flight: int) -> Iterator[Evaluation]:
+        """Evaluations of the chunks ``parts`` in their order. At most ``in_flight`` chunks are sent and not
+        yet evaluated (the next chunk is pulled from ``parts`` when one finishes), and at most
+        :data:`MAX_AHEAD` candidates are evaluated ahead of the one delivered next."""
+        pending: deque = deque()  # chunks in order, not yet delivered
+        state = {"more": True, "ahead": 0}
+
+        def fill() -> None:
+            while state["more"] and state["ahead"] < MAX_AHEAD and \
+                    sum(not c.future.done() for c in pending) < in_flight:
+                part = next(parts, None)
+                if part is None:
+                    state["more"] = False
+                    return
+                chunk = _Chunk(part)
+                self._submit(spec_id, chunk)
+                pending.append(chunk)
+                state["ahead"] += len(part)
+
+        try:
+            fill()
+            while pending:
+                head = pending[0]
+                while not head.future.done():
+                    wait([c.future for c in pending if not c.future.done()], return_when=FIRST_COMPLETED)
+                    fill()
+                if not head.evaluated():
+                    if not isinstance(head.future.exception(), BrokenProcessPool):
+                        head.future.result()  # the evaluation itself raised: a bug, not a lost worker
+                    wait([c.future for c in pending])  # a broken pool answers every chunk it had
+                    self._recover(spec_id, [c for c in pending if not c.evaluated()])
+                    continue
+                pending.popleft()
+                state["ahead"] -= len(head.candidates)
+                results = head.future.result()
+                fill()
+                yield from results
+        finally:  # the caller stopped early (or failed): chunks not started yet are dropped
+            for c in pending:
+                c.future.cancel()
+
     def map(self, spec_id, candidates):
-        results: List[Optional[Evaluation]] = [None] * len(candidates)
-        attempts = [0] * len(candidates)
-        pending = list(range(len(candidates)))
-        while pending:
-            futs = {}
-            broken = False
-            try:
-                for i in pending:
-                    attempts[i] += 1
-                    futs[i] = self._pool.submit(_evaluate, spec_id, candidates[i])
-            except BrokenProcessPool:
-                broken = True
-            for i, f in futs.items():
-                try:
-                    results[i] = f.result()
-                except BrokenProcessPool:
-                    broken = True
-            pending = [i for i in pending if results[i] is None]
-            if pending:
-                if not broken:  # cannot happen: other exceptions propagate from f.result()
-                    raise RuntimeError("process pool returned no result")
-                worst = max(attempts[i] for i in pending)
-                if worst >= MAX_ATTEMPTS:
-                    raise RuntimeError(f"a worker process died {worst} times while evaluating "
-                                       f"{candidates[pending[0]].key()!r}; giving up")
-                self.failures += 1
-                log.warning("a worker process died; restarting the pool and re-running %d candidate(s)", len(pending))
-                self._restart()
-        return results  # type: ignore[return-value]
+        parts, k = [], 0
+        for n in chunk_sizes(len(candidates), self.workers, self.chunk_size):
+            parts.append(list(candidates[k:k + n]))
+            k += n
+        return list(self._stream(spec_id, iter(parts), in_flight=max(1, len(parts))))
+
+    def imap(self, spec_id, candidates, batch_size=1):
+        size = self.chunk_size or auto_chunk_size(batch_size, self.workers)
+        # two chunks per worker: one running, one waiting in the call queue
+        return self._stream(spec_id, chunked(candidates, size), in_flight=2 * self.workers)
 
     def close(self):
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+
+    def info(self) -> dict:
+        d = super().info()
+        d["chunk_size"] = self.chunk_size or "auto"
+        return d
 
 
 # ------------------------------------------------------------------------------------------------
@@ -357,11 +503,11 @@ class RayPool(EvaluatorPool):
 
 
 def make_pool(kind: str, specs: Dict[str, EvaluatorSpec], workers: Optional[int] = None,
-              address: Optional[str] = None) -> EvaluatorPool:
+              address: Optional[str] = None, chunk_size: Optional[int] = None) -> EvaluatorPool:
     if kind == "serial":
         return SerialPool(specs)
     if kind == "process":
-        return ProcessPool(specs, workers)
+        return ProcessPool(specs, workers, chunk_size)
     if kind == "ray":
         return RayPool(specs, workers, address)
     raise InputError(f"unknown executor {kind!r} (serial, process or ray)")

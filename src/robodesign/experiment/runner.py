@@ -457,7 +457,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
         todo = [r for r in runs if db.run_status(r.run_id) != "done"]
         if todo:
             pool = make_pool(kind, exp.evaluator_specs(), workers or exp.executor.workers,
-                             address or exp.executor.address)
+                             address or exp.executor.address, exp.executor.chunk_size)
             session["executor"] = pool.info()
             meta = json.loads((out / "meta.json").read_text())
             meta["sessions"][-1] = session  # recorded now: a killed session keeps its executor in meta.json

@@ -440,6 +440,11 @@ def _toppra():
     return toppra
 
 
+def preload() -> None:
+    """Import toppra now (its import is slow) instead of at the first time scaling."""
+    _toppra()
+
+
 class BlendedPolyline:
     """Piecewise-linear joint path with parabolic corner blends (see module docstring).
 
