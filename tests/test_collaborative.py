@@ -248,6 +248,15 @@ def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, caps
     (tmp_path / "skew.json").write_text(json.dumps(data))
     code, out = _main(["check", task, tmp_path / "skew.json"], capsys)
     assert code == 2 and "robots[1].trajectory.t" in out.err and "common time base" in out.err
+    # a misspelt top-level key, or a robot naming another task: exit 2 naming the field
+    data = json.loads(Path(good).read_text())
+    (tmp_path / "extra.json").write_text(json.dumps({**data, "computationtime": 1.0}))
+    code, out = _main(["check", task, tmp_path / "extra.json"], capsys)
+    assert code == 2 and "computationtime: unknown key(s): 'computationtime'" in out.err
+    data["robots"][0]["taskID"] = "robodesign/pick_and_place"
+    (tmp_path / "other.json").write_text(json.dumps(data))
+    code, out = _main(["check", task, tmp_path / "other.json"], capsys)
+    assert code == 2 and "robots[0].taskID: robot 'left' names task 'robodesign/pick_and_place'" in out.err
     code, out = _main(["solve", task, "--modules", "robodesign_arm", "--robot", "middle=1,21", "--order", "1"], capsys)
     assert code == 2 and "no robot 'middle'" in out.err
 

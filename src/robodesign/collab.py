@@ -200,6 +200,9 @@ class CollabSolution:
         return write_json(path, self.to_json())
 
 
+SOLUTION_KEYS = frozenset({"taskID", "taskId", "collaborative", "computationTime", "notes", "robots"})  # top level
+
+
 def load_collab_solution(path) -> CollabSolution:
     p = Path(path)
     return parse_collab_solution(load_json(p, display_name=p.name), p.name, source=str(p))
@@ -208,6 +211,18 @@ def load_collab_solution(path) -> CollabSolution:
 def parse_collab_solution(data, fname: str, source: Optional[str] = None) -> CollabSolution:
     if not is_collaborative(data):
         raise InputError("a collaborative solution needs a 'robots' list", file=fname, path=["robots"])
+    unknown = sorted(set(data) - SOLUTION_KEYS)
+    if unknown:  # as the single-robot schema: a misspelt key is an error, not silently dropped
+        raise InputError(f"unknown key(s): {', '.join(repr(k[:100]) for k in unknown[:5])} (a collaborative solution "
+                         f"has {', '.join(sorted(SOLUTION_KEYS - {'taskId'}))}; the rest belongs to each robot)",
+                         file=fname, path=[unknown[0][:100]])
+    if data.get("collaborative", True) is not True:
+        raise InputError("expected true (a solution with a 'robots' list is collaborative)", file=fname,
+                         path=["collaborative"])
+    for key, types, what in (("computationTime", (int, float), "a number"), ("notes", (str,), "a string")):
+        v = data.get(key)
+        if v is not None and (not isinstance(v, types) or isinstance(v, bool)):
+            raise InputError(f"expected {what}", file=fname, path=[key])
     tid = data.get("taskID", data.get("taskId"))
     if not isinstance(tid, str):
         raise InputError("expected the task ID (a string)", file=fname, path=["taskID"])
@@ -220,6 +235,11 @@ def parse_collab_solution(data, fname: str, source: Optional[str] = None) -> Col
             raise InputError(f"duplicate robot ID {r['ID']!r}", file=fname, path=["robots", i, "ID"])
         seen.add(r["ID"])
         body = {k: v for k, v in r.items() if k != "ID"}
+        own = body.get("taskID", body.get("taskId", tid))
+        if own != tid:
+            raise InputError(f"robot {r['ID'][:100]!r} names task {str(own)[:200]!r}, the solution {tid[:200]!r}",
+                             file=fname, path=["robots", i, "taskID" if "taskID" in body else "taskId"])
+        body.pop("taskId", None)
         body["taskID"] = tid
         try:
             sol = parse_solution(body, fname, source=source)
