@@ -212,8 +212,9 @@ def cmd_optimize(args) -> int:
     if args.json:
         print(json.dumps(summary))
     else:
-        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s), batches "
-              f"of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
+        sent = f", {summary['messages']} messages to them" if workers > 1 else ""
+        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s){sent}, "
+              f"batches of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
