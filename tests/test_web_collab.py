@@ -90,8 +90,8 @@ def make_site(tmp_path, db_url):
     clients = []
 
     def make(**kw):
-        app = create_app(db_url=db_url, data_dir=tmp_path / "data", admin_token=ADMIN, upload_rate=0, read_rate=0,
-                         **kw)
+        kw = {"admin_token": ADMIN, "upload_rate": 0, "read_rate": 0, **kw}
+        app = create_app(db_url=db_url, data_dir=tmp_path / "data", **kw)
         c = TestClient(app, headers=ADMIN_HEADERS, raise_server_exceptions=False)
         c.__enter__()
         clients.append(c)
@@ -152,6 +152,45 @@ def entries(c, bid):
 
 
 # ------------------------------------------------------------------------------------------------------------
+# registering a collaborative task (admin)
+# ------------------------------------------------------------------------------------------------------------
+def test_collaborative_task_registration(site):
+    d = json.loads(Path(TASK_FILE).read_text())
+    d["header"]["ID"] = "lab/conveyor2"
+    r = site.post("/api/tasks", json=d)
+    assert r.status_code == 201, r.text
+    (t,) = r.json()["tasks"]
+    assert t["collaborative"] is True and t["id"] == "lab/conveyor2"
+    assert t["robots"] == [{"ID": "left", "name": "arm at y = +0.45 m"}, {"ID": "right", "name": "arm at y = -0.45 m"}]
+    assert t["goals"] == {"left_pick": "left", "left_place": "left", "right_pick": "right", "right_place": "right",
+                          "inspect": "any", "left_home": "left", "right_home": "right"}
+    assert site.get("/api/tasks/lab/conveyor2").json() == d  # stored as uploaded, robots and all
+    page = site.get("/tasks/lab/conveyor2").text
+    assert "<th>Robot</th>" in page and "any robot" in page and "arm at y = +0.45 m" in page
+    assert TestClient(site.app).post("/api/tasks", json=d).status_code == 403  # no admin token
+
+    def refused(status, change, *parts):
+        bad = copy.deepcopy(d)
+        bad["header"]["ID"] = "lab/bad"
+        change(bad)
+        r = site.post("/api/tasks", json=bad)
+        assert r.status_code == status, r.text
+        for p in parts:
+            assert p in r.json()["detail"], (p, r.json()["detail"])
+
+    refused(400, lambda x: x["goals"][0].update(robot="middle"), "goals[0].robot: unknown robot 'middle'")
+    refused(400, lambda x: x["robots"][1].update(ID="left"), "robots[1].ID: duplicate robot ID 'left'")
+    refused(400, lambda x: x["robots"][0].update(ID="r" * 101), "robots[0].ID: at most 100 characters")
+    refused(400, lambda x: x["robots"][0].update(ID="a\u0000b"), "NUL character")
+    refused(400, lambda x: x.update(robots=[]), "robots: needs at least one robot")
+    refused(413, lambda x: x.update(robots=[{"ID": f"r{k}"} for k in range(17)]),
+            "robots: at most 16 robots are allowed (got 17)")
+    refused(400, lambda x: x["robots"][0].update(basePlacement=[1, 2]), "robots[0].basePlacement")
+    refused(400, lambda x: x["goals"][4].update(robot=["left"]), "goals[4].robot: unknown robot ['left']")
+    assert "lab/bad" not in [t["id"] for t in site.get("/api/tasks").json()]
+
+
+# ------------------------------------------------------------------------------------------------------------
 # a valid solution: the site's verdict is robodesign check's
 # ------------------------------------------------------------------------------------------------------------
 def test_valid_collaborative_upload_has_the_cli_cost_tuple(site, solved, tmp_path):
@@ -195,7 +234,10 @@ def test_valid_collaborative_upload_has_the_cli_cost_tuple(site, solved, tmp_pat
     assert 'id="cost-tuple"' in page and "left" in page and "right" in page
     assert f'<b class="mono" id="cost-tuple">{tup}</b>' in page, page[page.find("cost tuple"):][:200]
     viewer = site.get(f"/solutions/{sid}/viewer")
-    assert viewer.status_code == 200 and "scene-data" in viewer.text
+    assert viewer.status_code == 200 and "default-src 'none'" in viewer.headers["content-security-policy"]
+    from robodesign.viewer.html import decode_page_data
+    anim = decode_page_data(viewer.text)["animation"]  # both robots animate on the common time base
+    assert {"robot/TCP", "right/robot/TCP"} <= set(anim["nodes"]) and anim["t"][-1] == pytest.approx(end)
     task_page = site.get(f"/tasks/{TID}").text
     assert "collaborative: 2 robots" in task_page and f'href="{bid_url(CYC)}"' in task_page
     board_page = site.get(f"/leaderboard/{CYC}").text
@@ -203,6 +245,16 @@ def test_valid_collaborative_upload_has_the_cli_cost_tuple(site, solved, tmp_pat
     tasks = {t["id"]: t for t in site.get("/api/tasks").json()}
     assert tasks[TID]["collaborative"] is True and [r["ID"] for r in tasks[TID]["robots"]] == ["left", "right"]
     assert tasks["robodesign/pick_and_place"]["collaborative"] is False
+
+
+def test_upload_form_shows_every_robot(site, solved):
+    r = site.post("/upload", files={"file": ("cell.json", json.dumps(solved["AA"]))}, data={"author": "Form"})
+    assert r.status_code == 201 and "Valid" in r.text and 'id="token"' in r.text
+    assert 'id="cost-tuple"' in r.text and "watch the robots move together" in r.text
+    r = site.post("/upload", files={"file": ("cell.json", json.dumps(no_wait(solved["AA"], "right", 100)))},
+                  data={"author": "Form"})
+    assert r.status_code == 422 and "Invalid" in r.text and "<th>Robot</th>" in r.text
+    assert "robotCollisionFree" in r.text and "robot–robot collision" in r.text
 
 
 # ------------------------------------------------------------------------------------------------------------
@@ -386,6 +438,41 @@ def test_collaborative_size_caps_count_every_robot(make_site, solved):
                                   f"robots); at most {n + 1} are allowed")
     c2 = make_site(limits=Limits(trajectory_values=2 * n))
     assert post(c2, sol).status_code == 201
+
+
+def test_collaborative_uploads_share_the_workers_the_rate_limit_and_the_error_rules(make_site, solved, monkeypatch):
+    import os
+    import robodesign.web.service as service
+    sol = solved["AA"]
+    end = sol["robots"][0]["trajectory"]["t"][-1]
+    # judged in a separate checker process at a lower priority (robodesign serve's default)
+    c = make_site(check_processes=True, check_workers=1)
+    r = post(c, sol, author="Proc")
+    assert r.status_code == 201, r.text
+    assert r.json()["costs"] == pytest.approx([end, end]) and r.json()["benchmark_id"] == CYC
+    (pid,) = list(c.app.state.checker._get_pool()._processes)
+    assert os.getpriority(os.PRIO_PROCESS, pid) == min(19, os.getpriority(os.PRIO_PROCESS, 0) + 10)
+    r = post(c, no_wait(sol, "right", 100), author="Proc")
+    assert r.status_code == 422 and r.json()["violations"][0]["constraint"] == "robotCollisionFree"
+    make_site.close(c)
+
+    # an internal error of the judge is a 500, never a verdict, and nothing is stored
+    def broken(*a, **k):
+        raise RuntimeError("a bug in the judge")
+    monkeypatch.setattr(service, "check_collab", broken)
+    c = make_site()
+    r = post(c, sol, author="Bug")
+    assert r.status_code == 500 and "internal error (RuntimeError)" in r.json()["detail"]
+    assert "valid" not in r.json() and [e["author"] for e in entries(c, CYC)] == ["Proc"]
+    monkeypatch.undo()
+    make_site.close(c)
+
+    # the per-client upload rate counts collaborative uploads like any other (bursts of rate/3)
+    c = make_site(upload_rate=3)
+    assert post(c, sol, author="First").status_code == 201
+    r = post(c, sol, author="Second")
+    assert r.status_code == 429 and int(r.headers["retry-after"]) >= 1
+    assert [e["author"] for e in entries(c, CYC)] == ["Proc", "First"]
 
 
 # ------------------------------------------------------------------------------------------------------------
