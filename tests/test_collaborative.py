@@ -300,6 +300,28 @@ def test_cli_optimize_base_poses_of_a_fixed_design(tmp_path, capsys):
     assert code == 0 and v["valid"] and v["costs"] == pytest.approx(s["costs"])
 
 
+def test_cli_optimize_collaborative_workers_give_the_same_cell(tmp_path, capsys):
+    """``--workers`` applies to a collaborative task too (each robot's study runs on the process pool): for
+    a seed and batch size, 1 and 2 workers give the same designs, costs and checked cell."""
+    task = mt.collab_task_path("shared_conveyor")
+    runs = {}
+    for w in (1, 2):
+        out = tmp_path / f"best{w}.json"
+        code, o = _main(["optimize", task, "--modules", "robodesign_arm", "--optimizer", "base_pose",
+                         "--opt", "order=" + ",".join(ORDER), "--budget", "4evals", "--batch-size", "2",
+                         "--workers", str(w), "--out", out, "--json"], capsys)
+        s = json.loads(o.out)
+        assert code == 0 and s["feasible"] and s["workers"] == w and s["batch_size"] == 2, s
+        runs[w] = s
+        runs[w]["solution_json"] = json.loads(out.read_text())
+    assert runs[1]["evaluations"] == runs[2]["evaluations"] == {"left": 4, "right": 4}
+    assert runs[1]["designs"] == runs[2]["designs"]
+    assert runs[1]["costs"] == runs[2]["costs"] and runs[1]["totalCost"] == runs[2]["totalCost"]
+    for a, b in zip(runs[1]["solution_json"]["robots"], runs[2]["solution_json"]["robots"]):
+        timing = ("computationTime", "date")  # wall-clock facts of the run, not of the result
+        assert {k: v for k, v in a.items() if k not in timing} == {k: v for k, v in b.items() if k not in timing}
+
+
 @pytest.mark.slow
 def test_cli_optimize_designs_both_robots(tmp_path, capsys):
     """The genetic plugin designs each robot (6 DoF) on its part of the cell; the best designs are combined

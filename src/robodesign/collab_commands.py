@@ -123,22 +123,26 @@ def optimize_command(args, ctask: CollabTask) -> int:
     from .cli_args import parse_options
     from .module_io import load_module_set
     from .optimize import Budget
-    from .commands import search_rules
+    from .commands import optimize_executor, optimize_workers, search_rules
     if args.optimize_trajectory:
         raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
     budget = Budget.parse(args.budget)
     ms = load_module_set(args.modules)
+    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size)
 
     def on_robot(rid, res):
         if not args.json:
             feas = sum(e.feasible for e in res.history)
-            print(f"robot {rid}: {len(res.history)} evaluations in {res.seconds:.1f} s, {feas} feasible alone")
+            print(f"robot {rid}: {len(res.history)} evaluations in {res.seconds:.1f} s ({workers} worker(s)), "
+                  f"{feas} feasible alone")
     r = optimize_collab(ctask, ms, args.optimizer, args.cost, budget, seed=args.seed,
                         options=parse_options(args.opt), on_robot=on_robot, rules=search_rules(args),
-                        base_search=not args.fixed_base)
+                        base_search=not args.fixed_base, batch_size=args.batch_size,
+                        executor_factory=lambda spec: optimize_executor(spec, workers, args.chunk_size))
     out = r.result.solution.write(args.out or "best_solution.json") if r.feasible else None
     if args.json:
         print(json.dumps({"feasible": r.feasible, "collaborative": True, "evaluations": r.evaluations,
+                          "workers": workers, "batch_size": args.batch_size,
                           "combinations_tried": r.combinations_tried, "seconds": r.seconds,
                           "designs": {rid: [{"order": list(d.order), "cost_alone": d.cost} for d in ds]
                                       for rid, ds in r.designs.items()},

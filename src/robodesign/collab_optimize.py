@@ -44,10 +44,14 @@ class CollabOptimizeResult:
 def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, cost: str, budget, seed: int = 0,
                     options: Optional[dict] = None, top_k: int = 3, settings=None,
                     on_robot: Optional[Callable[[str, object], None]] = None, rules: Optional[dict] = None,
-                    base_search: bool = True) -> CollabOptimizeResult:
+                    base_search: bool = True, batch_size: int = 1,
+                    executor_factory: Optional[Callable] = None) -> CollabOptimizeResult:
     """Optimize every robot's design on its part of ``ctask`` (``budget``: an ``optimize.Budget``, per robot),
     then combine the ``top_k`` designs per robot by prioritized planning (best summed cost first). ``rules``
-    and ``base_search`` define every robot's search space as for :meth:`robodesign.problem.Problem.build`."""
+    and ``base_search`` define every robot's search space as for :meth:`robodesign.problem.Problem.build`.
+    Each robot's study asks ``batch_size`` candidates at a time and evaluates them with the executor that
+    ``executor_factory(spec)`` returns with its close function (default: in this process), e.g.
+    :func:`robodesign.commands.optimize_executor` for ``--workers``; the result does not depend on it."""
     import time
 
     from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
@@ -61,9 +65,14 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
     for k, rid in enumerate(ctask.robot_ids):
         part = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
         problem = Problem.build(part, module_set, cost, rules=rules, base_search=base_search)
-        ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(), seed=seed + k))
+        spec = EvaluatorSpec(problem, evaluation_settings(), seed=seed + k)
         opt = create_optimizer(optimizer, problem, seed=seed + k, options=dict(options or {}))
-        res = Study(opt, SerialExecutor(ev), budget).run()
+        executor, close = executor_factory(spec) if executor_factory else (SerialExecutor(Evaluator(spec)), None)
+        try:
+            res = Study(opt, executor, budget, batch_size=batch_size).run()
+        finally:
+            if close is not None:
+                close()
         evaluations[rid] = len(res.history)
         best: Dict[Tuple[str, ...], RobotDesign] = {}
         for e in sorted((e for e in res.history if e.feasible), key=lambda e: e.cost):

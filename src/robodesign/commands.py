@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from typing import Dict, List
+from typing import Dict, List, Optional
 
 import numpy as np
 
@@ -158,8 +158,8 @@ def cmd_optimize(args) -> int:
     if ctask is not None:  # several robots in one cell: docs/collaborative.md
         return optimize_command(args, ctask)
     from .costs import parse_cost
-    from .evaluator import Evaluator, EvaluatorSpec, evaluation_settings
-    from .optimize import Budget, SerialExecutor, Study, create_optimizer
+    from .evaluator import EvaluatorSpec, evaluation_settings
+    from .optimize import Budget, Study, create_optimizer
     from .problem import Problem
     budget = Budget.parse(args.budget)
     rules = search_rules(args)
@@ -169,14 +169,8 @@ def cmd_optimize(args) -> int:
     spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
                          seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
-    workers = _optimize_workers(args.workers, args.batch_size)
-    if args.chunk_size is not None and args.chunk_size < 1:
-        raise InputError(f"--chunk-size must be at least 1, got {args.chunk_size}")
-    if workers == 1:  # in this process
-        executor = SerialExecutor(Evaluator(spec))
-    else:  # the experiments' process pool; results are the same for any number of workers
-        from .experiment.executors import ProcessPool
-        executor = ProcessPool({"optimize": spec}, workers, args.chunk_size).bind("optimize")
+    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size)
+    executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
 
@@ -187,8 +181,7 @@ def cmd_optimize(args) -> int:
         res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation).run()
     finally:
         progress.close()
-        if workers > 1:
-            executor.pool.close()
+        close_executor()
     from .experiment.suites import record_of_run
     run = record_of_run("", args.task, args.optimizer, args.seed, [
         {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
@@ -231,11 +224,14 @@ def cmd_optimize(args) -> int:
     return 0 if best is not None and best.feasible else 1
 
 
-def _optimize_workers(workers, batch_size: int) -> int:
-    """``--workers`` (default: every core this process may use), at most one per candidate of a batch."""
+def optimize_workers(workers, batch_size: int, chunk_size: Optional[int] = None) -> int:
+    """``--workers`` (default: every core this process may use), at most one per candidate of a batch;
+    ``--batch-size`` and ``--chunk-size`` are checked on the way."""
     import os
     if batch_size < 1:
         raise InputError(f"--batch-size must be at least 1, got {batch_size}")
+    if chunk_size is not None and chunk_size < 1:
+        raise InputError(f"--chunk-size must be at least 1, got {chunk_size}")
     if workers is None:
         try:
             workers = len(os.sched_getaffinity(0))
@@ -244,6 +240,18 @@ def _optimize_workers(workers, batch_size: int) -> int:
     elif workers < 1:
         raise InputError(f"--workers must be at least 1, got {workers}")
     return max(1, min(int(workers), batch_size))
+
+
+def optimize_executor(spec, workers: int, chunk_size: Optional[int] = None):
+    """The executor of ``robodesign optimize`` and a function that closes it: in this process for one worker,
+    else the experiments' process pool (results are the same for any number of workers)."""
+    from .evaluator import Evaluator
+    from .optimize import SerialExecutor
+    if workers == 1:
+        return SerialExecutor(Evaluator(spec)), lambda: None
+    from .experiment.executors import ProcessPool
+    pool = ProcessPool({"optimize": spec}, workers, chunk_size)
+    return pool.bind("optimize"), pool.close
 
 
 class _Progress:
