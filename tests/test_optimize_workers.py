@@ -92,6 +92,31 @@ def test_chunked_pool_gives_the_serial_history_in_fewer_messages():
         assert told[0] >= 20 and len(asks) == 32
 
 
+@pytest.mark.slow
+def test_stream_survives_a_killed_worker():
+    """A worker killed while chunks are in flight: the pool is restarted, the chunks without a result are
+    sent again, and the stream still delivers the serial evaluations in ask order."""
+    import os
+    import signal
+    problem = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    spec = EvaluatorSpec(problem, evaluation_settings(), seed=7)
+
+    def keys(executor, on_evaluation=None):
+        res = Study(create_optimizer("random", problem, seed=7), executor, Budget(evaluations=64), batch_size=16,
+                    on_evaluation=on_evaluation).run()
+        return [(e.candidate.key(), e.stage, e.cost) for e in res.history]
+
+    serial = keys(SerialExecutor(Evaluator(spec)))
+    with ProcessPool({"s": spec}, 2) as pool:
+        first = list(pool.pids)
+
+        def kill_once(i, e, best):
+            if i == 0:
+                os.kill(first[0], signal.SIGKILL)
+        assert keys(pool.bind("s"), kill_once) == serial
+        assert pool.failures >= 1 and not set(pool.pids) & set(first)  # new workers took over
+
+
 def test_chunk_sizes():
     assert chunk_sizes(16, 2) == [4, 3, 3, 2, 1, 1, 1, 1]  # 8 messages instead of 16
     assert chunk_sizes(6, 2) == [2, 1, 1, 1, 1]
