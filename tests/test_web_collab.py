@@ -16,7 +16,6 @@ import copy
 import io
 import json
 import sys
-import uuid
 from pathlib import Path
 
 import pytest
@@ -31,7 +30,8 @@ from robodesign.web import create_app  # noqa: E402
 from robodesign.web.db import make_engine  # noqa: E402
 from robodesign.web.pages import bid_url  # noqa: E402
 
-from test_web import ADMIN, ADMIN_HEADERS, postgres_cluster, upload  # noqa: E402
+from test_web import ADMIN, ADMIN_HEADERS, upload  # noqa: E402
+from test_web_attacks import db_url, pg_server  # noqa: E402,F401  (SQLite, or a fresh PostgreSQL database)
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "assets" / "tasks"))
@@ -62,24 +62,6 @@ def solved():
         assert res.feasible, res.message
         out[name] = res.solution.to_json()
     return out
-
-
-@pytest.fixture(scope="module")
-def pg_server():
-    with postgres_cluster() as url:
-        yield url
-
-
-@pytest.fixture(params=["sqlite", "postgresql"])
-def db_url(request, tmp_path):
-    if request.param == "sqlite":
-        return f"sqlite:///{tmp_path / 'data' / 'bench.db'}"
-    base = request.getfixturevalue("pg_server")
-    import psycopg
-    name = "c" + uuid.uuid4().hex[:12]
-    with psycopg.connect(base, autocommit=True) as con:
-        con.execute(f"CREATE DATABASE {name}")
-    return base.rsplit("/", 1)[0] + "/" + name
 
 
 @pytest.fixture
@@ -181,6 +163,7 @@ def test_collaborative_task_registration(site):
     refused(400, lambda x: x["goals"][0].update(robot="middle"), "goals[0].robot: unknown robot 'middle'")
     refused(400, lambda x: x["robots"][1].update(ID="left"), "robots[1].ID: duplicate robot ID 'left'")
     refused(400, lambda x: x["robots"][0].update(ID="r" * 101), "robots[0].ID: at most 100 characters")
+    refused(400, lambda x: x["robots"][0].update(ID=int("9" * 101)), "robots[0].ID: at most 100 characters")
     refused(400, lambda x: x["robots"][0].update(ID="a\u0000b"), "NUL character")
     refused(400, lambda x: x.update(robots=[]), "robots: needs at least one robot")
     refused(413, lambda x: x.update(robots=[{"ID": f"r{k}"} for k in range(17)]),
@@ -537,14 +520,15 @@ def test_single_robot_and_collaborative_boards_never_mix(site, solved):
 # ------------------------------------------------------------------------------------------------------------
 # an older database (before collaborative tasks) opens and is migrated
 # ------------------------------------------------------------------------------------------------------------
-def test_older_database_is_migrated(make_site, db_url, solved):
+def test_older_database_is_migrated(make_site, db_url, solved, tmp_path):
+    url = db_url or f"sqlite:///{tmp_path / 'data' / 'bench.db'}"
     c = make_site()
     assert c.post("/api/tasks", json=left_alone_task()).status_code == 201
     old = post(c, left_alone_solution(solved["AA"]), author="Before")
     assert old.status_code == 201, old.text
     make_site.close(c)
     # what an older version's database looks like: the same tables without the new columns
-    engine = make_engine(db_url)
+    engine = make_engine(url)
     try:
         with engine.begin() as con:
             for table, cols in NEW_COLUMNS.items():
@@ -556,7 +540,7 @@ def test_older_database_is_migrated(make_site, db_url, solved):
         engine.dispose()
 
     c = make_site()  # opens it: the columns are added, the old rows get their defaults
-    engine = make_engine(db_url)
+    engine = make_engine(url)
     try:
         for table, cols in NEW_COLUMNS.items():
             assert set(cols) <= {x["name"] for x in inspect(engine).get_columns(table)}

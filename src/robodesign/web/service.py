@@ -429,6 +429,7 @@ class Bench:
         for i, r in enumerate(robots):
             for key, n in (("ID", lim.robot_id_chars), ("name", db.TaskRow.name.type.length)):
                 v = r.get(key) if isinstance(r, dict) else None
+                v = str(v) if isinstance(v, int) and not isinstance(v, bool) else v  # an ID may be an integer
                 if isinstance(v, str) and len(v) > n:
                     raise InputError(f"at most {n} characters are allowed (got {len(v)})", file=fname,
                                      path=["robots", i, key])
