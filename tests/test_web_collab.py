@@ -68,7 +68,6 @@ def solved():
 def make_site(tmp_path, db_url):
     """``make_site()`` → a TestClient of a site with the built-in tasks and module sets (the admin header set);
     ``close(c)`` stops one early; the rest are closed at the end of the test."""
-    (tmp_path / "data").mkdir(exist_ok=True)
     clients = []
 
     def make(**kw):
