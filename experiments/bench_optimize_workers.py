@@ -11,8 +11,10 @@ pool's workers do when they start — so that the rate compares steady states; t
    1 worker (in-process, as ``--workers 1``) and 2 worker processes (``--workers 2``: chunked messages,
    random search asked ahead of its tells), round r with seed r for both worker counts (the same
    candidates), the order alternating; the median over the rounds of the per-round ratio, and the same
-   ratio for the whole command (start-up included). ``--ablation`` adds 2-worker rounds with one candidate
-   per message (``chunk_size=1``) and with the batch barrier (no asking ahead), to show what each part gives.
+   ratio for the whole command (start-up included). Also the CPU seconds per evaluation (driver and
+   workers, start-up excluded: a pool started and closed without work is measured in every round), which
+   the machine's other load hardly changes. ``--ablation`` adds 2-worker rounds with one candidate per
+   message (``chunk_size=1``) and with the batch barrier (no asking ahead), to show what each part gives.
 2. Time to a good design: genetic (batches of 16) until its best checked cycle time is ≤ ``--target`` s
    (the best known design is 2.75 s), for each seed with 1 and with 2 workers; wall time from the start of
    the command (task, modules and pool start-up included), median over the seeds. A seed that does not get
@@ -26,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -84,9 +87,11 @@ def search(optimizer: str, seed: int, workers: int, evaluations: int, target=Non
         messages = pool.messages if pool is not None else 0
         if pool is not None:
             pool.close()
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)  # the pool's workers, joined by close()
     return {"optimizer": optimizer, "seed": seed, "workers": workers, "chunk_size": chunk_size,
             "ask_ahead": ask_ahead, "startup_s": startup, "search_s": search_s,
-            "parent_cpu_s": time.process_time() - cpu, "messages": messages,
+            "parent_cpu_s": time.process_time() - cpu, "workers_cpu_s": kids.ru_utime + kids.ru_stime,
+            "messages": messages,
             "evaluations": n if n is not None else hit["evaluation"], "reached": hit or None,
             "best": None if opt.best is None or not opt.best.feasible else opt.best.cost,
             "keys": [e.candidate.key() for e in opt.history], "eval_seconds": [e.seconds for e in opt.history]}
@@ -150,17 +155,24 @@ def main():
     if not a.skip_rate:
         for r in range(a.rounds):
             order = variants if r % 2 == 0 else variants[::-1]
+            # the CPU the pool's start-up takes (spawn, load, warm up), to count the workers' CPU per evaluation
+            idle = fresh("random", r, 2, 0)
             row = {}
             for name, kw in order:
                 x = fresh("random", r, evaluations=a.rate_evals, **kw)
                 x["rate"] = x["evaluations"] / x["search_s"]
                 x["variant"], x["round"] = name, r
+                # CPU seconds per evaluation, start-up excluded (driver + workers): what the rate would be
+                # on idle cores, whatever else the machine runs
+                x["cpu_per_eval_ms"] = 1000 * (x["parent_cpu_s"] + (x["workers_cpu_s"] - idle["workers_cpu_s"]
+                                                                     if x["workers"] > 1 else 0.0)) / x["evaluations"]
                 keys = x.pop("keys")
                 row[name] = x
                 out["rate"].append(x)
                 print(f"rate round {r}, {name}: {x['rate']:.1f} evaluations/s ({x['evaluations']} in "
                       f"{x['search_s']:.2f} s, start-up {x['startup_s']:.2f} s, {x['messages']} messages, parent CPU "
-                      f"{x['parent_cpu_s']:.2f} s, command {x['process_s']:.2f} s)", flush=True)
+                      f"{x['parent_cpu_s']:.2f} s, CPU {x['cpu_per_eval_ms']:.2f} ms per evaluation, command "
+                      f"{x['process_s']:.2f} s)", flush=True)
                 row.setdefault("keys", keys)
                 assert keys == row["keys"], "the worker counts evaluated different candidates"
         out["rate_summary"] = {}
@@ -174,11 +186,13 @@ def main():
             runs = {x["round"]: x for x in out["rate"] if x["variant"] == name}
             ratio = statistics.median(runs[b["round"]]["rate"] / b["rate"] for b in base)
             cmd = statistics.median(b["process_s"] / runs[b["round"]]["process_s"] for b in base)
-            out["rate_summary"][name] = {"ratio": ratio, "command_ratio": cmd,
+            cpu = statistics.median(runs[b["round"]]["cpu_per_eval_ms"] / b["cpu_per_eval_ms"] for b in base)
+            out["rate_summary"][name] = {"ratio": ratio, "command_ratio": cmd, "cpu_per_eval_ratio": cpu,
                                          "median_rate": statistics.median(x["rate"] for x in runs.values())}
             print(f"throughput {name} / 1 worker: {ratio:.2f}x (median of {len(base)} rounds; target >= 1.8x), "
                   f"whole command {cmd:.2f}x; median rates {statistics.median(b['rate'] for b in base):.1f} vs "
-                  f"{out['rate_summary'][name]['median_rate']:.1f}/s", flush=True)
+                  f"{out['rate_summary'][name]['median_rate']:.1f}/s; CPU per evaluation {cpu:.2f}x 1 worker's",
+                  flush=True)
     if not a.skip_target:
         for seed in [int(s) for s in a.seeds.split(",")]:
             keys = {}
