@@ -61,6 +61,8 @@ def stored_count(out: Path) -> int:
     ("name: x\ntasks: [robodesign/pick_and_place]\noptimizers: [random]\nbudgte: 5evals\n",
      "cfg.yaml: budgte: unknown field 'budgte'"),
     ("name: x\ntasks: [robodesign/pick_and_place\noptimizers: [random]\n", "cfg.yaml: line"),
+    ("name: x\ntasks: [robodesign/pick_and_place]\noptimizers: [random]\nexecutor: {kind: process, chunk_size: 0}\n",
+     "cfg.yaml: executor.chunk_size"),
 ])
 def test_malformed_configs_name_the_field(tmp_path, capsys, text, msg):
     cfg = write(tmp_path, text)
@@ -148,13 +150,15 @@ def test_resume_after_kill_equals_uninterrupted_run(tmp_path):
 
 def test_serial_and_process_executors_give_identical_results(tmp_path):
     outs = {}
-    for ex in ("serial", "process"):
-        out = tmp_path / ex
-        code = main(["run", str(write(tmp_path, SMALL.format(budget=6, executor=ex), f"{ex}.yaml")), "--out",
+    for name, ex in (("serial", "serial"), ("process", "process"), ("chunks", "{kind: process, chunk_size: 3}")):
+        out = tmp_path / name
+        code = main(["run", str(write(tmp_path, SMALL.format(budget=6, executor=ex), f"{name}.yaml")), "--out",
                      str(out), "--progress", "none", "--workers", "2"])
         assert code == 0
-        outs[ex] = rows(out / "evaluations.sqlite")
-    assert outs["serial"] == outs["process"] and len(outs["serial"]) == 12
+        outs[name] = rows(out / "evaluations.sqlite")
+    assert outs["serial"] == outs["process"] == outs["chunks"] and len(outs["serial"]) == 12
+    meta = json.loads((tmp_path / "chunks" / "meta.json").read_text())
+    assert meta["sessions"][0]["executor"]["chunk_size"] == 3
 
 
 def _pool_workers(parent: int):
