@@ -8,6 +8,16 @@ import pytest
 os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
 os.environ.setdefault("RAY_AUTH_MODE", "disabled")
 
+
+def pytest_sessionstart(session):
+    """Compile the IK kernels into numba's cache before the first test (a fresh checkout's cache is cold,
+    and a process that finds it cold runs the Python loop for its whole life): every test process, and
+    every subprocess a test starts, then uses the compiled loop. tests/test_cold_start.py tests the cold
+    path with caches of its own."""
+    from robodesign.solvers import ik_kernel
+    if ik_kernel.available() and not ik_kernel.compiled():
+        ik_kernel.compile_into_cache()
+
 ROOT = Path(__file__).resolve().parents[1]
 COBRA = ROOT.parent / "shared" / "cobra"
 IMPROV = COBRA / "modules" / "IMPROV"

@@ -22,13 +22,16 @@ cached on disk (numba's cache: ``__pycache__`` next to this file, or ``NUMBA_CAC
 processes load it in about 0.1 s. A process that finds no compiled kernels in the cache does not wait
 for them: it starts one background process (``python -m robodesign.solvers.ik_kernel``; niced, in the
 command's session, its own process group) that compiles them into the cache, and runs the Python loop
-until that process has finished; from then on it uses the compiled loop. So the first command after an
-install is not held up by the compilation (tests/test_cold_start.py: within 20 % of the pure-Python path),
-and long runs switch to the compiled loop after a few seconds. A stamp file beside numba's cache
-(``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python, CPU and
-source; concurrent processes serialise the compilation with a lock file beside it.
-``ROBODESIGN_JIT=wait`` compiles in the process at the first use instead (the old behaviour);
-:func:`warm_up` does the same on request.
+for the rest of its life; the processes it starts (evaluation workers) do the same (it sets
+``ROBODESIGN_JIT=0`` in its environment). Later commands use the compiled loop. So the first command after
+an install is not held up by the compilation (tests/test_cold_start.py: within 20 % of the pure-Python
+path), and a run never switches loops midway: the two loops agree to about 1e-15 rad, not bit for bit, so a
+switch at a moment that depends on the machine's load would make a seed's results differ in their last
+digits between runs and between worker counts. To compile ahead of a long first run:
+``python -m robodesign.solvers.ik_kernel`` (or ``ROBODESIGN_JIT=wait``: compile in the process at the first
+use; :func:`warm_up` does the same on request). A stamp file beside numba's cache
+(``robodesign_ik_kernel.ready``) records that the kernels are compiled for this numba, Python (its resolved
+executable), CPU and source; concurrent processes serialise the compilation with a lock file beside it.
 """
 from __future__ import annotations
 
@@ -586,7 +589,7 @@ def _warm_up_kernels() -> None:
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a command on the compilation
 # ---------------------------------------------------------------------------------------------------------
-_STATE: Optional[str] = None   # None (not looked at yet) | "compiling" | "ready" | "failed"
+_STATE: Optional[str] = None   # None (not decided yet) | "python" (cold cache: compiling elsewhere) | "ready" | "failed"
 _COMPILER: Optional[subprocess.Popen] = None
 _KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are compiled into them)
 
@@ -607,7 +610,8 @@ def _stamp_text() -> str:
     import numba
     from llvmlite import binding
     src = Path(__file__).stat()
-    return (f"numba {numba.__version__}; python {sys.version.split()[0]} {sys.executable}; "
+    # the resolved executable: `python` and `python3` of one environment are the same interpreter
+    return (f"numba {numba.__version__}; python {sys.version.split()[0]} {Path(sys.executable).resolve()}; "
             f"cpu {platform.machine()} {binding.get_host_cpu_name()}; source {src.st_size} {src.st_mtime_ns}")
 
 
@@ -641,38 +645,28 @@ def _start_compiler() -> Optional[subprocess.Popen]:
 
 
 def ready() -> bool:
-    """True when the compiled loop can run now without a compilation stall. The first call in a process
-    with a cold cache starts the background compilation and answers False (the Python loop runs); later
-    calls answer True once it has finished (``ROBODESIGN_JIT=wait``: compile now, in this process)."""
+    """True when the compiled loop runs in this process. Decided at the first call and kept for the
+    process's life: with the kernels in the cache, True; with a cold cache, the background compilation
+    starts and the answer stays False (the Python loop runs; ``ROBODESIGN_JIT=0`` is set for the processes
+    this one starts, so that a run's workers use the same loop). ``ROBODESIGN_JIT=wait``: compile now, in
+    this process."""
     global _STATE, _COMPILER
-    if _STATE == "ready":
-        return True
-    if _STATE == "failed" or not available():
-        return False
-    if _STATE is None:
+    if _STATE is None and available():
         if compiled():
             _STATE = "ready"
         elif _jit_mode() == "wait":
             warm_up()
         else:
             _COMPILER = _start_compiler()
-            _STATE = "compiling" if _COMPILER is not None else "failed"
-        return _STATE == "ready"
-    code = _COMPILER.poll()
-    if code is None:
-        return False
-    _STATE = "ready" if code == 0 and compiled() else "failed"
+            _STATE = "python" if _COMPILER is not None else "failed"
+            os.environ["ROBODESIGN_JIT"] = "0"   # the workers this process starts: the same loop
     return _STATE == "ready"
 
 
-def _compile_into_cache() -> int:
-    """The background compiler: compile every kernel into numba's cache and write the stamp (once, under a
-    lock shared with concurrent compilers)."""
+def compile_into_cache() -> int:
+    """Compile every kernel into numba's cache and write the stamp (once, under a lock shared with
+    concurrent compilers); what ``python -m robodesign.solvers.ik_kernel`` does, niced, in the background."""
     import fcntl
-    try:
-        os.nice(10)   # the commands that wait for nothing come first
-    except OSError:
-        pass
     stamp = stamp_path()
     stamp.parent.mkdir(parents=True, exist_ok=True)
     with open(stamp.with_suffix(".lock"), "a+") as lock:
@@ -685,5 +679,13 @@ def _compile_into_cache() -> int:
     return 0
 
 
+def _background_compile() -> int:
+    try:
+        os.nice(10)   # the commands that wait for nothing come first
+    except OSError:
+        pass
+    return compile_into_cache() if available() else 1
+
+
 if __name__ == "__main__":
-    sys.exit(_compile_into_cache() if available() else 1)
+    sys.exit(_background_compile())
