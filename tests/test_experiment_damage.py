@@ -34,9 +34,9 @@ def rows(db):
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
-    """A finished 2-run experiment (2 × 6 evaluations) and its rows."""
+    """A finished 2-run experiment (2 × 10 evaluations, each run with a feasible best design) and its rows."""
     d = tmp_path_factory.mktemp("finished")
-    (d / "cfg.yaml").write_text(SMALL.format(budget=6))
+    (d / "cfg.yaml").write_text(SMALL.format(budget=10))
     out = d / "res"
     assert main(["run", str(d / "cfg.yaml"), "--out", str(out), "--progress", "none", "--no-report"]) == 0
     return out, rows(out / "evaluations.sqlite")
@@ -55,8 +55,8 @@ DAMAGE = {
     "garbled pages": (_garble_pages, "is damaged"),
     "garbled header": (lambda f: f.write_bytes(b"this is no SQLite file" * 10 + f.read_bytes()[220:]),
                        "is damaged (file is not a database)"),
-    "missing": (lambda f: f.unlink(), "is missing, but meta.json records 12 stored evaluations"),
-    "empty": (lambda f: f.write_bytes(b""), "is an empty file, but meta.json records 12 stored evaluations"),
+    "missing": (lambda f: f.unlink(), "is missing, but meta.json records 20 stored evaluations"),
+    "empty": (lambda f: f.write_bytes(b""), "is an empty file, but meta.json records 20 stored evaluations"),
 }
 
 
@@ -80,11 +80,11 @@ def test_damaged_database_refuses_resume_and_restart_starts_over(finished, tmp_p
 
     code = main(["run", "--resume", str(out), "--restart", "--progress", "none", "--no-report"])
     assert code == 0, capsys.readouterr().err
-    assert rows(db) == expected and len(expected) == 12  # started over: the same 12 evaluations again
+    assert rows(db) == expected and len(expected) == 20  # started over: the same 20 evaluations again
     meta = json.loads((out / "meta.json").read_text())
-    assert meta["stored_evaluations"] == 12
+    assert meta["stored_evaluations"] == 20
     restart = meta["restarts"][-1]
-    assert restart["stored_evaluations"] == 12
+    assert restart["stored_evaluations"] == 20
     aside = out / restart["moved_to"]
     assert "best" in restart["moved"] and (aside / "best").is_dir()
     if damaged_bytes is not None:  # the damaged file is kept aside, never deleted
@@ -92,7 +92,7 @@ def test_damaged_database_refuses_resume_and_restart_starts_over(finished, tmp_p
 
 
 def test_database_with_fewer_evaluations_than_meta_records_is_refused_every_time(finished, tmp_path, capsys):
-    """An older copy of the database (here: the last 5 evaluations of seed 1 gone) is refused, and the refusal
+    """An older copy of the database (here: the last 9 evaluations of seed 1 gone) is refused, and the refusal
     leaves meta.json's record alone, so asking again is refused again."""
     src, expected = finished
     out = tmp_path / "res"
@@ -104,9 +104,9 @@ def test_database_with_fewer_evaluations_than_meta_records_is_refused_every_time
     for _ in range(2):
         assert main(["run", "--resume", str(out), "--progress", "none", "--no-report"]) == 2
         err = capsys.readouterr().err
-        assert "the results database holds only 7 evaluations, but meta.json records 12 stored evaluations" in err
-        assert json.loads((out / "meta.json").read_text())["stored_evaluations"] == 12
-    assert len(rows(out / "evaluations.sqlite")) == 7
+        assert "the results database holds only 11 evaluations, but meta.json records 20 stored evaluations" in err
+        assert json.loads((out / "meta.json").read_text())["stored_evaluations"] == 20
+    assert len(rows(out / "evaluations.sqlite")) == 11
 
 
 def test_restart_needs_resume(tmp_path, capsys):
