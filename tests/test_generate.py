@@ -131,7 +131,7 @@ def test_whitman_cells(whitman, opts, n):
 def test_whitman_header_regenerates_the_file(whitman, tmp_path):
     f = _files(whitman[(5, "xyz_any_rot")])[2]
     tags = json.loads(f.read_text())["header"]["tags"]
-    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=2",
+    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=3",
               "robodesign-generate:seed=7", "robodesign-generate:index=2", "robodesign-generate:goals=5",
               "robodesign-generate:obstacles=5", "robodesign-generate:base=xyz_any_rot",
               "robodesign-generate:verify=solve"):

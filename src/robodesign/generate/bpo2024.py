@@ -25,7 +25,7 @@ from ..spatial import rot_z
 from .common import PI, Provenance, ReferenceArm, header, tolerated, transform, verified
 from .registry import VERIFY, Family, GeneratedTask, Option
 
-VERSION = 1
+VERSION = 2
 CUBE = 0.25
 N_GOALS = 3
 POS_TOL = 0.005

@@ -27,7 +27,7 @@ from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, trans
 from .machine import COVER_DOWN, COVER_UP, DEFAULT_NAME, STEP, MachineFrame, analyse, default_machine_stl
 from .registry import VERIFY, Family, GeneratedTask, Option, copy_file
 
-VERSION = 3
+VERSION = 4
 BASE_Z = 0.30  # m, nominal base height (the robot on a stand)
 BASE_XY = 0.30  # m, base tolerance in x and y
 BASE_Z_RANGE = (-0.30, 0.30)  # about BASE_Z: 0 … 0.6 m above the floor

@@ -23,7 +23,7 @@ from ..errors import InputError, RobodesignError
 from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform, verified
 from .registry import VERIFY, Family, GeneratedTask, Option
 
-VERSION = 2
+VERSION = 3
 CUBE = 0.25  # m, obstacle edge
 POS_TOL = 0.005  # m, goal tolerance in x, y, z
 GOAL_R = (0.30, 0.90)  # m, horizontal distance of a goal from the base axis
