@@ -106,3 +106,42 @@ def test_check_path_reports_the_first_bad_segment(robot):
     assert check_path(robot, np.array([q1, QA, mid]), 5.0) == (False, 2)     # the waypoint itself collides
     assert check_path(robot, np.array([mid, QA]), 0.01) == (False, 0)
     assert check_path(robot, np.zeros((0, robot.dof)), 0.01) == (True, -1)
+
+
+# a long built-in arm (two 0.5 m links, Panda joint limits 87 / 12 Nm): folded up it holds itself, stretched
+# out sideways it needs 1.9 × the shoulder's torque (checked below with the RNEA gravity torque)
+HEAVY_ORDER = "1,21,22,7,22,7,22,3,23,24,23,12".split(",")
+FOLD_A = np.array([0.0, -1.2, 2.4, 0.0, 0.0, 0.0, 0.0])    # elbow folded one way
+FOLD_B = np.array([0.0, -1.2, -2.4, 0.0, 0.0, 0.0, 0.0])   # ... and the other: the straight line stretches the arm
+
+
+def test_static_torque_planning_avoids_configurations_the_joints_cannot_hold():
+    """The straight line between two held configurations is collision-free but passes poses whose gravity
+    torque exceeds the joints' limits (time scaling cannot repair that: slowing down leaves gravity);
+    ``static_torque=True`` plans around them, and every state of the result (independent dense check) is
+    held within the limits."""
+    from robodesign.solvers.timing import TimingError, time_parameterize
+    r = Robot.from_order(load_module_set("robodesign_arm"), HEAVY_ORDER)
+    tau_max = np.asarray(r.tau_max)
+    ratio = lambda q: float(np.max(np.abs(r.gravity_torque(q)) / tau_max))
+    assert ratio(FOLD_A) < 1 and ratio(FOLD_B) < 1
+    line = np.linspace(FOLD_A, FOLD_B, 201)
+    assert max(ratio(q) for q in line) == pytest.approx(1.91, abs=0.02)   # stretched sideways at the middle
+    assert check_path(r, np.array([FOLD_A, FOLD_B]), 0.01) == (True, -1)   # collision-free
+    assert check_path(r, np.array([FOLD_A, FOLD_B]), 0.01, static_torque=True) == (False, 0)
+    with pytest.raises(TimingError, match="gravity alone exceeds"):
+        time_parameterize(r, np.array([FOLD_A, FOLD_B]), dt=0.01)
+
+    plain = plan_path(r, FOLD_A, FOLD_B, time_limit=5.0, seed=0)
+    assert plain.stats["straight_line"] and len(plain.path) == 2            # the old behaviour
+    res = plan_path(r, FOLD_A, FOLD_B, time_limit=5.0, seed=0, static_torque=True)
+    assert res.success and res.stats["reason"] == "planned"
+    np.testing.assert_array_equal(res.path[0], FOLD_A)
+    np.testing.assert_array_equal(res.path[-1], FOLD_B)
+    worst = 0.0
+    for a, b in zip(res.path[:-1], res.path[1:]):
+        n = max(1, math.ceil(np.max(np.abs(b - a)) / 0.005))
+        worst = max(worst, max(ratio(a + (b - a) * (k / n)) for k in range(n + 1)))
+    assert worst <= 1.0 and dense_ok(r, res.path, 0.005)
+    traj = time_parameterize(r, res.path, dt=0.01)                          # and it can be timed
+    np.testing.assert_allclose(traj.q[-1], FOLD_B, atol=1e-9)

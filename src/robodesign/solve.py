@@ -455,7 +455,8 @@ class GoalPlanner:
                     self.paths.append(None)
                     continue
                 r = plan_path(self.robot, q, arg, planner=self.settings.planner, time_limit=self.settings.plan_time,
-                              seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution)
+                              seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution,
+                              static_torque=True)  # as the static_torque stage: timing cannot repair it
                 if not r:
                     raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
                                 f"({r.stats.get('reason')})")

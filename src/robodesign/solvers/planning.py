@@ -6,7 +6,10 @@ obstacles already set on it) and returns joint waypoints whose straight interpol
 Decisions:
 
 * **Validity** of a configuration: within the joint limits and ``not robot.in_collision(q)`` (self +
-  obstacles, with the robot's safety margin).
+  obstacles, with the robot's safety margin); with ``static_torque=True`` (what :func:`robodesign.solve.solve`
+  asks for) also held against gravity within the torque limits, |g(q)| ≤ τ_max: a path through a pose
+  the joints cannot hold standing still cannot be timed by slowing down. The OMPL planner, the shortcuts
+  and the final dense check all use this one test.
 * **Resolution** is an absolute joint step (rad, or m for prismatic joints): no two consecutive checked
   states differ by more than ``resolution`` in any joint. OMPL's discrete motion validator steps by the
   *Euclidean* distance ``fraction × maximum extent``, so the fraction is ``resolution / extent``; its
@@ -84,13 +87,20 @@ def available_planners() -> List[str]:
 # ---------------------------------------------------------------------------------------------------------
 # Dense checking
 # ---------------------------------------------------------------------------------------------------------
-def _config_validator(robot):
+def _config_validator(robot, static_torque: bool = False):
+    """Joint limits and collisions; with ``static_torque`` also that the joints hold the configuration
+    against gravity within their torque limits (|g(q)| ≤ τ_max), so that a path never needs more torque
+    standing still than the joints have: time scaling cannot repair such a path by slowing down."""
     lo = np.asarray(robot.q_lower, dtype=float) - _LIMIT_SLACK
     hi = np.asarray(robot.q_upper, dtype=float) + _LIMIT_SLACK
     in_collision = robot.in_collision
+    tau_max = np.asarray(robot.tau_max, dtype=float)
+    gravity = robot.gravity_torque if static_torque and np.isfinite(tau_max).any() else None
 
     def valid(q: np.ndarray) -> bool:
         if (q < lo).any() or (q > hi).any():
+            return False
+        if gravity is not None and (np.abs(gravity(q)) > tau_max).any():
             return False
         return not in_collision(q)
     return valid
@@ -141,11 +151,12 @@ def _bisection_order(n: int) -> List[int]:
     return out
 
 
-def check_path(robot, path, resolution: float = 0.01) -> Tuple[bool, int]:
+def check_path(robot, path, resolution: float = 0.01, static_torque: bool = False) -> Tuple[bool, int]:
     """Dense check of a joint path (K×dof waypoints, linearly interpolated).
 
     Returns ``(True, -1)`` if every waypoint and every interpolated state (steps of at most
-    ``resolution`` in each joint) is within the joint limits and collision-free; otherwise
+    ``resolution`` in each joint) is within the joint limits and collision-free (and, with
+    ``static_torque``, held against gravity within the torque limits); otherwise
     ``(False, i)`` where ``i`` is the first waypoint that is invalid itself or whose segment to
     waypoint ``i + 1`` contains an invalid state.
     """
@@ -159,7 +170,7 @@ def check_path(robot, path, resolution: float = 0.01) -> Tuple[bool, int]:
     if not np.all(np.isfinite(P)):
         bad = int(np.nonzero(~np.all(np.isfinite(P), axis=1))[0][0])
         return False, bad
-    valid = _config_validator(robot)
+    valid = _config_validator(robot, static_torque)
     if not valid(P[0]):
         return False, 0
     for i in range(len(P) - 1):
@@ -231,13 +242,16 @@ def _partial_shortcuts(valid, P: np.ndarray, resolution: float, counter: List[in
 # Planning
 # ---------------------------------------------------------------------------------------------------------
 def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: float = 1.0, seed: int = 0,
-              resolution: float = 0.01, simplify: bool = True, optimize: bool = False) -> PlanResult:
+              resolution: float = 0.01, simplify: bool = True, optimize: bool = False,
+              static_torque: bool = False) -> PlanResult:
     """A collision-free joint path from ``q_start`` to ``q_goal`` (both kept exactly).
 
     ``planner``: one of :func:`available_planners` (case-insensitive). ``time_limit`` (s) bounds the
     OMPL solve. ``seed``: OMPL's and the shortcutting RNG seed. ``resolution``: largest joint step (rad
     or m) between checked states. ``simplify``: shortcut the planner's path. ``optimize``: let anytime
-    planners refine the path length until ``time_limit`` instead of returning their first solution. ``stats``: planner, straight_line, time, plan_time, simplify_time,
+    planners refine the path length until ``time_limit`` instead of returning their first solution.
+    ``static_torque``: every state must also be held against gravity within the torque limits (see
+    :func:`check_path`). ``stats``: planner, straight_line, time, plan_time, simplify_time,
     checks, raw_waypoints, waypoints, length (Euclidean joint-space length), reason
     ("straight_line" | "planned" | "invalid_start" | "invalid_goal" | "no_solution" | "final_check_failed").
     """
@@ -257,7 +271,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         if q.shape != (n,) or not np.all(np.isfinite(q)):
             raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
     counter = [0]
-    valid = _config_validator(robot)
+    valid = _config_validator(robot, static_torque)
     stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
                                 "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
                                 "length": 0.0, "reason": ""}
@@ -284,7 +298,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         stats["raw_waypoints"] = 2
         return done(direct, "straight_line")      # also for q_start == q_goal: always [start, goal]
 
-    raw = _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats)
+    raw = _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats)
     if raw is None:
         return done(None, "no_solution")
     raw[0], raw[-1] = qs, qg
@@ -302,13 +316,13 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         stats["simplify_time"] = time.perf_counter() - ts
         candidates.insert(0, P)
     for P in candidates:
-        ok, _ = check_path(robot, P, resolution)
+        ok, _ = check_path(robot, P, resolution, static_torque)
         if ok:
             return done(P, "planned")
     return done(None, "final_check_failed")
 
 
-def _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats):
+def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats):
     from ompl import base as ob, geometric as og, util as ou
 
     n = robot.dof
@@ -329,7 +343,6 @@ def _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, coun
             bounds.setHigh(i, float(hi[i]))
         space.setBounds(bounds)
         ss = og.SimpleSetup(space)
-        in_collision = robot.in_collision
         rng_idx = range(n)
 
         hard_deadline = [math.inf]   # set when solving starts
@@ -338,10 +351,7 @@ def _plan_ompl(robot, qs, qg, name, time_limit, seed, resolution, optimize, coun
             counter[0] += 1
             if time.perf_counter() > hard_deadline[0]:
                 return False         # past the time limit: make planners that ignore it (FMT) stop soon
-            q = np.array([s[i] for i in rng_idx])
-            if (q < lo - _LIMIT_SLACK).any() or (q > hi + _LIMIT_SLACK).any():
-                return False
-            return not in_collision(q)
+            return valid(np.array([s[i] for i in rng_idx]))   # the same test as the dense checks
 
         ss.setStateValidityChecker(is_valid)
         si = ss.getSpaceInformation()
