@@ -156,6 +156,17 @@ def test_suite_summary_matches_a_hand_count(tmp_path, capsys):
     cfg.write_text(text.replace("seed: 1", "seed: 2", 1))
     assert main(["run", str(cfg), "--out", str(tmp_path / "out2")]) == 2
     assert "holds tasks generated with other arguments" in capsys.readouterr().err
+    # ... and so is a folder written by another version of a generator (recorded in the manifest)
+    from robodesign.generate import get_family
+    cfg.write_text(text)
+    manifest = tmp_path / "gen" / "bpo2024" / ".suite.json"
+    m = json.loads(manifest.read_text())
+    assert m["versions"] == {"bpo2024": get_family("bpo2024").version}
+    m["versions"]["bpo2024"] -= 1
+    manifest.write_text(json.dumps(m))
+    assert main(["run", str(cfg), "--out", str(tmp_path / "out3")]) == 2
+    v = get_family("bpo2024").version
+    assert f"holds tasks of other generator versions (bpo2024 v{v - 1}, now v{v})" in capsys.readouterr().err
 
 
 def test_optimize_json_says_where_the_candidates_stopped(capsys):

@@ -604,8 +604,9 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
     """The task files of a suite. A plain folder: its ``*.json`` files, sorted. With ``generate``, the
     folder (default ``generated/<name>`` beside the config) holds exactly what those generator calls write,
     in call order: generated on first use (the generators are deterministic, so a folder cut short by a
-    kill is completed with identical bytes) and recorded in ``.suite.json``; a folder generated with other
-    arguments is an error, never overwritten."""
+    kill is completed with identical bytes) and recorded in ``.suite.json`` with the generators' versions;
+    a folder generated with other arguments or by another generator version is an error, never
+    overwritten."""
     import json
     folder = Path(su.folder or f"generated/{su.name}")
     folder = folder if folder.is_absolute() else (base / folder).resolve()
@@ -617,7 +618,9 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         if not files:
             raise InputError(f"no task files (*.json) in {folder}", file=display, path=where + ["folder"])
         return files
+    from ..generate import get_family
     want = [g.model_dump() for g in su.generate]
+    versions = {g.family: get_family(g.family).version for g in su.generate}
     manifest = folder / SUITE_MANIFEST
     if manifest.is_file():
         try:
@@ -627,10 +630,15 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         if have.get("generate") != want:
             raise InputError(f"{folder} holds tasks generated with other arguments ({have.get('generate')}): delete "
                              "it or give the suite another folder", file=display, path=where + ["generate"])
+        old = {f: v for f, v in (have.get("versions") or {}).items() if versions.get(f) != v}
+        if old:  # (a manifest written before versions were recorded names none: its folder is taken as it is)
+            raise InputError(f"{folder} holds tasks of other generator versions "
+                             f"({', '.join(f'{f} v{v}, now v{versions.get(f)}' for f, v in sorted(old.items()))}): "
+                             "delete it or give the suite another folder", file=display, path=where + ["generate"])
         files = [folder / n for n in have.get("files", [])]
         if files and all(p.is_file() for p in files):
             return files
-    from ..generate import generate, get_family
+    from ..generate import generate
     files = []
     for k, g in enumerate(su.generate):
         options = dict(g.options)
@@ -645,7 +653,7 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         raise InputError("two generate blocks write the same task file: give them different options or seeds",
                          file=display, path=where + ["generate"])
     tmp = manifest.with_name(manifest.name + ".tmp")
-    tmp.write_text(json.dumps({"generate": want, "files": [p.name for p in files]}, indent=1))
+    tmp.write_text(json.dumps({"generate": want, "versions": versions, "files": [p.name for p in files]}, indent=1))
     tmp.replace(manifest)
     return files
 
