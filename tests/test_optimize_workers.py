@@ -117,6 +117,24 @@ def test_stream_survives_a_killed_worker():
         assert pool.failures >= 1 and not set(pool.pids) & set(first)  # new workers took over
 
 
+def test_pool_workers_follow_the_drivers_ik_loop(monkeypatch):
+    """With a cold kernel cache the driver decides the Python loop before it starts the workers, so every
+    worker runs it too (the cache these tests use is compiled: a worker deciding alone would compile)."""
+    from robodesign.solvers import ik_kernel
+    monkeypatch.setenv("ROBODESIGN_JIT", "1")  # restored afterwards; ready() sets 0 for the workers
+    monkeypatch.setattr(ik_kernel, "_STATE", None)
+    monkeypatch.setattr(ik_kernel, "compiled", lambda: False)  # a cold cache, as the driver sees it
+    monkeypatch.setattr(ik_kernel, "_start_compiler", lambda: object())  # the background compiler
+    problem = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    with ProcessPool({"s": EvaluatorSpec(problem, evaluation_settings())}, 2) as pool:
+        assert [pool._pool.submit(ik_kernel.ready).result() for _ in range(4)] == [False] * 4
+    assert ik_kernel.ready() is False
+    monkeypatch.undo()
+    assert ik_kernel.compiled()  # the real cache is compiled: what a worker deciding alone would have used
+    with ProcessPool({"s": EvaluatorSpec(problem, evaluation_settings())}, 1) as pool:
+        assert pool._pool.submit(ik_kernel.ready).result() is True
+
+
 def test_chunk_sizes():
     assert chunk_sizes(16, 2) == [4, 3, 3, 2, 1, 1, 1, 1]  # 8 messages instead of 16
     assert chunk_sizes(6, 2) == [2, 1, 1, 1, 1]

@@ -42,6 +42,7 @@ from ..errors import InputError
 from ..evaluator import Evaluation, Evaluator, EvaluatorSpec
 from ..search_space import Candidate
 from ..solve import warm_up
+from ..solvers import ik_kernel
 
 log = logging.getLogger(__name__)
 
@@ -261,6 +262,9 @@ class ProcessPool(EvaluatorPool):
         self.messages = 0  # chunks sent to the workers (each answered by one message)
         self._pool: Optional[ProcessPoolExecutor] = None
         t0 = time.perf_counter()
+        # the IK loop is decided here, once: with a cold kernel cache every worker, a restarted one too, runs
+        # the Python loop (ROBODESIGN_JIT=0 in their environment), whenever the background compilation ends
+        ik_kernel.ready()
         self._start()
         self.startup_seconds = time.perf_counter() - t0
 
