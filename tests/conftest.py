@@ -1,5 +1,6 @@
 import json
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +21,8 @@ def pytest_sessionstart(session):
 
 ROOT = Path(__file__).resolve().parents[1]
 COBRA = ROOT.parent / "shared" / "cobra"
+# assets/tasks/make_tasks.py (the built-in tasks' script) is importable as `make_tasks` in every test
+sys.path.insert(0, str(ROOT / "assets" / "tasks"))
 IMPROV = COBRA / "modules" / "IMPROV"
 PRIMITIVES = COBRA / "modules" / "geometric_primitive_modules"
 TASKS = COBRA / "tasks"

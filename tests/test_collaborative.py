@@ -1,6 +1,5 @@
 """Collaborative tasks: two robots in one cell (format, robot–robot checking between samples, prioritized solve)."""
 import json
-import sys
 from pathlib import Path
 
 import coal
@@ -16,9 +15,7 @@ from robodesign.errors import InputError
 from robodesign.pair_sweep import RobotPairSweep
 from robodesign.solvers.schedule import static_cell
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "assets" / "tasks"))
-import make_tasks as mt  # noqa: E402
+import make_tasks as mt  # assets/tasks, on the path by conftest
 
 ORDER = tuple(mt.DEFAULT_ORDER)
 

@@ -1,6 +1,5 @@
 """Planning among moving obstacles: waiting for a moving part, certified with the checker's semantics."""
 import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -14,9 +13,7 @@ from robodesign.solve import solve
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
 from robodesign.task_io import load_task
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "assets" / "tasks"))
-import make_tasks as mt  # noqa: E402
+import make_tasks as mt  # assets/tasks, on the path by conftest
 
 ORDER = list(mt.DEFAULT_ORDER)
 

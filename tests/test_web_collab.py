@@ -15,7 +15,6 @@ import contextlib
 import copy
 import io
 import json
-import sys
 from pathlib import Path
 
 import pytest
@@ -34,8 +33,7 @@ from test_web import ADMIN, ADMIN_HEADERS, upload  # noqa: E402
 from test_web_attacks import db_url, pg_server  # noqa: E402,F401  (SQLite, or a fresh PostgreSQL database)
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "assets" / "tasks"))
-import make_tasks as mt  # noqa: E402
+import make_tasks as mt  # noqa: E402  (assets/tasks, on the path by conftest)
 
 TID = "robodesign-collab/shared_conveyor"
 TASK_FILE = mt.collab_task_path("shared_conveyor")
