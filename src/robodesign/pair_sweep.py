@@ -3,7 +3,8 @@
 Two robots move at once; between two samples each moves linearly in its own joint space (the same
 interpolation the checker uses for one robot, docs/checker.md). For a pair of geometries (a of robot
 A, b of robot B) the relative displacement over a step is bounded by ``W_a·|Δq_A| + W_b·|Δq_B|`` with
-the lever arms of :func:`robodesign.sweep.lever_arms`, which is exactly the bound of a self-collision
+the lever arms of :func:`robodesign.sweep.lever_arms` (bodies of revolution about their own joint's
+axis included), which is exactly the bound of a self-collision
 pair whose two bodies hang from disjoint joint sets. So the stacked configuration ``[q_A, q_B]`` is
 certified by the same conservative advancement as :class:`~robodesign.sweep.SweepChecker`; only the
 distance query differs (two robots, two models).
@@ -47,6 +48,7 @@ class RobotPairSweep(SweepChecker):
         self._shapes = ([ga[i].geometry for i in range(na)], [gb[j].geometry for j in range(nb)])
         self._req = coal.DistanceRequest()
         self._res = coal.DistanceResult()
+        self.queries = 0
 
     def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
         qa, qb = q[: self._dof_a], q[self._dof_a:]
@@ -63,4 +65,5 @@ class RobotPairSweep(SweepChecker):
             self._res.clear()
             out[n] = coal.distance(sa[i], coal.Transform3s(Ma.rotation, Ma.translation),
                                    sb[j], coal.Transform3s(Mb.rotation, Mb.translation), self._req, self._res)
+        self.queries += len(out)
         return out

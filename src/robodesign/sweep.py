@@ -9,6 +9,15 @@ touch until the accumulated bound exceeds d − margin, so most pairs need a dis
 few dozen samples, and a pair that comes close is advanced in sub-sample steps until it either
 clears or touches. The result is exact up to ``tolerance`` metres (default 1e-6): a contact that
 lasts less than that is not reported.
+
+Bodies of revolution tighten the bounds: distances depend only on the space a body occupies, and a
+sphere, cylinder, capsule or cone turning about its own axis of symmetry does not move that space. So
+(1) a geometry that is a body of revolution about the axis of the revolute joint it hangs from does not
+count that joint's motion (:func:`lever_arms`), and (2) for a self pair whose upper body is a body of
+revolution about the axis of the first joint between the two, that joint does not count either: the
+relative pose then changes only by a rotation the upper body does not see. Modular arms are built this
+way (a joint housing coaxial with its joint), and links sliding past a housing at a few µm would
+otherwise be advanced in µm steps (IMPROV: one PTP_3 check 4.8 s → 0.2 s).
 """
 from __future__ import annotations
 
@@ -39,9 +48,59 @@ def _shape_radius(geometry) -> float:
     return float(np.linalg.norm(m))
 
 
-def lever_arms(robot: Robot) -> np.ndarray:
-    """R[j, g]: bound on the displacement of any point of robot geometry g per unit motion of joint j
-    (0 if g is not downstream of j). Joint indices are velocity indices (0..dof-1)."""
+#: a primitive counts as a body of revolution about a line when its centre lies within this distance of
+#: the line and (cylinder, capsule, cone) its axis is within this angle of the line's direction: the
+#: occupied space then moves by less than 1e-9·(size + 1) m under any rotation about the line
+SYMMETRY_EPS = 1e-9
+_ROTATIONAL = ("Cylinder", "Capsule", "Cone")  # bodies of revolution about their local z axis
+
+
+def revolute_axis(model, j: int) -> Optional[np.ndarray]:
+    """Unit axis of joint ``j`` in its own frame if it is a revolute joint (RX, RY, RZ, unaligned, and their
+    unbounded forms), else None."""
+    name = model.joints[j].shortname()
+    for suffix, axis in (("RX", (1.0, 0, 0)), ("RY", (0, 1.0, 0)), ("RZ", (0, 0, 1.0))):
+        if name in ("JointModel" + suffix, "JointModelRUB" + suffix[1]):
+            return np.array(axis, dtype=float)
+    if name in ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned"):
+        a = np.asarray(model.joints[j].extract().axis, dtype=float)
+        return a / np.linalg.norm(a)
+    return None
+
+
+def symmetric_about(obj, point: np.ndarray, direction: np.ndarray, eps: float = SYMMETRY_EPS) -> bool:
+    """Whether geometry object ``obj`` (a sphere, cylinder, capsule or cone) is a body of revolution about the
+    line through ``point`` along the unit vector ``direction``, both in the frame of its parent joint: a
+    rotation about that line then leaves the space it occupies unchanged."""
+    kind = type(obj.geometry).__name__
+    if kind != "Sphere" and kind not in _ROTATIONAL:
+        return False
+    centre = np.asarray(obj.placement.translation, dtype=float)
+    if np.linalg.norm(np.cross(centre - point, direction)) > eps:
+        return False
+    if kind == "Sphere":
+        return True
+    return float(np.linalg.norm(np.cross(obj.placement.rotation[:, 2], direction))) <= eps
+
+
+def own_axis_symmetric(robot: Robot) -> List[bool]:
+    """Per robot geometry g: a body of revolution about the axis of the revolute joint it hangs from, so that
+    this joint's motion does not move the space g occupies."""
+    model, gm = robot.model, robot.geom_model
+    out = []
+    for g in range(robot.n_collision_geometries):
+        obj = gm.geometryObjects[g]
+        axis = revolute_axis(model, obj.parentJoint) if obj.parentJoint > 0 else None
+        out.append(axis is not None and symmetric_about(obj, np.zeros(3), axis))
+    return out
+
+
+def lever_arms(robot: Robot, symmetry: bool = True) -> np.ndarray:
+    """R[j, g]: bound on how far the space occupied by robot geometry g moves per unit motion of joint j
+    (0 if g is not downstream of j). Joint indices are velocity indices (0..dof-1). It is the displacement
+    bound of g's points, except that a geometry that is a body of revolution about the axis of its own
+    (revolute) joint gets 0 for that joint: its points move but the space it fills does not, and distances
+    depend only on that space (:func:`own_axis_symmetric`). ``symmetry=False``: the plain point bound."""
     model, gm = robot.model, robot.geom_model
     nj = model.njoints
     n_geom = robot.n_collision_geometries
@@ -65,15 +124,40 @@ def lever_arms(robot: Robot) -> np.ndarray:
             R[model.joints[j].idx_v, g] = 1.0 if prismatic[j] else reach
             reach += float(np.linalg.norm(model.jointPlacements[j].translation)) + ext[j]
             j = parents[j]
+    for g, sym in enumerate(own_axis_symmetric(robot)):
+        if sym and symmetry:
+            R[model.joints[gm.geometryObjects[g].parentJoint].idx_v, g] = 0.0
     return R
+
+
+def first_joint_below(model, parent_joint: int, joints: Collection[int]) -> Optional[int]:
+    """The joint of ``joints`` (pinocchio joint ids on one branch below ``parent_joint``) that hangs directly
+    from ``parent_joint``, if any."""
+    for j in joints:
+        if model.parents[j] == parent_joint:
+            return j
+    return None
+
+
+def symmetric_about_child_joint(model, obj, j: int) -> bool:
+    """Whether geometry ``obj``, hanging from joint ``j``'s parent joint, is a body of revolution about
+    ``j``'s axis (fixed in obj's frame): then the motion of ``j`` does not change obj's distance to anything
+    that hangs below ``j``."""
+    axis = revolute_axis(model, j)
+    if axis is None:
+        return False
+    M = model.jointPlacements[j]
+    return symmetric_about(obj, np.asarray(M.translation, dtype=float), np.asarray(M.rotation, dtype=float) @ axis)
 
 
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
-                 max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None):
-        """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all)."""
+                 max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True):
+        """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all).
+        ``symmetry``: use bodies of revolution to tighten the bounds (module docstring); False gives the plain
+        lever-arm bounds (same verdicts, more distance queries)."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
@@ -89,14 +173,14 @@ class SweepChecker:
                 env = [k for k in env if gm.collisionPairs[k].second in keep]
             pairs += list(env)
         self.pairs = pairs
-        R = lever_arms(robot)
+        R = lever_arms(robot, symmetry)
         model = robot.model
-        ancestors = []
+        ancestors = []  # per geometry: the pinocchio joint ids it hangs from
         for g in range(robot.n_collision_geometries):
             s = set()
             j = gm.geometryObjects[g].parentJoint
             while j > 0:
-                s.add(model.joints[j].idx_v)
+                s.add(j)
                 j = model.parents[j]
             ancestors.append(s)
         W = np.zeros((robot.dof, len(pairs)))
@@ -115,14 +199,20 @@ class SweepChecker:
                 only_a = ancestors[a] - ancestors[b]
                 only_b = ancestors[b] - ancestors[a]
                 for j in only_a:
-                    W[j, c] = R[j, a]
+                    W[model.joints[j].idx_v, c] = R[model.joints[j].idx_v, a]
                 for j in only_b:
-                    W[j, c] = R[j, b]
+                    W[model.joints[j].idx_v, c] = R[model.joints[j].idx_v, b]
+                # the first joint below the upper body: a body of revolution about its axis sees no motion
+                for up, low_only in ((a, only_b), (b, only_a)) if symmetry else ():
+                    j1 = first_joint_below(model, gm.geometryObjects[up].parentJoint, low_only)
+                    if j1 is not None and symmetric_about_child_joint(model, gm.geometryObjects[up], j1):
+                        W[model.joints[j1].idx_v, c] = 0.0
         self.W = W
         names = [o.name for o in gm.geometryObjects]
         self.pair_names = [(names[gm.collisionPairs[k].first], names[gm.collisionPairs[k].second]) for k in pairs]
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests
+        self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
 
     # ------------------------------------------------------------------------------------------
     def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
@@ -133,6 +223,7 @@ class SweepChecker:
         out = np.empty(len(cols))
         for i, c in enumerate(cols):
             out[i] = pin.computeDistance(r.geom_model, gd, self.pairs[c]).min_distance
+        self.queries += len(out)
         return out
 
     def check(self, Q: np.ndarray, first_only: bool = True) -> List[CollisionEvent]:
