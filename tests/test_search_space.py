@@ -9,6 +9,7 @@ optimization runs do not change.
 from __future__ import annotations
 
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -272,3 +273,21 @@ def test_assembly_check_of_walked_orders(tmp_path):
         assert _draws(lambda r: sp.random_order(r, max_tries=3), rng_new, 3) == \
             _draws(lambda r: ref_random_order(ref.successors, ref.validate_order, r, max_tries=3), rng_ref, 3)
         assert rng_new.bit_generator.state == rng_ref.bit_generator.state
+
+
+# -- memo caches -------------------------------------------------------------------------------------------------
+def test_memo_caches_are_not_pickled():
+    sp = _space("IMPROV", "default")
+    bare = len(pickle.dumps(sp))
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        sp.random_order(rng)
+    sp.count_orders()
+    assert any(k.startswith("_memo") for k in vars(sp))
+    data = pickle.dumps(sp)
+    assert len(data) < bare + 1000  # (the module set may cache a few values of its own)
+    back = pickle.loads(data)
+    assert not any(k.startswith("_memo") for k in vars(back))
+    rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
+    assert [back.random_order(rng_a) for _ in range(20)] == [sp.random_order(rng_b) for _ in range(20)]
+    assert back.count_orders() == sp.count_orders()

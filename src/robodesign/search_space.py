@@ -20,18 +20,23 @@ x, y, z [m], yaw [rad] relative to the nominal base pose; empty when the base is
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .assembly import Assembly, chain_step, free_connectors, next_compatible
+from .assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
 from .errors import AssemblyError, InputError
 from .module_spec import ModuleSet
 from .spatial import homogeneous, rot_z
 
 BASE_PARAMS = ("x", "y", "z", "yaw")
+_NO_MODULE = object()  # free connectors of a prefix whose first module is not in the module set
+_MISS = object()
+_DEAD_END = ((), {}, (), {})  # SearchSpace._step of a state that nothing may follow
+_CACHE_LIMIT = 1 << 16  # entries of a per-order/per-prefix memo before it is cleared
 
 @dataclass(frozen=True)
 class ModuleInfo:
@@ -147,20 +152,17 @@ class SearchSpace:
         return tuple(m.id for m in self.module_set.of_kind("base") if self._allowed(m.id))
 
     def _followers(self, mid: str) -> Tuple[str, ...]:
-        return _followers(self.module_set, mid, self.exclude, self.bases, self.end_effectors)
+        cache = self._cache("_memo_followers")
+        out = cache.get(mid)
+        if out is None:
+            out = cache[mid] = _followers(self.module_set, mid, self.exclude, self.bases, self.end_effectors)
+        return out
 
     def _state(self, prefix: Sequence[str]) -> Tuple[int, int, bool]:
         """(dof so far, links since the last joint, complete)"""
-        ms = self.module_set
-        dof, links = 0, 0
-        for mid in prefix[1:]:
-            k = ms[mid].kind
-            if k == "joint":
-                dof += ms[mid].dof
-                links = 0
-            elif k == "link":
-                links += 1
-        complete = len(prefix) > 1 and ms[prefix[-1]].kind == "eef"
+        if not prefix:
+            return 0, 0, False
+        _, _, dof, links, _, complete = self._prefix_state(tuple(map(str, prefix)))
         return dof, links, complete
 
     def successors(self, prefix: Sequence[str]) -> List[str]:
@@ -168,15 +170,59 @@ class SearchSpace:
         must mate (exactly one connector pair) with a free connector of the last module."""
         if not prefix:
             return list(self.base_modules)
-        dof, links, complete = self._state(prefix)
+        last, free, dof, links, n, complete = self._prefix_state(tuple(map(str, prefix)))
         if complete:
             return []
-        free = self._chain_free(prefix)
+        if free is _NO_MODULE:  # the first module is not in the module set
+            free_connectors(self.module_set, str(prefix[0]))  # raises the KeyError
         if free is None:
             return []
-        return [nxt for nxt, _ in self._next((str(prefix[-1]), free, dof, links, len(prefix)))]
+        return list(self._step((last, free, dof, links, n))[0])
 
     # -- chaining (internal) -------------------------------------------------------------------------
+    def _prefix_state(self, prefix: Tuple[str, ...]):
+        """(last module, its free connectors, dof, links since the last joint, length, complete) of a non-empty
+        ``prefix`` of module IDs, computed step by step from its parent's and memoized. Free connectors are
+        None once a step does not mate with exactly one connector pair (as :meth:`_chain_free`), and
+        ``_NO_MODULE`` when the first module is unknown; an unknown later module raises KeyError (as
+        ``_state`` did). Any prefix is accepted, not only valid ones: dof and links count joint and link
+        modules after the first one, whatever the rules say."""
+        cache = self._cache("_memo_prefix")
+        st = cache.get(prefix)
+        if st is not None:
+            return st
+        # the longest memoized proper prefix, then one step per module after it
+        i = len(prefix) - 1
+        while i > 0 and prefix[:i] not in cache:
+            i -= 1
+        ms = self.module_set
+        if i == 0:
+            mid = prefix[0]
+            st = (mid, free_connectors(ms, mid) if mid in ms else _NO_MODULE, 0, 0, 1, False)
+            i = 1
+            new = [(prefix[:1], st)]
+        else:
+            st = cache[prefix[:i]]
+            new = []
+        for j in range(i, len(prefix)):
+            prev, free, dof, links, n, _ = st
+            mid = prefix[j]
+            m = ms[mid]
+            k = m.kind
+            if k == "joint":
+                dof += m.dof
+                links = 0
+            elif k == "link":
+                links += 1
+            if free is not None and free is not _NO_MODULE:
+                free = _mate_step(ms, prev, free, mid)
+            st = (mid, free, dof, links, n + 1, k == "eef")
+            new.append((prefix[:j + 1], st))
+        if len(cache) + len(new) > _CACHE_LIMIT:
+            cache.clear()
+        cache.update(new)
+        return st
+
     def _chain_free(self, prefix: Sequence[str]) -> Optional[Tuple[str, ...]]:
         """IDs of the free connectors of ``prefix[-1]`` after chaining ``prefix`` serially (None if a step
         does not mate with exactly one connector pair)."""
@@ -192,32 +238,67 @@ class SearchSpace:
         """(module, state after appending it or None when it completes the order) for every module that may
         follow a partial order in ``state`` = (last module, its free connectors, dof, links since the last
         joint, number of modules)."""
+        return list(self._step(state)[2])
+
+    def _step(self, state):
+        """``_next(state)`` memoized per state, as (module IDs, {module ID: state after it}, the (module, state)
+        pairs, {module ID: modules that would mate with a connector ``state``'s last module keeps free once
+        that module is attached}); see :meth:`random_order` for the last one."""
+        cache = self._cache("_memo_next")
+        hit = cache.get(state)
+        if hit is not None:
+            return hit
         last, free, dof, links, n = state
-        if n >= self.max_modules:
-            return []
         out = []
-        for nxt in self._followers(last):
-            nfree = _mate_step(self.module_set, last, free, nxt)
-            if nfree is None:
-                continue
-            m = self.module_set[nxt]
-            if m.kind == "eef":
-                if self.min_dof <= dof <= self.max_dof:
-                    out.append((nxt, None))
-            elif m.kind == "joint":
-                if dof + m.dof <= self.max_dof:
-                    out.append((nxt, (nxt, nfree, dof + m.dof, 0, n + 1)))
-            elif m.kind == "link":
-                if links < self.max_links_between and n + 2 <= self.max_modules:
-                    out.append((nxt, (nxt, nfree, dof, links + 1, n + 1)))
+        if n < self.max_modules:
+            ms = self.module_set
+            for nxt in self._followers(last):
+                nfree = _mate_step(ms, last, free, nxt)
+                if nfree is None:
+                    continue
+                m = ms[nxt]
+                if m.kind == "eef":
+                    if self.min_dof <= dof <= self.max_dof:
+                        out.append((nxt, None))
+                elif m.kind == "joint":
+                    if dof + m.dof <= self.max_dof:
+                        out.append((nxt, (nxt, nfree, dof + m.dof, 0, n + 1)))
+                elif m.kind == "link":
+                    if links < self.max_links_between and n + 2 <= self.max_modules:
+                        out.append((nxt, (nxt, nfree, dof, links + 1, n + 1)))
+        after, blocks = {}, {}
+        for nxt, st in out:
+            if nxt not in after:
+                after[nxt] = st
+                (c_old, _), = chain_pairs(self.module_set, last, free, nxt)  # exactly one: _mate_step mated
+                blocks[nxt] = self._mating(last, tuple(c for c in free if c != c_old.id))
+        hit = cache[state] = (tuple(nxt for nxt, _ in out), after, tuple(out), blocks)
+        return hit
+
+    def _mating(self, mid: str, free: Tuple[str, ...]) -> frozenset:
+        """IDs of the modules that some connector pair would mate to ``mid`` over its ``free`` connectors."""
+        cache = self._cache("_memo_mating")
+        key = (mid, free)
+        out = cache.get(key)
+        if out is None:
+            ms = self.module_set
+            out = cache[key] = frozenset(m.id for m in ms if free and chain_pairs(ms, mid, free, m.id))
         return out
 
-    def _memo(self) -> dict:
-        memo = self.__dict__.get("_memo_cache")
+    def _cache(self, name: str) -> dict:
+        """A memo dict stored on the (frozen) instance; not pickled (see ``__getstate__``)."""
+        memo = self.__dict__.get(name)
         if memo is None:
             memo = {}
-            object.__setattr__(self, "_memo_cache", memo)
+            object.__setattr__(self, name, memo)
         return memo
+
+    def _memo(self) -> dict:
+        return self._cache("_memo_cache")
+
+    def __getstate__(self):
+        # memo caches are rebuilt on demand: a space sent to a worker process carries only its fields
+        return {k: v for k, v in self.__dict__.items() if not k.startswith("_memo")}
 
     def _completion(self, state) -> Tuple[int, float]:
         """(number of completions, mass of the lightest completion) of a partial order in ``state``."""
@@ -321,35 +402,107 @@ class SearchSpace:
     def validate_order(self, order: Sequence[str]) -> Optional[str]:
         """None if ``order`` is a complete valid design under the rules, else the reason."""
         order = tuple(str(x) for x in order)
+        cache = self._cache("_memo_valid")
+        hit = cache.get(order, _MISS)
+        if hit is not _MISS:
+            return hit
+        why = self._validate_order(order)
+        if len(cache) >= _CACHE_LIMIT:
+            cache.clear()
+        cache[order] = why
+        return why
+
+    def _validate_order(self, order: Tuple[str, ...]) -> Optional[str]:
+        # the walk of successors(order[:i]) for i = 0, 1, ...: every prefix checked so far is valid, so the
+        # state after it is the one _next gives for its last module; the Assembly check as in random_order
         if not order:
             return "empty order"
+        ms = self.module_set
+        state = None  # state of order[:i] (None: complete, nothing may follow)
+        clash, blocked = False, frozenset()
         for i, mid in enumerate(order):
-            if mid not in self.module_set:
+            if mid not in ms:
                 return f"module {mid!r} is not in the module set"
-            allowed = self.successors(order[:i])
-            if mid not in allowed:
+            if i == 0:
+                ok = mid in self.base_modules
+                if ok:
+                    state = (mid, free_connectors(ms, mid), 0, 0, 1)
+                    clash = not self._one_base_connector(mid)
+            else:
+                _, after, _, blocks = self._step(state) if state is not None else _DEAD_END
+                ok = mid in after
+                if ok:
+                    state = after[mid]
+                    if mid in blocked:
+                        clash = True
+                    if blocks[mid]:
+                        blocked = blocked | blocks[mid]
+            if not ok:
                 return f"module {mid!r} may not follow {list(order[:i])} under the rules"
-        dof, _, complete = self._state(order)
-        if not complete:
+        if not (len(order) > 1 and ms[order[-1]].kind == "eef"):
             return "the order does not end with an end effector"
+        return self._assembly_error(order) if clash else None
+
+    def _assembly_error(self, order: Tuple[str, ...]) -> Optional[str]:
+        """The message of the AssemblyError that ``Assembly.from_order`` raises for ``order`` (None if it
+        assembles), memoized per order."""
+        cache = self._cache("_memo_assembly")
+        hit = cache.get(order, _MISS)
+        if hit is not _MISS:
+            return hit
         try:
             Assembly.from_order(self.module_set, order)
+            why = None
         except AssemblyError as e:
-            return str(e)
-        return None
+            why = str(e)
+        if len(cache) >= _CACHE_LIMIT:
+            cache.clear()
+        cache[order] = why
+        return why
 
     def random_order(self, rng, max_tries: int = 200) -> Tuple[str, ...]:
+        # Walks the state machine of _next: at each step the choices are exactly successors(order), in the
+        # same order, and one rng.integers(len(choices)) is drawn, as in
+        #     while succ := self.successors(order): order.append(succ[rng.integers(len(succ))])
+        # followed by validate_order(order). For a walked order only the Assembly check of validate_order
+        # can fail, and only there the whole order matters, so it is memoized per order. Assembly.from_order
+        # accepts a walked order iff its first module has one base connector and no module mates with
+        # a connector that a module before its predecessor left free (each step mates with its predecessor
+        # by exactly one pair): `clash` tracks that along the walk, and the Assembly check runs only if
+        # it finds a clash (it then gives the verdict), so the result is the one of validate_order.
+        bases = self.base_modules
+        ms = self.module_set
+        step = self._step
         for _ in range(max_tries):
-            order: List[str] = []
-            while True:
-                succ = self.successors(order)
-                if not succ:
+            if not bases:
+                continue  # validate_order(()) fails: "empty order"
+            mid = bases[int(rng.integers(len(bases)))]
+            order = [mid]
+            state = (mid, free_connectors(ms, mid), 0, 0, 1)
+            clash = not self._one_base_connector(mid)
+            blocked = frozenset()  # modules that would mate with an earlier module than the last one
+            while state is not None:
+                names, after, _, blocks = step(state)
+                if not names:
                     break
-                # prefer finishing once the DoF target is met, else continue
-                order.append(succ[int(rng.integers(len(succ)))])
-            if self.validate_order(order) is None:
-                return tuple(order)
+                mid = names[int(rng.integers(len(names)))]
+                order.append(mid)
+                if mid in blocked:
+                    clash = True
+                b = blocks[mid]
+                if b:
+                    blocked = blocked | b
+                state = after[mid]
+            if state is None and (not clash or self._assembly_error(tuple(order)) is None):
+                return tuple(order)  # ended with an end effector and assembles
         raise InputError("the search space contains no valid module order under its rules")
+
+    def _one_base_connector(self, mid: str) -> bool:
+        cache = self._cache("_memo_base")
+        ok = cache.get(mid)
+        if ok is None:
+            ok = cache[mid] = sum(1 for c in self.module_set[mid].connectors if c.type == "base") == 1
+        return ok
 
     def random_candidate(self, rng) -> Candidate:
         return Candidate(self.random_order(rng), self.base_bounds.sample(rng))
@@ -405,7 +558,6 @@ def _followers_cached(ms_id: int, mid: str, exclude, bases, eefs, ms_ref) -> Tup
 
 
 def _followers(ms: ModuleSet, mid: str, exclude, bases, eefs) -> Tuple[str, ...]:
-    import weakref
     return _followers_cached(id(ms), mid, tuple(exclude), bases, eefs, weakref.ref(ms))
 
 
@@ -416,7 +568,6 @@ def _mate_step_cached(ms_id: int, prev: str, free: Tuple[str, ...], mid: str, ms
 
 def _mate_step(ms: ModuleSet, prev: str, free: Tuple[str, ...], mid: str) -> Optional[Tuple[str, ...]]:
     """:func:`robodesign.assembly.chain_step`, cached per module set."""
-    import weakref
     return _mate_step_cached(id(ms), prev, tuple(free), mid, weakref.ref(ms))
 
 
