@@ -339,8 +339,12 @@ class SearchSpace:
     # -- informed search ---------------------------------------------------------------------------
     def module_info(self, mid: str) -> ModuleInfo:
         """Kind, DoF and mass of module ``mid``."""
-        m = self.module_set[str(mid)]
-        return ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass)
+        cache = self._cache("_memo_info")
+        info = cache.get(mid)
+        if info is None:
+            m = self.module_set[str(mid)]
+            info = cache[mid] = ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass)
+        return info
 
     def count_completions(self, prefix: Sequence[str]) -> int:
         """Number of valid complete orders that start with ``prefix`` (1 for a complete order, 0 for a dead
