@@ -9,6 +9,7 @@ optimization runs do not change.
 from __future__ import annotations
 
 import json
+import math
 import pickle
 
 import numpy as np
@@ -291,3 +292,25 @@ def test_memo_caches_are_not_pickled():
     rng_a, rng_b = np.random.default_rng(5), np.random.default_rng(5)
     assert [back.random_order(rng_a) for _ in range(20)] == [sp.random_order(rng_b) for _ in range(20)]
     assert back.count_orders() == sp.count_orders()
+
+
+@pytest.mark.parametrize("set_name", sorted(SETS))
+def test_completion_counts_of_any_prefix_match_enumeration(set_name):
+    sp = _space(set_name, "short")
+    orders, stack = [], [()]
+    while stack:  # every valid order, enumerated with the reference rule
+        p = stack.pop()
+        succ = ref_successors(sp, p)
+        if not succ:
+            if ref_validate(sp, p) is None:
+                orders.append(p)
+            continue
+        stack += [p + (s,) for s in succ]
+    assert sp.count_orders() == len(orders) > 0
+    mass = lambda o: sum(sp.module_info(m).mass for m in o)
+    probes = {o[:i] for o in _probe_orders(sp, np.random.default_rng(5), 100) for i in range(len(o) + 1)}
+    probes = {p for p in probes if all(m in sp.module_set for m in p)}
+    for p in sorted(probes):
+        done = [o for o in orders if o[:len(p)] == p]
+        assert sp.count_completions(p) == len(done), p
+        assert sp.lightest_completion(p) == pytest.approx(min((mass(o) - mass(p) for o in done), default=math.inf)), p

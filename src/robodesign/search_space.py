@@ -325,16 +325,12 @@ class SearchSpace:
             out = [self._prefix_completion((b,)) for b in self.base_modules]
             return (sum(c for c, _ in out),
                     min((self.module_info(b).mass + l for b, (_, l) in zip(self.base_modules, out)), default=math.inf))
-        for i, mid in enumerate(prefix):
-            if mid not in self.module_set or mid not in self.successors(prefix[:i]):
-                return 0, math.inf
-        dof, links, complete = self._state(prefix)
-        if complete:
-            return 1, 0.0
-        free = self._chain_free(prefix)
-        if free is None:
+        failed, state, _ = self._walk(prefix)
+        if failed is not None:
             return 0, math.inf
-        return self._completion((prefix[-1], free, dof, links, len(prefix)))
+        if state is None:  # complete
+            return 1, 0.0
+        return self._completion(state)
 
     # -- informed search ---------------------------------------------------------------------------
     def module_info(self, mid: str) -> ModuleInfo:
@@ -417,35 +413,44 @@ class SearchSpace:
         return why
 
     def _validate_order(self, order: Tuple[str, ...]) -> Optional[str]:
-        # the walk of successors(order[:i]) for i = 0, 1, ...: every prefix checked so far is valid, so the
-        # state after it is the one _next gives for its last module; the Assembly check as in random_order
         if not order:
             return "empty order"
+        failed, _, clash = self._walk(order)
+        if failed is not None:
+            mid = order[failed]
+            if mid not in self.module_set:
+                return f"module {mid!r} is not in the module set"
+            return f"module {mid!r} may not follow {list(order[:failed])} under the rules"
+        if not (len(order) > 1 and self.module_set[order[-1]].kind == "eef"):
+            return "the order does not end with an end effector"
+        return self._assembly_error(order) if clash else None
+
+    def _walk(self, order: Tuple[str, ...]):
+        """Check ``order[i] in successors(order[:i])`` for i = 0, 1, ... along the state machine of _next (each
+        prefix checked so far is valid, so its state is the one _next gives). Returns (index of the first
+        module that fails, else None; the state after ``order`` (None when it is complete); whether a module
+        clashes with a connector an earlier module than its predecessor left free, see random_order)."""
         ms = self.module_set
         state = None  # state of order[:i] (None: complete, nothing may follow)
         clash, blocked = False, frozenset()
         for i, mid in enumerate(order):
             if mid not in ms:
-                return f"module {mid!r} is not in the module set"
+                return i, None, clash
             if i == 0:
-                ok = mid in self.base_modules
-                if ok:
-                    state = (mid, free_connectors(ms, mid), 0, 0, 1)
-                    clash = not self._one_base_connector(mid)
+                if mid not in self.base_modules:
+                    return i, None, clash
+                state = (mid, free_connectors(ms, mid), 0, 0, 1)
+                clash = not self._one_base_connector(mid)
             else:
                 _, after, _, blocks = self._step(state) if state is not None else _DEAD_END
-                ok = mid in after
-                if ok:
-                    state = after[mid]
-                    if mid in blocked:
-                        clash = True
-                    if blocks[mid]:
-                        blocked = blocked | blocks[mid]
-            if not ok:
-                return f"module {mid!r} may not follow {list(order[:i])} under the rules"
-        if not (len(order) > 1 and ms[order[-1]].kind == "eef"):
-            return "the order does not end with an end effector"
-        return self._assembly_error(order) if clash else None
+                if mid not in after:
+                    return i, None, clash
+                state = after[mid]
+                if mid in blocked:
+                    clash = True
+                if blocks[mid]:
+                    blocked = blocked | blocks[mid]
+        return None, state, clash
 
     def _assembly_error(self, order: Tuple[str, ...]) -> Optional[str]:
         """The message of the AssemblyError that ``Assembly.from_order`` raises for ``order`` (None if it
