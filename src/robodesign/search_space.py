@@ -183,7 +183,7 @@ class SearchSpace:
     def _prefix_state(self, prefix: Tuple[str, ...]):
         """(last module, its free connectors, dof, links since the last joint, length, complete) of a non-empty
         ``prefix`` of module IDs, computed step by step from its parent's and memoized. Free connectors are
-        None once a step does not mate with exactly one connector pair (as :meth:`_chain_free`), and
+        None once a step does not mate with exactly one connector pair (chaining stops there), and
         ``_NO_MODULE`` when the first module is unknown; an unknown later module raises KeyError (as
         ``_state`` did). Any prefix is accepted, not only valid ones: dof and links count joint and link
         modules after the first one, whatever the rules say."""
@@ -222,17 +222,6 @@ class SearchSpace:
             cache.clear()
         cache.update(new)
         return st
-
-    def _chain_free(self, prefix: Sequence[str]) -> Optional[Tuple[str, ...]]:
-        """IDs of the free connectors of ``prefix[-1]`` after chaining ``prefix`` serially (None if a step
-        does not mate with exactly one connector pair)."""
-        ms = self.module_set
-        free = free_connectors(ms, str(prefix[0]))
-        for prev, mid in zip(prefix, prefix[1:]):
-            free = _mate_step(ms, str(prev), free, str(mid))
-            if free is None:
-                return None
-        return free
 
     def _next(self, state) -> List[Tuple[str, Optional[tuple]]]:
         """(module, state after appending it or None when it completes the order) for every module that may
@@ -307,7 +296,7 @@ class SearchSpace:
         if hit is not None:
             return hit
         count, lightest = 0, math.inf
-        for nxt, st in self._next(state):
+        for nxt, st in self._step(state)[2]:
             mass = self.module_info(nxt).mass
             if st is None:
                 count += 1
