@@ -235,31 +235,156 @@ def _ping() -> int:
 
 class _Chunk:
     """Consecutive candidates sent to a worker in one message, and the future of their evaluations."""
-    __slots__ = ("candidates", "future", "attempts")
+    __slots__ = ("candidates", "future", "attempts", "worker")
 
     def __init__(self, candidates: List[Candidate]):
         self.candidates = candidates
         self.future: Optional[Future] = None
         self.attempts = 0
+        self.worker = None  # where the pool sent it (the Ray pool: the actor's index and handle)
 
     def evaluated(self) -> bool:
         f = self.future
         return f.done() and not f.cancelled() and f.exception() is None
 
+    def failed(self) -> bool:
+        f = self.future
+        return f.done() and not f.cancelled() and f.exception() is not None
 
-class ProcessPool(EvaluatorPool):
-    """``concurrent.futures.ProcessPoolExecutor`` with the spawn context; each worker builds its
-    evaluators once in the initializer and warms up (:func:`~robodesign.solve.warm_up`). Candidates travel
-    in chunks (module docstring); ``messages`` counts the chunks sent. A dead worker
-    (``BrokenProcessPool``) is survived: the pool is restarted and the chunks without a result are re-run."""
-    kind = "process"
 
-    def __init__(self, specs, workers: Optional[int] = None, chunk_size: Optional[int] = None):
-        super().__init__(specs, workers or max(1, os.cpu_count() or 1))
+class ChunkedPool(EvaluatorPool):
+    """A pool whose workers get candidates in chunks (module docstring): batches split by
+    :func:`chunk_sizes`, streams by :func:`auto_chunk_size` (``chunk_size`` fixes both), ``messages`` counts
+    the chunks sent, chunks whose worker died are sent again. Subclasses send a chunk (:meth:`_send`: set
+    ``chunk.future``, a ``concurrent.futures.Future`` of the chunk's evaluations), tell a lost worker from a
+    failed evaluation (:meth:`_lost_worker`) and replace lost workers (:meth:`_replace_workers`)."""
+
+    #: what died, in the give-up message
+    worker_noun = "a worker"
+
+    def __init__(self, specs, workers: int, chunk_size: Optional[int] = None):
+        super().__init__(specs, workers)
         if chunk_size is not None and int(chunk_size) < 1:
             raise InputError(f"chunk size must be at least 1, got {chunk_size}")
         self.chunk_size = int(chunk_size) if chunk_size else None
         self.messages = 0  # chunks sent to the workers (each answered by one message)
+
+    # -- what a subclass provides
+    def _send(self, spec_id: str, chunk: _Chunk) -> None:
+        raise NotImplementedError
+
+    def _lost_worker(self, exc: BaseException) -> bool:
+        """Whether a chunk failed with ``exc`` because its worker died (not because an evaluation raised)."""
+        raise NotImplementedError
+
+    def _settle(self, pending: Iterable[_Chunk]) -> None:
+        """Called when a chunk's worker died, before the lost chunks are collected (a process pool waits for
+        every chunk: a broken pool answers all of them)."""
+
+    def _replace_workers(self, lost: List[_Chunk]) -> int:
+        """Make workers available for ``lost`` again; the number of workers lost."""
+        raise NotImplementedError
+
+    def _batch_in_flight(self, chunks: int) -> int:
+        """Chunks of a batch (:meth:`map`) sent before the first one is answered."""
+        return chunks
+
+    def _cancel(self, chunk: _Chunk) -> None:
+        chunk.future.cancel()
+
+    # -- shared
+    def _submit(self, spec_id: str, chunk: _Chunk) -> None:
+        chunk.attempts += 1
+        self.messages += 1
+        self._send(spec_id, chunk)
+
+    def _recover(self, spec_id: str, lost: List[_Chunk]) -> None:
+        """Replace the lost workers and send ``lost`` (chunks without a result) again."""
+        worst = max(lost, key=lambda c: c.attempts)
+        if worst.attempts >= MAX_ATTEMPTS:
+            raise RuntimeError(f"{self.worker_noun} died {worst.attempts} times while evaluating "
+                               f"{worst.candidates[0].key()!r} (or the candidates sent with it); giving up") \
+                from worst.future.exception()
+        log.warning("%s died (%s); re-running %d chunk(s), %d candidate(s)", self.worker_noun,
+                    type(worst.future.exception()).__name__, len(lost), sum(len(c.candidates) for c in lost))
+        self.failures += self._replace_workers(lost)
+        for c in lost:
+            self._submit(spec_id, c)
+
+    def _stream(self, spec_id: str, parts: Iterator[List[Candidate]], in_flight: int) -> Iterator[Evaluation]:
+        """Evaluations of the chunks ``parts`` in their order. At most ``in_flight`` chunks are sent and not
+        yet evaluated (the next chunk is pulled from ``parts`` when one finishes), and at most
+        :data:`MAX_AHEAD` candidates are evaluated ahead of the one delivered next. A chunk whose worker died
+        is sent again (the others keep their results)."""
+        pending: deque = deque()  # chunks in order, not yet delivered
+        state = {"more": True, "ahead": 0}
+
+        def fill() -> None:
+            while state["more"] and state["ahead"] < MAX_AHEAD and \
+                    sum(not c.future.done() for c in pending) < in_flight:
+                part = next(parts, None)
+                if part is None:
+                    state["more"] = False
+                    return
+                chunk = _Chunk(part)
+                self._submit(spec_id, chunk)
+                pending.append(chunk)
+                state["ahead"] += len(part)
+
+        try:
+            fill()
+            while pending:
+                head = pending[0]
+                if not head.future.done():
+                    wait([c.future for c in pending if not c.future.done()], return_when=FIRST_COMPLETED)
+                failed = [c for c in pending if c.failed()]
+                if failed:
+                    for c in failed:
+                        if not self._lost_worker(c.future.exception()):
+                            c.future.result()  # the evaluation itself raised: a bug, not a lost worker
+                    self._settle(pending)
+                    self._recover(spec_id, [c for c in pending if c.failed()])
+                    continue
+                if not head.future.done():
+                    fill()
+                    continue
+                pending.popleft()
+                state["ahead"] -= len(head.candidates)
+                results = head.future.result()
+                fill()
+                yield from results
+        finally:  # the caller stopped early (or failed): chunks not started yet are dropped
+            for c in pending:
+                self._cancel(c)
+
+    def map(self, spec_id, candidates):
+        parts, k = [], 0
+        for n in chunk_sizes(len(candidates), self.workers, self.chunk_size):
+            parts.append(list(candidates[k:k + n]))
+            k += n
+        return list(self._stream(spec_id, iter(parts), in_flight=max(1, self._batch_in_flight(len(parts)))))
+
+    def imap(self, spec_id, candidates, batch_size=1):
+        size = self.chunk_size or auto_chunk_size(batch_size, self.workers)
+        # two chunks per worker: one running, one waiting for it
+        return self._stream(spec_id, chunked(candidates, size), in_flight=2 * self.workers)
+
+    def info(self) -> dict:
+        d = super().info()
+        d["chunk_size"] = self.chunk_size or "auto"
+        return d
+
+
+class ProcessPool(ChunkedPool):
+    """``concurrent.futures.ProcessPoolExecutor`` with the spawn context; each worker builds its
+    evaluators once in the initializer and warms up (:func:`~robodesign.solve.warm_up`). Candidates travel
+    in chunks (:class:`ChunkedPool`). A dead worker (``BrokenProcessPool``) is survived: the pool is
+    restarted and the chunks without a result are re-run."""
+    kind = "process"
+    worker_noun = "a worker process"
+
+    def __init__(self, specs, workers: Optional[int] = None, chunk_size: Optional[int] = None):
+        super().__init__(specs, workers or max(1, os.cpu_count() or 1), chunk_size)
         self._pool: Optional[ProcessPoolExecutor] = None
         t0 = time.perf_counter()
         # the IK loop is decided here, once: with a cold kernel cache every worker, a restarted one too, runs
@@ -283,90 +408,30 @@ class ProcessPool(EvaluatorPool):
             pass
         self._start()
 
-    def _submit(self, spec_id: str, chunk: _Chunk) -> None:
-        chunk.attempts += 1
-        self.messages += 1
+    def _send(self, spec_id: str, chunk: _Chunk) -> None:
         try:
             chunk.future = self._pool.submit(_evaluate_chunk, spec_id, chunk.candidates)
         except BrokenProcessPool as e:  # answered like a chunk whose worker died
             chunk.future = Future()
             chunk.future.set_exception(e)
 
-    def _recover(self, spec_id: str, lost: List[_Chunk]) -> None:
-        """Restart the pool and send ``lost`` (chunks without a result) again."""
-        worst = max(lost, key=lambda c: c.attempts)
-        if worst.attempts >= MAX_ATTEMPTS:
-            raise RuntimeError(f"a worker process died {worst.attempts} times while evaluating "
-                               f"{worst.candidates[0].key()!r} (or the candidates sent with it); giving up")
-        self.failures += 1
-        log.warning("a worker process died; restarting the pool and re-running %d candidate(s)",
-                    sum(len(c.candidates) for c in lost))
+    def _lost_worker(self, exc):
+        return isinstance(exc, BrokenProcessPool)
+
+    def _settle(self, pending):
+        wait([c.future for c in pending])  # a broken pool answers every chunk it had
+
+    def _replace_workers(self, lost):
         self._restart()
-        for c in lost:
-            self._submit(spec_id, c)
+        return 1
 
-    def _stream(self, spec_id: str, parts: Iterator[List[Candidate]], in_flight: int) -> Iterator[Evaluation]:
-        """Evaluations of the chunks ``parts`` in their order. At most ``in_flight`` chunks are sent and not
-        yet evaluated (the next chunk is pulled from ``parts`` when one finishes), and at most
-        :data:`MAX_AHEAD` candidates are evaluated ahead of the one delivered next."""
-        pending: deque = deque()  # chunks in order, not yet delivered
-        state = {"more": True, "ahead": 0}
-
-        def fill() -> None:
-            while state["more"] and state["ahead"] < MAX_AHEAD and \
-                    sum(not c.future.done() for c in pending) < in_flight:
-                part = next(parts, None)
-                if part is None:
-                    state["more"] = False
-                    return
-                chunk = _Chunk(part)
-                self._submit(spec_id, chunk)
-                pending.append(chunk)
-                state["ahead"] += len(part)
-
-        try:
-            fill()
-            while pending:
-                head = pending[0]
-                while not head.future.done():
-                    wait([c.future for c in pending if not c.future.done()], return_when=FIRST_COMPLETED)
-                    fill()
-                if not head.evaluated():
-                    if not isinstance(head.future.exception(), BrokenProcessPool):
-                        head.future.result()  # the evaluation itself raised: a bug, not a lost worker
-                    wait([c.future for c in pending])  # a broken pool answers every chunk it had
-                    self._recover(spec_id, [c for c in pending if not c.evaluated()])
-                    continue
-                pending.popleft()
-                state["ahead"] -= len(head.candidates)
-                results = head.future.result()
-                fill()
-                yield from results
-        finally:  # the caller stopped early (or failed): chunks not started yet are dropped
-            for c in pending:
-                c.future.cancel()
-
-    def map(self, spec_id, candidates):
-        parts, k = [], 0
-        for n in chunk_sizes(len(candidates), self.workers, self.chunk_size):
-            parts.append(list(candidates[k:k + n]))
-            k += n
-        return list(self._stream(spec_id, iter(parts), in_flight=max(1, len(parts))))
-
-    def imap(self, spec_id, candidates, batch_size=1):
-        size = self.chunk_size or auto_chunk_size(batch_size, self.workers)
-        # two chunks per worker: one running, one waiting in the call queue
-        return self._stream(spec_id, chunked(candidates, size), in_flight=2 * self.workers)
+    def _batch_in_flight(self, chunks):
+        return chunks  # all at once: the executor's call queue hands them to the workers as they get free
 
     def close(self):
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
-
-    def info(self) -> dict:
-        d = super().info()
-        d["chunk_size"] = self.chunk_size or "auto"
-        return d
 
 
 # ------------------------------------------------------------------------------------------------
