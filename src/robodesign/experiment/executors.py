@@ -447,24 +447,30 @@ class EvaluatorActor:
     def __init__(self, specs: Dict[str, EvaluatorSpec]):
         self.evaluators = build_evaluators(specs)
 
-    def evaluate(self, spec_id: str, candidate: Candidate) -> Evaluation:
-        return self.evaluators[spec_id](candidate)
+    def evaluate_chunk(self, spec_id: str, candidates: List[Candidate]) -> List[Evaluation]:
+        ev = self.evaluators[spec_id]
+        return [ev(c) for c in candidates]
 
     def pid(self) -> int:
         return os.getpid()
 
 
-class RayPool(EvaluatorPool):
-    """Candidates are evaluated by ``workers`` Ray actors (one CPU each), one call in flight per actor.
+class RayPool(ChunkedPool):
+    """Candidates are evaluated by ``workers`` Ray actors (one CPU each), in chunks (:class:`ChunkedPool`):
+    a chunk goes to the actor with the fewest chunks in flight, at most two per actor (one running, one
+    waiting), so the small chunks at the end of a batch go to the actors that get free first.
 
     ``address=None`` starts a private local Ray instance (``num_cpus=workers``, no dashboard, bound to
     127.0.0.1); otherwise it connects to the cluster at ``address`` (``HOST:PORT`` of ``ray start --head``)
     and defaults ``workers`` to the cluster's CPU count.
     """
     kind = "ray"
+    worker_noun = "a Ray evaluator actor"
 
     def __init__(self, specs, workers: Optional[int] = None, address: Optional[str] = None,
-                 max_restarts: int = 4, start_timeout: float = 300.0):
+                 max_restarts: int = 4, start_timeout: float = 300.0, chunk_size: Optional[int] = None):
+        if chunk_size is not None and int(chunk_size) < 1:  # before Ray is started
+            raise InputError(f"chunk size must be at least 1, got {chunk_size}")
         ray_env()
         import ray
         t0 = time.perf_counter()
@@ -483,12 +489,13 @@ class RayPool(EvaluatorPool):
             self._owns = True
         if not workers:
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
-        super().__init__(specs, workers)
+        super().__init__(specs, workers, chunk_size)
         self.address = address
         self.max_restarts = int(max_restarts)
         self._actor_cls = ray.remote(EvaluatorActor).options(num_cpus=1, max_restarts=self.max_restarts,
                                                               max_task_retries=-1)
         self.actors = [self._new_actor() for _ in range(self.workers)]
+        self._calls: List[List[Future]] = [[] for _ in range(self.workers)]  # per actor: its chunks' futures
         try:
             self.pids = ray.get([a.pid.remote() for a in self.actors], timeout=start_timeout)
         except ray.exceptions.GetTimeoutError:
@@ -502,50 +509,56 @@ class RayPool(EvaluatorPool):
         # the specs are small plain data, passed inline: a restarted actor never depends on the object store
         return self._actor_cls.remote(self.specs)
 
-    def map(self, spec_id, candidates):
-        import ray
+    def _send(self, spec_id: str, chunk: _Chunk) -> None:
+        for calls in self._calls:
+            calls[:] = [f for f in calls if not f.done()]
+        a = min(range(len(self.actors)), key=lambda i: len(self._calls[i]))
+        actor = self.actors[a]
+        ref = actor.evaluate_chunk.remote(spec_id, chunk.candidates)
+        chunk.worker = (a, actor, ref)
+        chunk.future = ref.future()
+        self._calls[a].append(chunk.future)
+
+    def _lost_worker(self, exc):
         from ray.exceptions import RayActorError, RayTaskError, WorkerCrashedError
-        results: List[Optional[Evaluation]] = [None] * len(candidates)
-        attempts = [0] * len(candidates)
-        queue = deque(range(len(candidates)))
-        busy: Dict[int, object] = {}  # actor index → ref
-        inflight: Dict[object, tuple] = {}  # ref → (candidate index, actor index)
-        while queue or inflight:
-            for a in range(len(self.actors)):
-                if not queue:
-                    break
-                if a in busy:
-                    continue
-                i = queue.popleft()
-                attempts[i] += 1
-                ref = self.actors[a].evaluate.remote(spec_id, candidates[i])
-                busy[a] = ref
-                inflight[ref] = (i, a)
-            done, _ = ray.wait(list(inflight), num_returns=1)
-            for ref in done:
-                i, a = inflight.pop(ref)
-                busy.pop(a, None)
+        return isinstance(exc, (RayActorError, WorkerCrashedError)) and not isinstance(exc, RayTaskError)
+
+    def _replace_workers(self, lost):
+        """An actor Ray could not keep (its restarts used up) is replaced by a new one; one that is only
+        unavailable for now (restarting) keeps its place. Ray itself re-sends the calls of an actor it
+        restarts (``max_task_retries=-1``): those chunks never fail here."""
+        import ray
+        unavailable = getattr(ray.exceptions, "ActorUnavailableError", ())
+        died = getattr(ray.exceptions, "ActorDiedError", ())
+        workers = set()  # actors lost since the last recovery (a chunk may fail after its actor was replaced)
+        for c in lost:
+            a, actor, _ = c.worker
+            if actor is not self.actors[a]:
+                continue
+            workers.add(a)
+            e = c.future.exception()
+            if isinstance(e, died) or not isinstance(e, unavailable):
                 try:
-                    results[i] = ray.get(ref)
-                except RayTaskError:
-                    raise  # the evaluation itself raised: a bug, not a lost worker
-                except (RayActorError, WorkerCrashedError) as e:
-                    self.failures += 1
-                    if attempts[i] >= MAX_ATTEMPTS:
-                        raise RuntimeError(f"Ray workers died {attempts[i]} times while evaluating "
-                                           f"{candidates[i].key()!r}; giving up") from e
-                    log.warning("Ray evaluator actor %d failed (%s); re-submitting %s", a, type(e).__name__,
-                                candidates[i].key())
-                    if isinstance(e, getattr(ray.exceptions, "ActorDiedError", ())) or \
-                            not isinstance(e, getattr(ray.exceptions, "ActorUnavailableError", ())):
-                        # dead for good (restarts exhausted): replace it
-                        try:
-                            ray.kill(self.actors[a], no_restart=True)
-                        except Exception:  # noqa: BLE001
-                            pass
-                        self.actors[a] = self._new_actor()
-                    queue.appendleft(i)
-        return results  # type: ignore[return-value]
+                    ray.kill(actor, no_restart=True)
+                except Exception:  # noqa: BLE001
+                    pass
+                self.actors[a] = self._new_actor()
+                self._calls[a] = []
+        return len(workers)
+
+    def _batch_in_flight(self, chunks):
+        return 2 * self.workers  # the rest wait here, for the actor that gets free first
+
+    def _cancel(self, chunk):
+        """A chunk still queued at its actor is dropped (a running one finishes: actor calls are not
+        interrupted)."""
+        if chunk.future.done():
+            return
+        try:  # the future is Ray's: it is answered (TaskCancelledError) rather than cancelled here
+            import ray
+            ray.cancel(chunk.worker[2])
+        except Exception:  # noqa: BLE001 - best effort
+            pass
 
     def actor_pids(self) -> List[int]:
         import ray
@@ -578,5 +591,5 @@ def make_pool(kind: str, specs: Dict[str, EvaluatorSpec], workers: Optional[int]
     if kind == "process":
         return ProcessPool(specs, workers, chunk_size)
     if kind == "ray":
-        return RayPool(specs, workers, address)
+        return RayPool(specs, workers, address, chunk_size=chunk_size)
     raise InputError(f"unknown executor {kind!r} (serial, process or ray)")
