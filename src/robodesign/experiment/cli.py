@@ -1,5 +1,5 @@
 """``robodesign run [CONFIG] [--out DIR] [--resume DIR] [--executor serial|process|ray] [--workers N]
-[--address ADDR]`` (the ``run`` subcommand; ``robodesign.cli`` delegates here)."""
+[--address ADDR] [--chunk-size N]`` (the ``run`` subcommand; ``robodesign.cli`` delegates here)."""
 from __future__ import annotations
 
 import argparse
@@ -24,6 +24,9 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
                                                  "the number of CPUs)")
     run.add_argument("--address", help="Ray cluster address HOST:PORT (with --executor ray; default: start a "
                                         "private local Ray instance)")
+    run.add_argument("--chunk-size", type=int, metavar="N",
+                     help="candidates per message to a worker process or Ray actor (default: the config's "
+                          "executor.chunk_size, else automatic from the batch size and --workers)")
     run.add_argument("--progress", choices=("auto", "bar", "lines", "none"), default="auto",
                      help="progress display (default: a bar on a terminal, one line per evaluation otherwise)")
     run.add_argument("--no-report", action="store_true", help="do not write the report (CSV, plots, HTML)")
@@ -41,6 +44,8 @@ def cmd_run(args) -> int:
 
     if args.workers is not None and args.workers < 1:
         raise InputError("--workers must be at least 1")
+    if args.chunk_size is not None and args.chunk_size < 1:
+        raise InputError(f"--chunk-size must be at least 1, got {args.chunk_size}")
     if args.address and (args.executor or "ray") != "ray":
         raise InputError("--address needs --executor ray")
     executor = args.executor or ("ray" if args.address else None)
@@ -66,7 +71,7 @@ def cmd_run(args) -> int:
     try:
         outcome = run_experiment(exp, out, config_text=text, config_path=cfg_path, resume=bool(args.resume),
                                  restart=args.restart, executor=executor, workers=args.workers, address=args.address,
-                                 progress=progress, report=not args.no_report)
+                                 chunk_size=args.chunk_size, progress=progress, report=not args.no_report)
     finally:
         progress.close()
     print(f"\n{outcome.evaluations} evaluations ({outcome.new_evaluations} new) in {outcome.runs} runs, "

@@ -261,7 +261,7 @@ class ExecutorConfig(BaseModel):
     kind: Literal["serial", "process", "ray"] = "serial"
     workers: Optional[int] = Field(None, ge=1)
     address: Optional[str] = None
-    chunk_size: Optional[int] = Field(None, ge=1)  # process executor: candidates per message (None: automatic)
+    chunk_size: Optional[int] = Field(None, ge=1)  # process and ray executors: candidates per message (None: automatic)
 
 
 def _solve_model():

@@ -419,8 +419,8 @@ def _open_db(path: Path, out: Path) -> ExperimentDB:
 
 def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "", config_path=None,
                    resume: bool = False, restart: bool = False, executor: Optional[str] = None,
-                   workers: Optional[int] = None, address: Optional[str] = None, progress=None,
-                   report: bool = True) -> ExperimentOutcome:
+                   workers: Optional[int] = None, address: Optional[str] = None,
+                   chunk_size: Optional[int] = None, progress=None, report: bool = True) -> ExperimentOutcome:
     """Run (or resume) an experiment into ``out``. The executor settings of the config can be overridden.
     ``restart`` (with ``resume``): start the experiment over in its folder, the old results moved aside."""
     from .executors import make_pool
@@ -457,7 +457,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
         todo = [r for r in runs if db.run_status(r.run_id) != "done"]
         if todo:
             pool = make_pool(kind, exp.evaluator_specs(), workers or exp.executor.workers,
-                             address or exp.executor.address, exp.executor.chunk_size)
+                             address or exp.executor.address, chunk_size or exp.executor.chunk_size)
             session["executor"] = pool.info()
             meta = json.loads((out / "meta.json").read_text())
             meta["sessions"][-1] = session  # recorded now: a killed session keeps its executor in meta.json
