@@ -180,6 +180,14 @@ def test_bad_workers_and_batch_size(capsys, args, msg):
     assert code == 2 and msg in err and "Traceback" not in err
 
 
+def test_run_checks_its_chunk_size(capsys):
+    """``robodesign run --chunk-size`` (process and Ray executors) is checked before anything starts."""
+    from robodesign.cli import main
+    code = main(["run", "--executor", "ray", "--chunk-size", "0"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--chunk-size must be at least 1, got 0" in err and "Traceback" not in err
+
+
 def test_bound_executor_sends_each_candidate_to_the_workers_once():
     """Repeats (within a batch or from an earlier one) come from the driver's cache, as in-process."""
     from robodesign.evaluator import Evaluation
