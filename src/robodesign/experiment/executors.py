@@ -9,22 +9,25 @@ loaded once per worker and shared between specs.
 (``map(candidates) -> list[Evaluation]`` in the order given; ``imap(candidates, batch_size)``, the same as a
 stream that pulls candidates only as workers need them; ``close()``).
 
-Messages: the process pool sends candidates to its workers in *chunks*, several candidates per message, and
-gets the evaluations back per chunk (a PTP_3 candidate is often screened out in 1–2 ms, so one message per
-candidate would cost a noticeable share of the work). A batch is split by guided self-scheduling: each
-chunk takes ``ceil(remaining / (2·workers))`` candidates, so the big chunks go first and the last ones are
-single candidates that even out the workers at the end of the batch (16 candidates on 2 workers: 8
-messages instead of 16). A stream (``imap``) is cut into chunks of :func:`auto_chunk_size` (16 on 2
-workers: 4). ``chunk_size`` (``--chunk-size``; the experiment config's ``executor.chunk_size``) fixes it.
+Messages: the process pool and the Ray pool (both :class:`ChunkedPool`) send candidates to their workers in
+*chunks*, several candidates per message, and get the evaluations back per chunk (a PTP_3 candidate is
+often screened out in 1–2 ms, so one message per candidate would cost a noticeable share of the work). A
+batch is split by guided self-scheduling: each chunk takes ``ceil(remaining / (2·workers))`` candidates, so
+the big chunks go first and the last ones are single candidates that even out the workers at the end of
+the batch (16 candidates on 2 workers: 8 messages instead of 16). A stream (``imap``) is cut into chunks of
+:func:`auto_chunk_size` (16 on 2 workers: 4), at most two chunks per worker in flight. ``chunk_size``
+(``robodesign optimize --chunk-size``, ``robodesign run --chunk-size``, the experiment config's
+``executor.chunk_size``) fixes it. ``messages`` counts the chunks sent.
 
 Results do not depend on the executor: evaluations are pure functions of the candidate (per-candidate
 seeds) and the study tells them in ask order.
 
 Faults: a process-pool worker that dies (``BrokenProcessPool``) makes the pool restart and re-run the
-candidates that had no result. A Ray actor that dies is restarted by Ray (``max_restarts``) and its
-in-flight call retried (``max_task_retries``); should the actor be gone for good, a new actor is created
-and the candidate re-submitted. Either way no candidate is lost, and none is stored twice (only the main
-process stores results).
+chunks that had no result. A Ray actor that dies is restarted by Ray (``max_restarts``) and its in-flight
+chunks retried by Ray (``max_task_retries``); should the actor be gone for good, a new actor is created
+and only the chunks that actor had are re-submitted (the other actors' chunks keep their results). A chunk
+is sent at most :data:`MAX_ATTEMPTS` times. Either way no candidate is lost, and none is stored twice
+(only the main process stores results).
 """
 from __future__ import annotations
 
@@ -46,7 +49,7 @@ from ..solvers import ik_kernel
 
 log = logging.getLogger(__name__)
 
-MAX_ATTEMPTS = 4  # per candidate, counting the first
+MAX_ATTEMPTS = 4  # per chunk (the candidates sent in one message), counting the first
 #: candidates a stream (``imap``) may have evaluated ahead of the one the caller waits for: a long
 #: evaluation holds back the delivery of the later ones, not the workers
 MAX_AHEAD = 1024
