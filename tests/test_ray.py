@@ -101,6 +101,7 @@ def test_ray_pool_sends_chunks_and_loses_only_a_dead_actors_chunks():
     from robodesign.experiment.executors import RayPool, auto_chunk_size, chunk_sizes, chunked
     from robodesign.optimize import SerialExecutor, create_optimizer
     from robodesign.problem import Problem
+    from robodesign.solvers import ik_kernel
 
     n = 32  # candidates of the stream (two batches of 16)
     problem = Problem.build(str(TASKS / "simple" / "PTP_3.json"), str(IMPROV), "cyc")
@@ -116,6 +117,8 @@ def test_ray_pool_sends_chunks_and_loses_only_a_dead_actors_chunks():
         # one pool (two would wait for each other's CPUs): first with its chunk size fixed, then automatic
         with RayPool({"s": spec}, 2, max_restarts=0, chunk_size=5) as pool:
             assert pool.info()["chunk_size"] == 5
+            loop = "compiled" if ik_kernel.ready() else "python"  # the actors run the driver's IK loop
+            assert pool.jit == (loop == "compiled") and ray.get([a.ik_loop.remote() for a in pool.actors]) == [loop] * 2
             messages = []
             for size in (5, None):
                 pool.chunk_size = size
@@ -156,6 +159,7 @@ def test_ray_pool_sends_chunks_and_loses_only_a_dead_actors_chunks():
             assert all(c.attempts == 2 and c.worker[1] is not dead for c in again.values())
             assert len(first_actor) == n // 4 and pool.messages - before == len(sent) == n // 4 + len(again)
             assert pool.failures == 1 and pool.actors[0] is not dead and victim not in pool.actor_pids()
+            assert ray.get(pool.actors[0].ik_loop.remote()) == loop  # the new actor too
     finally:
         if ray.is_initialized():
             ray.shutdown()
