@@ -266,3 +266,35 @@ def test_ask_ahead_study_resumes_stored_evaluations_exactly():
     alien = Memory([full.rows[1]])
     with pytest.raises(InputError, match="cannot resume: evaluation 0"):
         run(alien)
+
+
+def test_default_workers_follow_the_budget(monkeypatch):
+    """Without --workers: all cores, except an evaluations-only budget below 200, where a pool's start-up
+    costs more than it saves (docs/benchmarks.md); an explicit --workers is always kept."""
+    import os
+    from robodesign.commands import POOL_MIN_EVALUATIONS, optimize_workers
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2}, raising=False)
+    assert POOL_MIN_EVALUATIONS == 200
+    assert optimize_workers(None, 16, None, Budget(evaluations=50)) == 1
+    assert optimize_workers(None, 16, None, Budget(evaluations=199)) == 1
+    assert optimize_workers(None, 16, None, Budget(evaluations=200)) == 3
+    assert optimize_workers(None, 16, None, Budget(seconds=5.0)) == 3
+    assert optimize_workers(None, 16, None, Budget(evaluations=50, seconds=60.0)) == 3  # a time limit: the pool
+    assert optimize_workers(None, 2, None, Budget(evaluations=500)) == 2  # at most one per candidate of a batch
+    assert optimize_workers(2, 16, None, Budget(evaluations=50)) == 2
+    assert optimize_workers(None, 16, None) == 3
+
+
+def test_cli_short_default_budget_runs_in_the_process(capsys, tmp_path):
+    """The default budget (50evals) of `robodesign optimize` starts no pool and says so."""
+    from robodesign.cli import main
+    code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "6evals", "--batch-size", "3",
+                 "--out", str(tmp_path / "b.json")])
+    out = capsys.readouterr().out
+    assert code in (0, 1)
+    assert "evaluating in this process: 6 evaluations are fewer than a worker pool's start-up pays for (200)" in out
+    assert "6 evaluations in" in out and "1 worker(s), batches of 3" in out and "messages" not in out
+    code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "6evals", "--batch-size", "3",
+                 "--json", "--out", str(tmp_path / "b.json")])
+    summary = json.loads(capsys.readouterr().out)
+    assert (summary["workers"], summary["messages"], summary["evaluations"]) == (1, 0, 6)

@@ -276,8 +276,10 @@ def build_parser() -> argparse.ArgumentParser:
     op.add_argument("--cost", default="cyc", help="cost function to minimise, e.g. cyc, mechEnergy, cyc_0.2,mass_1")
     op.add_argument("--budget", default="50evals", help="e.g. 500evals, 60s, 10min, or 500evals,60s")
     op.add_argument("--seed", type=int, default=0, help="random seed of the optimizer and of every evaluation")
-    op.add_argument("--workers", type=int, help="evaluate each batch in N worker processes (default: all cores; 1 = "
-                                                "in this process); the result does not depend on N")
+    op.add_argument("--workers", type=int, help="evaluate each batch in N worker processes (default: all cores, "
+                                                "but a budget of fewer than 200 evaluations and no time runs in "
+                                                "this process, where a pool's start-up costs more than it saves; "
+                                                "1 = in this process); the result does not depend on N")
     op.add_argument("--batch-size", type=int, default=16,
                     help="candidates asked per step and evaluated in parallel; the same seed and batch size give "
                          "the same result for any --workers (default: %(default)s)")

@@ -128,7 +128,7 @@ def optimize_command(args, ctask: CollabTask) -> int:
         raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
     budget = Budget.parse(args.budget)
     ms = load_module_set(args.modules)
-    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size)
+    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)  # budget: per robot
 
     def on_robot(rid, res):
         if not args.json:

@@ -169,7 +169,10 @@ def cmd_optimize(args) -> int:
     spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
                          seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
-    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size)
+    workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)
+    if args.workers is None and short_budget(budget) and not args.json:
+        print(f"evaluating in this process: {budget.evaluations} evaluations are fewer than a worker pool's "
+              f"start-up pays for ({POOL_MIN_EVALUATIONS}); --workers N uses N processes")
     executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
@@ -224,15 +227,25 @@ def cmd_optimize(args) -> int:
     return 0 if best is not None and best.feasible else 1
 
 
-def optimize_workers(workers, batch_size: int, chunk_size: Optional[int] = None) -> int:
-    """``--workers`` (default: every core this process may use), at most one per candidate of a batch;
-    ``--batch-size`` and ``--chunk-size`` are checked on the way."""
+#: without ``--workers``, a budget of fewer evaluations than this (and no time limit) runs in this process:
+#: a worker pool's start-up (~0.7 s: spawn, import, load, warm up) costs more than it saves there (random
+#: search on PTP_3/IMPROV, the whole command: 50 evaluations 2.3 s in the process against 2.8 s with 2
+#: workers, 100: 2.7 / 3.3 s, 200: 4.4 / 4.2 s, 400: 5.4 / 4.7 s; docs/benchmarks.md)
+POOL_MIN_EVALUATIONS = 200
+
+
+def optimize_workers(workers, batch_size: int, chunk_size: Optional[int] = None, budget=None) -> int:
+    """``--workers`` (default: every core this process may use, or 1 for an evaluations-only ``budget`` below
+    :data:`POOL_MIN_EVALUATIONS`), at most one per candidate of a batch; ``--batch-size`` and
+    ``--chunk-size`` are checked on the way."""
     import os
     if batch_size < 1:
         raise InputError(f"--batch-size must be at least 1, got {batch_size}")
     if chunk_size is not None and chunk_size < 1:
         raise InputError(f"--chunk-size must be at least 1, got {chunk_size}")
     if workers is None:
+        if short_budget(budget):
+            return 1
         try:
             workers = len(os.sched_getaffinity(0))
         except AttributeError:
@@ -240,6 +253,12 @@ def optimize_workers(workers, batch_size: int, chunk_size: Optional[int] = None)
     elif workers < 1:
         raise InputError(f"--workers must be at least 1, got {workers}")
     return max(1, min(int(workers), batch_size))
+
+
+def short_budget(budget) -> bool:
+    """Whether ``budget`` (a :class:`~robodesign.optimize.Budget`) is too short for a worker pool to pay off."""
+    return budget is not None and budget.seconds is None and budget.evaluations is not None \
+        and budget.evaluations < POOL_MIN_EVALUATIONS
 
 
 def optimize_executor(spec, workers: int, chunk_size: Optional[int] = None):
