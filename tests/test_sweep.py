@@ -9,10 +9,11 @@ from robodesign.problem import Problem
 from robodesign.robot import Robot
 from robodesign.sweep import SweepChecker, own_axis_symmetric
 
-from conftest import COBRA as SHARED
+from conftest import COBRA as SHARED, ROOT
 
 IMPROV = SHARED / "modules" / "IMPROV"
 PRIMITIVES = SHARED / "modules" / "geometric_primitive_modules"
+BUILTIN = ROOT / "assets" / "modules" / "robodesign_arm"
 PTP3 = SHARED / "tasks" / "simple" / "PTP_3.json"
 ORDER = ("1", "22", "5", "23", "5", "29", "14", "16")  # IMPROV: three 2-DoF modules (housing, sphere, housing)
 
@@ -85,7 +86,7 @@ def test_dropped_joints_do_not_change_distances():
     assert np.ptp([pair_distances(r, [chk.pairs[c]], qq)[0] for qq in Q]) > 1e-3
 
 
-@pytest.mark.parametrize("module_set,seed", [(IMPROV, 1), (PRIMITIVES, 2)])
+@pytest.mark.parametrize("module_set,seed", [(IMPROV, 1), (PRIMITIVES, 2), (BUILTIN, 3)])
 def test_motion_bound_holds_densely(module_set, seed):
     """The property certification rests on, for every pair (self and obstacle) of random real robots: along a
     linear joint motion qa→qb, |d(s) − d(s')| ≤ (W·|qb − qa|)·|s − s'| (dense samples, exact distances; the
@@ -133,3 +134,31 @@ def test_near_contact_motion_same_verdict_far_fewer_queries():
     d = np.array([tight.distances(q, [c])[0] for q in Q])
     assert d.min() < 2e-5  # the near contact is real
     assert plain.queries > 20 * tight.queries
+
+
+def test_robot_pair_motion_bound_holds_densely():
+    """The same property for two robots moving at once (robodesign.pair_sweep, collaborative cells): the lever
+    arms with bodies of revolution bound every cross pair's distance change along a stacked linear motion."""
+    from robodesign.pair_sweep import RobotPairSweep
+    p = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    from robodesign.sweep import lever_arms
+    a, _ = improv_robot()
+    shift = np.eye(4)
+    shift[:3, 3] = [0.45, 0.1, 0.0]
+    b = Robot.from_order(p.module_set, ("1", "23", "5", "29", "14", "16"), base_pose=shift)
+    sweep = RobotPairSweep(a, b)
+    assert np.sum(lever_arms(a) < lever_arms(a, symmetry=False)) == 3  # the three output cylinders
+    rng = np.random.default_rng(4)
+    s = np.linspace(0.0, 1.0, 201)
+    checked = 0
+    for _ in range(3):
+        qa = np.concatenate([random_q(a, rng)[0], random_q(b, rng)[0]])
+        qb = np.concatenate([random_q(a, rng)[0], random_q(b, rng)[0]])
+        qb = qa + 0.5 * (qb - qa)
+        bound = np.abs(qb - qa) @ sweep.W
+        D = np.array([sweep.distances(qa + t * (qb - qa), range(len(sweep.pairs))) for t in s])
+        apart = (D[:-1] > 0) & (D[1:] > 0)
+        slope = np.max(np.where(apart, np.abs(np.diff(D, axis=0)), 0.0), axis=0) / (s[1] - s[0])
+        assert np.all(slope <= bound + 1e-3)
+        checked += int(np.sum(apart.all(axis=0)))
+    assert checked > 300
