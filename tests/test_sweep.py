@@ -162,3 +162,27 @@ def test_robot_pair_motion_bound_holds_densely():
         assert np.all(slope <= bound + 1e-3)
         checked += int(np.sum(apart.all(axis=0)))
     assert checked > 300
+
+
+def test_symmetry_needs_the_centre_on_the_axis_and_the_axis_aligned():
+    """symmetric_about by hand: a sphere anywhere on the line, a cylinder/capsule/cone only when coaxial; a box
+    or a convex mesh never; 1e-9 m or rad of misalignment is the limit."""
+    import coal
+    from robodesign.sweep import symmetric_about
+
+    def obj(shape, xyz=(0, 0, 0), rot=np.eye(3)):
+        return pin.GeometryObject("g", 0, pin.SE3(rot, np.array(xyz, float)), shape)
+    z, p0 = np.array([0.0, 0.0, 1.0]), np.zeros(3)
+    tilt = pin.exp3(np.array([1e-6, 0.0, 0.0]))
+    assert symmetric_about(obj(coal.Sphere(0.1), (0, 0, 0.3)), p0, z)
+    assert not symmetric_about(obj(coal.Sphere(0.1), (0.001, 0, 0.3)), p0, z)
+    for shape in (coal.Cylinder(0.05, 0.2), coal.Capsule(0.05, 0.2), coal.Cone(0.05, 0.2)):
+        assert symmetric_about(obj(shape, (0, 0, -0.1)), p0, z)
+        assert symmetric_about(obj(shape, (0, 0, -0.1), pin.exp3(np.array([np.pi, 0, 0]))), p0, z)  # flipped
+        assert not symmetric_about(obj(shape, (0, 0, -0.1), tilt), p0, z)
+        assert not symmetric_about(obj(shape, (0, 2e-9, -0.1)), p0, z)
+        assert symmetric_about(obj(shape, (0, 5e-10, -0.1)), p0, z)
+        x = np.array([1.0, 0, 0])
+        assert not symmetric_about(obj(shape), p0, x)  # its axis is z
+    assert not symmetric_about(obj(coal.Box(0.1, 0.1, 0.1)), p0, z)
+    assert symmetric_about(obj(coal.Sphere(0.1), (0.2, 0.5, 0.0)), np.array([0.2, 0.5, 7.0]), z)  # line off origin
