@@ -428,17 +428,14 @@ class SearchSpace:
             if i == 0:
                 if mid not in self.base_modules:
                     return i, None, clash
-                state = (mid, free_connectors(ms, mid), 0, 0, 1)
-                clash = not self._one_base_connector(mid)
+                state, clash = self._root(mid)
             else:
                 _, after, _, blocks = self._step(state) if state is not None else _DEAD_END
                 if mid not in after:
                     return i, None, clash
                 state = after[mid]
-                if mid in blocked:
-                    clash = True
-                if blocks[mid]:
-                    blocked = blocked | blocks[mid]
+                hit, blocked = _block(blocked, blocks, mid)
+                clash = clash or hit
         return None, state, clash
 
     def _assembly_error(self, order: Tuple[str, ...]) -> Optional[str]:
@@ -469,15 +466,13 @@ class SearchSpace:
         # by exactly one pair): `clash` tracks that along the walk, and the Assembly check runs only if
         # it finds a clash (it then gives the verdict), so the result is the one of validate_order.
         bases = self.base_modules
-        ms = self.module_set
         step = self._step
         for _ in range(max_tries):
             if not bases:
                 continue  # validate_order(()) fails: "empty order"
             mid = bases[int(rng.integers(len(bases)))]
             order = [mid]
-            state = (mid, free_connectors(ms, mid), 0, 0, 1)
-            clash = not self._one_base_connector(mid)
+            state, clash = self._root(mid)
             blocked = frozenset()  # modules that would mate with an earlier module than the last one
             while state is not None:
                 names, after, _, blocks = step(state)
@@ -485,15 +480,17 @@ class SearchSpace:
                     break
                 mid = names[int(rng.integers(len(names)))]
                 order.append(mid)
-                if mid in blocked:
-                    clash = True
-                b = blocks[mid]
-                if b:
-                    blocked = blocked | b
+                hit, blocked = _block(blocked, blocks, mid)
+                clash = clash or hit
                 state = after[mid]
             if state is None and (not clash or self._assembly_error(tuple(order)) is None):
                 return tuple(order)  # ended with an end effector and assembles
         raise InputError("the search space contains no valid module order under its rules")
+
+    def _root(self, mid: str):
+        """(state of the one-module order ``(mid,)``, whether Assembly.from_order may reject an order starting
+        with it: its base connectors are not exactly one)."""
+        return (mid, free_connectors(self.module_set, mid), 0, 0, 1), not self._one_base_connector(mid)
 
     def _one_base_connector(self, mid: str) -> bool:
         cache = self._cache("_memo_base")
@@ -546,6 +543,13 @@ class SearchSpace:
         return Candidate(tuple(order), tuple(0.0 if self.base_bounds.lower[i] <= 0 <= self.base_bounds.upper[i]
                                              else 0.5 * (self.base_bounds.lower[i] + self.base_bounds.upper[i])
                                              for i in self.base_bounds.free))
+
+
+def _block(blocked: frozenset, blocks: dict, mid: str):
+    """One step of the clash tracking of :meth:`SearchSpace.random_order`: (``mid`` mates with a connector an
+    earlier module than its predecessor left free, the modules blocked after it)."""
+    b = blocks[mid]
+    return mid in blocked, (blocked | b if b else blocked)
 
 
 @lru_cache(maxsize=4096)

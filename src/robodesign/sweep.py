@@ -130,24 +130,23 @@ def lever_arms(robot: Robot, symmetry: bool = True) -> np.ndarray:
     return R
 
 
-def first_joint_below(model, parent_joint: int, joints: Collection[int]) -> Optional[int]:
-    """The joint of ``joints`` (pinocchio joint ids on one branch below ``parent_joint``) that hangs directly
-    from ``parent_joint``, if any."""
-    for j in joints:
-        if model.parents[j] == parent_joint:
-            return j
-    return None
-
-
-def symmetric_about_child_joint(model, obj, j: int) -> bool:
-    """Whether geometry ``obj``, hanging from joint ``j``'s parent joint, is a body of revolution about
-    ``j``'s axis (fixed in obj's frame): then the motion of ``j`` does not change obj's distance to anything
-    that hangs below ``j``."""
-    axis = revolute_axis(model, j)
-    if axis is None:
-        return False
-    M = model.jointPlacements[j]
-    return symmetric_about(obj, np.asarray(M.translation, dtype=float), np.asarray(M.rotation, dtype=float) @ axis)
+def coaxial_child_joints(robot: Robot) -> List[set]:
+    """Per robot geometry g: the revolute joints hanging directly from g's joint whose axis (fixed in g's
+    frame) g is a body of revolution about; the motion of such a joint does not change g's distance to
+    anything that hangs below it."""
+    model, gm = robot.model, robot.geom_model
+    out = [set() for _ in range(robot.n_collision_geometries)]
+    for j in range(1, model.njoints):
+        axis = revolute_axis(model, j)
+        if axis is None:
+            continue
+        M = model.jointPlacements[j]
+        point, direction = np.asarray(M.translation, dtype=float), np.asarray(M.rotation, dtype=float) @ axis
+        for g in range(robot.n_collision_geometries):
+            obj = gm.geometryObjects[g]
+            if obj.parentJoint == model.parents[j] and symmetric_about(obj, point, direction):
+                out[g].add(j)
+    return out
 
 
 class SweepChecker:
@@ -183,6 +182,7 @@ class SweepChecker:
                 s.add(j)
                 j = model.parents[j]
             ancestors.append(s)
+        coaxial = coaxial_child_joints(robot) if symmetry else [set()] * robot.n_collision_geometries
         W = np.zeros((robot.dof, len(pairs)))
         self.margins = np.zeros(len(pairs))
         self.is_env = np.zeros(len(pairs), dtype=bool)
@@ -203,10 +203,8 @@ class SweepChecker:
                 for j in only_b:
                     W[model.joints[j].idx_v, c] = R[model.joints[j].idx_v, b]
                 # the first joint below the upper body: a body of revolution about its axis sees no motion
-                for up, low_only in ((a, only_b), (b, only_a)) if symmetry else ():
-                    j1 = first_joint_below(model, gm.geometryObjects[up].parentJoint, low_only)
-                    if j1 is not None and symmetric_about_child_joint(model, gm.geometryObjects[up], j1):
-                        W[model.joints[j1].idx_v, c] = 0.0
+                for j in (coaxial[a] & only_b) | (coaxial[b] & only_a):
+                    W[model.joints[j].idx_v, c] = 0.0
         self.W = W
         names = [o.name for o in gm.geometryObjects]
         self.pair_names = [(names[gm.collisionPairs[k].first], names[gm.collisionPairs[k].second]) for k in pairs]

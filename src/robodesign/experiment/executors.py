@@ -289,7 +289,8 @@ class ChunkedPool(EvaluatorPool):
         raise NotImplementedError
 
     def _batch_in_flight(self, chunks: int) -> int:
-        """Chunks of a batch (:meth:`map`) sent before the first one is answered."""
+        """Chunks of a batch (:meth:`map`) sent before the first one is answered (the process pool: all at
+        once, its executor's call queue hands them to the workers as they get free)."""
         return chunks
 
     def _cancel(self, chunk: _Chunk) -> None:
@@ -427,9 +428,6 @@ class ProcessPool(ChunkedPool):
     def _replace_workers(self, lost):
         self._restart()
         return 1
-
-    def _batch_in_flight(self, chunks):
-        return chunks  # all at once: the executor's call queue hands them to the workers as they get free
 
     def close(self):
         if self._pool is not None:
