@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
-from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
-from robodesign.paths import project_root
-from robodesign.problem import Problem
-from robodesign.search_space import BASE_PARAMS, Candidate
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.core.paths import project_root
+from robodesign.design.problem import Problem
+from robodesign.design.search_space import BASE_PARAMS, Candidate
 
 HERE = Path(__file__).resolve().parent
 
@@ -59,7 +59,7 @@ def main():
     meta = json.loads((res_dir / "meta.json").read_text())
     task_file = project_root() / "assets" / "tasks" / "robodesign" / "base_placement.json"
     settings = meta.get("solve") or {}
-    from robodesign.solve import SolveSettings
+    from robodesign.design.solve import SolveSettings
     problem = Problem.build(task_file, "robodesign_arm", "cyc")
     spec = EvaluatorSpec(problem, seed=args.seed)
     if settings:

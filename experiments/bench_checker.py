@@ -8,7 +8,7 @@ it has ~1,500 samples (a uniform time stretch keeps it valid). Prints samples pe
 
 Then a near-contact motion: the IMPROV arm 1,22,5,23,5,29,14,16 that `robodesign optimize --optimizer
 random --seed 3` evaluates 6th on PTP_3, whose link slides past a joint housing at 3–18 µm. Its certified
-collision check (robodesign.sweep) with and without the bodies-of-revolution bounds: time and distance
+collision check (robodesign.model.sweep) with and without the bodies-of-revolution bounds: time and distance
 queries.
 """
 from __future__ import annotations
@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from robodesign import load_module_set
-from robodesign.checker import CheckSettings, check
-from robodesign.solution import SolutionTrajectory
+from robodesign.judge.checker import CheckSettings, check
+from robodesign.formats.solution import SolutionTrajectory
 from robodesign.solvers.timing import JointTrajectory
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 
@@ -70,10 +70,10 @@ def main():
 
 def near_contact(task, ms, repeat: int) -> None:
     from dataclasses import replace
-    from robodesign.cell import build_robot
-    from robodesign.evaluator import candidate_seed, evaluation_settings
-    from robodesign.search_space import Candidate
-    from robodesign.sweep import SweepChecker
+    from robodesign.model.cell import build_robot
+    from robodesign.design.evaluator import candidate_seed, evaluation_settings
+    from robodesign.design.search_space import Candidate
+    from robodesign.model.sweep import SweepChecker
     order = ("1", "22", "5", "23", "5", "29", "14", "16")
     settings = replace(evaluation_settings(), seed=candidate_seed(3, Candidate(order, ()).key()))
     res = solve(task, ms, list(order), np.eye(4), cost="cyc", settings=settings)

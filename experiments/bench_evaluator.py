@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from robodesign import load_module_set
-from robodesign.search_space import SearchSpace
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
+from robodesign.design.search_space import SearchSpace
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 

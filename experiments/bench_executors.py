@@ -53,9 +53,9 @@ def machine_ceiling(rounds: int = 3) -> list:
 
 
 def main():
-    from robodesign.evaluator import Evaluator, EvaluatorSpec
+    from robodesign.design.evaluator import Evaluator, EvaluatorSpec
     from robodesign.experiment.executors import ProcessPool, RayPool
-    from robodesign.problem import Problem
+    from robodesign.design.problem import Problem
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--rounds", type=int, default=3)
@@ -116,11 +116,11 @@ def main():
     # runner overhead: the full experiment (serial, no report) minus the time inside Evaluator.evaluate and the
     # optimizer's ask(), relative to the time inside the evaluator; broken down into the per-run re-check of
     # the best solution file and the per-evaluation costs
-    import robodesign.evaluator as evm
+    import robodesign.design.evaluator as evm
     import robodesign.experiment.runner as runner_mod
     from robodesign.experiment.config import load_experiment
     from robodesign.experiment.storage import RunStorage
-    from robodesign.optimize import load_optimizer
+    from robodesign.design.optimize import load_optimizer
     opt_cls = load_optimizer("random")
     inside = {"evaluate": 0.0, "ask": 0.0, "store": 0.0, "best": 0.0}
     patched = [(evm.Evaluator, "evaluate", "evaluate"), (opt_cls, "ask", "ask"), (RunStorage, "append", "store"),

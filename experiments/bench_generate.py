@@ -5,7 +5,7 @@ goals are verified (``--verify ik``) versus the whole task (``--verify solve``).
     flock /tmp/robodesign-bench.lock nice -n 5 .venv/bin/python experiments/bench_generate.py --count 10
 
 Per variant: CPU seconds per task (process time, so a busy machine inflates it less than wall time) for
-``--verify ik`` and ``--verify solve``, and the share of the ``ik`` tasks that robodesign.solve.solve with the
+``--verify ik`` and ``--verify solve``, and the share of the ``ik`` tasks that robodesign.design.solve.solve with the
 reference design (robodesign_arm, default order, nominal base, seed 0, default settings) solves and the checker
 accepts. With ``--verify solve`` that share is 100 % by construction (up to planner time-outs on a busy machine).
 """
@@ -32,9 +32,9 @@ VARIANTS = {
 
 def solved_share(files) -> float:
     from robodesign.generate.common import REFERENCE_ORDER
-    from robodesign.module_io import load_module_set
-    from robodesign.solve import solve
-    from robodesign.task_io import load_task
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.design.solve import solve
+    from robodesign.formats.task_io import load_task
     ms = load_module_set("robodesign_arm")
     ok = sum(solve(load_task(f), ms, list(REFERENCE_ORDER)).feasible for f in files)
     return ok / len(files)

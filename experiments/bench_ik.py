@@ -29,13 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
-from robodesign.assembly import Assembly
-from robodesign.errors import InputError
-from robodesign.geometry import coal_shapes, parse_geometries
-from robodesign.module_io import load_module_set
-from robodesign.robot import Obstacle, Robot
+from robodesign.formats.assembly import Assembly
+from robodesign.core.errors import InputError
+from robodesign.formats.geometry import coal_shapes, parse_geometries
+from robodesign.formats.module_io import load_module_set
+from robodesign.model.robot import Obstacle, Robot
 from robodesign.solvers.ik import solve_ik
-from robodesign.tolerance import ToleratedPose
+from robodesign.formats.tolerance import ToleratedPose
 
 COBRA = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 TASK = COBRA / "tasks" / "simple" / "PTP_3.json"

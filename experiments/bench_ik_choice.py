@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 
 from robodesign import load_module_set
-from robodesign.assembly import random_serial_order
-from robodesign.evaluator import evaluation_settings
-from robodesign.paths import project_root
-from robodesign.solve import solve
-from robodesign.task_io import load_task
+from robodesign.formats.assembly import random_serial_order
+from robodesign.design.evaluator import evaluation_settings
+from robodesign.core.paths import project_root
+from robodesign.design.solve import solve
+from robodesign.formats.task_io import load_task
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 # (name, task file, module set, joint counts of the drawn arms, used in turn)

@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign import Robot, load_module_set
-from robodesign.assembly import random_serial_order
+from robodesign.formats.assembly import random_serial_order
 
 IMPROV = Path(__file__).resolve().parents[2] / "shared" / "cobra" / "modules" / "IMPROV"
 

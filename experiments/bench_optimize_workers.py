@@ -4,7 +4,7 @@
         [--rate-evals 640] [--rounds 7] [--ablation] [--seeds 0,1,2,3,4] [--target 2.9] [--max-evals 600]
 
 Every measurement runs in a fresh Python process (the same cold start for every worker count: imports,
-loading the compiled IK kernels, task and modules) and starts from ``robodesign.solve.warm_up`` — what the
+loading the compiled IK kernels, task and modules) and starts from ``robodesign.design.solve.warm_up`` — what the
 pool's workers do when they start — so that the rate compares steady states; the start-up is reported apart.
 
 1. Throughput: evaluations per second of the random optimizer (batches of 16, the CLI's default) with
@@ -50,11 +50,11 @@ def search(optimizer: str, seed: int, workers: int, evaluations: int, target=Non
            ask_ahead: bool = True) -> dict:
     """One search in this process, as ``robodesign optimize`` runs it."""
     t0 = time.perf_counter()
-    from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
+    from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from robodesign.experiment.executors import ProcessPool
-    from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
-    from robodesign.problem import Problem
-    from robodesign.solve import warm_up
+    from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+    from robodesign.design.problem import Problem
+    from robodesign.design.solve import warm_up
     problem = Problem.build(str(TASK), str(IMPROV), "cyc")
     spec = EvaluatorSpec(problem, evaluation_settings(), seed=seed)
     pool = None

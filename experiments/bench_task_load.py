@@ -21,8 +21,8 @@ COBRA = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 LOAD = r'''
 import sys, time
 t0 = time.perf_counter()
-from robodesign.module_io import load_module_set
-from robodesign.task_io import load_task
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.task_io import load_task
 kind, ref = sys.argv[1], sys.argv[2]
 t1 = time.perf_counter()
 (load_task if kind == "task" else load_module_set)(ref)
@@ -45,7 +45,7 @@ def main() -> None:
                       ("task", COBRA / "tasks" / "simple" / "PTP_3.json"),
                       ("modules", COBRA / "modules" / "IMPROV")):
         print(f"  {ref.relative_to(COBRA)}: {fresh_load_ms(kind, ref, a.repeat):.0f} ms")
-    from robodesign.geometry import read_stl  # the reader itself is what is measured
+    from robodesign.formats.geometry import read_stl  # the reader itself is what is measured
     t = time.perf_counter()
     import trimesh
     print(f"import trimesh: {(time.perf_counter() - t) * 1e3:.0f} ms (not needed for STL any more)")

@@ -1,7 +1,7 @@
 """Where the checker's one-motion tolerances come from (docs/checker.md, "One motion").
 
 For every step the checker compares Δq with the trapezoid rule h·(dq_k + dq_k+1)/2 and Δdq with
-h·(ddq_k + ddq_k+1)/2 (robodesign.quantities.step_residuals). This script measures, relative to a joint's
+h·(ddq_k + ddq_k+1)/2 (robodesign.judge.quantities.step_residuals). This script measures, relative to a joint's
 largest acceleration A in the file (max |ddq|, max |Δdq|/h):
 
 1. reference-style trajectories (Timor's Trajectory.from_mstraj: straight segments, constant-acceleration
@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from reference_trajectories import mstraj_like  # noqa: E402
 
-from robodesign.quantities import DQ_RULE_FACTOR, Q_RULE_FACTOR, step_residuals  # noqa: E402
+from robodesign.judge.quantities import DQ_RULE_FACTOR, Q_RULE_FACTOR, step_residuals  # noqa: E402
 
 
 def reference_style(trials: int, seed: int = 0):
@@ -50,9 +50,9 @@ def robodesign_outputs():
     spec = importlib.util.spec_from_file_location("make_tasks", ROOT / "assets" / "tasks" / "make_tasks.py")
     mt = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mt)
-    from robodesign.module_io import load_module_set
-    from robodesign.solve import SolveSettings, solve
-    from robodesign.task_io import load_task
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.design.solve import SolveSettings, solve
+    from robodesign.formats.task_io import load_task
     rows = []
     for name in sorted(mt.TASKS):
         _, res, _ = mt.solve_builtin(name)

@@ -13,9 +13,9 @@ import json
 import time
 from pathlib import Path
 
-from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
-from robodesign.problem import Problem
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.design.problem import Problem
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared" / "cobra"

@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from robodesign import load_module_set
-from robodesign.cell import build_robot
-from robodesign.checker import check
-from robodesign.solve import SolveSettings, solve
+from robodesign.model.cell import build_robot
+from robodesign.judge.checker import check
+from robodesign.design.solve import SolveSettings, solve
 from robodesign.solvers.timing import time_optimal_bound
-from robodesign.task_io import load_task
-from robodesign.urdf import import_urdf
+from robodesign.formats.task_io import load_task
+from robodesign.formats.urdf import import_urdf
 
 HERE = Path(__file__).resolve().parent
 SHARED = HERE.parents[1] / "shared" / "cobra"

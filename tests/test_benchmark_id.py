@@ -1,8 +1,8 @@
 import pytest
 
-from robodesign.benchmark_id import BenchmarkID, RobotRef, resolve
-from robodesign.costs import parse_cost
-from robodesign.errors import InputError
+from robodesign.formats.benchmark_id import BenchmarkID, RobotRef, resolve
+from robodesign.formats.costs import parse_cost
+from robodesign.core.errors import InputError
 
 
 def test_simple_id():

@@ -13,16 +13,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.cell import build_robot
-from robodesign.checker import check
-from robodesign.quantities import TrajectoryQuantities, step_residuals
-from robodesign.module_io import load_module_set
-from robodesign.solution import Solution, SolutionTrajectory, load_solution
+from robodesign.model.cell import build_robot
+from robodesign.judge.checker import check
+from robodesign.judge.quantities import TrajectoryQuantities, step_residuals
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.solution import Solution, SolutionTrajectory, load_solution
 from robodesign.solvers.ik import solve_ik
-from robodesign.task_io import load_task
-from robodesign.task_spec import (BasePlacement, CollisionFree, EndEffectorConstraint, Follow, JointLimitsConstraint,
+from robodesign.formats.task_io import load_task
+from robodesign.formats.task_spec import (BasePlacement, CollisionFree, EndEffectorConstraint, Follow, JointLimitsConstraint,
                                   Leave, Pause)
-from robodesign.tolerance import ToleratedPose
+from robodesign.formats.tolerance import ToleratedPose
 
 from conftest import ROOT
 

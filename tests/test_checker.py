@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from robodesign import load_module_set
-from robodesign.checker import check
-from robodesign.solution import Solution, SolutionTrajectory, load_solution
-from robodesign.task_io import load_task, parse_task
+from robodesign.judge.checker import check
+from robodesign.formats.solution import Solution, SolutionTrajectory, load_solution
+from robodesign.formats.task_io import load_task, parse_task
 
 from conftest import toy_module_set
 
@@ -174,7 +174,7 @@ def test_torque_limit(setup):
     ms, task, _ = setup
     t, q, dq, ddq, g2t = plan()
     v = check(task, solution(t, q, dq, ddq, g2t), ms)
-    from robodesign.robot import Robot
+    from robodesign.model.robot import Robot
     r = Robot.from_order(ms, ["B", "J", "J", "E"])
     tau = r.drivetrain_torques(q, dq, ddq)
     assert np.abs(tau).max() < 50  # the valid plan is well inside the limit
@@ -248,7 +248,7 @@ def test_end_effector_speed(setup, tmp_path):
     assert "endEffector.v" in kinds(v)
     x = [x for x in v.violations if x.constraint == "endEffector.v"][0]
     # independent value: |J(q) dq| linear part
-    from robodesign.robot import Robot
+    from robodesign.model.robot import Robot
     r = Robot.from_order(ms, ["B", "J", "J", "E"])
     speed = np.linalg.norm(r.jacobian(q[x.sample])[:3] @ dq[x.sample])
     assert x.value == pytest.approx(speed, rel=1e-9) and speed > 0.5
@@ -281,12 +281,12 @@ def test_obstacle_collision_at_samples_and_between_samples(setup, tmp_path):
     Q2 = np.vstack([qa, qb])
     DQ2 = np.tile((qb - qa) / 0.01, (2, 1))  # one motion: constant velocity from qa to qb
     sol = solution(T2, Q2, DQ2, np.zeros((2, 2)), {})
-    from robodesign.cell import build_robot
+    from robodesign.model.cell import build_robot
     r = build_robot(task, ms, sol.assembly(ms), np.eye(4))
     assert not r.in_collision(qa) and not r.in_collision(qb)  # both samples are free ...
     v = check(task, sol, ms)
     assert not v.valid and "between samples 0 and 1" in v.violations[0].message  # ... the motion is not
-    from robodesign.checker import CheckSettings
+    from robodesign.judge.checker import CheckSettings
     v_samples_only = check(task, sol, ms, CheckSettings(between_samples=False))
     assert v_samples_only.valid  # what a sample-only checker (the reference) would say
 

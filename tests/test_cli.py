@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from robodesign import Robot, load_module_set
-from robodesign.cli import main
-from robodesign.defaults import DEFAULT_ORDER
+from robodesign.cli.entry import main
+from robodesign.core.defaults import DEFAULT_ORDER
 
 from conftest import IMPROV, TASKS
 

@@ -11,11 +11,11 @@ import sys
 import numpy as np
 import pytest
 
-from robodesign import cli
-from robodesign.cli import main
-from robodesign.jsonio import MAX_DEPTH, loads_json
-from robodesign.errors import InputError
-from robodesign.solution import Solution, SolutionTrajectory
+from robodesign.cli import entry as cli
+from robodesign.cli.entry import main
+from robodesign.core.jsonio import MAX_DEPTH, loads_json
+from robodesign.core.errors import InputError
+from robodesign.formats.solution import Solution, SolutionTrajectory
 
 from conftest import IMPROV, ROOT, TASKS
 
@@ -239,7 +239,7 @@ def test_solve_unknown_module_is_bad_input_like_robot(capsys):
 
 
 def test_trajectory_mode_follows_the_cost():
-    from robodesign.commands import trajectory_mode
+    from robodesign.cli.commands import trajectory_mode
     assert trajectory_mode("cyc") == "time-optimal"
     assert trajectory_mode("mass") == "time-optimal"
     assert trajectory_mode("linkMechEnergy") == "time-optimal"  # not a term the trajectory optimizer has
@@ -292,10 +292,10 @@ def test_view_of_another_tasks_solution_warns_and_exits_1(capsys, tmp_path, ptp3
     # --check: the rest trajectory reaches none of PTP_3's goals, so the page is written and the exit is 1
     code, out, err = run(capsys, "view", sol, "--task", PTP3, "--modules", IMPROV, "--no-plots", "--check",
                          "--out", page)
-    from robodesign.checker import check
-    from robodesign.module_io import load_module_set
-    from robodesign.solution import load_solution
-    from robodesign.task_io import load_task
+    from robodesign.judge.checker import check
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.formats.solution import load_solution
+    from robodesign.formats.task_io import load_task
     verdict = check(load_task(PTP3), load_solution(sol), load_module_set(IMPROV))
     assert not verdict.valid and code == 1 and "INVALID" in page.read_text()
     assert err == (f"robodesign: warning: the checker finds the solution INVALID ({len(verdict.violations)} "

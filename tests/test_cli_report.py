@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from robodesign.cli import main
-from robodesign.solution import load_solution
+from robodesign.cli.entry import main
+from robodesign.formats.solution import load_solution
 from robodesign.viewer.html import decode_page_data
 
 CONFIG = """

@@ -8,11 +8,11 @@ import pinocchio as pin
 import pytest
 
 from robodesign import load_module_set
-from robodesign.cell import build_robot
-from robodesign.collab import (CollabSolution, RobotSetup, check_collab, load_collab_solution, load_collab_task,
+from robodesign.model.cell import build_robot
+from robodesign.collab.core import (CollabSolution, RobotSetup, check_collab, load_collab_solution, load_collab_task,
                                parse_collab_task, solve_collab)
-from robodesign.errors import InputError
-from robodesign.pair_sweep import RobotPairSweep
+from robodesign.core.errors import InputError
+from robodesign.model.pair_sweep import RobotPairSweep
 from robodesign.solvers.schedule import static_cell
 
 import make_tasks as mt  # assets/tasks, on the path by conftest
@@ -37,7 +37,7 @@ def solved(ctask, ms):
 
 def _robots(ctask, ms):
     return {rid: build_robot(static_cell(ctask.robot_tasks[rid]), ms,
-                             __import__("robodesign.assembly", fromlist=["Assembly"]).Assembly.from_order(ms, list(ORDER)),
+                             __import__("robodesign.formats.assembly", fromlist=["Assembly"]).Assembly.from_order(ms, list(ORDER)),
                              ctask.robot_tasks[rid].nominal_base_pose) for rid in ctask.robot_ids}
 
 
@@ -151,7 +151,7 @@ def _swing(dof, joint, D, T, dt):
 def test_checker_finds_robot_robot_collision_at_the_right_time(ctask, ms):
     """Both arms pitch their shoulders towards the belt at the same time (no waiting): the checker reports
     the robot–robot collision between samples, at the instant a dense independent scan finds it."""
-    from robodesign.solution import Solution, SolutionTrajectory
+    from robodesign.formats.solution import Solution, SolutionTrajectory
     robots = _robots(ctask, ms)
     a = robots["left"]
     D = 1.5 if a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3] < mt.SC_BASE_Y else -1.5  # towards the belt
@@ -209,13 +209,13 @@ def test_prioritized_solve_is_valid_and_round_trips(ctask, ms, solved, tmp_path)
 # command line and viewer
 # ---------------------------------------------------------------------------------------------------------
 def _main(argv, capsys):
-    from robodesign.cli import main
+    from robodesign.cli.entry import main
     code = main([str(a) for a in argv])
     return code, capsys.readouterr()
 
 
 def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, capsys):
-    from robodesign.solution import Solution, SolutionTrajectory
+    from robodesign.formats.solution import Solution, SolutionTrajectory
     task = mt.collab_task_path("shared_conveyor")
     good = solved.solution.write(tmp_path / "good.json")
     code, out = _main(["check", task, good], capsys)

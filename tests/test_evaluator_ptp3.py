@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 
 from robodesign import load_module_set
-from robodesign.checker import check
-from robodesign.evaluator import INFEASIBLE, Evaluator, EvaluatorSpec
-from robodesign.problem import Problem
-from robodesign.search_space import BaseBounds, Candidate
-from robodesign.solution import SolutionTrajectory, parse_solution
-from robodesign.solve import STAGES
-from robodesign.task_io import load_task, parse_task
+from robodesign.judge.checker import check
+from robodesign.design.evaluator import INFEASIBLE, Evaluator, EvaluatorSpec
+from robodesign.design.problem import Problem
+from robodesign.design.search_space import BaseBounds, Candidate
+from robodesign.formats.solution import SolutionTrajectory, parse_solution
+from robodesign.design.solve import STAGES
+from robodesign.formats.task_io import load_task, parse_task
 
 from conftest import IMPROV, TASKS
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from robodesign.cli import main
+from robodesign.cli.entry import main
 from robodesign.experiment.config import load_experiment
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -105,9 +105,9 @@ def test_small_run_writes_every_result_file(tmp_path, capsys):
     pngs = list((out / "plots").glob("*.png"))
     assert pngs and all(mpimg.imread(p).shape[0] > 200 for p in pngs)
     # best solutions are CoBRA files that the checker accepts (re-checked here, independently of the runner)
-    from robodesign.checker import check
-    from robodesign.solution import load_solution
-    from robodesign.task_io import load_task
+    from robodesign.judge.checker import check
+    from robodesign.formats.solution import load_solution
+    from robodesign.formats.task_io import load_task
     best = sorted((out / "best").rglob("*-seed*.json"))
     best = [b for b in best if not b.name.endswith(".verdict.json")]
     if any(r[5] for r in db):

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from robodesign.cli import main
-from robodesign.evaluator import Evaluation
+from robodesign.cli.entry import main
+from robodesign.design.evaluator import Evaluation
 from robodesign.experiment.storage import DamagedDatabase, ExperimentDB
-from robodesign.search_space import Candidate
+from robodesign.design.search_space import Candidate
 from test_experiment import SMALL as SMALL_CONFIG
 
 RD = [sys.executable, "-m", "robodesign.cli"]

@@ -23,12 +23,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from robodesign.cli import main
-from robodesign.defaults import DEFAULT_ORDER
-from robodesign.module_io import load_module_set
-from robodesign.paths import builtin_tasks_dir
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
+from robodesign.cli.entry import main
+from robodesign.core.defaults import DEFAULT_ORDER
+from robodesign.formats.module_io import load_module_set
+from robodesign.core.paths import builtin_tasks_dir
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
 
 from conftest import COBRA, IMPROV, PRIMITIVES, ROOT, TASKS
 

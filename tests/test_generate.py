@@ -8,15 +8,15 @@ import coal
 import numpy as np
 import pytest
 
-from robodesign.checker import check
-from robodesign.cli import main
+from robodesign.judge.checker import check
+from robodesign.cli.entry import main
 from robodesign.generate import families, generate, regenerate
 from robodesign.generate.common import REFERENCE_ORDER
-from robodesign.geometry import coal_shapes
-from robodesign.module_io import load_module_set
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
-from robodesign.task_spec import BasePlacement, Reach
+from robodesign.formats.geometry import coal_shapes
+from robodesign.formats.module_io import load_module_set
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
+from robodesign.formats.task_spec import BasePlacement, Reach
 
 from conftest import TASKS as COBRA_TASKS
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from robodesign import load_module_set
-from robodesign.checker import check
-from robodesign.quantities import TrajectoryQuantities
-from robodesign.cell import solution_robot
-from robodesign.task_io import load_task
+from robodesign.judge.checker import check
+from robodesign.judge.quantities import TrajectoryQuantities
+from robodesign.model.cell import solution_robot
+from robodesign.formats.task_io import load_task
 
 from conftest import toy_module_set
 from test_checker import plan, pose, solution, task_json, tcp
@@ -122,7 +122,7 @@ def test_goal_level_collision_free_reads_exactly_its_window(tmp_path, ms):
 def test_goal_level_self_collision_free_reads_exactly_its_window(tmp_path, ms):
     """Folded back (q2 = 3.1 rad) the last link reaches down onto the base."""
     spike = np.array([0.0, 3.1])
-    from robodesign.robot import Robot
+    from robodesign.model.robot import Robot
     assert Robot.from_order(ms, ["B", "J", "J", "E"]).in_self_collision(spike)
     task = goal_task(tmp_path, {"type": "selfCollisionFree"})
     for k in SPIKES + OUTSIDE:

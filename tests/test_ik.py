@@ -7,11 +7,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.geometry import coal_shapes, parse_geometries
-from robodesign.module_io import load_module_set
-from robodesign.robot import Obstacle, Robot
+from robodesign.formats.geometry import coal_shapes, parse_geometries
+from robodesign.formats.module_io import load_module_set
+from robodesign.model.robot import Obstacle, Robot
 from robodesign.solvers.ik import IKResult, goal_model, solve_ik
-from robodesign.tolerance import ToleratedPose
+from robodesign.formats.tolerance import ToleratedPose
 
 from conftest import IMPROV, TASKS
 

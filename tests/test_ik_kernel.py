@@ -9,13 +9,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.module_io import load_module_set
-from robodesign.robot import Robot
+from robodesign.formats.module_io import load_module_set
+from robodesign.model.robot import Robot
 from robodesign.solvers import ik_kernel
 from robodesign.solvers.ik import goal_model, solve_ik
-from robodesign.spatial import homogeneous, rpy_to_matrix
-from robodesign.task_io import load_task
-from robodesign.tolerance import ToleratedPose
+from robodesign.core.spatial import homogeneous, rpy_to_matrix
+from robodesign.formats.task_io import load_task
+from robodesign.formats.tolerance import ToleratedPose
 
 from conftest import IMPROV, PRIMITIVES, ROOT, TASKS
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from robodesign import InputError, load_module_set
-from robodesign.module_io import module_set_to_json, write_module_set
+from robodesign.formats.module_io import module_set_to_json, write_module_set
 
 from conftest import IMPROV, PRIMITIVES
 
@@ -24,7 +24,7 @@ def test_real_sets_load_with_their_contents():
     base = ms["1"].connectors[0]
     assert base.type == "base" and base.gender == "f" and base.size == ()
     # L3 collision is a .wrl convex decomposition with 4 parts
-    from robodesign.geometry import coal_shapes
+    from robodesign.formats.geometry import coal_shapes
     g = ms["12"].bodies[0].collision[0]
     assert g.kind == "mesh" and g.file.name == "L3.stl.wrl" and len(coal_shapes(g)) == 4
     prim = load_module_set(PRIMITIVES)

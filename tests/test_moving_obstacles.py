@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from robodesign import load_module_set
-from robodesign.cell import build_robot
-from robodesign.checker import check
-from robodesign.solve import solve
+from robodesign.model.cell import build_robot
+from robodesign.judge.checker import check
+from robodesign.design.solve import solve
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
-from robodesign.task_io import load_task
+from robodesign.formats.task_io import load_task
 
 import make_tasks as mt  # assets/tasks, on the path by conftest
 

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from robodesign.cli import main
+from robodesign.cli.entry import main
 
 from test_checker import plan, solution, task_json
 from conftest import toy_module_set

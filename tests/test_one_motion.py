@@ -11,13 +11,13 @@ import json
 import numpy as np
 import pytest
 
-from robodesign.checker import check
-from robodesign.cli import main
-from robodesign.module_io import load_module_set
-from robodesign.quantities import DQ_RULE_FACTOR, Q_RULE_FACTOR, RULE_ATOL, RULE_RTOL, step_residuals
-from robodesign.solution import SolutionTrajectory, load_solution
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
+from robodesign.judge.checker import check
+from robodesign.cli.entry import main
+from robodesign.formats.module_io import load_module_set
+from robodesign.judge.quantities import DQ_RULE_FACTOR, Q_RULE_FACTOR, RULE_ATOL, RULE_RTOL, step_residuals
+from robodesign.formats.solution import SolutionTrajectory, load_solution
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
 
 from conftest import IMPROV, TASKS
 from reference_trajectories import mstraj_like
@@ -78,7 +78,7 @@ def test_teleport_is_invalid_and_names_the_samples(ptp3, tmp_path, capsys):
     assert tele[0].value == pytest.approx(0.5, abs=0.05) and tele[1].value == pytest.approx(-0.5, abs=0.05)
     assert "between samples 99 and 100" in tele[0].message and "between samples 149 and 150" in tele[1].message
     # without the one-motion rules (what the reference does) only qDist notices
-    from robodesign.checker import CheckSettings
+    from robodesign.judge.checker import CheckSettings
     assert check(task, bad, ms, CheckSettings(one_motion=False)).valid
     # the CLI says INVALID (exit 1) and names the samples
     f = tmp_path / "teleport.json"
@@ -113,7 +113,7 @@ def test_reference_style_trapezoids_are_valid(ptp3):
     each goal (Trajectory.stationary), concatenated, dq/ddq by numpy.gradient over the whole: valid."""
     task, ms, sol = ptp3
     tr = sol.trajectory
-    from robodesign.cell import solution_robot
+    from robodesign.model.cell import solution_robot
     robot = solution_robot(task, sol, ms)
     stops = [tr.q[0]] + [tr.q[int(np.argmin(np.abs(tr.t - tr.goal2time[g])))] for g in task.goal_order]
     dt = task.dt

@@ -7,13 +7,13 @@ import sys
 import pytest
 
 from conftest import IMPROV, TASKS
-from robodesign.checker import check
-from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
+from robodesign.judge.checker import check
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
 from robodesign.experiment.executors import ProcessPool, auto_chunk_size, chunk_sizes
-from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
-from robodesign.problem import Problem
-from robodesign.solution import load_solution
-from robodesign.task_io import load_task
+from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+from robodesign.design.problem import Problem
+from robodesign.formats.solution import load_solution
+from robodesign.formats.task_io import load_task
 
 PTP3 = TASKS / "simple" / "PTP_3.json"
 RD = [sys.executable, "-m", "robodesign.cli"]
@@ -174,7 +174,7 @@ def test_cli_workers_2_equals_workers_1(tmp_path):
                                       (["--batch-size", "0"], "--batch-size must be at least 1, got 0"),
                                       (["--chunk-size", "0"], "--chunk-size must be at least 1, got 0")])
 def test_bad_workers_and_batch_size(capsys, args, msg):
-    from robodesign.cli import main
+    from robodesign.cli.entry import main
     code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "2evals", *args])
     err = capsys.readouterr().err
     assert code == 2 and msg in err and "Traceback" not in err
@@ -182,7 +182,7 @@ def test_bad_workers_and_batch_size(capsys, args, msg):
 
 def test_run_checks_its_chunk_size(capsys):
     """``robodesign run --chunk-size`` (process and Ray executors) is checked before anything starts."""
-    from robodesign.cli import main
+    from robodesign.cli.entry import main
     code = main(["run", "--executor", "ray", "--chunk-size", "0"])
     err = capsys.readouterr().err
     assert code == 2 and "--chunk-size must be at least 1, got 0" in err and "Traceback" not in err
@@ -190,9 +190,9 @@ def test_run_checks_its_chunk_size(capsys):
 
 def test_bound_executor_sends_each_candidate_to_the_workers_once():
     """Repeats (within a batch or from an earlier one) come from the driver's cache, as in-process."""
-    from robodesign.evaluator import Evaluation
+    from robodesign.design.evaluator import Evaluation
     from robodesign.experiment.executors import EvaluatorPool
-    from robodesign.search_space import Candidate
+    from robodesign.design.search_space import Candidate
 
     class Counting(EvaluatorPool):
         sent = []
@@ -225,7 +225,7 @@ def test_ask_ahead_study_resumes_stored_evaluations_exactly():
     as it is told; a study resumed from the first 7 stored evaluations replays them (none evaluated again)
     and ends with the uninterrupted run's 12 evaluations; a stored candidate the optimizer does not ask
     again is refused."""
-    from robodesign.errors import InputError
+    from robodesign.core.errors import InputError
     from robodesign.experiment.executors import SerialPool
 
     class Memory:
@@ -272,7 +272,7 @@ def test_default_workers_follow_the_budget(monkeypatch):
     """Without --workers: all cores, except an evaluations-only budget below 200, where a pool's start-up
     costs more than it saves (docs/benchmarks.md); an explicit --workers is always kept."""
     import os
-    from robodesign.commands import POOL_MIN_EVALUATIONS, optimize_workers
+    from robodesign.cli.commands import POOL_MIN_EVALUATIONS, optimize_workers
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2}, raising=False)
     assert POOL_MIN_EVALUATIONS == 200
     assert optimize_workers(None, 16, None, Budget(evaluations=50)) == 1
@@ -287,7 +287,7 @@ def test_default_workers_follow_the_budget(monkeypatch):
 
 def test_cli_short_default_budget_runs_in_the_process(capsys, tmp_path):
     """The default budget (50evals) of `robodesign optimize` starts no pool and says so."""
-    from robodesign.cli import main
+    from robodesign.cli.entry import main
     code = main(["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "6evals", "--batch-size", "3",
                  "--out", str(tmp_path / "b.json")])
     out = capsys.readouterr().out

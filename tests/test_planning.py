@@ -5,9 +5,9 @@ import coal
 import numpy as np
 import pytest
 
-from robodesign.errors import InputError
-from robodesign.module_io import load_module_set
-from robodesign.robot import Obstacle, Robot
+from robodesign.core.errors import InputError
+from robodesign.formats.module_io import load_module_set
+from robodesign.model.robot import Obstacle, Robot
 from robodesign.solvers.planning import available_planners, check_path, plan_path
 
 from conftest import IMPROV

@@ -9,7 +9,7 @@ Fallback: building a wheel without build isolation needs the ``wheel`` package (
 the venv lacks it, or pip fails or takes more than 60 s, the test instead puts the package and a
 ``<name>.dist-info`` folder (``METADATA`` + ``entry_points.txt``) into a tmp dir on the subprocess's
 ``PYTHONPATH`` — exactly what an installed distribution looks like to ``importlib.metadata``, which is how
-``robodesign.optimize.available_optimizers`` discovers plugins. Either way the checks run in a fresh
+``robodesign.design.optimize.available_optimizers`` discovers plugins. Either way the checks run in a fresh
 Python process.
 """
 from __future__ import annotations
@@ -30,7 +30,7 @@ HILL_CLIMBER = '''
 """A hill-climber: the minimal robodesign optimizer plugin."""
 from dataclasses import dataclass
 
-from robodesign.optimize import Candidate, Optimizer, option
+from robodesign.design.optimize import Candidate, Optimizer, option
 
 
 class HillClimber(Optimizer):
@@ -104,11 +104,11 @@ py-modules = ["{MODULE}"]
 
 CHECK = f'''
 import json, sys
-from robodesign.errors import InputError
-from robodesign.evaluator import Evaluator, EvaluatorSpec
-from robodesign.optimize import (Budget, SerialExecutor, Study, available_optimizers, create_optimizer, load_optimizer,
+from robodesign.core.errors import InputError
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+from robodesign.design.optimize import (Budget, SerialExecutor, Study, available_optimizers, create_optimizer, load_optimizer,
                                  optimize)
-from robodesign.problem import Problem
+from robodesign.design.problem import Problem
 eps = available_optimizers()
 cls = load_optimizer("{ENTRY}")
 rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"],
@@ -212,7 +212,7 @@ def test_external_plugin_is_discovered_and_runs(tmp_path):
         if installed:
             _pip("uninstall", "-y", "-q", DIST, timeout=120)
     # gone again (a fresh process; the fallback never touched the venv)
-    after = subprocess.run([sys.executable, "-c", "from robodesign.optimize import available_optimizers as a; "
+    after = subprocess.run([sys.executable, "-c", "from robodesign.design.optimize import available_optimizers as a; "
                             "print(sorted(a()))"], capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert ENTRY not in after.stdout
 
@@ -227,7 +227,7 @@ def test_docs_example_is_the_tested_plugin():
 
 # -- the plugin API before Problem (deprecated, kept for one release) ----------------------------------------------
 LEGACY = '''
-from robodesign.optimize import Optimizer
+from robodesign.design.optimize import Optimizer
 
 
 class LegacyRandom(Optimizer):
@@ -254,9 +254,9 @@ def test_plugins_written_against_the_old_api_still_run(tmp_path):
     """Optimizer(space, seed, **options) plugins get the search space (and, as the CLI used to give them, the study's
     cost as option ``cost``) with a DeprecationWarning; undeclared options reach them unchanged."""
     import pytest
-    from robodesign.evaluator import Evaluator, EvaluatorSpec
-    from robodesign.optimize import Budget, SerialExecutor, Study, create_optimizer
-    from robodesign.problem import Problem
+    from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+    from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+    from robodesign.design.problem import Problem
     ns: dict = {}
     exec(LEGACY, ns)
     rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10",
@@ -277,8 +277,8 @@ def test_plugins_written_against_the_old_api_still_run(tmp_path):
 def test_an_old_plugin_that_sets_its_own_cost_attribute_still_runs(tmp_path):
     """The old first-party pattern ``self.cost = str(cost)`` (from the injected cost option) keeps working."""
     import pytest
-    from robodesign.optimize import Optimizer, create_optimizer
-    from robodesign.problem import Problem
+    from robodesign.design.optimize import Optimizer, create_optimizer
+    from robodesign.design.problem import Problem
 
     class OldBound(Optimizer):
         def __init__(self, space, seed=0, cost=None, **options):

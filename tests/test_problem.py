@@ -16,9 +16,9 @@ from typing import Optional, Tuple
 
 import pytest
 
-from robodesign.errors import InputError
-from robodesign.optimize import Optimizer, OptionError, create_optimizer, option, option_specs, parse_options
-from robodesign.problem import Problem
+from robodesign.core.errors import InputError
+from robodesign.design.optimize import Optimizer, OptionError, create_optimizer, option, option_specs, parse_options
+from robodesign.design.problem import Problem
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE_PLACEMENT = ROOT / "assets" / "tasks" / "robodesign" / "base_placement.json"
@@ -126,7 +126,7 @@ def test_bad_options_are_one_error_listing_the_valid_ones(options, message):
 
 def test_every_first_party_option_table_is_declared():
     """The docstring defaults of the first-party plugins are what `robodesign optimizers --verbose` shows."""
-    from robodesign.optimize import load_optimizer
+    from robodesign.design.optimize import load_optimizer
     specs = {n: {s.name: s for s in option_specs(load_optimizer(n))}
              for n in ("random", "genetic", "elimination", "heuristic", "optuna", "base_pose")}
     assert specs["genetic"]["population_size"].default == 20 and specs["genetic"]["population_size"].low == 2
@@ -215,7 +215,7 @@ def test_fingerprint_follows_file_contents_not_paths(tmp_path):
 
 
 def test_results_store_refuses_to_resume_a_changed_problem(tmp_path):
-    from robodesign.evaluator import Evaluation
+    from robodesign.design.evaluator import Evaluation
     from robodesign.experiment.storage import ExperimentDB
     p = Problem.build("robodesign/pick_and_place", "robodesign_arm", "cyc")
     db = ExperimentDB(tmp_path / "evaluations.sqlite")

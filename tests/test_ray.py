@@ -71,7 +71,7 @@ def test_ray_cluster_run_survives_a_killed_worker(tmp_path):
 
 
 def _history(executor, problem, budget, on_evaluation=None):
-    from robodesign.optimize import Budget, Study, create_optimizer
+    from robodesign.design.optimize import Budget, Study, create_optimizer
     res = Study(create_optimizer("random", problem, seed=3), executor, Budget(evaluations=budget), batch_size=16,
                 on_evaluation=on_evaluation).run()
     return [(e.candidate.key(), e.feasible, e.stage, e.cost, e.goals_reached) for e in res.history]
@@ -97,10 +97,10 @@ def test_ray_pool_sends_chunks_and_loses_only_a_dead_actors_chunks():
     (``max_restarts=0``: Ray does not restart it): only the chunks it had are sent again (to a new actor),
     and the stream still gives the serial evaluations."""
     import ray
-    from robodesign.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
+    from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from robodesign.experiment.executors import RayPool, auto_chunk_size, chunk_sizes, chunked
-    from robodesign.optimize import SerialExecutor, create_optimizer
-    from robodesign.problem import Problem
+    from robodesign.design.optimize import SerialExecutor, create_optimizer
+    from robodesign.design.problem import Problem
     from robodesign.solvers import ik_kernel
 
     n = 32  # candidates of the stream (two batches of 16)

@@ -4,8 +4,8 @@ import pinocchio as pin
 import pytest
 
 from robodesign import Assembly, AssemblyError, Robot, load_module_set
-from robodesign.assembly import random_serial_order
-from robodesign.robot import Obstacle
+from robodesign.formats.assembly import random_serial_order
+from robodesign.model.robot import Obstacle
 
 from conftest import IMPROV, PRIMITIVES
 
@@ -168,7 +168,7 @@ def test_invalid_orders_say_which_pair_and_why():
 
 
 def test_connector_rule():
-    from robodesign.module_spec import Connector
+    from robodesign.formats.module_spec import Connector
     E = np.eye(4)
     f = Connector("a", "b", E, "f", "t", (1.0,))
     m = Connector("c", "d", E, "m", "t", (1.0,))

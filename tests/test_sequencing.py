@@ -96,13 +96,13 @@ def test_returning_move_is_in_the_objective():
     """PTP_3 with a return to the start appended (1 → 2 → 3 → back to 1): the chosen IK solutions minimise
     the bound of all three moves, the closing one included — brute force over the solver's IK sets."""
     import dataclasses
-    from robodesign.assembly import Assembly
-    from robodesign.evaluator import evaluation_settings
-    from robodesign.module_io import load_module_set
-    from robodesign.cell import build_robot
-    from robodesign.solve import GoalPlanner, SolveResult
-    from robodesign.task_io import load_task
-    from robodesign.task_spec import ReturnTo
+    from robodesign.formats.assembly import Assembly
+    from robodesign.design.evaluator import evaluation_settings
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.model.cell import build_robot
+    from robodesign.design.solve import GoalPlanner, SolveResult
+    from robodesign.formats.task_io import load_task
+    from robodesign.formats.task_spec import ReturnTo
     task = load_task(str(COBRA / "tasks" / "simple" / "PTP_3.json"))
     task = dataclasses.replace(task, goals=task.goals + (ReturnTo(id="back"),))
     assert task.goal_order == ("1", "2", "3", "back")

@@ -5,13 +5,13 @@ import json
 import numpy as np
 import pytest
 
-from robodesign.checker import check
-from robodesign.cli import main
-from robodesign.defaults import DEFAULT_ORDER
-from robodesign.module_io import load_module_set
-from robodesign.paths import builtin_tasks_dir
-from robodesign.solve import SolveSettings, solve
-from robodesign.task_io import load_task
+from robodesign.judge.checker import check
+from robodesign.cli.entry import main
+from robodesign.core.defaults import DEFAULT_ORDER
+from robodesign.formats.module_io import load_module_set
+from robodesign.core.paths import builtin_tasks_dir
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
 
 
 def _welding_without_all_goals(tmp_path, v_max):
@@ -28,8 +28,8 @@ def _welding_without_all_goals(tmp_path, v_max):
 
 def _tcp_speed(task, sol, ms, k0, k1):
     """Largest TCP speed over samples k0..k1, from forward kinematics and the stored joint velocities."""
-    from robodesign.cell import build_robot
-    from robodesign.assembly import Assembly
+    from robodesign.model.cell import build_robot
+    from robodesign.formats.assembly import Assembly
     robot = build_robot(task, ms, Assembly.from_order(ms, list(sol.module_order)), sol.base_pose)
     tr = sol.trajectory
     return max(float(np.linalg.norm(robot.jacobian(tr.q[k])[:3] @ tr.dq[k])) for k in range(k0, k1 + 1))
@@ -87,7 +87,7 @@ def test_solve_result_exposes_the_shared_trajectory_quantities():
     tq = res.quantities
     assert tq is res.quantities  # computed once
     tr = res.solution.trajectory
-    from robodesign.cell import solution_robot
+    from robodesign.model.cell import solution_robot
     robot = solution_robot(task, res.solution, ms)
     for gid in ("seam_start", "retreat"):
         k = int(np.argmin(np.abs(tr.t - tr.goal2time[gid])))

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from robodesign.cli import main
-from robodesign.paths import builtin_tasks_dir
+from robodesign.cli.entry import main
+from robodesign.core.paths import builtin_tasks_dir
 
 from conftest import TASKS
 
@@ -170,7 +170,7 @@ def test_suite_summary_matches_a_hand_count(tmp_path, capsys):
 
 
 def test_optimize_json_says_where_the_candidates_stopped(capsys):
-    from robodesign.solve import STAGES
+    from robodesign.design.solve import STAGES
     # the nominal base of base_placement is 1.25 m from the fixture: with the base held there, designs fail
     code = main(["optimize", "robodesign/base_placement", "--modules", "robodesign_arm", "--fixed-base",
                  "--optimizer", "random", "--budget", "6evals", "--json"])

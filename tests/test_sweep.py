@@ -1,13 +1,13 @@
-"""The certified sweep (robodesign.sweep): its motion bounds hold on real module sets, bodies of revolution
+"""The certified sweep (robodesign.model.sweep): its motion bounds hold on real module sets, bodies of revolution
 drop exactly the joints that cannot change a distance, and the tighter bounds keep the verdicts while
 cutting the distance queries of a real near-contact motion."""
 import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.problem import Problem
-from robodesign.robot import Robot
-from robodesign.sweep import SweepChecker, own_axis_symmetric
+from robodesign.design.problem import Problem
+from robodesign.model.robot import Robot
+from robodesign.model.sweep import SweepChecker, own_axis_symmetric
 
 from conftest import COBRA as SHARED, ROOT
 
@@ -32,8 +32,8 @@ def random_q(robot, rng, n=1):
 
 
 def in_cell(p, order) -> Robot:
-    from robodesign.cell import build_robot
-    from robodesign.assembly import Assembly
+    from robodesign.model.cell import build_robot
+    from robodesign.formats.assembly import Assembly
     return build_robot(p.task, p.module_set, Assembly.from_order(p.module_set, order), np.eye(4))
 
 
@@ -118,9 +118,9 @@ def test_near_contact_motion_same_verdict_far_fewer_queries():
     """A real PTP_3 motion of an IMPROV arm whose link slides past a joint housing at 3–18 µm (found by random
     search): the tight bounds and the plain ones agree that it is collision-free, with ≥ 20× fewer queries."""
     from dataclasses import replace
-    from robodesign.evaluator import candidate_seed, evaluation_settings
-    from robodesign.search_space import Candidate
-    from robodesign.solve import solve
+    from robodesign.design.evaluator import candidate_seed, evaluation_settings
+    from robodesign.design.search_space import Candidate
+    from robodesign.design.solve import solve
     robot, p = improv_robot()
     # as `robodesign optimize --optimizer random --seed 3` evaluates it (its 6th candidate)
     settings = replace(evaluation_settings(), seed=candidate_seed(3, Candidate(ORDER, ()).key()))
@@ -137,11 +137,11 @@ def test_near_contact_motion_same_verdict_far_fewer_queries():
 
 
 def test_robot_pair_motion_bound_holds_densely():
-    """The same property for two robots moving at once (robodesign.pair_sweep, collaborative cells): the lever
+    """The same property for two robots moving at once (robodesign.model.pair_sweep, collaborative cells): the lever
     arms with bodies of revolution bound every cross pair's distance change along a stacked linear motion."""
-    from robodesign.pair_sweep import RobotPairSweep
+    from robodesign.model.pair_sweep import RobotPairSweep
     p = Problem.build(str(PTP3), str(IMPROV), "cyc")
-    from robodesign.sweep import lever_arms
+    from robodesign.model.sweep import lever_arms
     a, _ = improv_robot()
     shift = np.eye(4)
     shift[:3, 3] = [0.45, 0.1, 0.0]
@@ -168,7 +168,7 @@ def test_symmetry_needs_the_centre_on_the_axis_and_the_axis_aligned():
     """symmetric_about by hand: a sphere anywhere on the line, a cylinder/capsule/cone only when coaxial; a box
     or a convex mesh never; 1e-9 m or rad of misalignment is the limit."""
     import coal
-    from robodesign.sweep import symmetric_about
+    from robodesign.model.sweep import symmetric_about
 
     def obj(shape, xyz=(0, 0, 0), rot=np.eye(3)):
         return pin.GeometryObject("g", 0, pin.SE3(rot, np.array(xyz, float)), shape)

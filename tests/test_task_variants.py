@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 from robodesign import Robot, load_module_set
-from robodesign.checker import check
-from robodesign.cli import main
-from robodesign.errors import InputError
-from robodesign.geometry import GeometrySpec, contains_point, load_mesh_arrays
-from robodesign.solution import parse_solution
-from robodesign.task_io import load_task
-from robodesign.task_spec import Leave
+from robodesign.judge.checker import check
+from robodesign.cli.entry import main
+from robodesign.core.errors import InputError
+from robodesign.formats.geometry import GeometrySpec, contains_point, load_mesh_arrays
+from robodesign.formats.solution import parse_solution
+from robodesign.formats.task_io import load_task
+from robodesign.formats.task_spec import Leave
 
 from conftest import IMPROV, ROOT, TASKS
 
@@ -261,7 +261,7 @@ def test_frame_key_has_the_meaning_of_tolerance_frame(tmp_path):
 
 
 def test_signed_theta_r_bounds_allow_the_absolute_angle(tmp_path):
-    from robodesign.spatial import homogeneous, rot_z
+    from robodesign.core.spatial import homogeneous, rot_z
     d = source("PTP_2")
     d["goals"][0]["goalPose"]["tolerance"][1] = [-0.1, 0.05]
     tp = load_variant(tmp_path, d, "t").goals[0].pose
@@ -473,7 +473,7 @@ def test_missing_or_empty_visual_mesh_is_only_a_warning(tmp_path, capsys):
 def test_contains_point_matches_analytic_shapes(tmp_path):
     """Boxes, cylinders and spheres against their formulas; a closed STL box mesh against the primitive."""
     import trimesh
-    from robodesign.spatial import homogeneous, rot_x, rot_z
+    from robodesign.core.spatial import homogeneous, rot_x, rot_z
     rng = np.random.default_rng(3)
     pose = homogeneous(rot_z(0.7) @ rot_x(0.3), (0.2, -0.1, 0.5))
     box = GeometrySpec("box", pose, (0.4, 0.2, 0.6))
@@ -555,7 +555,7 @@ def _inside_box(p, center, size):
 def test_published_leave_task_is_solved_and_checked(tmp_path, improv):
     """The reference's sample task PTP_leave (occupiedSpace box, as published): solve → check VALID, and the
     TCP is outside the box at the leave goal's time (independent box test)."""
-    from robodesign.solve import SolveSettings, solve
+    from robodesign.design.solve import SolveSettings, solve
     d = source("PTP_2")
     d["header"]["ID"] = "simple/PTP_leave"
     d["obstacles"][0]["pose"] = [[1, 0, 0, -4.5], [0, 1, 0, 0.25], [0, 0, 1, -1], [0, 0, 0, 1]]
@@ -599,7 +599,7 @@ def test_published_leave_task_is_solved_and_checked(tmp_path, improv):
 
 
 def test_direct_api_stays_strict_about_unknown_tolerance_keys():
-    from robodesign.tolerance import ToleratedPose
+    from robodesign.formats.tolerance import ToleratedPose
     with pytest.raises(InputError, match=r"unknown key 'frames'"):
         ToleratedPose.from_json({"nominal": np.eye(4).tolist(), "frames": []}, "x.json", ["p"])
 
@@ -694,7 +694,7 @@ def test_broken_collision_mesh_in_a_urdf_is_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "collision mesh file 'lfs.stl' is a Git LFS pointer" in err and len(err.strip().splitlines()) == 1
     (tmp_path / "vis.urdf").write_text(urdf("ok.stl", "lfs.stl"))
-    from robodesign.urdf import import_urdf
+    from robodesign.formats.urdf import import_urdf
     warnings = []
     ms = import_urdf(tmp_path / "vis.urdf", warnings=warnings)
     assert len(warnings) == 1 and "visual mesh file 'lfs.stl' is a Git LFS pointer" in warnings[0]

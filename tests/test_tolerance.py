@@ -6,10 +6,10 @@ import pytest
 
 from conftest import COBRA as _COBRA
 
-from robodesign.errors import InputError
-from robodesign.jsonio import dumps_json, loads_json
-from robodesign.spatial import homogeneous, rot_x, rot_y, rot_z, translation
-from robodesign.tolerance import (PROJECTIONS, ToleratedPose, ToleranceSamplingError, projection_value,
+from robodesign.core.errors import InputError
+from robodesign.core.jsonio import dumps_json, loads_json
+from robodesign.core.spatial import homogeneous, rot_x, rot_y, rot_z, translation
+from robodesign.formats.tolerance import (PROJECTIONS, ToleratedPose, ToleranceSamplingError, projection_value,
                                   quaternion_to_rotation, rotation_to_quaternion)
 
 PTP_3 = _COBRA / "tasks" / "simple" / "PTP_3.json"

@@ -95,7 +95,7 @@ def test_start_at_a_joint_limit_keeps_the_limits():
     limit: the energy-optimal motion hugs that limit. Interior nodes keep a 1 mm rad margin, so every
     output sample stays inside; without the margin ipopt's constraint tolerance lets a sample end 4e-5 rad
     beyond the limit, which the output check turns into a TrajoptError (solve then keeps TOPP-RA)."""
-    from robodesign.urdf import import_urdf
+    from robodesign.formats.urdf import import_urdf
     ms = import_urdf(COBRA / "urdf" / "panda" / "urdf" / "panda.urdf")
     r = Robot.from_order(ms, [m.id for m in ms][:1])
     qa = np.array([1.46126, r.q_upper[1], 1.66363, -2.59881, -1.63492, 1.29217, 0.89685])

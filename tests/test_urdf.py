@@ -11,12 +11,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robodesign.errors import InputError
-from robodesign.module_io import load_module_set
-from robodesign.paths import schemas_dir
-from robodesign.robot import Robot
-from robodesign.spatial import homogeneous, rpy_to_matrix
-from robodesign.urdf import CONTINUOUS_LIMIT, export_urdf, import_urdf
+from robodesign.core.errors import InputError
+from robodesign.formats.module_io import load_module_set
+from robodesign.core.paths import schemas_dir
+from robodesign.model.robot import Robot
+from robodesign.core.spatial import homogeneous, rpy_to_matrix
+from robodesign.formats.urdf import CONTINUOUS_LIMIT, export_urdf, import_urdf
 
 from conftest import COBRA  # noqa: E402
 MODULES = COBRA / "modules"
@@ -52,8 +52,8 @@ def _module_set(name: str):
 
 def reversed_robot(tmp_root: Path) -> Robot:
     import copy
-    from robodesign.assembly import Assembly
-    from robodesign.jsonio import dumps_json, load_json
+    from robodesign.formats.assembly import Assembly
+    from robodesign.core.jsonio import dumps_json, load_json
     data = load_json(MODULES / "geometric_primitive_modules" / "modules.json")
     ff = copy.deepcopy(next(m for m in data["modules"] if m["header"]["ID"] == "i_15"))
     ff["header"]["ID"], ff["header"]["name"] = "ff_15", "I link f-f 15"

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from robodesign import Robot, load_module_set
-from robodesign.cli import main as cli_main
-from robodesign.solution import Solution, SolutionTrajectory, load_solution
-from robodesign.task_io import load_task
+from robodesign.cli.entry import main as cli_main
+from robodesign.formats.solution import Solution, SolutionTrajectory, load_solution
+from robodesign.formats.task_io import load_task
 from robodesign.viewer import build_scene, render_html, solution_page, trajectory_plots
 from robodesign.viewer.html import asset, decode_page_data
 from robodesign.viewer.meshes import MAX_TRIANGLES, decimate, decode_b64, mesh_entry, weld

@@ -35,8 +35,8 @@ pytest.importorskip("fastapi", reason="the website needs fastapi (pip install fa
 from fastapi.testclient import TestClient  # noqa: E402
 
 from robodesign import load_module_set  # noqa: E402
-from robodesign.checker import check  # noqa: E402
-from robodesign.task_io import parse_task  # noqa: E402
+from robodesign.judge.checker import check  # noqa: E402
+from robodesign.formats.task_io import parse_task  # noqa: E402
 from robodesign.web import create_app  # noqa: E402
 
 from conftest import toy_module_set  # noqa: E402
@@ -475,7 +475,7 @@ def test_seed_symlink_leaving_the_folder_is_refused(tmp_path):
 
 
 def test_module_set_upload(client, tmp_path):
-    from robodesign.module_io import module_set_to_json
+    from robodesign.formats.module_io import module_set_to_json
     toy = json.loads((toy_module_set(tmp_path / "src") / "modules.json").read_text())
     r = client.post("/api/modulesets", json={"name": "toy2", "modules": toy["modules"],
                                              "ignore_collisions": "rigid_via_joint"})

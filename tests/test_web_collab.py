@@ -24,7 +24,7 @@ from fastapi.testclient import TestClient  # noqa: E402
 from sqlalchemy import inspect, text  # noqa: E402
 
 from robodesign import load_module_set  # noqa: E402
-from robodesign.collab import RobotSetup, load_collab_task, solve_collab  # noqa: E402
+from robodesign.collab.core import RobotSetup, load_collab_task, solve_collab  # noqa: E402
 from robodesign.web import create_app  # noqa: E402
 from robodesign.web.db import make_engine  # noqa: E402
 from robodesign.web.pages import bid_url  # noqa: E402
@@ -108,7 +108,7 @@ def robot(sol: dict, rid: str) -> dict:
 
 def cli_check(sol: dict, tmp_path: Path, name="sol.json"):
     """``robodesign check <shared_conveyor> <sol> --json`` in this process → (exit code, JSON verdict)."""
-    from robodesign.cli import main
+    from robodesign.cli.entry import main
     f = tmp_path / name
     f.write_text(json.dumps(sol))
     out = io.StringIO()

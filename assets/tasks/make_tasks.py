@@ -523,9 +523,9 @@ def write_tasks(names: Optional[Sequence[str]] = None) -> List[tuple]:
 # ---------------------------------------------------------------------------------------------------------
 def solve_builtin(name: str, seed: Optional[int] = None, base: Optional[np.ndarray] = None, cost: str = "cyc"):
     """Solve built-in task ``name`` with its SOLVE_SETUP robot: (task, SolveResult, seconds)."""
-    from robodesign.module_io import load_module_set
-    from robodesign.solve import SolveSettings, solve
-    from robodesign.task_io import load_task
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.design.solve import SolveSettings, solve
+    from robodesign.formats.task_io import load_task
     setup = SOLVE_SETUP[name]
     task = load_task(task_path(name))
     ms = load_module_set(MODULE_SET)
@@ -538,9 +538,9 @@ def solve_builtin(name: str, seed: Optional[int] = None, base: Optional[np.ndarr
 def solve_collab_builtin(name: str, seed: Optional[int] = None):
     """Solve collaborative built-in task ``name`` with its COLLAB_SOLVE_SETUP robots (prioritized planning):
     (CollabTask, CollabSolveResult, seconds)."""
-    from robodesign.collab import RobotSetup, load_collab_task, solve_collab
-    from robodesign.module_io import load_module_set
-    from robodesign.solve import SolveSettings
+    from robodesign.collab.core import RobotSetup, load_collab_task, solve_collab
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.design.solve import SolveSettings
     setup = COLLAB_SOLVE_SETUP[name]
     ctask = load_collab_task(collab_task_path(name))
     ms = load_module_set(MODULE_SET)

@@ -1,2 +1,2 @@
-"""First-party robodesign optimizer plugins. Each module uses only ``robodesign.optimize`` and
-``robodesign.search_space`` (the public plugin API)."""
+"""First-party robodesign optimizer plugins. Each module uses only ``robodesign.plugin`` and
+``robodesign.design.search_space`` (the public plugin API)."""

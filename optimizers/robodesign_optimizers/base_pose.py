@@ -24,7 +24,7 @@ from typing import Optional, Tuple
 
 import optuna
 
-from robodesign.optimize import BASE_PARAMS, Candidate, Optimizer, option
+from robodesign.plugin import BASE_PARAMS, Candidate, Optimizer, option
 
 _OUTSIDE = 1e300
 

@@ -59,7 +59,7 @@ from typing import Deque, Iterator, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Candidate, Optimizer, option
+from robodesign.plugin import Candidate, Optimizer, option
 
 
 class HierarchicalElimination(Optimizer):

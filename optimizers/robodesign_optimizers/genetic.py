@@ -48,7 +48,7 @@ import numpy as np
 from deap import base as deap_base
 from deap import tools
 
-from robodesign.optimize import Candidate, Optimizer, option
+from robodesign.plugin import Candidate, Optimizer, option
 
 
 class _Fitness(deap_base.Fitness):

@@ -50,7 +50,7 @@ from typing import Deque, Dict, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.optimize import Candidate, Optimizer, option
+from robodesign.plugin import Candidate, Optimizer, option
 
 Prefix = Tuple[str, ...]
 

@@ -42,7 +42,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import optuna
 from optuna.trial import TrialState
 
-from robodesign.optimize import BASE_PARAMS, Candidate, Optimizer, STAGES, option
+from robodesign.plugin import BASE_PARAMS, STAGES, Candidate, Optimizer, option
 
 OBJECTIVES = ("score", "mass", "modules", "dof")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
-from robodesign.optimize import Candidate, Optimizer, option
+from robodesign.plugin import Candidate, Optimizer, option
 
 
 class RandomSearch(Optimizer):

@@ -3,7 +3,7 @@
 * :mod:`.config`   – the config schema (pydantic), loading with errors that name file and field, and
   resolution of tasks, module sets, costs and optimizers.
 * :mod:`.storage`  – the SQLite results database (one commit per evaluation, WAL) and the per-run
-  storage the :class:`robodesign.optimize.Study` replays to resume exactly.
+  storage the :class:`robodesign.design.optimize.Study` replays to resume exactly.
 * :mod:`.executors` – serial, local processes and Ray (fault tolerant) evaluation of candidates.
 * :mod:`.runner`   – runs an experiment (new or resumed), writes config snapshot, meta, best solutions.
 * :mod:`.report`   – anytime curves (CSV + PNG), summary tables and ``index.html``.

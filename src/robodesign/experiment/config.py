@@ -1,7 +1,7 @@
 """Experiment configs: YAML → validated :class:`ExperimentConfig` → :class:`ResolvedExperiment`.
 
 Two steps, both with errors that name the file and the field (``configs/x.yaml: optimizers[1].budget:
-budget '5x': use e.g. 500evals, ...``), raised as :class:`robodesign.errors.InputError` (CLI exit code 2):
+budget '5x': use e.g. 500evals, ...``), raised as :class:`robodesign.core.errors.InputError` (CLI exit code 2):
 
 1. :func:`load_config` reads the YAML (syntax errors with line/column, duplicate keys rejected) and
    validates its *shape* with pydantic (unknown fields, types, ranges, budgets, costs, benchmark IDs).
@@ -22,10 +22,10 @@ from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
 
-from ..errors import InputError, format_json_path
-from ..optimize import Budget
-from ..problem import Problem
-from ..solve import SolveSettings
+from robodesign.core.errors import InputError, format_json_path
+from robodesign.design.optimize import Budget
+from robodesign.design.problem import Problem
+from robodesign.design.solve import SolveSettings
 
 DEFAULT_BUDGET = "50evals"
 EXECUTORS = ("serial", "process", "ray")
@@ -55,7 +55,7 @@ _UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
 
 
 def read_yaml(text: str, display: str) -> Any:
-    from ..jsonio import MAX_DEPTH, check_values
+    from robodesign.core.jsonio import MAX_DEPTH, check_values
     try:
         return check_values(yaml.load(text, Loader=_UniqueKeyLoader), display)
     except RecursionError:
@@ -99,7 +99,7 @@ def _str_list(v, what="name"):
 
 
 def _check_cost(v: str) -> str:
-    from ..costs import parse_cost
+    from robodesign.formats.costs import parse_cost
     c = parse_cost(v)
     if c.is_empty:
         raise ValueError("empty cost function")
@@ -185,7 +185,7 @@ class SuiteGenerate(BaseModel):
 
     @model_validator(mode="after")
     def _known(self):
-        from ..generate import get_family
+        from robodesign.generate import get_family
         get_family(self.family).resolve(dict(self.options))  # unknown family or option, bad value: InputError
         return self
 
@@ -227,7 +227,7 @@ class BenchmarkEntry(BaseModel):
     @field_validator("id")
     @classmethod
     def _bid(cls, v):
-        from ..benchmark_id import BenchmarkID
+        from robodesign.formats.benchmark_id import BenchmarkID
         bid = BenchmarkID.parse(v)
         if bid.is_collaborative or bid.robot.robots[0].kind != "module_set":
             raise ValueError(f"benchmark ID {v!r}: only module-set robots (Name or M-Name) can be optimised")
@@ -265,7 +265,7 @@ class ExecutorConfig(BaseModel):
 
 
 def _solve_model():
-    from ..evaluator import evaluation_settings
+    from robodesign.design.evaluator import evaluation_settings
     defaults = dataclasses.asdict(evaluation_settings())  # the same defaults as the optimize CLI and the API
     fields = {}
     for f in dataclasses.fields(SolveSettings):
@@ -455,7 +455,7 @@ def load_config(path, display: Optional[str] = None) -> Tuple[ExperimentConfig, 
 @dataclass
 class ProblemEntry:
     """One named problem of an experiment (a task entry or benchmark ID with its cost, rules and base
-    search): the :class:`~robodesign.problem.Problem` every run of it optimizes, built once."""
+    search): the :class:`~robodesign.design.problem.Problem` every run of it optimizes, built once."""
     name: str
     problem: Problem
     base_search: bool
@@ -471,7 +471,7 @@ class ProblemEntry:
         return self.problem.cost_descriptor
 
     def evaluator_spec(self, seed: int, solve: SolveSettings):
-        from ..evaluator import EvaluatorSpec
+        from robodesign.design.evaluator import EvaluatorSpec
         return EvaluatorSpec(self.problem, settings=solve, seed=int(seed))
 
     def to_json(self) -> dict:
@@ -554,7 +554,7 @@ def _search_dirs(dirs: List[str], base: Path, display: str, key: str) -> List[Pa
 
 def _find_task(ref: str, base: Path, task_dirs: List[Path], display: str, path) -> Tuple[str, Path]:
     """→ (reference for load_task, file). Order: a path relative to the config folder, task_dirs, built-in."""
-    from ..paths import builtin_tasks_dir
+    from robodesign.core.paths import builtin_tasks_dir
     cand = Path(ref)
     tried = []
     if cand.is_absolute() or ref.endswith(".json") or ref.startswith("."):
@@ -578,7 +578,7 @@ def _find_task(ref: str, base: Path, task_dirs: List[Path], display: str, path) 
 
 
 def _find_modules(ref: str, base: Path, module_dirs: List[Path], display: str, path) -> str:
-    from ..paths import builtin_module_sets
+    from robodesign.core.paths import builtin_module_sets
     cand = Path(ref)
     tried = []
     if cand.is_absolute() or "/" in ref or ref.startswith("."):
@@ -618,7 +618,7 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         if not files:
             raise InputError(f"no task files (*.json) in {folder}", file=display, path=where + ["folder"])
         return files
-    from ..generate import get_family
+    from robodesign.generate import get_family
     want = [g.model_dump() for g in su.generate]
     versions = {g.family: get_family(g.family).version for g in su.generate}
     manifest = folder / SUITE_MANIFEST
@@ -638,7 +638,7 @@ def suite_task_files(su: SuiteEntry, base: Path, display: str, where: list) -> L
         files = [folder / n for n in have.get("files", [])]
         if files and all(p.is_file() for p in files):
             return files
-    from ..generate import generate
+    from robodesign.generate import generate
     files = []
     for k, g in enumerate(su.generate):
         options = dict(g.options)
@@ -667,9 +667,9 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
     """Resolve tasks, module sets and optimizers; load each task and module set once (parse errors
     surface here), build each problem once and instantiate each optimizer with its options on the first
     problem."""
-    from ..module_io import load_module_set
-    from ..paths import DEFAULT_MODULE_SET
-    from ..task_io import load_task
+    from robodesign.core.paths import DEFAULT_MODULE_SET
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.formats.task_io import load_task
 
     base_dir = Path(base_dir)
     task_dirs = _search_dirs(cfg.task_dirs, base_dir, display, "task_dirs")
@@ -687,7 +687,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
                             rules=cfg.rules.merged(t.rules), base_search=cfg.base_search if t.base_search is None
                             else t.base_search, name=t.name, n_costs=len(t.cost or cfg.cost)))
     for i, b in enumerate(cfg.benchmarks):
-        from ..benchmark_id import BenchmarkID
+        from robodesign.formats.benchmark_id import BenchmarkID
         where = ["benchmarks", i]
         bid = BenchmarkID.parse(b.id)
         task_ref, _ = _find_task(bid.task, base_dir, task_dirs, display, where + ["id"])
@@ -773,7 +773,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
 def check_optimizer(name: str, options: dict, problem: Problem, display: str, path: list) -> None:
     """Instantiate optimizer ``name`` with ``options`` once, so that an unknown plugin or a bad option is an
     error naming the config file and field before anything runs."""
-    from ..optimize import OptionError, available_optimizers, create_optimizer, load_optimizer
+    from robodesign.design.optimize import OptionError, available_optimizers, create_optimizer, load_optimizer
     if name not in available_optimizers():
         known = ", ".join(sorted(available_optimizers())) or "none installed"
         raise InputError(f"unknown optimizer {name!r} (installed: {known})", file=display, path=path + ["name"])

@@ -1,11 +1,11 @@
 """Executors: evaluate batches of candidates serially, in local processes or on a Ray cluster.
 
-An *evaluator pool* is created once per experiment with the :class:`~robodesign.evaluator.EvaluatorSpec`
+An *evaluator pool* is created once per experiment with the :class:`~robodesign.design.evaluator.EvaluatorSpec`
 of every (task, evaluation seed) the runs need, keyed by a spec id. Each worker (the main process, a
-spawned process, a Ray actor) builds its :class:`~robodesign.evaluator.Evaluator` objects **once**, when it
+spawned process, a Ray actor) builds its :class:`~robodesign.design.evaluator.Evaluator` objects **once**, when it
 starts; the specs' problems travel as file references, so tasks and module sets (the heavy models) are
 loaded once per worker and shared between specs.
-``pool.bind(spec_id)`` gives the object a :class:`~robodesign.optimize.Study` uses as its executor
+``pool.bind(spec_id)`` gives the object a :class:`~robodesign.design.optimize.Study` uses as its executor
 (``map(candidates) -> list[Evaluation]`` in the order given; ``imap(candidates, batch_size)``, the same as a
 stream that pulls candidates only as workers need them; ``close()``).
 
@@ -41,11 +41,11 @@ from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
 from typing import Dict, Iterable, Iterator, List, Optional, Sequence
 
-from ..errors import InputError
-from ..evaluator import Evaluation, Evaluator, EvaluatorSpec
-from ..search_space import Candidate
-from ..solve import warm_up
-from ..solvers import ik_kernel
+from robodesign.core.errors import InputError
+from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec
+from robodesign.design.search_space import Candidate
+from robodesign.design.solve import warm_up
+from robodesign.solvers import ik_kernel
 
 log = logging.getLogger(__name__)
 
@@ -381,7 +381,7 @@ class ChunkedPool(EvaluatorPool):
 
 class ProcessPool(ChunkedPool):
     """``concurrent.futures.ProcessPoolExecutor`` with the spawn context; each worker builds its
-    evaluators once in the initializer and warms up (:func:`~robodesign.solve.warm_up`). Candidates travel
+    evaluators once in the initializer and warms up (:func:`~robodesign.design.solve.warm_up`). Candidates travel
     in chunks (:class:`ChunkedPool`). A dead worker (``BrokenProcessPool``) is survived: the pool is
     restarted and the chunks without a result are re-run."""
     kind = "process"

@@ -24,7 +24,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .storage import ExperimentDB
+from robodesign.experiment.storage import ExperimentDB
 
 SUMMARY_COLUMNS = ("task", "optimizer", "seeds", "evaluations", "best_cost_median", "best_cost_min",
                    "best_cost_max", "feasible_rate", "seeds_feasible", "evals_to_first_feasible_median",
@@ -323,10 +323,10 @@ def write_views(out: Path, meta: dict, solutions: Sequence[str], verdicts: Dict[
     """Write the 3-D view page of each best solution (paths relative to ``out``, in priority order; at most
     :data:`VIEW_PAGES_MAX`); returns ``{solution: view page}`` for the pages that exist. A page newer than
     its solution is kept (a resumed experiment does not redo it); one that cannot be built is left out."""
-    from ..module_io import load_module_set
-    from ..solution import load_solution
-    from ..task_io import load_task
-    from ..viewer import solution_page
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.formats.solution import load_solution
+    from robodesign.formats.task_io import load_task
+    from robodesign.viewer import solution_page
     problems = {p.get("name"): p for p in meta.get("problems", [])}
     views: Dict[str, str] = {}
     for rel in list(dict.fromkeys(solutions))[:VIEW_PAGES_MAX]:
@@ -445,8 +445,16 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
 def write_suites(out: Path, meta: dict, db: ExperimentDB) -> str:
     """``suites.csv``, ``suites_unsolved.csv`` and ``suites.md`` when the experiment has suites; returns the
     HTML tables for the report page ("" without suites)."""
-    from .suites import (SUITE_COLUMNS, UNSOLVED_COLUMNS, html_tables, markdown, records_from_db, suite_of_problems,
-                         summarize_suites, unsolved_rows)
+    from robodesign.experiment.suites import (
+        SUITE_COLUMNS,
+        UNSOLVED_COLUMNS,
+        html_tables,
+        markdown,
+        records_from_db,
+        suite_of_problems,
+        summarize_suites,
+        unsolved_rows,
+    )
     suite_of = suite_of_problems(meta)
     if not suite_of:
         return ""

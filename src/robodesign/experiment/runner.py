@@ -33,10 +33,10 @@ from importlib import metadata
 from pathlib import Path
 from typing import Dict, Optional
 
-from ..errors import InputError
-from ..optimize import Budget, Study, create_optimizer
-from .config import ResolvedExperiment, RunSpec, load_experiment
-from .storage import DB_FILE, ExperimentDB
+from robodesign.core.errors import InputError
+from robodesign.design.optimize import Budget, Study, create_optimizer
+from robodesign.experiment.config import ResolvedExperiment, RunSpec, load_experiment
+from robodesign.experiment.storage import DB_FILE, ExperimentDB
 
 PACKAGES = ("robodesign", "robodesign-optimizers", "numpy", "pin", "coal", "ompl", "casadi", "ruckig", "toppra",
             "optuna", "deap", "ray", "scipy", "matplotlib", "pydantic", "PyYAML", "rich", "jsonschema", "trimesh")
@@ -197,8 +197,7 @@ class RichProgress:
 
     def __init__(self):
         from rich.console import Console
-        from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn,
-                                   TimeElapsedColumn)
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
         self.console = Console()
         self.progress = Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
                                  MofNCompleteColumn(), TextColumn("best {task.fields[best]}"), TimeElapsedColumn(),
@@ -265,8 +264,8 @@ def make_progress(mode: str = "auto"):
 def write_best(out: Path, db: ExperimentDB, run: RunSpec) -> Optional[dict]:
     """Write the run's best feasible solution as a CoBRA solution file and store the checker's verdict on
     that very file beside it. Returns the verdict JSON (None when the run found nothing feasible)."""
-    from ..checker import check
-    from ..solution import load_solution
+    from robodesign.formats.solution import load_solution
+    from robodesign.judge.checker import check
     best = db.best(run.run_id)
     sol_path, verdict_path = best_paths(out, run.problem.name, run.optimizer.label, run.seed)
     if best is None or not best.get("solution"):
@@ -347,7 +346,8 @@ def load_resume(folder: Path):
         # the solve settings the evaluations were made with, not today's defaults: a resume stays exact
         # even if robodesign's defaults changed in between
         import dataclasses
-        from ..solve import SolveSettings
+
+        from robodesign.design.solve import SolveSettings
         known = {f.name for f in dataclasses.fields(SolveSettings)}
         exp.solve = SolveSettings(**{k: v for k, v in meta["solve"].items() if k in known})
     return exp, text, meta
@@ -423,7 +423,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
                    chunk_size: Optional[int] = None, progress=None, report: bool = True) -> ExperimentOutcome:
     """Run (or resume) an experiment into ``out``. The executor settings of the config can be overridden.
     ``restart`` (with ``resume``): start the experiment over in its folder, the old results moved aside."""
-    from .executors import make_pool
+    from robodesign.experiment.executors import make_pool
     out = Path(out)
     t_start = time.perf_counter()
     progress = progress or NoProgress()
@@ -492,7 +492,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
             write_best(out, db, r)
     report_path = None
     if report:
-        from .report import write_report
+        from robodesign.experiment.report import write_report
         report_path = write_report(out, db=db)
     outcome = ExperimentOutcome(out_dir=out, report=report_path, evaluations=db.count(), new_evaluations=total_new,
                                 runs=len(runs), skipped_runs=skipped, executor=session.get("executor", {}),

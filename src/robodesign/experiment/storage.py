@@ -9,10 +9,10 @@ checkpoint ``on_checkpoint(count)`` reports the evaluations stored so far (the r
 in meta.json, where a resume compares it with what the database holds).
 
 Damage: opening an unreadable file (truncated, garbled, not SQLite; SQLite's ``quick_check``) raises
-:class:`DamagedDatabase`, an :class:`~robodesign.errors.InputError` naming the file and what to do, never a
+:class:`DamagedDatabase`, an :class:`~robodesign.core.errors.InputError` naming the file and what to do, never a
 traceback.
 
-Exact resume: :class:`RunStorage` is the ``storage`` of a :class:`robodesign.optimize.Study`. ``load()``
+Exact resume: :class:`RunStorage` is the ``storage`` of a :class:`robodesign.design.optimize.Study`. ``load()``
 returns the stored evaluations of the run in ask order; the study replays them through the (seeded,
 deterministic) optimizer and checks that it asks the same candidates again, then continues. Indices
 are a primary key, so an evaluation can never be stored twice.
@@ -29,9 +29,9 @@ import time
 from pathlib import Path
 from typing import Callable, List, Optional
 
-from ..errors import InputError
-from ..evaluator import Evaluation
-from ..search_space import Candidate
+from robodesign.core.errors import InputError
+from robodesign.design.evaluator import Evaluation
+from robodesign.design.search_space import Candidate
 
 SCHEMA_VERSION = 1
 DB_FILE = "evaluations.sqlite"
@@ -247,7 +247,7 @@ class ExperimentDB:
         self.con.execute("INSERT OR REPLACE INTO info (key, value) VALUES (?, ?)", (key, value))
 
     def storage(self, run_id: str, problem=None) -> "RunStorage":
-        """The Study storage of run ``run_id``; with its :class:`~robodesign.problem.Problem`, the run's stored
+        """The Study storage of run ``run_id``; with its :class:`~robodesign.design.problem.Problem`, the run's stored
         evaluations are tied to that problem (see :class:`RunStorage`)."""
         return RunStorage(self, run_id, problem)
 

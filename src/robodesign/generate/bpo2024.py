@@ -20,10 +20,10 @@ from typing import Callable, Dict, FrozenSet, List, Set, Tuple
 
 import numpy as np
 
-from ..errors import RobodesignError
-from ..spatial import rot_z
-from .common import PI, Provenance, ReferenceArm, header, tolerated, transform, verified
-from .registry import VERIFY, Family, GeneratedTask, Option
+from robodesign.core.errors import RobodesignError
+from robodesign.core.spatial import rot_z
+from robodesign.generate.common import PI, Provenance, ReferenceArm, header, tolerated, transform, verified
+from robodesign.generate.registry import VERIFY, Family, GeneratedTask, Option
 
 VERSION = 2
 CUBE = 0.25

@@ -17,8 +17,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..errors import InputError
-from ..spatial import homogeneous
+from robodesign.core.errors import InputError
+from robodesign.core.spatial import homogeneous
 
 PI = math.pi
 DATE = "2026-01-01"  # fixed: the date is part of the bytes
@@ -194,10 +194,10 @@ class ReferenceArm:
 
     def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
                  ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
-        from ..assembly import Assembly
-        from ..cell import build_robot
-        from ..module_io import load_module_set
-        from ..task_io import parse_task
+        from robodesign.formats.assembly import Assembly
+        from robodesign.formats.module_io import load_module_set
+        from robodesign.formats.task_io import parse_task
+        from robodesign.model.cell import build_robot
         self.task = parse_task(clean(task_dict), folder / "_probe.json")
         self.module_set = load_module_set(REFERENCE_MODULE_SET)
         asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
@@ -214,7 +214,8 @@ class ReferenceArm:
     def distance(self, shape, pose: np.ndarray) -> float:
         """Distance (coal) of a coal shape at ``pose`` from the cell's obstacles (≤ 0 when they touch)."""
         import coal
-        from ..geometry import coal_shapes
+
+        from robodesign.formats.geometry import coal_shapes
         if not hasattr(self, "_obstacles"):
             self._obstacles = [coal.CollisionObject(s, coal.Transform3s(g.pose[:3, :3], g.pose[:3, 3]))
                                for o in self.task.obstacles for g in o.collision for s in coal_shapes(g)]
@@ -227,8 +228,8 @@ class ReferenceArm:
         return best
 
     def reaches(self, goal_pose: dict) -> bool:
-        from ..solvers.ik import solve_ik
-        from ..tolerance import ToleratedPose
+        from robodesign.formats.tolerance import ToleratedPose
+        from robodesign.solvers.ik import solve_ik
         tp = ToleratedPose.from_json(clean(goal_pose))
         o, R = self.robot.reach_bound()
         if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
@@ -251,14 +252,14 @@ def verified(task_dict: dict, opts: dict, folder: Path, base_pose: Optional[np.n
 
 def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:
     """Whether the reference design at ``base_pose`` (default: the task's nominal base) solves the task and the
-    checker accepts the solution (``robodesign.solve.solve``, seed 0, ``VERIFY_PLAN_TIME`` per planning query).
+    checker accepts the solution (``robodesign.design.solve.solve``, seed 0, ``VERIFY_PLAN_TIME`` per planning query).
 
     OMPL is seeded, so the answer is the same on every run unless a planning query runs into the time limit:
     a query that needs seconds on an idle machine could be cut on an overloaded one. The generous limit makes
     that unlikely (a successful query returns at once; only failing cells pay the full limit)."""
-    from ..module_io import load_module_set
-    from ..solve import SolveSettings, solve
-    from ..task_io import parse_task
+    from robodesign.design.solve import SolveSettings, solve
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.formats.task_io import parse_task
     task = parse_task(clean(task_dict), folder / "_probe.json")
     res = solve(task, load_module_set(REFERENCE_MODULE_SET), list(REFERENCE_ORDER), base_pose=base_pose,
                 settings=SolveSettings(seed=0, plan_time=VERIFY_PLAN_TIME))

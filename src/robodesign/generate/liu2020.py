@@ -21,11 +21,19 @@ from typing import Dict, List
 
 import numpy as np
 
-from ..errors import InputError, RobodesignError
-from ..spatial import rot_y
-from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform, verified
-from .machine import COVER_DOWN, COVER_UP, DEFAULT_NAME, STEP, MachineFrame, analyse, default_machine_stl
-from .registry import VERIFY, Family, GeneratedTask, Option, copy_file
+from robodesign.core.errors import InputError, RobodesignError
+from robodesign.core.spatial import rot_y
+from robodesign.generate.common import AABB, PI, Provenance, ReferenceArm, header, tolerated, transform, verified
+from robodesign.generate.machine import (
+    COVER_DOWN,
+    COVER_UP,
+    DEFAULT_NAME,
+    STEP,
+    MachineFrame,
+    analyse,
+    default_machine_stl,
+)
+from robodesign.generate.registry import VERIFY, Family, GeneratedTask, Option, copy_file
 
 VERSION = 4
 BASE_Z = 0.30  # m, nominal base height (the robot on a stand)
@@ -74,7 +82,7 @@ def _machine_source(opts: Dict[str, object]):
 
 
 def _auto_scale(file: Path) -> float:
-    from ..geometry import load_mesh_arrays
+    from robodesign.formats.geometry import load_mesh_arrays
     V = np.concatenate([v for v, _ in load_mesh_arrays(str(file), (1.0, 1.0, 1.0))])
     return 0.001 if float(np.max(V.max(axis=0) - V.min(axis=0))) > 20.0 else 1.0
 

@@ -105,7 +105,7 @@ def _rotz(V: np.ndarray, yaw: float) -> np.ndarray:
 @lru_cache(maxsize=16)
 def analyse(file: str, scale: float) -> MachineFrame:
     """Place the machine mesh (file, uniform scale) with its work area towards the robot (-x side)."""
-    from ..geometry import load_mesh_arrays
+    from robodesign.formats.geometry import load_mesh_arrays
     parts = load_mesh_arrays(file, (scale, scale, scale))
     V0 = np.concatenate([v for v, _ in parts])
     offs = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])

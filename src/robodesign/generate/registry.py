@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Tuple
 
-from ..errors import InputError
-from .common import Provenance, task_text
+from robodesign.core.errors import InputError
+from robodesign.generate.common import Provenance, task_text
 
 
 @dataclass(frozen=True)
@@ -88,7 +88,7 @@ class Family:
 
 def families() -> Dict[str, Family]:
     """name → Family, in the order of ``robodesign generate --list``."""
-    from . import bpo2024, liu2020, whitman2020
+    from robodesign.generate import bpo2024, liu2020, whitman2020
     return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY, bpo2024.FAMILY)}
 
 
@@ -147,7 +147,7 @@ def regenerate(task_file: Path, out: Path) -> Path:
 
     A family that reads a user file (liu2020 ``--machine``) takes the copy the generator made in ``assets/``
     beside the task."""
-    from ..jsonio import load_json
+    from robodesign.core.jsonio import load_json
     task_file = Path(task_file)
     data = load_json(task_file, display_name=task_file.name)
     head = data.get("header") if isinstance(data, dict) else None

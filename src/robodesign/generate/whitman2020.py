@@ -19,9 +19,9 @@ from typing import Dict, List
 
 import numpy as np
 
-from ..errors import InputError, RobodesignError
-from .common import PI, AABB, Provenance, ReferenceArm, header, tolerated, transform, verified
-from .registry import VERIFY, Family, GeneratedTask, Option
+from robodesign.core.errors import InputError, RobodesignError
+from robodesign.generate.common import AABB, PI, Provenance, ReferenceArm, header, tolerated, transform, verified
+from robodesign.generate.registry import VERIFY, Family, GeneratedTask, Option
 
 VERSION = 3
 CUBE = 0.25  # m, obstacle edge

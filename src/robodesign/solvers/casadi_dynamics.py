@@ -8,7 +8,7 @@ iterations than MX, see the dependency notes).
 
 Supported joints: revolute and prismatic about/along x, y, z (``RX, RY, RZ, PX, PY, PZ``) and about
 any axis (``RevoluteUnaligned``, ``PrismaticUnaligned``), on any kinematic tree; 1-DoF joints only
-(what :class:`robodesign.robot.Robot` builds).
+(what :class:`robodesign.model.robot.Robot` builds).
 
 Conventions follow pinocchio: spatial motions (v, ω) and forces (f, n) are expressed in the local
 joint frame; the base acceleration is −gravity (so the result includes gravity).
@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from ..robot import COULOMB_SMOOTHING
+from robodesign.model.robot import COULOMB_SMOOTHING
 
 
 def _model(robot) -> pin.Model:

@@ -4,7 +4,7 @@
 returns distinct, collision-free joint configurations whose TCP pose satisfies ``goal.valid`` (up to
 ``n_solutions``).
 
-How the tolerance is used (robodesign's decisions; projections as in :mod:`robodesign.tolerance`):
+How the tolerance is used (robodesign's decisions; projections as in :mod:`robodesign.formats.tolerance`):
 
 * The error is computed from ``Δ = nominal⁻¹·T = (p, R)`` with the decoupled pair (p, log3 R) rather
   than ``log6(Δ)``: the tolerance projections are defined on exactly these quantities (x, y, z = p_i;
@@ -63,8 +63,8 @@ from typing import Callable, Dict, List, Optional, Tuple
 import numpy as np
 import pinocchio as pin
 
-from ..errors import InputError
-from ..tolerance import PROJECTIONS, ToleratedPose
+from robodesign.core.errors import InputError
+from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL"]
 
@@ -367,7 +367,7 @@ class GoalModel:
         if self._program is None:
             prog = None
             if not self.fallback and not self.unconstrained:
-                from . import ik_kernel
+                from robodesign.solvers import ik_kernel
                 prog = ik_kernel.compile_goal(self.term_specs)
             self._program = prog if prog is not None else False
         return self._program or None
@@ -601,7 +601,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
     does not cover them (the Python loop then runs)."""
     if gm.unconstrained:
         return None
-    from . import ik_kernel
+    from robodesign.solvers import ik_kernel
     if not ik_kernel.ready():   # not compiled yet: the Python loop runs meanwhile (no cold-start stall)
         return None
     prog = gm.program()

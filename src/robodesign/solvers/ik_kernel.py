@@ -8,7 +8,7 @@ iteration instead of 15–20 µs.
 
 What it covers (everything else keeps the Python loop, which is the reference):
 
-* joints: revolute and prismatic about ±z of the joint frame (every robot :class:`~robodesign.robot.Robot`
+* joints: revolute and prismatic about ±z of the joint frame (every robot :class:`~robodesign.model.robot.Robot`
   builds: ``JointModelRZ``/``PZ`` and their ``…Unaligned(0, 0, −1)`` for reversed modules);
 * goal constraints with one tolerance interval each: ``x``, ``y``, ``z``, ``N_x``, ``N_y``, ``N_z`` (in any
   frame), ``r_sph``, ``Theta_R`` and ``r_cyl``; not the periodic ``phi_*``/``theta`` rows, multi-piece

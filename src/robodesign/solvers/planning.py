@@ -1,12 +1,12 @@
 """Collision-free joint-space path planning with OMPL 2.x, plus a dense path checker.
 
-:func:`plan_path` plans from ``q_start`` to ``q_goal`` for a :class:`~robodesign.robot.Robot` (with the
+:func:`plan_path` plans from ``q_start`` to ``q_goal`` for a :class:`~robodesign.model.robot.Robot` (with the
 obstacles already set on it) and returns joint waypoints whose straight interpolation is collision-free.
 
 Decisions:
 
 * **Validity** of a configuration: within the joint limits and ``not robot.in_collision(q)`` (self +
-  obstacles, with the robot's safety margin); with ``static_torque=True`` (what :func:`robodesign.solve.solve`
+  obstacles, with the robot's safety margin); with ``static_torque=True`` (what :func:`robodesign.design.solve.solve`
   asks for) also held against gravity within the torque limits, |g(q)| ≤ τ_max: a path through a pose
   the joints cannot hold standing still cannot be timed by slowing down. The OMPL planner, the shortcuts
   and the final dense check all use this one test.
@@ -47,7 +47,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from ..errors import InputError
+from robodesign.core.errors import InputError
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "PLANNERS"]
 
@@ -323,7 +323,9 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
 
 
 def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats):
-    from ompl import base as ob, geometric as og, util as ou
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
 
     n = robot.dof
     lo = np.asarray(robot.q_lower, dtype=float).copy()

@@ -19,10 +19,10 @@ from typing import Optional, Protocol, Sequence, Tuple
 
 import numpy as np
 
-from ..cell import build_robot, moving_obstacle_events, moving_obstacle_indices
-from ..pair_sweep import RobotPairSweep
-from ..robot import Robot
-from ..sweep import SweepChecker
+from robodesign.model.cell import build_robot, moving_obstacle_events, moving_obstacle_indices
+from robodesign.model.pair_sweep import RobotPairSweep
+from robodesign.model.robot import Robot
+from robodesign.model.sweep import SweepChecker
 
 
 class TimedCollider(Protocol):

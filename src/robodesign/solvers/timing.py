@@ -90,7 +90,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..errors import RobodesignError
+from robodesign.core.errors import RobodesignError
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
@@ -482,11 +482,18 @@ class BlendedPolyline:
             a = W[i] + r[i] * U[i]
             length = L[i] - r[i] - r[i + 1]
             if length > 1e-12:
-                s0.append(s); p0.append(a); d0.append(U[i]); cc.append(np.zeros(self._dof)); kind.append(0)
+                s0.append(s)
+                p0.append(a)
+                d0.append(U[i])
+                cc.append(np.zeros(self._dof))
+                kind.append(0)
                 s += length
             if i + 1 < K - 1 and r[i + 1] > 0:
-                s0.append(s); p0.append(W[i + 1] - r[i + 1] * U[i]); d0.append(U[i])
-                cc.append((U[i + 1] - U[i]) / (2 * r[i + 1])); kind.append(1)
+                s0.append(s)
+                p0.append(W[i + 1] - r[i + 1] * U[i])
+                d0.append(U[i])
+                cc.append((U[i + 1] - U[i]) / (2 * r[i + 1]))
+                kind.append(1)
                 s += 2 * r[i + 1]
         self.breaks = np.array(s0 + [s])
         self.p0, self.d0, self.c = np.array(p0), np.array(d0), np.array(cc)

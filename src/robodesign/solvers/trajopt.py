@@ -61,9 +61,9 @@ from typing import Dict, Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from ..errors import RobodesignError
-from .casadi_dynamics import casadi_drivetrain_torque, casadi_fk
-from .timing import JointTrajectory, resample_velocity_profile, time_optimal_bound
+from robodesign.core.errors import RobodesignError
+from robodesign.solvers.casadi_dynamics import casadi_drivetrain_torque, casadi_fk
+from robodesign.solvers.timing import JointTrajectory, resample_velocity_profile, time_optimal_bound
 
 
 class TrajoptError(RobodesignError):
@@ -77,11 +77,11 @@ def parse_cost(cost) -> Dict[str, float]:
     if isinstance(cost, dict):
         out = {str(k): float(v) for k, v in cost.items()}
     else:
-        from ..costs import parse_cost as parse_cobra_cost
+        from robodesign.formats.costs import parse_cost as parse_cobra_cost
         out = {}
         for name, w in parse_cobra_cost(str(cost)).terms:
             out[name] = out.get(name, 0.0) + float(w)
-    from ..costs import cost_terms
+    from robodesign.formats.costs import cost_terms
     known = [n for n, term in cost_terms().items() if term.trajopt]
     bad = [k for k in out if k not in known]
     if bad:

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from typing import Mapping, Optional, Sequence, Union
 
-from .html import render_html
-from .plots import trajectory_plots
-from .scene import build_scene
+from robodesign.viewer.html import render_html
+from robodesign.viewer.plots import trajectory_plots
+from robodesign.viewer.scene import build_scene
 
 __all__ = ["build_scene", "render_html", "trajectory_plots", "solution_page", "collab_page", "task_page", "robot_page"]
 
@@ -32,9 +32,9 @@ def solution_page(task, solution, module_set=None, *, verdict=None, plots: Union
     be built (bad assembly, wrong number of joints, unknown module set) still gives a page: the task
     alone with the reason as a note.
     """
-    from ..cell import resolve_module_set
-    from ..errors import RobodesignError
-    from ..robot import Robot
+    from robodesign.core.errors import RobodesignError
+    from robodesign.model.cell import resolve_module_set
+    from robodesign.model.robot import Robot
 
     info = {"solution": solution.source or "", "cost_function": solution.cost_function}
     if solution.cost is not None:
@@ -80,8 +80,8 @@ def collab_page(ctask, csol, module_sets=None, *, verdict=None, fps: float = 25.
     for every robot, a dict robot ID → module set, or None (each robot's ``moduleSet``)."""
     from types import SimpleNamespace
 
-    from ..cell import build_robot, resolve_module_set
-    from ..collab import robot_module_set
+    from robodesign.collab.core import robot_module_set
+    from robodesign.model.cell import build_robot, resolve_module_set
     robots = []
     for rid, sol in csol.robots:
         ms = resolve_module_set(sol, robot_module_set(module_sets, rid))

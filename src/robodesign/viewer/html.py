@@ -20,7 +20,7 @@ from typing import Dict, Mapping, Optional, Union
 
 import numpy as np
 
-from .meshes import b64
+from robodesign.viewer.meshes import b64
 
 STATIC = Path(__file__).resolve().parent / "static"
 THREE_VERSION = "0.169.0"

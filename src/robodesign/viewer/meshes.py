@@ -1,7 +1,7 @@
 """Mesh data for the viewer: welded, decimated triangle meshes encoded as base64 arrays.
 
 A mesh file (STL, OBJ, … or an IMPROV ``.wrl`` convex decomposition) is loaded once per
-``(file, scale)`` with :func:`robodesign.geometry.load_mesh_arrays`, its duplicate vertices are
+``(file, scale)`` with :func:`robodesign.formats.geometry.load_mesh_arrays`, its duplicate vertices are
 welded (STL stores three per triangle), degenerate triangles are dropped and, if it still has more
 than ``max_triangles`` triangles, it is decimated by vertex clustering (numpy only): vertices are
 snapped to a cubic grid, each occupied cell becomes one vertex (the mean of its vertices) and
@@ -20,7 +20,7 @@ from typing import Dict, Tuple
 
 import numpy as np
 
-from ..geometry import load_mesh_arrays
+from robodesign.formats.geometry import load_mesh_arrays
 
 MAX_TRIANGLES = 20_000
 

@@ -95,10 +95,10 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     None for the solution's ``moduleSet``. With ``out_dir`` the images are also written there as
     ``<stem>_<name>.png``.
     """
-    from ..cell import resolve_module_set
-    from ..quantities import TrajectoryQuantities
-    from ..robot import Robot
-    from ..task_spec import Follow
+    from robodesign.formats.task_spec import Follow
+    from robodesign.judge.quantities import TrajectoryQuantities
+    from robodesign.model.cell import resolve_module_set
+    from robodesign.model.robot import Robot
 
     ms = resolve_module_set(solution, module_set)
     gravity = task.header.gravity if task is not None else (0.0, 0.0, -9.81)
@@ -126,7 +126,7 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     P = tq.tcp_poses[:, :3, 3]
     goals = []
     if task is not None:
-        from ..task_spec import At, Leave, Reach
+        from robodesign.formats.task_spec import At, Leave, Reach
         for g in task.goals:
             pose = getattr(g, "pose", None) if isinstance(g, (At, Reach)) else (g.region if isinstance(g, Leave) else None)
             if pose is not None:

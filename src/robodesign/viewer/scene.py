@@ -35,9 +35,9 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..geometry import GeometrySpec
-from ..tolerance import ToleratedPose
-from .meshes import MAX_TRIANGLES, mesh_entry
+from robodesign.formats.geometry import GeometrySpec
+from robodesign.formats.tolerance import ToleratedPose
+from robodesign.viewer.meshes import MAX_TRIANGLES, mesh_entry
 
 SCENE_FORMAT = "robodesign-scene/1"
 DEFAULT_FPS = 25.0
@@ -152,7 +152,7 @@ def _q_at(t: np.ndarray, q: np.ndarray, time_: float) -> np.ndarray:
 # tolerances
 # ---------------------------------------------------------------------------------------------
 def _frame_rotation(tp: ToleratedPose, frame: str) -> np.ndarray:
-    """Q_f: nominal axes → axes of the tolerance frame (see robodesign.tolerance)."""
+    """Q_f: nominal axes → axes of the tolerance frame (see robodesign.formats.tolerance)."""
     Q = getattr(tp, "_Q", {}).get(frame)
     if Q is not None:
         return np.asarray(Q, dtype=float)
@@ -286,9 +286,9 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
                 info: Optional[dict] = None, others: Sequence[Tuple[str, object, object]] = ()) -> dict:
     """Scene data for :func:`robodesign.viewer.html.render_html` (see the module docstring).
 
-    ``task``: a :class:`~robodesign.task_spec.Task` (obstacles, goals, base placement) or None.
-    ``robot``: a :class:`~robodesign.robot.Robot` (at its ``base_pose``) or None.
-    ``trajectory``: a :class:`~robodesign.solution.SolutionTrajectory` for ``robot``, or None for a static robot
+    ``task``: a :class:`~robodesign.formats.task_spec.Task` (obstacles, goals, base placement) or None.
+    ``robot``: a :class:`~robodesign.model.robot.Robot` (at its ``base_pose``) or None.
+    ``trajectory``: a :class:`~robodesign.formats.solution.SolutionTrajectory` for ``robot``, or None for a static robot
     at ``q`` (default zeros). ``include_collision`` adds the collision geometry (hidden by default on
     the page). Meshes with more than ``max_triangles`` triangles are decimated. ``others``: further robots
     of a collaborative cell as ``(robot ID, Robot, trajectory on the same time base)``; they animate with
@@ -466,7 +466,7 @@ def _geometry_corners(g: dict, meshes: dict) -> List[np.ndarray]:
 
 def _goal(g, g2t: Dict[str, float], times: List[float], nodes: List[dict], focus: List[np.ndarray],
           paths: Dict[str, list], meshes: "_MeshTable") -> dict:
-    from ..task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
+    from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
     tg = g2t.get(g.id)
     rec = {"id": g.id, "type": g.type, "time": None if tg is None else float(tg), "frame": None,
            "tolerance": [], "position": None, "details": ""}

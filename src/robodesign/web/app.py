@@ -24,16 +24,25 @@ from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Resp
 from starlette.concurrency import run_in_threadpool
 from starlette.datastructures import UploadFile
 
-from ..errors import InputError
-from ..jsonio import loads_json
-from ..paths import assets_dir
-from . import pages
-from .cache import ByteLRU
-from .safefiles import TooLarge, check_name
-from .service import (Bench, Conflict, Forbidden, Limits, NotFound, Settings, clean_json, files_source,
-                      solution_summary)
-from .throttle import Busy, CheckQueue, RateLimiter
-from .workers import ProcessChecker, ThreadChecker
+from robodesign.core.errors import InputError
+from robodesign.core.jsonio import loads_json
+from robodesign.core.paths import assets_dir
+from robodesign.web import pages
+from robodesign.web.cache import ByteLRU
+from robodesign.web.safefiles import TooLarge, check_name
+from robodesign.web.service import (
+    Bench,
+    Conflict,
+    Forbidden,
+    Limits,
+    NotFound,
+    Settings,
+    clean_json,
+    files_source,
+    solution_summary,
+)
+from robodesign.web.throttle import Busy, CheckQueue, RateLimiter
+from robodesign.web.workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
 MiB = 1 << 20
@@ -278,8 +287,9 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     Registering tasks and module sets needs ``admin_token`` (default: the ``ROBODESIGN_ADMIN_TOKEN`` environment
     variable) unless ``open_registration``. ``queue_size`` uploads may wait for the ``check_workers`` checker
     threads, at most ``per_client_queue`` per client; uploads larger than ``big_upload_bytes`` use at most all threads
-    but one; ``check_processes``: run the checks in as many separate processes (robodesign.web.workers). ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client
-    rate limits (0 = none); ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
+    but one; ``check_processes``: run the checks in as many separate processes (robodesign.web.workers).
+    ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client rate limits (0 = none);
+    ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
     of one solution."""
     settings = Settings(data_dir=Path(data_dir), db_url=db_url, max_request_bytes=int(max_request_bytes),
                         max_unzipped_bytes=int(max_unzipped_bytes), seed_dirs=tuple(Path(s) for s in seed),
@@ -445,13 +455,13 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         if html is None:
             verdict = json.loads(row.verdict_json or "{}") or None
             if row.collaborative:  # every robot animating together on the common time base
-                from ..viewer import collab_page
+                from robodesign.viewer import collab_page
                 csol = bench.solution(row.id)
                 html = collab_page(bench.collab_task(row.task_id), csol,
                                    {rid: bench.module_set(s.module_set) for rid, s in csol.robots},
                                    verdict=pages.collab_viewer_verdict(verdict))
             else:
-                from ..viewer import solution_page as render
+                from robodesign.viewer import solution_page as render
                 html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
                               verdict=verdict)
             viewer_cache.put(row.id, html)
@@ -673,7 +683,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
 def _viewer_available() -> Tuple[bool, str]:
     try:
-        from ..viewer import solution_page  # noqa: F401  (only: is it there?)
+        from robodesign.viewer import solution_page  # noqa: F401  (only: is it there?)
     except ImportError as e:
         return False, f"The 3D viewer is not available on this server ({e})."
     return True, ""

@@ -10,13 +10,25 @@ import datetime as _dt
 from pathlib import Path
 from typing import Dict, Optional, Sequence
 
-from sqlalchemy import (Boolean, DateTime, Float, Integer, String, Text, create_engine, event, false, Index, inspect,
-                        text)
-from sqlalchemy.exc import DBAPIError
+from sqlalchemy import (
+    Boolean,
+    DateTime,
+    Float,
+    Index,
+    Integer,
+    String,
+    Text,
+    create_engine,
+    event,
+    false,
+    inspect,
+    text,
+)
 from sqlalchemy.engine import Engine, make_url
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import DeclarativeBase, Mapped, load_only, mapped_column, sessionmaker
 
-from ..errors import InputError
+from robodesign.core.errors import InputError
 
 MAX_ID = 2 ** 31 - 1  # the largest row ID of the Integer key columns on every backend (32 bits on PostgreSQL)
 

@@ -9,7 +9,7 @@ from html import escape
 from typing import Iterable, List, Optional
 from urllib.parse import quote
 
-from . import db
+from robodesign.web import db
 
 CSS = """
 :root { --fg:#1d2430; --muted:#5b6577; --line:#d9dee7; --bg:#f6f7f9; --accent:#1f5fbf; --ok:#1c7c3c; --bad:#b42318; }
@@ -128,7 +128,8 @@ def index(tasks: List[db.TaskRow], msets: List[db.ModuleSetRow], costs: List[db.
     set_rows = [[f'<a class="mono" href="/modulesets/{e(quote(m.name))}">{e(m.name)}</a>',
                  str(len(json.loads(m.module_ids or "[]"))), e(m.origin)] for m in msets]
     cost_rows = [[f"<code>{e(c.name)}</code>", f"<code>{e(c.descriptor)}</code>", e(c.description)] for c in costs]
-    opt = lambda values: "".join(f'<option value="{e(v)}">{e(v)}</option>' for v in values)
+    def opt(values):
+        return "".join(f'<option value="{e(v)}">{e(v)}</option>' for v in values)
     body = f"""<h1>Benchmarks</h1>
 <p class="muted">A benchmark ID <code>M-&lt;module set&gt;:&lt;cost&gt;:&lt;task&gt;</code> names a task, the module set
 the robot is assembled from and the cost to minimise, e.g. <code>M-{e(first_set)}:cyc:simple/PTP_1</code>.

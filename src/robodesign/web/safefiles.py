@@ -23,8 +23,8 @@ import zipfile
 from pathlib import Path, PurePosixPath
 from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
-from ..errors import InputError, PathPart
-from ..jsonio import resolve_inside
+from robodesign.core.errors import InputError, PathPart
+from robodesign.core.jsonio import resolve_inside
 
 SAFE_SEGMENT = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.+() \-]{0,199}$")
 MESH_EXTENSIONS = (".stl", ".obj", ".ply", ".off", ".glb", ".dae", ".wrl")

@@ -2,7 +2,7 @@
 judging and storing solutions, leaderboards, queries and withdrawal.
 
 Everything here is synchronous; the web layer runs it in a thread pool. Bad input raises
-:class:`~robodesign.errors.InputError` (HTTP 400; :class:`TooLarge` 413), :class:`Conflict` (409),
+:class:`~robodesign.core.errors.InputError` (HTTP 400; :class:`TooLarge` 413), :class:`Conflict` (409),
 :class:`NotFound` (404), :class:`Forbidden` (403).
 """
 from __future__ import annotations
@@ -26,22 +26,41 @@ from typing import Dict, List, Optional, Sequence, Tuple, Union
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 
-from ..benchmark_id import BenchmarkID, RobotRef, RobotSpec
-from ..checker import Verdict, check
-from ..collab import (CollabSolution, CollabTask, check_collab, is_collaborative, parse_collab_solution,
-                      parse_collab_task, shared_cell_json)
-from ..costs import known_costs, parse_cost
-from ..errors import InputError, RobodesignError
-from ..jsonio import loads_json
-from ..module_io import parse_module_set
-from ..module_spec import ModuleSet
-from ..schema import validate
-from ..solution import Solution, parse_solution
-from ..task_io import parse_task, validate_task_json
-from ..task_spec import Task
-from . import db
-from .safefiles import (dangerous_name, DictSource, FileSource, FolderSource, TooLarge, ZipSource, assert_no_symlinks,
-                        check_mesh_refs, check_name, safe_relpath, task_id_segments, write_new_file)
+from robodesign.collab.core import (
+    CollabSolution,
+    CollabTask,
+    check_collab,
+    is_collaborative,
+    parse_collab_solution,
+    parse_collab_task,
+    shared_cell_json,
+)
+from robodesign.core.errors import InputError, RobodesignError
+from robodesign.core.jsonio import loads_json
+from robodesign.core.schema import validate
+from robodesign.formats.benchmark_id import BenchmarkID, RobotRef, RobotSpec
+from robodesign.formats.costs import known_costs, parse_cost
+from robodesign.formats.module_io import parse_module_set
+from robodesign.formats.module_spec import ModuleSet
+from robodesign.formats.solution import Solution, parse_solution
+from robodesign.formats.task_io import parse_task, validate_task_json
+from robodesign.formats.task_spec import Task
+from robodesign.judge.checker import Verdict, check
+from robodesign.web import db
+from robodesign.web.safefiles import (
+    DictSource,
+    FileSource,
+    FolderSource,
+    TooLarge,
+    ZipSource,
+    assert_no_symlinks,
+    check_mesh_refs,
+    check_name,
+    dangerous_name,
+    safe_relpath,
+    task_id_segments,
+    write_new_file,
+)
 
 log = logging.getLogger("robodesign.web")
 
@@ -707,7 +726,7 @@ class Bench:
 
     def judge(self, sub: "Submission") -> SubmitResult:
         """Run the checker on a prepared submission; store it when valid. A collaborative solution is judged by
-        :func:`robodesign.collab.check_collab`, the judge of ``robodesign check``; its ``cost`` is totalCost."""
+        :func:`robodesign.collab.core.check_collab`, the judge of ``robodesign check``; its ``cost`` is totalCost."""
         sol, row = sub.solution, sub.row
         if isinstance(sol, CollabSolution):
             cverdict = check_collab(sub.task, sol, sub.module_set)

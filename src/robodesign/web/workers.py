@@ -16,7 +16,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Optional
 
-from .service import Bench, Settings
+from robodesign.web.service import Bench, Settings
 
 log = logging.getLogger("robodesign.web")
 

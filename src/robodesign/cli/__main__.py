@@ -1,0 +1,5 @@
+import sys
+
+from robodesign.cli.entry import main
+
+sys.exit(main())

@@ -1,0 +1,141 @@
+"""The shared evaluator: Candidate → Evaluation, through the staged solve pipeline.
+
+A candidate's evaluation is a pure function of (candidate, problem, settings, seed), where the
+:class:`~robodesign.design.problem.Problem` fixes the task, module set, cost and base-pose bounds: the
+per-candidate seed is derived from the study seed and the candidate key, so results do not depend on
+evaluation order, executor or process. The cache key covers all of them (:meth:`Evaluator.cache_key`).
+
+Score (smaller is better): a feasible candidate scores the checker's cost of its checked solution
+(one judge). An infeasible one scores ``INFEASIBLE + (stages left)·STAGE_PENALTY − goals reached``,
+so every feasible candidate beats every infeasible one, and among infeasible ones those that got
+further (more stages, more goals) rank better — optimizers still learn from them.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass, field, replace
+from typing import Dict, List, Optional
+
+from robodesign.design.problem import Problem
+from robodesign.design.search_space import Candidate
+from robodesign.design.solve import STAGES, SolveSettings, solve
+from robodesign.formats.module_spec import ModuleSet
+from robodesign.formats.task_spec import Task
+
+INFEASIBLE = 1e9
+STAGE_PENALTY = 1e6
+
+
+@dataclass
+class Evaluation:
+    candidate: Candidate
+    feasible: bool
+    cost: Optional[float]
+    score: float
+    stage: str  # first failed stage or "done"
+    stage_index: int
+    goals_reached: int
+    seconds: float
+    seed: int
+    stages: List[dict] = field(default_factory=list)
+    message: str = ""
+    solution: Optional[dict] = None  # CoBRA JSON of the checked solution (feasible candidates)
+    costs: Dict[str, float] = field(default_factory=dict)  # every built-in cost of the checked solution
+
+    def to_json(self) -> dict:
+        d = asdict(self)
+        d["candidate"] = self.candidate.to_json()
+        return d
+
+    @staticmethod
+    def from_json(d: dict) -> "Evaluation":
+        d = dict(d)
+        c = d.pop("candidate")
+        return Evaluation(candidate=Candidate(tuple(c["order"]), tuple(c["base"])), **d)
+
+
+def score_of(feasible: bool, cost: Optional[float], stage_index: int, goals_reached: int) -> float:
+    if feasible and cost is not None:
+        return float(cost)
+    return INFEASIBLE + (len(STAGES) - stage_index) * STAGE_PENALTY - goals_reached
+
+
+def candidate_seed(study_seed: int, key: str) -> int:
+    h = hashlib.sha256(f"{study_seed}|{key}".encode()).digest()
+    return int.from_bytes(h[:4], "little")
+
+
+def evaluation_settings(**overrides) -> SolveSettings:
+    """Solve settings for optimizer evaluations: 150 IK restarts per goal (``solve`` uses 300). On PTP_3 with
+    IMPROV this keeps every candidate that 1000 restarts find feasible at the IK stage while screening
+    ≥ 200 candidates/s per core (docs/benchmarks.md)."""
+    return SolveSettings(**{"ik_restarts": 150, **overrides})
+
+
+@dataclass(frozen=True)
+class EvaluatorSpec:
+    """Everything an evaluator needs, as plain data (picklable: a problem built from files travels as
+    their references and is reloaded once per process)."""
+    problem: Problem
+    settings: SolveSettings = field(default_factory=evaluation_settings)
+    seed: int = 0
+    keep_solutions: bool = True
+
+    def fingerprint(self) -> str:
+        """A hash of everything besides the candidate that changes an evaluation: the problem (task, module
+        set, cost, base bounds), the solve settings and the study seed."""
+        d = {"problem": self.problem.fingerprint(), "settings": asdict(self.settings), "seed": int(self.seed),
+             "solution": bool(self.keep_solutions)}
+        return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+class Evaluator:
+    """Candidate → Evaluation for one :class:`EvaluatorSpec`. ``cache`` (a dict, may be shared between
+    evaluators) maps :meth:`cache_key` → Evaluation."""
+
+    def __init__(self, spec: EvaluatorSpec, cache: Optional[Dict[str, Evaluation]] = None):
+        self.spec = spec
+        self.problem = spec.problem
+        self.cache: Dict[str, Evaluation] = {} if cache is None else cache
+        self._context = spec.fingerprint()
+
+    @property
+    def task(self) -> Task:
+        return self.problem.task
+
+    @property
+    def module_set(self) -> ModuleSet:
+        return self.problem.module_set
+
+    def cache_key(self, candidate: Candidate) -> str:
+        """The candidate's key under this evaluator's problem, settings and seed."""
+        return f"{self._context}|{candidate.key()}"
+
+    def __call__(self, candidate: Candidate) -> Evaluation:
+        key = self.cache_key(candidate)
+        hit = self.cache.get(key)
+        if hit is not None:
+            return hit
+        ev = self.evaluate(candidate)
+        self.cache[key] = ev
+        return ev
+
+    def evaluate(self, candidate: Candidate) -> Evaluation:
+        t0 = time.perf_counter()
+        seed = candidate_seed(self.spec.seed, candidate.key())
+        problem = self.problem
+        settings = replace(self.spec.settings, seed=seed)
+        res = solve(problem.task, problem.module_set, list(candidate.order), problem.base_pose(candidate),
+                    cost=problem.cost_descriptor, settings=settings)
+        feasible = res.feasible
+        cost = res.cost if feasible else None
+        ev = Evaluation(candidate=candidate, feasible=feasible, cost=cost,
+                        score=score_of(feasible, cost, res.stage_index, res.goals_reached), stage=res.stage,
+                        stage_index=res.stage_index, goals_reached=res.goals_reached,
+                        seconds=time.perf_counter() - t0, seed=seed, stages=[s.to_json() for s in res.stages],
+                        message=res.message[:500],
+                        solution=res.solution.to_json() if (feasible and self.spec.keep_solutions) else None,
+                        costs=dict(res.verdict.costs) if res.verdict is not None else {})
+        return ev

@@ -1,0 +1,226 @@
+"""The optimization problem: what to search and how a design is scored (like OMPL's ProblemDefinition).
+
+A :class:`Problem` is immutable and holds everything that defines a design problem:
+
+* ``task`` — the :class:`~robodesign.formats.task_spec.Task` (workcell, goals, constraints, base placement),
+* ``module_set`` — the :class:`~robodesign.formats.module_spec.ModuleSet` designs are assembled from,
+* ``cost`` — the :class:`~robodesign.formats.costs.CostFunction` every design is scored with,
+* ``space`` — the :class:`~robodesign.design.search_space.SearchSpace`: module-order rules and base-pose bounds.
+
+It is built once — by the CLI (``robodesign optimize``), the experiment runner and the Python API — with
+:meth:`Problem.build`, and handed to the optimizer (``Optimizer(problem, seed, **options)``), to the
+evaluator (``EvaluatorSpec(problem, ...)``) and to the results store (``to_json``, ``fingerprint``).
+So an optimizer that prunes with cost bounds reads the cost from ``problem.cost``: it is always the
+cost the study evaluates.
+
+A problem built from references (a task file or built-in task ID, a module-set folder or built-in
+name) pickles as those references plus its cost, rules and base bounds, and reloads the task and
+module set in the receiving process (once per process): evaluator workers get small messages.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any, Dict, Mapping, Optional, Tuple, Union
+
+import numpy as np
+
+from robodesign.core.errors import InputError
+from robodesign.design.search_space import BaseBounds, Candidate, SearchSpace
+from robodesign.formats.costs import CostFunction, parse_cost
+from robodesign.formats.module_spec import ModuleSet
+from robodesign.formats.task_spec import Task
+
+#: the search-space rules a problem may set (fields of :class:`SearchSpace` besides the module set and bounds)
+RULES = ("min_dof", "max_dof", "max_links_between", "max_modules", "bases", "end_effectors", "exclude")
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """One design problem. Build it with :meth:`build`; construct it directly only to set a custom
+    ``space`` (e.g. hand-made base bounds in a test)."""
+    task: Task
+    module_set: ModuleSet
+    cost: CostFunction
+    space: SearchSpace
+    task_ref: Optional[str] = None      # what reloads ``task`` in another process (None: pickle the object)
+    modules_ref: Optional[str] = None   # what reloads ``module_set`` in another process
+
+    def __post_init__(self):
+        if self.space.module_set is not self.module_set:
+            raise ValueError("Problem: the search space must be over the problem's module set")
+
+    @classmethod
+    def build(cls, task: Union[Task, str, Path], module_set: Union[ModuleSet, str, Path],
+              cost: Union[CostFunction, str] = "cyc", *, rules: Optional[Mapping[str, Any]] = None,
+              base_search: bool = True, base_bounds: Optional[BaseBounds] = None) -> "Problem":
+        """The problem of ``task`` (a Task, a task file or a built-in task ID) with ``module_set`` (a
+        ModuleSet, a folder, a URDF file or a built-in name) and ``cost`` (a CostFunction or a descriptor
+        such as ``"cyc"`` or ``"Whit2"``).
+
+        ``rules``: search-space rules (:data:`RULES`; lists are accepted for ``bases``,
+        ``end_effectors``, ``exclude``). The base-pose bounds come from the task's base-placement
+        tolerance (the only place they are derived); ``base_search=False`` fixes the base at its
+        nominal pose; ``base_bounds`` overrides both.
+        """
+        task_ref = modules_ref = None
+        if not isinstance(task, Task):
+            task_ref = _ref(task)
+            task = _load_task(task_ref)
+        if not isinstance(module_set, ModuleSet):
+            from robodesign.formats.module_io import load_module_set
+            modules_ref = _ref(module_set)
+            module_set = load_module_set(modules_ref)
+        cf = cost if isinstance(cost, CostFunction) else parse_cost(cost, path="cost")
+        if cf.is_empty:
+            raise InputError("empty cost function", path="cost")
+        if base_bounds is None:
+            base_bounds = _task_base_bounds(task, base_search)
+        space = SearchSpace(module_set, base_bounds=base_bounds, **_rules(rules, module_set))
+        return cls(task=task, module_set=module_set, cost=cf, space=space, task_ref=task_ref,
+                   modules_ref=modules_ref)
+
+    # -- derived ----------------------------------------------------------------------------------------
+    @property
+    def base_bounds(self) -> BaseBounds:
+        return self.space.base_bounds
+
+    @property
+    def cost_descriptor(self) -> str:
+        """The cost as written to solution files: the compound name (``Whit2``) or the descriptor."""
+        return str(self.cost)
+
+    def base_pose(self, candidate: Candidate) -> np.ndarray:
+        """The 4x4 world pose of ``candidate``'s base (its base parameters decoded by the bounds)."""
+        return self.space.base_pose(candidate)
+
+    def rules(self) -> Dict[str, Any]:
+        """The search-space rules as plain data."""
+        return {k: (list(v) if isinstance(v, tuple) else v) for k in RULES for v in [getattr(self.space, k)]}
+
+    def with_(self, **changes) -> "Problem":
+        """A copy with some fields replaced (``cost=...`` accepts a descriptor; ``rules=...``, ``base_search``
+        and ``base_bounds`` rebuild the search space)."""
+        if "cost" in changes and not isinstance(changes["cost"], CostFunction):
+            changes["cost"] = parse_cost(changes["cost"], path="cost")
+        space_changes = {}
+        if "rules" in changes:
+            space_changes.update(_rules(changes.pop("rules"), self.module_set))
+        if "base_search" in changes:
+            space_changes["base_bounds"] = _task_base_bounds(self.task, changes.pop("base_search"))
+        if "base_bounds" in changes:
+            space_changes["base_bounds"] = changes.pop("base_bounds")
+        if space_changes:
+            changes["space"] = replace(self.space, **space_changes)
+        return replace(self, **changes)
+
+    def to_json(self) -> dict:
+        """Plain-data description (for result files and meta data): what defines the problem."""
+        bb = self.base_bounds
+        return {"task": self.task.id, "task_ref": self.task_ref, "module_set": self.module_set.name,
+                "modules_ref": self.modules_ref, "cost": self.cost_descriptor, "rules": self.rules(),
+                "base_bounds": {"nominal": np.asarray(bb.nominal).round(12).tolist(), "lower": list(bb.lower),
+                                "upper": list(bb.upper), "free": list(bb.free),
+                                "tolerance": None if bb.tolerance is None else
+                                [[n, list(iv), fr] for n, iv, fr in bb.tolerance.entries]}}
+
+    def fingerprint(self) -> str:
+        """A short hash of everything in the problem that changes a design's score: the task and module-set
+        files (their contents, not where they are), the cost terms and the base-pose bounds. Equal problems
+        give equal fingerprints in every process and on every machine."""
+        d = self.to_json()
+        d.pop("rules")  # the rules restrict which designs are asked, not how one is scored
+        d["cost"] = [[n, w] for n, w in self.cost.terms]
+        d.pop("task_ref")
+        d.pop("modules_ref")  # where the files are does not change a score; what they hold does
+        d["task_file"] = _file_digest(self.task.source)
+        d["modules_file"] = _file_digest(self.module_set.source)
+        return hashlib.sha256(json.dumps(d, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+    def __reduce__(self):
+        if self.task_ref is None or self.modules_ref is None:
+            return (Problem, tuple(getattr(self, f.name) for f in fields(self)))
+        rules = {k: getattr(self.space, k) for k in RULES}
+        return (_restore, (self.task_ref, self.modules_ref, self.cost, rules, self.base_bounds))
+
+
+def _task_base_bounds(task: Task, base_search: bool) -> BaseBounds:
+    """The base-pose bounds of ``task`` (the one place they are derived): its base-placement tolerance, or
+    with ``base_search=False`` its nominal base pose alone."""
+    bb = BaseBounds.from_tolerance(task.base_placement)
+    return bb if base_search else BaseBounds(nominal=bb.nominal)
+
+
+def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:
+    """Search-space keyword arguments from plain-data rules (unknown rules and modules are input errors)."""
+    out: Dict[str, Any] = {}
+    for k, v in (rules or {}).items():
+        if k not in RULES:
+            raise InputError(f"unknown search-space rule {k!r} (known: {', '.join(RULES)})", path=["rules", k])
+        if k in ("bases", "end_effectors", "exclude"):
+            if v is None:
+                if k == "exclude":
+                    v = ()
+            else:
+                v = tuple(str(x) for x in ([v] if isinstance(v, (str, int)) else v))
+                kind = {"bases": "base", "end_effectors": "eef"}.get(k)
+                for j, mid in enumerate(v):
+                    if mid not in ms:
+                        raise InputError(f"module {mid!r} is not in module set {ms.name!r}", path=["rules", k, j])
+                    if kind and ms[mid].kind != kind:
+                        raise InputError(f"module {mid!r} is a {ms[mid].kind} module, not a {kind} module",
+                                         path=["rules", k, j])
+        elif v is None:
+            continue
+        out[k] = v
+    lo, hi = out.get("min_dof", 6), out.get("max_dof", 6)
+    if lo > hi:
+        raise InputError(f"min_dof ({lo}) is larger than max_dof ({hi})", path="rules")
+    return out
+
+
+_DIGESTS: Dict[Tuple[str, int], str] = {}
+
+
+def _file_digest(path: Optional[str]) -> Optional[str]:
+    """SHA-256 of a file's bytes (cached per file version); None without a readable file."""
+    if not path:
+        return None
+    try:
+        p = Path(path)
+        key = (str(p.resolve()), p.stat().st_mtime_ns)
+    except OSError:
+        return None
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(p.read_bytes()).hexdigest()
+    return _DIGESTS[key]
+
+
+def _ref(name_or_path) -> str:
+    """An existing file or folder as an absolute path (valid in any worker's working folder); else the
+    name as given (a built-in task ID or module set)."""
+    p = Path(name_or_path)
+    return str(p.resolve()) if p.exists() else str(name_or_path)
+
+
+_TASKS: Dict[Tuple[str, int], Task] = {}
+
+
+def _load_task(ref: str) -> Task:
+    """load_task, once per process and file version (module sets are cached by load_module_set)."""
+    from robodesign.formats.task_io import load_task, resolve_task_path
+    f = resolve_task_path(ref)
+    key = (str(Path(f).resolve()), Path(f).stat().st_mtime_ns)
+    task = _TASKS.get(key)
+    if task is None:
+        task = _TASKS[key] = load_task(ref)
+    return task
+
+
+def _restore(task_ref: str, modules_ref: str, cost: CostFunction, rules: dict, base_bounds: BaseBounds) -> Problem:
+    from robodesign.formats.module_io import load_module_set
+    ms = load_module_set(modules_ref)
+    return Problem(task=_load_task(task_ref), module_set=ms, cost=cost,
+                   space=SearchSpace(ms, base_bounds=base_bounds, **rules), task_ref=task_ref, modules_ref=modules_ref)

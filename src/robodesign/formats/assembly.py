@@ -1,0 +1,234 @@
+"""Assemblies: which module instances are connected through which connectors.
+
+An :class:`Assembly` is plain data (module IDs per instance, connections, base connector).
+It is built either from a serial *module order* (the shortcut behind CoBRA solutions'
+``moduleOrder``) or from an explicit connection graph (``moduleConnection``/``baseConnection``).
+Connector rules (the CoBRA paper): types and sizes equal, genders f–m or h–h; mated frames
+have aligned x-axes and anti-parallel z-axes (the transform between them is Rx(π)).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+from robodesign.core.errors import AssemblyError
+from robodesign.formats.module_spec import Connector, ModuleSet
+
+Connection = Tuple[int, str, int, str]  # (instance a, connector of a, instance b, connector of b)
+
+
+@dataclass(frozen=True)
+class Assembly:
+    module_ids: Tuple[str, ...]
+    connections: Tuple[Connection, ...]
+    base: Tuple[int, str]  # (instance, connector id) that attaches to the world
+
+    @property
+    def order(self) -> Tuple[str, ...]:
+        return self.module_ids
+
+    def key(self) -> str:
+        """A stable text key (for caches and databases)."""
+        con = ";".join(f"{a}:{ca}-{b}:{cb}" for a, ca, b, cb in self.connections)
+        return f"{','.join(self.module_ids)}|{con}|{self.base[0]}:{self.base[1]}"
+
+    def is_serial(self) -> bool:
+        return all(b == a - 1 for a, _, b, _ in self.connections) and self.base[0] == 0
+
+    # -- construction -----------------------------------------------------------------------
+    @staticmethod
+    def from_order(ms: ModuleSet, order: Sequence) -> "Assembly":
+        order = [str(x) for x in order]
+        if not order:
+            raise AssemblyError("module order is empty")
+        for i, mid in enumerate(order):
+            if mid not in ms:
+                raise AssemblyError(f"module {mid!r} at position {i} is not in module set {ms.name!r} "
+                                    f"(IDs: {', '.join(sorted(ms.ids, key=_natural))})")
+        first = ms[order[0]]
+        bases = [c for c in first.connectors if c.type == "base"]
+        if len(bases) != 1:
+            raise AssemblyError(f"the first module {order[0]!r} ({first.name}) must have exactly one base connector, "
+                                f"it has {len(bases)}")
+        free = [free_connectors(ms, order[0])]  # per instance: connectors a later module may attach to
+        connections: List[Connection] = []
+        for i in range(1, len(order)):
+            new = ms[order[i]]
+            cands = [(k, c_old, c_new) for k in range(i)
+                     for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
+            prev = ms[order[i - 1]]
+            if not cands:
+                reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): "
+                           f"{c_new.mates_with(c_old)[1]}"
+                           for c_old in prev.connectors if c_old.id in free[i - 1] for c_new in new.connectors]
+                detail = "; ".join(reasons[:4]) or f"module {order[i-1]!r} has no free connector left"
+                raise AssemblyError(f"modules {order[i-1]!r} ({prev.name}) → {order[i]!r} ({new.name}) at positions "
+                                    f"{i-1}→{i} do not connect: {detail}")
+            if len(cands) > 1:
+                desc = ", ".join(f"{c_new.id}↔{order[k]}.{c_old.id}" for k, c_old, c_new in cands)
+                raise AssemblyError(f"module {order[i]!r} ({new.name}) at position {i} can be connected in "
+                                    f"{len(cands)} ways ({desc}); use an explicit moduleConnection")
+            k, c_old, c_new = cands[0]
+            if k != i - 1:
+                raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
+                                    f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
+                                    f"form a chain")
+            free[k] = tuple(c for c in free[k] if c != c_old.id)
+            free.append(free_connectors(ms, order[i], used=(c_new.id,)))
+            connections.append((i, c_new.id, k, c_old.id))
+        return Assembly(tuple(order), tuple(connections), (0, bases[0].id))
+
+    @staticmethod
+    def from_graph(ms: ModuleSet, module_ids: Sequence, connections: Sequence[Sequence],
+                   base: Optional[Sequence] = None) -> "Assembly":
+        ids = [str(x) for x in module_ids]
+        for i, mid in enumerate(ids):
+            if mid not in ms:
+                raise AssemblyError(f"module {mid!r} at position {i} is not in module set {ms.name!r}")
+        used: Dict[Tuple[int, str], int] = {}
+        cons: List[Connection] = []
+        for n, c in enumerate(connections):
+            if len(c) != 4:
+                raise AssemblyError(f"connection {n} must be [i_a, connector_a, i_b, connector_b], got {list(c)}")
+            a, ca, b, cb = int(c[0]), str(c[1]), int(c[2]), str(c[3])
+            for i, con in ((a, ca), (b, cb)):
+                if not 0 <= i < len(ids):
+                    raise AssemblyError(f"connection {n} names module index {i}, but there are {len(ids)} modules")
+                try:
+                    ms[ids[i]].connector(con)
+                except KeyError:
+                    raise AssemblyError(f"connection {n}: module {ids[i]!r} (index {i}) has no connector {con!r}") from None
+                if (i, con) in used:
+                    raise AssemblyError(f"connection {n}: connector {con!r} of module index {i} is already used by "
+                                        f"connection {used[(i, con)]}")
+                used[(i, con)] = n
+            if a == b:
+                raise AssemblyError(f"connection {n} connects module index {a} to itself")
+            ok, why = ms[ids[a]].connector(ca).mates_with(ms[ids[b]].connector(cb))
+            if not ok:
+                raise AssemblyError(f"connection {n}: {ids[a]}.{ca} ↔ {ids[b]}.{cb} do not connect: {why}")
+            cons.append((a, ca, b, cb))
+        if base is None or len(base) == 0:
+            free = [(i, c.id) for i, mid in enumerate(ids) for c in ms[mid].connectors
+                    if c.type == "base" and (i, c.id) not in used]
+            if len(free) != 1:
+                raise AssemblyError(f"expected exactly one free base connector, found {len(free)}; give baseConnection")
+            base_t = free[0]
+        else:
+            base_t = (int(base[0]), str(base[1]))
+            if not 0 <= base_t[0] < len(ids):
+                raise AssemblyError(f"baseConnection names module index {base_t[0]}, but there are {len(ids)} modules")
+            try:
+                ms[ids[base_t[0]]].connector(base_t[1])
+            except KeyError:
+                raise AssemblyError(f"baseConnection: module {ids[base_t[0]]!r} has no connector {base_t[1]!r}") from None
+            if base_t in used:
+                raise AssemblyError(f"baseConnection: connector {base_t[1]!r} is already used by a connection")
+        # connectivity
+        adj: Dict[int, set] = {i: set() for i in range(len(ids))}
+        for a, _, b, _ in cons:
+            adj[a].add(b)
+            adj[b].add(a)
+        seen, stack = {base_t[0]}, [base_t[0]]
+        while stack:
+            for nb in adj[stack.pop()]:
+                if nb not in seen:
+                    seen.add(nb)
+                    stack.append(nb)
+        if len(seen) != len(ids):
+            missing = sorted(set(range(len(ids))) - seen)
+            raise AssemblyError(f"modules at indices {missing} are not connected to the base")
+        if len(cons) != len(ids) - 1:
+            raise AssemblyError("the connection graph has a loop; only tree-shaped assemblies are supported")
+        return Assembly(tuple(ids), tuple(cons), base_t)
+
+    def to_json(self) -> dict:
+        """The CoBRA solution fields describing this assembly."""
+        out = {"moduleOrder": list(self.module_ids)}
+        if not self.is_serial():
+            out["moduleConnection"] = [[a, ca, b, cb] for a, ca, b, cb in self.connections]
+            out["baseConnection"] = [[self.base[0], self.base[1], 0]]
+        return out
+
+
+def _cdesc(c: Connector) -> str:
+    return f"{c.type}/{list(c.size)}/{c.gender}"
+
+
+def _natural(s: str):
+    return (0, int(s), "") if s.isdigit() else (1, 0, s)
+
+
+# -- the serial-chaining rule (module orders; used by Assembly.from_order and the search space) ------------
+def free_connectors(ms: ModuleSet, module_id: str, used: Sequence[str] = ()) -> Tuple[str, ...]:
+    """IDs of the connectors of ``module_id`` that a later module of a serial order may attach to: all but
+    its base connector and the ``used`` ones."""
+    return tuple(c.id for c in ms[module_id].connectors if c.type != "base" and c.id not in used)
+
+
+def chain_pairs(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> List[Tuple[Connector, Connector]]:
+    """The serial-chaining rule: the (connector of ``prev_id``, connector of ``next_id``) pairs that mate, over
+    the ``free`` connectors of ``prev_id``. In a module order, a module attaches to the previous one iff
+    exactly one pair mates (and none with an earlier module); its free connectors are then the others."""
+    new = ms[next_id]
+    return [(c_old, c_new) for c_old in ms[prev_id].connectors if c_old.id in free and c_old.type != "base"
+            for c_new in new.connectors if c_new.mates_with(c_old)[0]]
+
+
+def chain_step(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> Optional[Tuple[str, ...]]:
+    """Free connectors of ``next_id`` after attaching it to ``prev_id`` (whose free connectors are ``free``)
+    by the chaining rule; None if it does not attach with exactly one connector pair (none: it does not
+    connect; several: ambiguous, :meth:`Assembly.from_order` rejects it)."""
+    pairs = chain_pairs(ms, prev_id, free, next_id)
+    if len(pairs) != 1:
+        return None
+    return free_connectors(ms, next_id, used=(pairs[0][1].id,))
+
+
+def next_compatible(ms: ModuleSet, module_id: str, exclude_kinds: Sequence[str] = ("base",)) -> List[str]:
+    """IDs of modules that can follow ``module_id`` in a serial order (one connector pair mates)."""
+    free = free_connectors(ms, module_id)
+    return [m.id for m in ms if m.kind not in exclude_kinds and chain_pairs(ms, module_id, free, m.id)]
+
+
+def random_serial_order(ms: ModuleSet, rng, dof: int = 6, max_links_between: int = 1,
+                        max_tries: int = 1000) -> List[str]:
+    """A random valid serial module order (base, joint/link modules, end effector) with ``dof`` joints.
+
+    At most ``max_links_between`` link modules stand between two joint modules. Validity is
+    checked with :meth:`Assembly.from_order`; raises :class:`AssemblyError` if none is found.
+    """
+    bases = [m.id for m in ms.of_kind("base")]
+    if not bases:
+        raise AssemblyError(f"module set {ms.name!r} has no base module")
+    for _ in range(max_tries):
+        order = [bases[rng.integers(len(bases))]]
+        d, links = 0, 0
+        ok = True
+        while True:
+            cands = next_compatible(ms, order[-1])
+            if d >= dof:
+                cands = [c for c in cands if ms[c].kind == "eef"]
+            else:
+                cands = [c for c in cands if ms[c].kind != "eef" and ms[c].dof <= dof - d
+                         and (ms[c].kind == "joint" or links < max_links_between)]
+            if not cands:
+                ok = False
+                break
+            nxt = cands[rng.integers(len(cands))]
+            order.append(nxt)
+            if ms[nxt].kind == "eef":
+                break
+            if ms[nxt].kind == "joint":
+                d += ms[nxt].dof
+                links = 0
+            else:
+                links += 1
+        if not ok:
+            continue
+        try:
+            Assembly.from_order(ms, order)
+        except AssemblyError:
+            continue
+        return order
+    raise AssemblyError(f"no valid serial order with {dof} DoF found in module set {ms.name!r}")

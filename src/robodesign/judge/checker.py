@@ -1,0 +1,441 @@
+"""The judge: does a solution solve a task, and what does it cost?
+
+``check(task, solution, module_set)`` returns a :class:`Verdict` with every violation (which
+constraint or goal, at which time/sample, the value and the bound) and every cost. The same code
+judges uploads, solver output and optimizer candidates. Semantics (docs/checker.md):
+
+* The samples must describe one motion: q the integral of dq and dq of ddq over every step, within the
+  tolerances of :func:`robodesign.judge.quantities.step_residuals` (the reference does not check this).
+* Per-sample constraints are checked at every sample. Collisions and joint limits are checked *between*
+  samples too: the motion between samples is the linear interpolation of q (and of dq), collisions are
+  certified by :mod:`robodesign.model.sweep`, velocity and acceleration are the step's Δq/h and Δdq/h.
+* ``ddq`` limits are enforced (the reference never checks them).
+* Torques are drivetrain torques τ = RNEA + k²I_m q̈ + f_v q̇ + f_c σ(q̇) under the task's gravity,
+  with the wrench of a follow goal applied at the TCP during that goal.
+* Goal-level constraints hold over the goal's own window (pause/follow: [t_g − duration, t_g];
+  leave: [t_g, t_g + duration]; at/reach/returnTo: the instant t_g), not from t = 0 as in the reference.
+* Moving obstacles (task extension): at each sample an obstacle is at its pose in effect at that time
+  (zero-order hold) and stays there over the motion to the next sample.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from robodesign.core.errors import AssemblyError
+from robodesign.formats.costs import CostContext, MissingQuantityError, known_costs, parse_cost
+from robodesign.formats.solution import Solution
+from robodesign.formats.task_spec import (
+    AllGoalsFulfilled,
+    At,
+    BasePlacement,
+    CollisionFree,
+    EndEffectorConstraint,
+    Follow,
+    Goal,
+    GoalsInOrder,
+    JointLimitsConstraint,
+    Leave,
+    Pause,
+    Reach,
+    ReturnTo,
+    SelfCollisionFree,
+    Task,
+    TaskConstraint,
+)
+from robodesign.judge.quantities import TrajectoryQuantities, find_time_index
+from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
+from robodesign.model.sweep import CollisionEvent, SweepChecker
+
+LIMIT_RTOL = 1e-9  # relative slack on velocity/acceleration/torque limits (float round-off)
+Q_ATOL = 1e-9  # absolute slack on position limits [rad or m]
+
+
+@dataclass
+class Violation:
+    constraint: str  # e.g. "joint.q", "collisionFree", "goal", "basePlacement"
+    message: str
+    goal: Optional[str] = None
+    sample: Optional[int] = None
+    time: Optional[float] = None
+    value: Optional[float] = None
+    bound: Optional[float] = None
+    joint: Optional[int] = None
+
+    def to_json(self) -> dict:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) and k != "value" else v)
+                for k, v in self.__dict__.items() if v is not None}
+
+    def __str__(self) -> str:
+        where = []
+        if self.goal is not None:
+            where.append(f"goal {self.goal}")
+        if self.time is not None:
+            where.append(f"t={self.time:.4f}s")
+        if self.sample is not None:
+            where.append(f"sample {self.sample}")
+        if self.joint is not None:
+            where.append(f"joint {self.joint}")
+        return f"[{self.constraint}] {', '.join(where)}: {self.message}" if where else f"[{self.constraint}] {self.message}"
+
+
+@dataclass
+class Verdict:
+    valid: bool
+    violations: List[Violation]
+    costs: Dict[str, float]
+    cost: Optional[float]
+    cost_function: str
+    goals: Dict[str, bool] = field(default_factory=dict)
+    timings: Dict[str, float] = field(default_factory=dict)
+    samples: int = 0
+
+    def to_json(self) -> dict:
+        return {"valid": self.valid, "violations": [v.to_json() for v in self.violations],
+                "costs": {k: _num(v) for k, v in self.costs.items()}, "cost": _num(self.cost),
+                "costFunction": self.cost_function, "goals": self.goals, "samples": self.samples,
+                "timings": self.timings}
+
+
+def _describe(violations) -> str:
+    """``[(projection, value, lo, hi)]`` of a tolerated pose → readable text."""
+    return "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in violations)
+
+
+def _num(v):
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return None
+    return float(v)
+
+
+@dataclass
+class CheckSettings:
+    max_violations_per_constraint: int = 20
+    between_samples: bool = True  # certify collision freedom and joint limits between samples
+    one_motion: bool = True  # q must be the integral of dq, dq of ddq (off: accept files as the reference does)
+    all_costs: bool = True  # compute every built-in cost, not only the solution's
+
+
+def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None) -> Verdict:
+    """Judge ``solution`` on ``task``. Bad input (unknown module set, malformed data) raises InputError;
+    everything else — including an invalid assembly — is a violation in the verdict."""
+    settings = settings or CheckSettings()
+    timings: Dict[str, float] = {}
+    t0 = time.perf_counter()
+    violations: List[Violation] = []
+    cost_fn = parse_cost(solution.cost_function, file=solution.source, path=["costFunction"])
+    tr = solution.trajectory
+    if solution.task_id != task.id:
+        violations.append(Violation("taskID", f"solution is for task {solution.task_id!r}, not {task.id!r}"))
+    try:
+        robot = solution_robot(task, solution, module_set)
+    except AssemblyError as e:
+        violations.append(Violation("validAssembly", str(e)))
+        return Verdict(False, violations, {}, None, cost_fn.descriptor(), samples=tr.n)
+    if tr.q.shape[1] != robot.dof:
+        violations.append(Violation("trajectory", f"q has {tr.q.shape[1]} columns but the robot has {robot.dof} joints"))
+        return Verdict(False, violations, {}, None, cost_fn.descriptor(), samples=tr.n)
+    timings["model"] = time.perf_counter() - t0
+    tq = TrajectoryQuantities.from_solution(robot, solution, task)
+    t1 = time.perf_counter()
+    goal_ok: Dict[str, bool] = {}
+    goal_viol: List[Violation] = []
+    for g in task.goals:
+        vs = check_goal(g, tq)
+        goal_ok[g.id] = not vs
+        goal_viol += vs
+    timings["goals"] = time.perf_counter() - t1
+    t1 = time.perf_counter()
+    limit = settings.max_violations_per_constraint
+    for c in task.constraints:
+        violations += _check_constraint(c, tq, None, settings)[: limit]
+    if settings.one_motion:
+        violations += _one_motion_violations(tq, limit)
+    # goal-level constraints (over each goal's window)
+    for g in task.goals:
+        if not g.constraints or g.id not in tq.goal_windows:
+            continue
+        for c in g.constraints:
+            vs = _check_constraint(c, tq, tq.goal_windows[g.id], settings)
+            if vs:
+                goal_ok[g.id] = False
+                for v in vs[:limit]:
+                    v.goal = g.id
+                    goal_viol.append(v)
+    timings["constraints"] = time.perf_counter() - t1
+    has_all_goals = any(isinstance(c, AllGoalsFulfilled) for c in task.constraints)
+    if has_all_goals:
+        violations += goal_viol
+    else:
+        # goals only count through allGoalsFulfilled (as in the reference); report them as notes
+        for v in goal_viol:
+            v.constraint = "goal (not required)"
+    order_c = [c for c in task.constraints if isinstance(c, GoalsInOrder)]
+    for c in order_c:
+        violations += _check_order(c, tr.goal2time)
+    t1 = time.perf_counter()
+    n_ok = sum(goal_ok.values())
+    cctx = CostContext(t=tr.t, q=tr.q, dq=tr.dq, ddq=tr.ddq, tau=lambda: tq.torques, tau_link=lambda: tq.link_torques,
+                       mass=robot.mass, num_joints=robot.dof, goals_achieved=n_ok, num_goals=len(task.goals))
+    costs: Dict[str, float] = {}
+    if settings.all_costs:
+        for name in known_costs():
+            try:
+                costs[name] = float(parse_cost(name).evaluate(cctx))
+            except MissingQuantityError:  # a plugin term that needs what a check does not provide
+                continue
+    cost = float(cost_fn.evaluate(cctx))
+    timings["costs"] = time.perf_counter() - t1
+    timings["total"] = time.perf_counter() - t0
+    real = [v for v in violations if v.constraint != "goal (not required)"]
+    return Verdict(valid=not real, violations=real + [v for v in violations if v not in real], costs=costs, cost=cost,
+                   cost_function=cost_fn.descriptor(), goals=goal_ok, timings=timings, samples=tr.n)
+
+
+# ---------------------------------------------------------------------------------------------
+# constraints
+# ---------------------------------------------------------------------------------------------
+def _limit_violations(name, values, bound, tq: TrajectoryQuantities, k0: int, k1: int, limit: int, lower=None,
+                      abs_tol=0.0) -> List[Violation]:
+    """Samples k0..k1 (inclusive) of ``values`` (the whole trajectory, (N, dof)) outside the limits."""
+    vals = values[k0:k1 + 1]
+    if lower is None:
+        over = np.abs(vals) > bound * (1 + LIMIT_RTOL) + abs_tol
+    else:
+        over = (vals < lower - abs_tol) | (vals > bound + abs_tol)
+    ks, js = np.nonzero(over)
+    out = []
+    for k, j in list(zip(ks, js))[:limit]:
+        kk = int(k + k0)
+        v = float(values[kk, j])
+        if lower is None:
+            out.append(Violation(name, f"|{name.split('.')[-1]}| = {abs(v):.6g} exceeds the limit {bound[j]:.6g}",
+                                 sample=kk, time=float(tq.t[kk]), value=v, bound=float(bound[j]), joint=int(j)))
+        else:
+            b = float(lower[j]) if v < lower[j] else float(bound[j])
+            out.append(Violation(name, f"q = {v:.6g} outside [{lower[j]:.6g}, {bound[j]:.6g}]", sample=kk,
+                                 time=float(tq.t[kk]), value=v, bound=b, joint=int(j)))
+    if len(ks) > limit:
+        out.append(Violation(name, f"... and {len(ks) - limit} more samples over the limit"))
+    return out
+
+
+def _one_motion_violations(tq: TrajectoryQuantities, limit: int) -> List[Violation]:
+    """Steps over which q is not the integral of dq or dq not the integral of ddq (quantities.step_residuals)."""
+    st = tq.steps
+    out = []
+    for name, res, tol, what, of in (("trajectory.q", st.q, st.q_tol, "q", "dq"),
+                                     ("trajectory.dq", st.dq, st.dq_tol, "dq", "ddq")):
+        ks, js = np.nonzero(np.abs(res) > tol)
+        for k, j in list(zip(ks, js))[:limit]:
+            k, j = int(k), int(j)
+            out.append(Violation(name, f"{what} is not the integral of {of} between samples {k} and {k + 1}: "
+                                       f"they differ by {res[k, j]:.6g} (allowed {tol[k, j]:.3g})",
+                                 sample=k, time=float(tq.t[k]), value=float(res[k, j]), bound=float(tol[k, j]),
+                                 joint=j))
+        if len(ks) > limit:
+            out.append(Violation(name, f"... and {len(ks) - limit} more steps"))
+    return out
+
+
+def _between_sample_violations(name, means, bound, tq: TrajectoryQuantities, k0: int, k1: int,
+                               limit: int) -> List[Violation]:
+    """Steps k0 → k0+1 … k1−1 → k1 whose mean velocity or acceleration (linear interpolation) exceeds
+    ``bound``."""
+    vals = means[k0:k1]
+    ks, js = np.nonzero(np.abs(vals) > bound * (1 + LIMIT_RTOL))
+    out = []
+    for k, j in list(zip(ks, js))[:limit]:
+        kk, j = int(k + k0), int(j)
+        v = float(means[kk, j])
+        out.append(Violation(name, f"|{name.split('.')[-1]}| = {abs(v):.6g} between samples {kk} and {kk + 1} "
+                                   f"exceeds the limit {bound[j]:.6g}", sample=kk, time=float(tq.t[kk]), value=v,
+                             bound=float(bound[j]), joint=j))
+    if len(ks) > limit:
+        out.append(Violation(name, f"... and {len(ks) - limit} more steps over the limit"))
+    return out
+
+
+def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, settings: CheckSettings) -> List[Violation]:
+    """Violations of ``c`` over the samples of ``window`` ((k0, k1) inclusive; None: the whole trajectory)."""
+    r = tq.robot
+    k0, k1 = (0, tq.n - 1) if window is None else window
+    sl = slice(k0, k1 + 1)
+    limit = settings.max_violations_per_constraint
+    if isinstance(c, JointLimitsConstraint):
+        out = []
+        if "q" in c.parts:
+            out += _limit_violations("joint.q", tq.q, r.q_upper, tq, k0, k1, limit, lower=r.q_lower, abs_tol=Q_ATOL)
+        if "dq" in c.parts:
+            out += _limit_violations("joint.dq", tq.dq, r.dq_max, tq, k0, k1, limit)
+            if settings.between_samples:
+                out += _between_sample_violations("joint.dq", tq.steps.mean_velocity, r.dq_max, tq, k0, k1, limit)
+        if "ddq" in c.parts:
+            out += _limit_violations("joint.ddq", tq.ddq, r.ddq_max, tq, k0, k1, limit)
+            if settings.between_samples:
+                out += _between_sample_violations("joint.ddq", tq.steps.mean_acceleration, r.ddq_max, tq, k0, k1,
+                                                  limit)
+        if "tau" in c.parts:
+            out += _limit_violations("joint.tau", tq.torques, r.tau_max, tq, k0, k1, limit)
+        return out
+    if isinstance(c, (CollisionFree, SelfCollisionFree)):
+        return _collision_violations(c, tq, k0, k1, settings)
+    if isinstance(c, BasePlacement):
+        if c.pose is None or c.pose.valid(r.base_pose):
+            return []
+        return [Violation("basePlacement",
+                          "base pose outside its tolerance: " + _describe(c.pose.violations(r.base_pose)))]
+    if isinstance(c, EndEffectorConstraint):
+        out = []
+        if math.isfinite(c.v_max) or c.v_min > 0 or math.isfinite(c.o_max) or c.o_min > 0:
+            tw = tq.tcp_twists[sl]
+            v = np.linalg.norm(tw[:, :3], axis=1)
+            o = np.linalg.norm(tw[:, 3:], axis=1)
+            for name, vals, lo, hi in (("v", v, c.v_min, c.v_max), ("o", o, c.o_min, c.o_max)):
+                bad = np.nonzero((vals < lo * (1 - LIMIT_RTOL)) | (vals > hi * (1 + LIMIT_RTOL)))[0]
+                for k in bad[:limit]:
+                    kk = int(k + k0)
+                    out.append(Violation("endEffector." + name, f"TCP {'speed' if name == 'v' else 'angular speed'} "
+                                         f"{vals[k]:.6g} outside [{lo:.6g}, {hi:.6g}]", sample=kk,
+                                         time=float(tq.t[kk]), value=float(vals[k]),
+                                         bound=float(hi if vals[k] > hi else lo)))
+        if c.pose is not None:
+            T = tq.tcp_poses
+            bad = [k for k in range(k0, k1 + 1) if not c.pose.valid(T[k])]
+            for k in bad[:limit]:
+                out.append(Violation("endEffector.pose", "TCP pose outside the tolerance: " +
+                                     _describe(c.pose.violations(T[k])), sample=k, time=float(tq.t[k])))
+        return out
+    # allGoalsFulfilled, order, validAssembly, alwaysTrue are handled elsewhere / always true
+    return []
+
+
+def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, settings: CheckSettings) -> List[Violation]:
+    r = tq.robot
+    env = isinstance(c, CollisionFree)
+    Q = tq.q[k0:k1 + 1]
+    moving = moving_obstacle_indices(r, tq.task) if env else []
+    # pairs with moving obstacles are checked piecewise (cell.moving_obstacle_events), all others here
+    static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
+    checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
+    if settings.between_samples:
+        events = checker.check(Q, first_only=False)
+    else:
+        events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
+    if moving:
+        events = sorted(events + moving_obstacle_events(r, tq.task, moving, tq.t[k0:k1 + 1], Q,
+                                                        between_samples=settings.between_samples),
+                        key=lambda e: (e.sample, e.s))
+    limit = settings.max_violations_per_constraint
+    out = []
+    for e in events[:limit]:
+        k = e.sample + k0
+        tt = float(tq.t[k] + e.s * (tq.t[min(k + 1, tq.n - 1)] - tq.t[k]))
+        kind = "robot–obstacle" if e.environment else "self"
+        between = f" between samples {k} and {k + 1}" if e.s > 0 else ""
+        margin = r.safety_margin if e.environment else 0.0
+        out.append(Violation(c.type, f"{kind} collision {e.first} ↔ {e.second}{between} "
+                                     f"(distance {e.distance:.4g} m, margin {margin:.3g})",
+                             sample=k, time=tt, value=e.distance))
+    if len(events) > limit:
+        out.append(Violation(c.type, f"... and {len(events) - limit} more collisions"))
+    return out
+
+
+def _check_order(c: GoalsInOrder, g2t: Dict[str, float]) -> List[Violation]:
+    missing = [g for g in c.order if g not in g2t]
+    if missing:
+        return [Violation("allGoalsFulfilledInOrder", f"goals {missing} have no goal2time entry")]
+    actual = sorted(c.order, key=lambda g: g2t[g])
+    if list(actual) != list(c.order):
+        return [Violation("allGoalsFulfilledInOrder", f"goals reached in order {actual}, required {list(c.order)}")]
+    return []
+
+
+# ---------------------------------------------------------------------------------------------
+# goals
+# ---------------------------------------------------------------------------------------------
+def check_goal(g: Goal, tq: TrajectoryQuantities) -> List[Violation]:
+    """Why goal ``g`` is not achieved by the trajectory (empty: achieved). Goal-level constraints are
+    checked separately, over :attr:`TrajectoryQuantities.goal_windows`."""
+    g2t = tq.goal2time
+    if g.id not in g2t:
+        return [Violation("goal", f"{g.type} goal has no entry in goal2time", goal=g.id)]
+    tg = g2t[g.id]
+    k = tq.goal_sample(g.id)
+    if k is None:
+        return [Violation("goal", f"no unique sample at the goal time {tg}", goal=g.id, time=tg)]
+    V = lambda msg, **kw: Violation("goal", msg, goal=g.id, time=kw.pop("time", float(tq.t[k])), **kw)  # noqa: E731
+    if isinstance(g, (At, Reach)):
+        T = tq.tcp_poses[k]
+        out = []
+        if not g.pose.valid(T):
+            out.append(V(f"{g.type}: TCP pose outside the goal tolerance: " + _describe(g.pose.violations(T)),
+                         sample=k))
+        if isinstance(g, Reach):
+            m = float(np.abs(tq.tcp_twists[k]).max())
+            if m > g.velocity_tolerance:
+                out.append(V(f"reach: the TCP is still moving (max twist component {m:.4g} > {g.velocity_tolerance})",
+                             sample=k, value=m, bound=g.velocity_tolerance))
+        return out
+    if isinstance(g, ReturnTo):
+        if g.return_to is None:
+            kr = 0
+        else:
+            if g.return_to not in g2t:
+                return [V(f"returnTo: goal {g.return_to!r} has no goal2time entry", sample=k)]
+            kr = find_time_index(tq.t, g2t[g.return_to])
+            if kr is None:
+                return [V(f"returnTo: no unique sample at goal {g.return_to!r}'s time", sample=k)]
+        out = []
+        for name, arr in (("q", tq.q), ("dq", tq.dq), ("ddq", tq.ddq)):
+            d = float(np.linalg.norm(arr[k] - arr[kr]))
+            if d > g.epsilon:
+                out.append(V(f"returnTo: ‖Δ{name}‖ = {d:.4g} to sample {kr} exceeds {g.epsilon}", sample=k, value=d,
+                             bound=g.epsilon))
+        return out
+    window = tq.goal_windows.get(g.id)
+    if isinstance(g, Pause):
+        if window is None:
+            return [V(f"pause: the window starts at {tg - g.duration:.4f} s, before the trajectory", sample=k)]
+        k0 = window[0]
+        out = []
+        dq_max = float(np.abs(tq.q[k0:k + 1] - tq.q[k0]).max())
+        v_max = float(np.abs(tq.dq[k0:k + 1]).max())
+        a_max = float(np.abs(tq.ddq[k0:k + 1]).max())
+        if dq_max > 1e-9:
+            out.append(V(f"pause: q moves by {dq_max:.3g} during the pause [{tq.t[k0]:.4f}, {tg:.4f}] s", sample=k))
+        if v_max > 1e-9 or a_max > 1e-9:
+            out.append(V(f"pause: dq/ddq not zero during the pause (max |dq| {v_max:.3g}, |ddq| {a_max:.3g})",
+                         sample=k))
+        return out
+    if isinstance(g, Follow):
+        if g.t is None:
+            _, unmet = tq.untimed_follow_match(g, k)
+            return [] if unmet is None else [V(f"follow: pose {unmet} (of {len(g.poses)}) is never met before t_g",
+                                               sample=k)]
+        rel = g.t - g.t[-1]
+        if window is None:
+            return [V(f"follow: the timed trajectory would start at {tg + rel[0]:.4f} s, before t=0", sample=k)]
+        out = []
+        for i, (pose, dt_) in enumerate(zip(g.poses, rel)):
+            ti = tg + dt_
+            Ti = tq.tcp_at(ti)
+            if not pose.valid(Ti):
+                out.append(V(f"follow: pose {i} not met at t={ti:.4f}: " + _describe(pose.violations(Ti)), time=ti))
+        return out
+    if isinstance(g, Leave):
+        t_end = tg + g.duration
+        if window is None:
+            return [V(f"leave: the trajectory ends before t_g + duration = {t_end:.4f} s", sample=k)]
+        T = tq.tcp_poses
+        inside = [kk for kk in range(window[0], window[1] + 1) if g.contains(T[kk])]
+        if inside:
+            return [V(f"leave: the TCP is inside the region to leave at {len(inside)} samples of "
+                      f"[{tg:.4f}, {t_end:.4f}] s (first at t={tq.t[inside[0]]:.4f})", sample=inside[0])]
+        return []
+    return [V(f"unsupported goal type {type(g).__name__}")]

@@ -1,0 +1,247 @@
+"""What a trajectory *does* on a robot in its cell: the quantities the judge, the solver and the viewer read.
+
+:class:`TrajectoryQuantities` wraps one sampled trajectory (``t``, ``q``, ``dq``, ``ddq`` and the goal
+times) of one robot (built by :mod:`robodesign.model.cell`) in one task. Every quantity is a property computed on
+first use and cached (as in Timor's ``Trajectory``), so a check that never needs torques never runs
+inverse dynamics:
+
+* :attr:`~TrajectoryQuantities.tcp_poses` (N, 4, 4) and :attr:`~TrajectoryQuantities.tcp_twists` (N, 6):
+  world TCP pose and world-aligned TCP twist ``[v; ω]`` at every sample;
+* :attr:`~TrajectoryQuantities.goal_windows`: for each goal the samples ``(k0, k1)`` it spans
+  (``pause``/``follow``: [t_g − duration, t_g]; ``leave``: [t_g, t_g + duration]; ``at``/``reach``/
+  ``returnTo``: the sample at t_g). A goal without a window (no goal time, no unique sample at it, or a
+  window outside the trajectory) is absent;
+* :attr:`~TrajectoryQuantities.external_wrenches` (N, 6): the world wrench ``[f; τ]`` a follow goal applies
+  at the TCP during its window (the first such goal wins where windows overlap), zero elsewhere;
+* :attr:`~TrajectoryQuantities.torques` and :attr:`~TrajectoryQuantities.link_torques` (N, dof): drivetrain
+  and link-side torques (:meth:`Robot.drivetrain_torques <robodesign.model.robot.Robot.drivetrain_torques>`)
+  under those wrenches.
+
+* :attr:`~TrajectoryQuantities.steps`: per step, whether q is the integral of dq and dq of ddq
+  (:class:`StepResiduals`), and the mean velocity and acceleration between the samples.
+
+Between samples q is interpolated linearly (:meth:`~TrajectoryQuantities.q_at`), the rule the checker uses
+for collisions, timed follow poses and the limits between samples.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from robodesign.formats.solution import Solution
+from robodesign.formats.task_spec import At, Follow, Goal, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.model.robot import Robot
+
+TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
+TIME_RTOL = 1e-5
+WINDOW_TIME_TOL = 1e-9  # slack when a window's start or end time is compared with the samples [s]
+
+
+# q must be the integral of dq, and dq of ddq, over every step (docs/checker.md, "One motion"). With h the
+# step and A a joint's largest acceleration in the file (max |ddq| and max |Δdq|/h over the trajectory):
+#   |Δq − h·(dq_k + dq_k+1)/2| ≤ Q_RULE_FACTOR·A·h²             (trapezoid rule for q)
+#   |Δdq − h·(ddq_k + ddq_k+1)/2| ≤ h·|ddq_k+1 − ddq_k|/2 + DQ_RULE_FACTOR·A·h
+# The exact motion of samples with |q̈| ≤ A is within A·h²/4 of the first rule; robodesign's solvers write
+# samples that meet both rules to rounding (ddq_k is the acceleration over [t_k, t_k+1]); the reference's
+# numpy.gradient-filled trapezoids (Trajectory.from_mstraj) reach 0.50·A·h² and 0.25·A·h (worst over random
+# via points, step sizes and blend times, experiments/consistency_tolerances.py). The factors keep 20 % over.
+Q_RULE_FACTOR = 0.6
+DQ_RULE_FACTOR = 0.3
+RULE_ATOL = 1e-9  # absolute slack of both rules (rounding) [rad, m, rad/s, m/s]
+RULE_RTOL = 1e-9  # relative slack (of |Δq| resp. |Δdq|)
+
+
+@dataclass(frozen=True)
+class StepResiduals:
+    """Per step k (samples k → k+1) and joint: how far the samples are from describing one motion.
+
+    ``q``/``dq``: residual of the q rule and of the dq rule (module constants), ``q_tol``/``dq_tol``: what
+    each may be, of which ``dq_hull`` = h·|ddq_k+1 − ddq_k|/2 is exact (ddq_k may be the acceleration before,
+    after or around sample k); arrays (N−1, dof). ``mean_velocity`` = Δq/h and ``mean_acceleration`` = Δdq/h: the
+    velocity and acceleration of the motion between the samples under the linear interpolation of q and dq.
+    """
+    q: np.ndarray
+    q_tol: np.ndarray
+    dq: np.ndarray
+    dq_tol: np.ndarray
+    dq_hull: np.ndarray
+    mean_velocity: np.ndarray
+    mean_acceleration: np.ndarray
+
+    @property
+    def worst_ratio(self) -> Tuple[float, float]:
+        """The largest share of the slack a step uses, q rule and dq rule: |r_q| / q_tol and
+        (|r_dq| − dq_hull) / (dq_tol − dq_hull) (≤ 1: the samples are one motion; ~0: the rules hold exactly)."""
+        return (float(np.max(np.abs(self.q) / self.q_tol, initial=0.0)),
+                float(np.max((np.abs(self.dq) - self.dq_hull) / (self.dq_tol - self.dq_hull), initial=0.0)))
+
+
+def step_residuals(t, q, dq, ddq) -> StepResiduals:
+    """The :class:`StepResiduals` of samples ``t`` (N,), ``q``, ``dq``, ``ddq`` (N, dof)."""
+    t, q, dq, ddq = (np.asarray(x, dtype=float) for x in (t, q, dq, ddq))
+    h = np.diff(t)[:, None]
+    d_q, d_dq = np.diff(q, axis=0), np.diff(dq, axis=0)
+    mean_v, mean_a = d_q / h, d_dq / h
+    A = np.max(np.abs(np.concatenate([ddq, mean_a])), axis=0, initial=0.0)  # per joint
+    r_q = d_q - h * (dq[1:] + dq[:-1]) / 2
+    r_dq = d_dq - h * (ddq[1:] + ddq[:-1]) / 2
+    q_tol = Q_RULE_FACTOR * A * h ** 2 + RULE_ATOL + RULE_RTOL * np.abs(d_q)
+    hull = h * np.abs(np.diff(ddq, axis=0)) / 2
+    dq_tol = hull + DQ_RULE_FACTOR * A * h + RULE_ATOL + RULE_RTOL * np.abs(d_dq)
+    return StepResiduals(r_q, q_tol, r_dq, dq_tol, hull, mean_v, mean_a)
+
+
+def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
+    """The unique sample at ``value`` (numpy.isclose rule of the reference), else None."""
+    close = np.nonzero(np.isclose(t, value, rtol=TIME_RTOL, atol=TIME_ATOL))[0]
+    return int(close[0]) if len(close) == 1 else None
+
+
+class TrajectoryQuantities:
+    """Lazily computed quantities of one trajectory of ``robot`` in ``task`` (see the module docstring).
+
+    ``task`` may be None (no goals: no windows, no external wrenches). Arrays are read-only views of the
+    inputs; do not change them while the object is in use.
+    """
+
+    def __init__(self, robot: Robot, t, q, dq, ddq, task: Optional[Task] = None,
+                 goal2time: Optional[Dict[str, float]] = None):
+        self.robot, self.task = robot, task
+        self.t = np.asarray(t, dtype=float)
+        self.q, self.dq, self.ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
+        self.goal2time = dict(goal2time or {})
+
+    @classmethod
+    def from_solution(cls, robot: Robot, solution: Solution, task: Optional[Task] = None) -> "TrajectoryQuantities":
+        tr = solution.trajectory
+        return cls(robot, tr.t, tr.q, tr.dq, tr.ddq, task, tr.goal2time)
+
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+    @cached_property
+    def steps(self) -> StepResiduals:
+        """Consistency of q, dq, ddq over every step (:func:`step_residuals`)."""
+        return step_residuals(self.t, self.q, self.dq, self.ddq)
+
+    # -- kinematics ---------------------------------------------------------------------------------
+    @cached_property
+    def tcp_poses(self) -> np.ndarray:
+        """(N, 4, 4) world pose of the TCP at every sample."""
+        r = self.robot
+        out = np.empty((self.n, 4, 4))
+        for k in range(self.n):
+            pin.framesForwardKinematics(r.model, r.data, self.q[k])
+            out[k] = r.data.oMf[r.tcp_frame].homogeneous
+        return out
+
+    @cached_property
+    def tcp_twists(self) -> np.ndarray:
+        """(N, 6) TCP twist ``[v; ω]`` in world-aligned axes at the TCP, at every sample."""
+        r = self.robot
+        out = np.empty((self.n, 6))
+        for k in range(self.n):
+            pin.forwardKinematics(r.model, r.data, self.q[k], self.dq[k])
+            pin.updateFramePlacements(r.model, r.data)
+            out[k] = pin.getFrameVelocity(r.model, r.data, r.tcp_frame, pin.LOCAL_WORLD_ALIGNED).vector
+        return out
+
+    def q_at(self, time: float) -> np.ndarray:
+        """q at any time (linear interpolation between samples, held constant outside)."""
+        return np.array([np.interp(time, self.t, self.q[:, j]) for j in range(self.q.shape[1])])
+
+    def tcp_at(self, time: float) -> np.ndarray:
+        """TCP pose at any time (q interpolated linearly between samples)."""
+        return self.robot.fk(self.q_at(time))
+
+    # -- goals --------------------------------------------------------------------------------------
+    def goal_sample(self, goal_id: str) -> Optional[int]:
+        """The unique sample at the goal's time (None without a goal time or a unique sample)."""
+        tg = self.goal2time.get(goal_id)
+        return None if tg is None else find_time_index(self.t, tg)
+
+    def untimed_follow_match(self, goal: Follow, k: int) -> Tuple[int, Optional[int]]:
+        """Walking back from sample ``k`` (the goal time), each pose of an untimed follow goal (last to first)
+        is met at an earlier or equal sample. Returns (first sample of the window, index of the first pose
+        never met or None)."""
+        T = self.tcp_poses
+        kk = k
+        for i in range(len(goal.poses) - 1, -1, -1):
+            while kk >= 0 and not goal.poses[i].valid(T[kk]):
+                kk -= 1
+            if kk < 0:
+                return 0, i
+        return kk, None
+
+    def goal_window(self, goal: Goal) -> Optional[Tuple[int, int]]:
+        """Samples (k0, k1), inclusive, that ``goal`` spans (module docstring), or None."""
+        k = self.goal_sample(goal.id)
+        if k is None:
+            return None
+        tg = self.goal2time[goal.id]
+        t = self.t
+        if isinstance(goal, (At, Reach, ReturnTo)):
+            return k, k
+        if isinstance(goal, Pause):
+            t_start = tg - goal.duration
+            if t_start < t[0] - WINDOW_TIME_TOL:
+                return None
+            return int(np.searchsorted(t, t_start - WINDOW_TIME_TOL, side="left")), k
+        if isinstance(goal, Follow):
+            if goal.t is None:
+                return self.untimed_follow_match(goal, k)[0], k
+            t_start = tg + goal.t[0] - goal.t[-1]
+            if t_start < t[0] - WINDOW_TIME_TOL:
+                return None
+            return int(np.searchsorted(t, t_start - WINDOW_TIME_TOL, side="left")), k
+        if isinstance(goal, Leave):
+            t_end = tg + goal.duration
+            if t_end > t[-1] + WINDOW_TIME_TOL:
+                return None
+            return k, int(np.searchsorted(t, t_end + WINDOW_TIME_TOL, side="right") - 1)
+        return None
+
+    @cached_property
+    def goal_windows(self) -> Dict[str, Tuple[int, int]]:
+        """goal id → its window (k0, k1); goals without a window are absent."""
+        out = {}
+        for g in (self.task.goals if self.task is not None else ()):
+            w = self.goal_window(g)
+            if w is not None:
+                out[g.id] = w
+        return out
+
+    # -- dynamics -----------------------------------------------------------------------------------
+    @cached_property
+    def external_wrenches(self) -> np.ndarray:
+        """(N, 6) world wrench ``[f; τ]`` at the TCP: a follow goal's force and torque during its window."""
+        W = np.zeros((self.n, 6))
+        taken = np.zeros(self.n, dtype=bool)
+        for g in (self.task.goals if self.task is not None else ()):
+            if not isinstance(g, Follow) or g.id not in self.goal_windows:
+                continue
+            wrench = np.concatenate([g.external_force, g.external_torque]).astype(float)
+            if not np.any(wrench != 0):
+                continue
+            k0, k1 = self.goal_windows[g.id]
+            rows = np.arange(k0, k1 + 1)
+            rows = rows[~taken[rows]]
+            W[rows] = wrench
+            taken[rows] = True
+        return W
+
+    @cached_property
+    def link_torques(self) -> np.ndarray:
+        """(N, dof) link-side torques (no motor inertia, no friction) under :attr:`external_wrenches`."""
+        W = self.external_wrenches
+        return self.robot.link_torques(self.q, self.dq, self.ddq, W if np.any(W) else None)
+
+    @cached_property
+    def torques(self) -> np.ndarray:
+        """(N, dof) drivetrain torques under :attr:`external_wrenches` (what peakTorque limits)."""
+        return self.robot.drivetrain_torques(self.q, self.dq, self.ddq, link_torques=self.link_torques)

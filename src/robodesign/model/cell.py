@@ -1,0 +1,132 @@
+"""The robot in its cell: a :class:`~robodesign.model.robot.Robot` placed by a solution or candidate in a task's
+world (base pose, the task's gravity, its obstacles with the collision safety margin).
+
+The checker, the solver and the viewer all build robots here, so the judged, the planned and the
+plotted robot are the same object.
+"""
+from __future__ import annotations
+
+from typing import Dict, List, Optional, Sequence, Union
+
+import numpy as np
+
+from robodesign.core.errors import InputError
+from robodesign.formats.assembly import Assembly
+from robodesign.formats.geometry import coal_shapes
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.module_spec import ModuleSet
+from robodesign.formats.solution import Solution
+from robodesign.formats.task_spec import CollisionFree, Task
+from robodesign.model.robot import Obstacle, Robot
+from robodesign.model.sweep import CollisionEvent, SweepChecker
+
+
+def resolve_module_set(solution: Solution, module_set: Union[ModuleSet, str, None] = None) -> ModuleSet:
+    """``module_set`` itself, else the set it names, else the one the solution names (InputError if none)."""
+    if isinstance(module_set, ModuleSet):
+        return module_set
+    name = module_set or solution.module_set
+    if not name:
+        raise InputError("the solution names no moduleSet; pass --modules", file=solution.source or "solution")
+    return load_module_set(name)
+
+
+def task_obstacles(task: Task, t: float = 0.0) -> List[Obstacle]:
+    """The task's collision objects at time ``t`` (moving obstacles at their pose in effect then)."""
+    out = []
+    for ob in task.obstacles:
+        M = ob.transform_at(t)
+        for gi, g in enumerate(ob.collision):
+            for si, shape in enumerate(coal_shapes(g)):
+                out.append(Obstacle(f"{ob.id}.{gi}.{si}", shape, M @ g.pose))  # see obstacle_spec_id
+    return out
+
+
+def obstacle_spec_id(obstacle: Obstacle) -> str:
+    """The id of the task obstacle a collision object of :func:`task_obstacles` comes from."""
+    return obstacle.name.rsplit(".", 2)[0]
+
+
+def safety_margin(task: Task) -> float:
+    """The collision safety margin of the task (the largest ``collisionFree`` margin, 0 without one)."""
+    return max([c.safety_margin for c in task.constraints if isinstance(c, CollisionFree)], default=0.0)
+
+
+def build_robot(task: Optional[Task], ms: ModuleSet, assembly: Assembly, base_pose: np.ndarray) -> Robot:
+    """The robot in the task's cell: base pose, the task's gravity, obstacles with the safety margin.
+    Without a task: default gravity and no obstacles."""
+    if task is None:
+        return Robot(ms, assembly, base_pose=base_pose)
+    robot = Robot(ms, assembly, base_pose=base_pose, gravity=task.header.gravity)
+    robot.set_obstacles(task_obstacles(task), safety_margin=safety_margin(task))
+    return robot
+
+
+def solution_robot(task: Optional[Task], solution: Solution, module_set=None) -> Robot:
+    """The robot of ``solution`` in ``task``'s cell (``module_set``: a ModuleSet, a name/folder, or None for
+    the solution's). Raises AssemblyError for an invalid assembly, InputError for an unknown module set."""
+    ms = resolve_module_set(solution, module_set)
+    return build_robot(task, ms, solution.assembly(ms), solution.base_pose)
+
+
+def moving_obstacle_indices(robot: Robot, task: Task) -> List[int]:
+    """Indices into ``robot.obstacles`` of the collision objects of the task's moving obstacles."""
+    moving_ids = {ob.id for ob in task.obstacles if ob.moving}
+    return [i for i, ob in enumerate(robot.obstacles) if obstacle_spec_id(ob) in moving_ids]
+
+
+def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: np.ndarray, Q: np.ndarray, *,
+                           first_only: bool = False, between_samples: bool = True,
+                           checker: Optional[SweepChecker] = None) -> List[CollisionEvent]:
+    """Collisions of the motion through the rows of ``Q`` at the times ``t`` with the moving obstacles
+    ``moving`` (indices into ``robot.obstacles``, e.g. :func:`moving_obstacle_indices`); event samples index
+    the rows of ``Q``.
+
+    An obstacle's pose is the one in effect at a sample's time (zero-order hold,
+    ``ObstacleSpec.transform_at``) and is kept over the motion to the next sample; runs of samples with
+    unchanged obstacle poses are certified together by conservative advancement (``between_samples``; else
+    only the samples are checked). One event per pair and contact episode, or only the first event with
+    ``first_only``. ``checker``: a SweepChecker over exactly these robot–obstacle pairs, to reuse it.
+    """
+    specs = {ob.id: ob for ob in task.obstacles if ob.moving}
+    movers = [(i, specs[obstacle_spec_id(robot.obstacles[i])], np.array(robot.obstacles[i].pose, dtype=float))
+              for i in moving]  # (robot obstacle index, spec, t=0 world pose of the geometry)
+    chk = checker or SweepChecker(robot, check_self=False, check_env=True, obstacles=list(moving))
+    t = np.asarray(t, dtype=float)
+    Q = np.asarray(Q, dtype=float)
+    keys = [tuple(int(np.searchsorted(sp.motion_t, tk + 1e-12, side="right")) for sp in specs.values()) for tk in t]
+    events: List[CollisionEvent] = []
+    last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
+    a = 0
+    try:
+        while a < len(keys):
+            b = a
+            while b + 1 < len(keys) and keys[b + 1] == keys[a]:
+                b += 1
+            for i, sp, pose0 in movers:
+                robot.move_obstacle(i, sp.transform_at(float(t[a])) @ pose0)
+            if not between_samples:
+                hits = np.nonzero(chk.sample_collisions(Q[a:b + 1]))[0]
+                events += [CollisionEvent(int(k + a), 0.0, "", "", 0.0, True) for k in hits]
+                if first_only and events:
+                    return events[:1]
+                a = b + 1
+                continue
+            end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
+            Qr = Q[a:end + 1]
+            evs = chk.check(Qr, first_only=first_only)
+            for e in evs:
+                e = CollisionEvent(e.sample + a, e.s, e.first, e.second, e.distance, e.environment)
+                if first_only:
+                    return [e]
+                pair = (e.first, e.second)
+                if pair not in last or e.sample > last[pair] + 1:  # else: the episode of the previous run
+                    events.append(e)
+                last[pair] = e.sample
+            for pair in chk.in_contact(Qr[-1], {(e.first, e.second) for e in evs}):
+                last[pair] = end  # still in contact at the end of this run
+            a = b + 1
+    finally:
+        for i, _, pose0 in movers:
+            robot.move_obstacle(i, pose0)
+    return events

@@ -1,0 +1,543 @@
+"""Exact robot models: a pinocchio ``Model`` plus coal collision geometry, built from an assembly.
+
+``Robot`` keeps what the robot *is* (pinocchio model, geometry model, limits, drivetrain
+parameters, base pose) apart from scratch space (``pin.Data``/``pin.GeometryData``), as in
+Pinocchio. It is built once per assembly (~1 ms) and is not meant to be pickled: ship the
+(module set, assembly) specs to other processes and rebuild there.
+
+Conventions (docs/formats.md):
+* The base frame is the base connector flipped about x; ``base_pose`` is its world pose.
+* Revolute joints rotate about the joint frame's z axis, prismatic ones translate along it. A
+  module mounted "backwards" (entered through its child body) gets the same joint about −z so q
+  keeps its meaning.
+* The TCP is the free ``eef`` connector (or the last free connector in breadth-first order).
+* Drivetrain torque (:meth:`Robot.drivetrain_torques`, the one formula)
+  τ = RNEA(q, q̇, q̈) + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇), with σ(x) = sin(atan(100x))
+  (the smooth sign of the reference, so costs are comparable); k²·I_m is pinocchio's ``armature``.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from robodesign.core.errors import AssemblyError, InputError
+from robodesign.core.spatial import inv
+from robodesign.formats.assembly import Assembly
+from robodesign.formats.geometry import coal_shapes
+from robodesign.formats.module_spec import ModuleSet
+
+COULOMB_SMOOTHING = 100.0
+
+
+def smooth_sign(x: np.ndarray) -> np.ndarray:
+    """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
+    s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
+    return s / np.sqrt(1.0 + s * s)
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    name: str
+    module_index: int
+    module_id: str
+    joint_id: str
+    type: str
+    reversed: bool
+
+
+@dataclass
+class Obstacle:
+    """A collision object of the environment: shape + world pose (world-fixed unless moved)."""
+    name: str
+    shape: object  # coal CollisionGeometry
+    pose: np.ndarray  # 4x4 world
+
+
+class Robot:
+    def __init__(self, module_set: ModuleSet, assembly: Assembly, base_pose: Optional[np.ndarray] = None,
+                 convex_meshes: bool = False, gravity: Sequence[float] = (0.0, 0.0, -9.81)):
+        self.module_set = module_set
+        self.assembly = assembly
+        self._build(convex_meshes)
+        self.model.gravity = pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
+        self.base_pose = np.eye(4)
+        self.data = self.model.createData()
+        self._sync_link_model()
+        self._n_self_pairs = len(self.geom_model.collisionPairs)
+        self._geom_data = None  # built on first use (many candidates never reach a collision query)
+        self._reach = None
+        self.obstacles: List[Obstacle] = []
+        self._obstacle_ids: List[int] = []
+        self.safety_margin = 0.0  # of robot–obstacle pairs (set_obstacles)
+        if base_pose is not None:
+            self.set_base_pose(base_pose)
+
+    # ------------------------------------------------------------------------------------------
+    @classmethod
+    def from_order(cls, module_set: ModuleSet, order: Sequence, **kw) -> "Robot":
+        return cls(module_set, Assembly.from_order(module_set, order), **kw)
+
+    def _build(self, convex_meshes: bool) -> None:
+        ms, asm = self.module_set, self.assembly
+        model = pin.Model()
+        model.name = "robodesign:" + ",".join(asm.module_ids)
+        geom = pin.GeometryModel()
+        counts: Dict[str, int] = {}
+        labels = []
+        for mid in asm.module_ids:
+            k = counts.get(mid, 0)
+            labels.append(mid if k == 0 else f"{mid}-{k}")
+            counts[mid] = k + 1
+        self.instance_labels = tuple(labels)
+        conn: Dict[Tuple[int, str], Tuple[int, str]] = {}
+        for a, ca, b, cb in asm.connections:
+            conn[(a, ca)] = (b, cb)
+            conn[(b, cb)] = (a, ca)
+        bi, bcon = asm.base
+        base_mod = ms[asm.module_ids[bi]]
+        base_con = base_mod.connector(bcon)
+        # base body pose in the base frame: the base connector's world pose is Rx(π)
+        start = (bi, base_con.body_id, 0, base_con.entry_pose)
+        visited = set()
+        queue = deque([start])
+        body_joint: Dict[Tuple[int, str], int] = {}
+        self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
+        self.joint_infos: List[JointInfo] = []
+        lower, upper, vel, acc, eff, gear, im, fc, fv = ([] for _ in range(9))
+        free_connectors: List[Tuple[int, str, int]] = []  # (instance, connector id, frame id)
+        total_mass = 0.0
+        geom_body: List[Tuple[int, str]] = []
+        direct_joint_pairs = set()
+        while queue:
+            i, body_id, jid, M = queue.popleft()
+            if (i, body_id) in visited:
+                continue
+            visited.add((i, body_id))
+            body_joint[(i, body_id)] = jid
+            mod = ms[asm.module_ids[i]]
+            body = mod.body(body_id)
+            label = labels[i]
+            total_mass += body.mass
+            if body.mass > 0:
+                Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+                model.appendBodyToJoint(jid, Y, pin.SE3(M))
+            parent_frame = model.getFrameId(model.names[jid]) if jid > 0 else 0
+            fid = model.addFrame(pin.Frame(f"{label}.{body_id}", jid, parent_frame, pin.SE3(M), pin.FrameType.BODY))
+            if jid == 0:
+                self._root_items.append(("frame", fid, M.copy()))
+            for ci, c in enumerate(body.connectors):
+                Mc = M @ c.pose
+                cf = model.addFrame(pin.Frame(f"{label}.{body_id}.{c.id}", jid, fid, pin.SE3(Mc), pin.FrameType.OP_FRAME))
+                if jid == 0:
+                    self._root_items.append(("frame", cf, Mc.copy()))
+                other = conn.get((i, c.id))
+                if other is not None:
+                    j2, c2id = other
+                    c2 = ms[asm.module_ids[j2]].connector(c2id)
+                    if (j2, c2.body_id) not in visited:
+                        queue.append((j2, c2.body_id, jid, Mc @ c2.entry_pose))
+                elif (i, c.id) != asm.base:
+                    free_connectors.append((i, c, cf))
+            for gi, g in enumerate(body.collision):
+                P = M @ g.pose
+                for si, shape in enumerate(coal_shapes(g, convex_meshes)):
+                    go = pin.GeometryObject(f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid,
+                                            pin.SE3(P), shape)
+                    k = geom.addGeometryObject(go)
+                    geom_body.append((i, body_id))
+                    if jid == 0:
+                        self._root_items.append(("geom", k, P.copy()))
+            for jt in mod.joints:
+                if jt.parent == body_id:
+                    other_body, rev = jt.child, False
+                    P, Q = jt.pose_parent, jt.pose_child
+                elif jt.child == body_id:
+                    other_body, rev = jt.parent, True
+                    P, Q = inv(jt.pose_child), inv(jt.pose_parent)
+                else:
+                    continue
+                if (i, other_body) in visited:
+                    continue
+                direct_joint_pairs.add(frozenset(((i, body_id), (i, other_body))))
+                placement = M @ P
+                if jt.type == "fixed":
+                    queue.append((i, other_body, jid, placement @ Q))
+                    continue
+                if jt.type == "revolute":
+                    jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
+                else:
+                    jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
+                name = f"{label}.{jt.id}"
+                new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
+                model.addJointFrame(new_jid, -1)
+                if jid == 0:
+                    self._root_items.append(("joint", new_jid, placement.copy()))
+                self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
+                L = jt.limits
+                lower.append(L.lower)
+                upper.append(L.upper)
+                vel.append(L.velocity)
+                acc.append(L.acceleration)
+                eff.append(L.torque)
+                gear.append(jt.gear_ratio)
+                im.append(jt.motor_inertia)
+                fc.append(jt.friction_coulomb)
+                fv.append(jt.friction_viscous)
+                queue.append((i, other_body, new_jid, Q))
+        missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
+        if missing:
+            raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+        nq = model.nq
+        if nq != len(self.joint_infos):
+            raise AssemblyError("only 1-DoF joints are supported")
+        self.dof = nq
+        self.mass = total_mass
+        model.lowerPositionLimit = np.array(lower, dtype=float)
+        model.upperPositionLimit = np.array(upper, dtype=float)
+        model.velocityLimit = np.array(vel, dtype=float)
+        model.effortLimit = np.array(eff, dtype=float)
+        self.q_lower = np.array(lower, dtype=float)
+        self.q_upper = np.array(upper, dtype=float)
+        self.dq_max = np.array(vel, dtype=float)
+        self.ddq_max = np.array(acc, dtype=float)
+        self.tau_max = np.array(eff, dtype=float)
+        self.gear_ratio = np.array(gear, dtype=float)
+        self.motor_inertia = np.array(im, dtype=float)
+        self.friction_coulomb = np.array(fc, dtype=float)
+        self.friction_viscous = np.array(fv, dtype=float)
+        model.armature = self.gear_ratio ** 2 * self.motor_inertia
+        # TCP: the free eef connector; else the last free connector in BFS order
+        eefs = [f for f in free_connectors if f[1].type == "eef"]
+        if len(eefs) == 1:
+            tcp = eefs[0]
+        elif free_connectors:
+            tcp = free_connectors[-1]
+        else:
+            tcp = None
+        if tcp is not None:
+            fr = model.frames[tcp[2]]
+            self.tcp_frame = model.addFrame(pin.Frame("TCP", fr.parentJoint, tcp[2], fr.placement, pin.FrameType.OP_FRAME))
+            if fr.parentJoint == 0:
+                self._root_items.append(("frame", self.tcp_frame, fr.placement.homogeneous.copy()))
+        else:
+            self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+            self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
+        self.model = model
+        self.geom_model = geom
+        self._geom_body = geom_body
+        self._add_self_collision_pairs(direct_joint_pairs)
+
+    def _add_self_collision_pairs(self, direct_joint_pairs) -> None:
+        geom, model = self.geom_model, self.model
+        mode = self.module_set.ignore_collisions
+        parents = model.parents
+        objs = geom.geometryObjects
+        n = len(objs)
+        for a in range(n):
+            ja = objs[a].parentJoint
+            for b in range(a + 1, n):
+                jb = objs[b].parentJoint
+                if ja == jb:
+                    continue  # rigidly connected
+                if mode == "rigid_via_joint" and (parents[ja] == jb or parents[jb] == ja):
+                    continue
+                if mode == "via_joint" and frozenset((self._geom_body[a], self._geom_body[b])) in direct_joint_pairs:
+                    continue
+                geom.addCollisionPair(pin.CollisionPair(a, b))
+
+    # ------------------------------------------------------------------------------------------
+    # configuration of the robot in its cell
+    def set_base_pose(self, T: np.ndarray) -> None:
+        T = np.asarray(T, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            raise InputError("base pose must be a finite 4x4 matrix")
+        self.base_pose = T.copy()
+        for kind, idx, M in self._root_items:
+            P = pin.SE3(T @ M)
+            if kind == "joint":
+                self.model.jointPlacements[idx] = P
+            elif kind == "frame":
+                self.model.frames[idx].placement = P
+            else:
+                self.geom_model.geometryObjects[idx].placement = P
+        self.data = self.model.createData()
+        self._sync_link_model()
+        self._geom_data = None
+        self._reach = None
+
+    def set_gravity(self, g: Sequence[float]) -> None:
+        self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+        self._sync_link_model()
+
+    def _sync_link_model(self) -> None:
+        """Invalidate the armature-free model copy (rebuilt lazily by :meth:`rnea`)."""
+        self._link_model = None
+
+    def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
+        """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
+        geom = self.geom_model
+        # drop previous obstacles (they sit after the robot's own objects)
+        n_robot = len(self._geom_body)
+        if len(geom.geometryObjects) > n_robot:
+            self.geom_model = geom = self._robot_only_geom()
+        self.obstacles = list(obstacles)
+        self._obstacle_ids = []
+        for ob in self.obstacles:
+            k = geom.addGeometryObject(pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape))
+            self._obstacle_ids.append(k)
+        for k in self._obstacle_ids:
+            for a in range(n_robot):
+                geom.addCollisionPair(pin.CollisionPair(a, k))
+        self.safety_margin = float(safety_margin)
+        self._geom_data = None
+
+    @property
+    def obstacle_geometry_ids(self) -> Tuple[int, ...]:
+        """Geometry-model index of each obstacle (in the order of :attr:`obstacles`)."""
+        return tuple(self._obstacle_ids)
+
+    def move_obstacle(self, index: int, pose: np.ndarray) -> None:
+        self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
+
+    def _robot_only_geom(self):
+        g = pin.GeometryModel()
+        for k in range(len(self._geom_body)):
+            g.addGeometryObject(self.geom_model.geometryObjects[k])
+        for cp in list(self.geom_model.collisionPairs)[: self._n_self_pairs]:
+            g.addCollisionPair(cp)
+        return g
+
+    @property
+    def geom_data(self) -> "pin.GeometryData":
+        """Scratch space of the collision queries (built lazily, after the last change of the geometry)."""
+        gd = self._geom_data
+        if gd is None:
+            gd = self._geom_data = pin.GeometryData(self.geom_model)
+            self._apply_margins(gd)
+        return gd
+
+    def _apply_margins(self, gd) -> None:
+        # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
+        # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
+        margin = getattr(self, "safety_margin", 0.0)
+        for k, req in enumerate(gd.collisionRequests):
+            req.enable_contact = True
+            if k >= self._n_self_pairs:
+                req.security_margin = margin
+
+    # ------------------------------------------------------------------------------------------
+    # kinematics
+    def _q(self, q) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        if q.shape[0] != self.dof or q.ndim != 1:
+            raise InputError(f"expected {self.dof} joint values, got shape {q.shape}")
+        return q
+
+    def tcp_chain(self) -> List[int]:
+        """The pinocchio joint ids from the world to the TCP's joint, in order (empty: TCP on the base)."""
+        m = self.model
+        chain = []
+        j = m.frames[self.tcp_frame].parentJoint
+        while j > 0:
+            chain.append(j)
+            j = m.parents[j]
+        chain.reverse()
+        return chain
+
+    def fk(self, q, frame: Optional[int] = None) -> np.ndarray:
+        """World pose (4x4) of a frame (default: TCP)."""
+        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        return self.data.oMf[self.tcp_frame if frame is None else frame].homogeneous
+
+    def fk_all(self, q) -> Dict[str, np.ndarray]:
+        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        return {f.name: self.data.oMf[i].homogeneous for i, f in enumerate(self.model.frames)}
+
+    def frame_id(self, name: str) -> int:
+        if not self.model.existFrame(name):
+            raise KeyError(name)
+        return self.model.getFrameId(name)
+
+    def jacobian(self, q, frame: Optional[int] = None, reference=pin.LOCAL_WORLD_ALIGNED) -> np.ndarray:
+        """6×dof frame Jacobian (linear rows first), world-aligned at the frame origin by default."""
+        f = self.tcp_frame if frame is None else frame
+        return pin.computeFrameJacobian(self.model, self.data, self._q(q), f, reference)
+
+    def reach_bound(self) -> Tuple[np.ndarray, float]:
+        """(world point o, radius R): every reachable TCP position lies within R of o.
+
+        o is the origin of the first joint on the TCP's chain (fixed in the world); R sums the distances
+        between consecutive joint origins on the chain (constant for revolute joints, plus the stroke for
+        prismatic ones) and the TCP offset from its joint. Cached until the base pose changes.
+        """
+        if self._reach is None:
+            m = self.model
+            chain = self.tcp_chain()
+            d = m.createData()
+            pin.framesForwardKinematics(m, d, pin.neutral(m))
+            if not chain:
+                o, R = d.oMf[self.tcp_frame].translation.copy(), 0.0
+            else:
+                o = d.oMi[chain[0]].translation.copy()
+                R = sum(float(np.linalg.norm(m.jointPlacements[b].translation)) for b in chain[1:])
+                R += float(np.linalg.norm(m.frames[self.tcp_frame].placement.translation))
+                for j in chain:
+                    if m.joints[j].shortname().startswith("JointModelP"):  # PX/PY/PZ, PrismaticUnaligned
+                        idx = m.joints[j].idx_q
+                        lo, hi = m.lowerPositionLimit[idx], m.upperPositionLimit[idx]
+                        R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf
+            self._reach = (o, R)
+        return self._reach[0].copy(), self._reach[1]
+
+    # ------------------------------------------------------------------------------------------
+    # dynamics
+    def rnea(self, q, dq, ddq, f_ext=None) -> np.ndarray:
+        """Link-side inverse dynamics of one sample (no motor inertia, no friction); ``f_ext``: pinocchio
+        joint-frame forces (see :meth:`tcp_wrench_forces`)."""
+        if self._link_model is None:  # a copy without armature: link-side RNEA in one pinocchio call
+            self._link_model = pin.Model(self.model)
+            self._link_model.armature = np.zeros(self.model.nv)
+            self._link_data = self._link_model.createData()
+        m, d = self._link_model, self._link_data
+        if f_ext is None:
+            return pin.rnea(m, d, self._q(q), np.asarray(dq, dtype=float), np.asarray(ddq, dtype=float))
+        return pin.rnea(m, d, self._q(q), np.asarray(dq, dtype=float), np.asarray(ddq, dtype=float), f_ext)
+
+    def gravity_torque(self, q) -> np.ndarray:
+        return pin.computeGeneralizedGravity(self.model, self.data, self._q(q)).copy()
+
+    def tcp_wrench_forces(self, q, wrench) -> "pin.StdVec_Force":
+        """A world wrench ``[f; τ]`` acting at the TCP as pinocchio joint-frame external forces for RNEA
+        (which subtracts them: the joints resist the push, τ gains −Jᵀw)."""
+        m, d = self.model, self.data
+        pin.framesForwardKinematics(m, d, self._q(q))
+        jid = m.frames[self.tcp_frame].parentJoint
+        oMi = d.oMi[jid]
+        w = np.asarray(wrench, dtype=float)
+        f = w[:3]
+        # the force acts at the TCP point: about the joint origin it adds the moment (p_tcp − p_joint) × f;
+        # both are then expressed in the joint frame, as pinocchio's external forces are
+        moment = w[3:] + np.cross(d.oMf[self.tcp_frame].translation - oMi.translation, f)
+        fext = pin.StdVec_Force()
+        for _ in range(m.njoints):
+            fext.append(pin.Force.Zero())
+        fext[jid] = pin.Force(oMi.rotation.T @ f, oMi.rotation.T @ moment)
+        return fext
+
+    def link_torques(self, Q, DQ, DDQ, fext=None) -> np.ndarray:
+        """Link-side torques (RNEA without motor inertia and friction) at every sample: arrays (N, dof) →
+        (N, dof). ``fext``: None or (N, 6) world wrenches ``[f; τ]`` applied at the TCP (zero rows: none)."""
+        Q, DQ, DDQ = (np.asarray(x, dtype=float).reshape(-1, self.dof) for x in (Q, DQ, DDQ))
+        out = np.empty_like(Q)
+        for k in range(len(Q)):
+            f = None if fext is None or not np.any(fext[k]) else self.tcp_wrench_forces(Q[k], fext[k])
+            out[k] = self.rnea(Q[k], DQ[k], DDQ[k], f)
+        return out
+
+    def friction_torques(self, DQ) -> np.ndarray:
+        """f_v·q̇ + f_c·σ(q̇) (σ: :func:`smooth_sign`), per sample."""
+        DQ = np.asarray(DQ, dtype=float)
+        return self.friction_viscous * DQ + self.friction_coulomb * smooth_sign(DQ)
+
+    def drivetrain_torques(self, Q, DQ, DDQ, fext=None, link_torques: Optional[np.ndarray] = None) -> np.ndarray:
+        """Drivetrain (motor-side) torques, what peakTorque limits: τ = RNEA + k²·I_m·q̈ + f_v·q̇ + f_c·σ(q̇)
+        at every sample, arrays (N, dof) → (N, dof). ``fext`` as in :meth:`link_torques`; pass
+        ``link_torques`` when they are already computed for the same samples and wrenches."""
+        tau_link = self.link_torques(Q, DQ, DDQ, fext) if link_torques is None else link_torques
+        DDQ = np.asarray(DDQ, dtype=float).reshape(tau_link.shape)
+        return tau_link + self.model.armature * DDQ + self.friction_torques(np.reshape(DQ, tau_link.shape))
+
+    def mass_matrix(self, q) -> np.ndarray:
+        """Joint-space inertia incl. reflected motor inertia (armature)."""
+        M = pin.crba(self.model, self.data, self._q(q))
+        return np.triu(M) + np.triu(M, 1).T
+
+    def forward_dynamics(self, q, dq, tau) -> np.ndarray:
+        """q̈ from drivetrain torque (inverse of :meth:`drivetrain_torques`)."""
+        dq = np.asarray(dq, float)
+        tau_link = np.asarray(tau, float) - self.friction_torques(dq)
+        return pin.aba(self.model, self.data, self._q(q), dq, tau_link).copy()
+
+    # ------------------------------------------------------------------------------------------
+    # collision
+    @property
+    def n_collision_geometries(self) -> int:
+        return len(self._geom_body)
+
+    @property
+    def n_self_collision_pairs(self) -> int:
+        return self._n_self_pairs
+
+    def _update_geometry(self, q) -> None:
+        pin.updateGeometryPlacements(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+
+    def _check_pairs(self, start: int, stop: int, first: bool = True) -> List[int]:
+        hits = []
+        for k in range(start, stop):
+            if pin.computeCollision(self.geom_model, self.geom_data, k):
+                hits.append(k)
+                if first:
+                    break
+        return hits
+
+    def in_self_collision(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(0, self._n_self_pairs))
+
+    def in_collision(self, q) -> bool:
+        """Self-collision or contact with an obstacle (within the safety margin)."""
+        return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q), True))
+
+    def collides_with_obstacles(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(self._n_self_pairs, len(self.geom_model.collisionPairs)))
+
+    def colliding_pairs(self, q) -> List[Tuple[str, str]]:
+        self._update_geometry(q)
+        hits = self._check_pairs(0, len(self.geom_model.collisionPairs), first=False)
+        objs = self.geom_model.geometryObjects
+        out = []
+        for k in hits:
+            cp = self.geom_model.collisionPairs[k]
+            out.append((objs[cp.first].name, objs[cp.second].name))
+        return out
+
+    def min_distances(self, q) -> Tuple[float, float]:
+        """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
+        pin.computeDistances(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+        d = [r.min_distance for r in self.geom_data.distanceResults]
+        s = min(d[: self._n_self_pairs], default=math.inf)
+        o = min(d[self._n_self_pairs:], default=math.inf)
+        return float(s), float(o)
+
+    # ------------------------------------------------------------------------------------------
+    def joint_limits(self) -> Dict[str, list]:
+        return {"lower": self.q_lower.tolist(), "upper": self.q_upper.tolist(), "velocity": self.dq_max.tolist(),
+                "acceleration": self.ddq_max.tolist(), "torque": self.tau_max.tolist()}
+
+    def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
+        lo = np.where(np.isfinite(self.q_lower), self.q_lower, -math.pi)
+        hi = np.where(np.isfinite(self.q_upper), self.q_upper, math.pi)
+        return rng.uniform(lo, hi)
+
+    def summary(self, q=None) -> dict:
+        q = np.zeros(self.dof) if q is None else self._q(q)
+        return {
+            "modules": list(self.assembly.module_ids),
+            "dof": self.dof,
+            "mass": self.mass,
+            "q": q.tolist(),
+            "tcp_pose": self.fk(q).tolist(),
+            "base_pose": self.base_pose.tolist(),
+            "gravity_torque": self.gravity_torque(q).tolist(),
+            "joint_limits": self.joint_limits(),
+            "joint_names": [j.name for j in self.joint_infos],
+            "n_collision_geometries": self.n_collision_geometries,
+            "n_self_collision_pairs": self.n_self_collision_pairs,
+            "self_collision": self.in_self_collision(q),
+        }
