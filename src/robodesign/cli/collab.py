@@ -127,7 +127,7 @@ def optimize_command(args, ctask: CollabTask) -> int:
     task (the budget applies per robot), then the best designs are combined by prioritized planning
     (:mod:`robodesign.collab.optimize`)."""
     from robodesign.cli.args import parse_options
-    from robodesign.cli.commands import optimize_executor, optimize_workers, search_rules
+    from robodesign.cli.workers import optimize_executor, optimize_workers, search_rules
     from robodesign.collab.optimize import optimize_collab
     from robodesign.design.optimize import Budget
     from robodesign.formats.module_io import load_module_set
