@@ -2,12 +2,13 @@
 from __future__ import annotations
 
 import json
-import sys
 import time
 from typing import List
 
 import numpy as np
 
+from robodesign.cli.journal import EXIT_INTERRUPTED, Journal, resume_command, write_best, write_interrupted
+from robodesign.cli.progress import Progress, progress_mode
 from robodesign.cli.workers import (  # noqa: F401 - re-exported: their home before cli.workers
     POOL_MIN_EVALUATIONS,
     optimize_executor,
@@ -94,8 +95,9 @@ def cmd_solve(args) -> int:
                           "goals_missed": res.goals_missed,
                           "solution": str(out) if out else None, "seconds": elapsed}))
     else:
-        for s in res.stages:
-            print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {s.message[:150]}")
+        for s in res.stages if not getattr(args, "quiet", False) else ():
+            msg = s.message if getattr(args, "verbose", False) else s.message[:150]
+            print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {msg}")
         how = ("time-optimal (TOPP-RA)" if args.timing == "toppra" else "time-optimal (ruckig)") \
             if mode == "time-optimal" else f"optimized for {args.cost} (CasADi/ipopt)"
         chosen = " (--trajectory auto, from the cost)" if args.trajectory == "auto" and not args.optimize_trajectory \
@@ -167,21 +169,28 @@ def cmd_optimize(args) -> int:
                          seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
     workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)
-    if args.workers is None and short_budget(budget) and not args.json:
+    if args.workers is None and short_budget(budget) and not (args.json or args.quiet):
         print(f"evaluating in this process: {budget.evaluations} evaluations are fewer than a worker pool's "
               f"start-up pays for ({POOL_MIN_EVALUATIONS}); --workers N uses N processes")
+    journal = Journal(args, problem, budget)  # every evaluation committed: Ctrl-C loses nothing (--resume)
     executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
-    progress = _Progress(budget, quiet=args.json)
-    walls: List[float] = []  # wall time of each evaluation since the study started
+    progress = Progress(journal.budget, progress_mode(args))
+    walls: List[float] = []  # wall time of each evaluation (a resumed search: since the search began)
 
     def on_evaluation(i, e, best):
-        walls.append(time.perf_counter() - progress.t0)
+        walls.append(journal.storage.wall())
         progress(i, e, best)
+    res = None
     try:
-        res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation).run()
+        res = Study(opt, executor, journal.budget, batch_size=args.batch_size, storage=journal.storage,
+                    on_evaluation=on_evaluation, stop_on_interrupt=True).run()
+        if res.stopped == "interrupted":  # the best so far is saved before anything else can be interrupted
+            progress.close()
+            write_interrupted(args, res, journal)
     finally:
         progress.close()
-        close_executor()
+        close_executor(now=res is None or res.stopped == "interrupted")
+        journal.close(keep=res is None or res.stopped == "interrupted")
     from robodesign.experiment.suites import record_of_run
     run = record_of_run("", args.task, args.optimizer, args.seed, [
         {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
@@ -189,9 +198,7 @@ def cmd_optimize(args) -> int:
     best = res.best
     out = None
     if best is not None and best.feasible and best.solution is not None:
-        from robodesign.formats.solution import parse_solution
-        sol = parse_solution(best.solution, "best")
-        out = sol.write(args.out or "best_solution.json")
+        out = write_best(best, args.out)
     summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
                "workers": workers, "batch_size": args.batch_size,
                "messages": executor.pool.messages if workers > 1 else 0,
@@ -201,7 +208,9 @@ def cmd_optimize(args) -> int:
                                                   "cost": best.cost, "stage": best.stage, "message": best.message,
                                                   "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
-               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
+               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts,
+               "resumed_evaluations": journal.stored,
+               "resume": resume_command(getattr(args, "argv", None)) if res.stopped == "interrupted" else None}
     if args.json:
         print(json.dumps(summary))
     else:
@@ -221,34 +230,6 @@ def cmd_optimize(args) -> int:
                 from robodesign.experiment.suites import stage_counts_text
                 print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
                       f"{stage_counts_text(run.stage_counts)})")
+    if res.stopped == "interrupted":
+        return EXIT_INTERRUPTED
     return 0 if best is not None and best.feasible else 1
-
-
-class _Progress:
-    """A rich progress bar on a terminal, one line per evaluation otherwise."""
-
-    def __init__(self, budget, quiet=False):
-        self.quiet = quiet
-        self.t0 = time.perf_counter()
-        self.bar = None
-        if not quiet and sys.stderr.isatty():
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed} evals"),
-                                TimeElapsedColumn(), transient=True)
-            self.bar.start()
-            self.task = self.bar.add_task("optimizing", total=budget.evaluations)
-
-    def __call__(self, i, ev, best):
-        if self.quiet:
-            return
-        b = f"{best.cost:.4g}" if best is not None and best.feasible else "—"
-        if self.bar is not None:
-            self.bar.update(self.task, advance=1, description=f"best {b}")
-        else:
-            state = f"cost {ev.cost:.4g}" if ev.feasible else f"failed at {ev.stage}"
-            print(f"[{i + 1:4d}] {time.perf_counter() - self.t0:7.1f}s  {ev.candidate.key():40s} {state:24s} best {b}",
-                  file=sys.stderr, flush=True)
-
-    def close(self):
-        if self.bar is not None:
-            self.bar.stop()

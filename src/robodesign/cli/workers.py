@@ -53,11 +53,12 @@ def short_budget(budget) -> bool:
 
 def optimize_executor(spec, workers: int, chunk_size: Optional[int] = None):
     """The executor of ``robodesign optimize`` and a function that closes it: in this process for one worker,
-    else the experiments' process pool (results are the same for any number of workers)."""
+    else the experiments' process pool (results are the same for any number of workers). The close function
+    takes ``now=True`` after an interrupt (the workers are terminated rather than waited for)."""
     from robodesign.design.evaluator import Evaluator
     from robodesign.design.optimize import SerialExecutor
     if workers == 1:
-        return SerialExecutor(Evaluator(spec)), lambda: None
+        return SerialExecutor(Evaluator(spec)), lambda now=False: None
     from robodesign.experiment.executors import ProcessPool
     pool = ProcessPool({"optimize": spec}, workers, chunk_size)
     return pool.bind("optimize"), pool.close
