@@ -5,8 +5,6 @@ import json
 import time
 from typing import List
 
-import numpy as np
-
 from robodesign.cli.journal import EXIT_INTERRUPTED, Journal, resume_command, write_best, write_interrupted
 from robodesign.cli.progress import Progress, progress_mode
 from robodesign.cli.workers import (  # noqa: F401 - re-exported: their home before cli.workers
@@ -17,6 +15,7 @@ from robodesign.cli.workers import (  # noqa: F401 - re-exported: their home bef
     short_budget,
 )
 from robodesign.core.errors import InputError
+from robodesign.experiment.report import base_pose_text
 
 
 def _base_pose(text, task):
@@ -220,7 +219,7 @@ def cmd_optimize(args) -> int:
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
-            print(f"base pose    xyz {np.round(bp[:3, 3], 4).tolist()}  yaw {np.degrees(np.arctan2(bp[1, 0], bp[0, 0])):.1f}°")
+            print(f"base pose    {base_pose_text(bp)}")
             print(f"cost         {args.cost} = {best.cost:.6g}")
             print(f"solution     {out} (checked valid)")
         else:

@@ -44,7 +44,7 @@ def default_config_path() -> Path:
 
 def cmd_run(args) -> int:
     from robodesign.experiment.config import load_experiment
-    from robodesign.experiment.report import base_pose_text
+    from robodesign.experiment.report import base_pose_text, search_offsets_text
     from robodesign.experiment.runner import default_out_dir, load_resume, make_progress, run_experiment
 
     if args.workers is not None and args.workers < 1:
@@ -103,7 +103,7 @@ def cmd_run(args) -> int:
         print(f"best robot for {task}: {b['optimizer']} seed {b['run_seed']}, cost {sol.get('costFunction', '')} = "
               f"{b['cost']:.6g}")
         print(f"  module order  {','.join(json.loads(b['module_order']))}")
-        print(f"  base pose     {base_pose_text(bp)}" + (f"  (search parameters {[round(x, 4) for x in params]})"
+        print(f"  base pose     {base_pose_text(bp)}" + (f"  (search offsets {search_offsets_text(params)})"
                                                        if params else ""))
     if in_suite:
         print_suites(outcome.out_dir)
