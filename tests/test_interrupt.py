@@ -58,3 +58,48 @@ def test_interrupted_optimize_keeps_its_best_checked_design(tmp_path, workers, h
     r = subprocess.run(RD + ["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "5evals", "--out", str(out)],
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "--resume" in r.stderr and "Traceback" not in r.stderr
+
+
+RUN_CFG = """
+name: interrupted
+modules: ../shared/cobra/modules/IMPROV
+tasks: [../shared/cobra/tasks/simple/PTP_3.json]
+cost: cyc
+optimizers: [random]
+budget: 2000evals
+seeds: [0]
+batch_size: 8
+executor: process
+"""
+
+
+@pytest.mark.slow
+def test_interrupted_run_prints_its_resume_command(tmp_path):
+    """Ctrl-C on `robodesign run` with 2 worker processes: exit 130, no traceback from the driver or a worker,
+    the exact resume command, the session recorded as interrupted."""
+    import sqlite3
+    import time
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(RUN_CFG.replace("../shared/cobra", str(IMPROV.parents[1])))
+    out = tmp_path / "res"
+    p = subprocess.Popen(RD + ["run", str(cfg), "--out", str(out), "--workers", "2", "--no-report"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+    def stored() -> int:
+        try:
+            with sqlite3.connect(out / "evaluations.sqlite") as c:
+                return c.execute("SELECT COUNT(*) FROM evaluations").fetchone()[0]
+        except sqlite3.Error:
+            return 0
+    deadline = time.time() + 600
+    while p.poll() is None and stored() < 5 and time.time() < deadline:
+        time.sleep(0.2)
+    assert p.poll() is None, p.communicate()
+    os.killpg(p.pid, signal.SIGINT)
+    stdout, stderr = p.communicate(timeout=300)
+    assert p.returncode == 130, stdout + stderr
+    assert "Traceback" not in stdout + stderr and "KeyboardInterrupt" not in stdout + stderr, stdout + stderr
+    assert f"continue with: robodesign run --resume {out}" in stderr
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["sessions"][-1]["status"] == "interrupted: KeyboardInterrupt"
+    assert stored() >= 5  # kept for the resume (which tests/test_experiment.py checks to be exact)
