@@ -11,6 +11,12 @@ import pytest
 from conftest import IMPROV, TASKS
 
 RD = [sys.executable, "-m", "robodesign.cli"]
+
+
+def _sigint_default():
+    """In the child: Ctrl-C as in a terminal, even when pytest itself runs with SIGINT ignored (a background
+    job of a non-interactive shell), which the child would inherit."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 PTP3 = TASKS / "simple" / "PTP_3.json"
 
 
@@ -20,7 +26,7 @@ def optimize_until_feasible(tmp_path, workers: int, extra=()):
     cmd = RD + ["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "3000evals", "--workers", str(workers),
                 "--out", str(out), "--verbose", *extra]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
-                         env=dict(os.environ, PYTHONUNBUFFERED="1"))
+                         preexec_fn=_sigint_default, env=dict(os.environ, PYTHONUNBUFFERED="1"))
     seen = []
     for line in p.stderr:
         seen.append(line)
@@ -83,7 +89,8 @@ def test_interrupted_run_prints_its_resume_command(tmp_path):
     cfg.write_text(RUN_CFG.replace("../shared/cobra", str(IMPROV.parents[1])))
     out = tmp_path / "res"
     p = subprocess.Popen(RD + ["run", str(cfg), "--out", str(out), "--workers", "2", "--no-report"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                         preexec_fn=_sigint_default)
 
     def stored() -> int:
         try:

@@ -10,6 +10,12 @@ import pytest
 from conftest import IMPROV, TASKS
 
 RD = [sys.executable, "-m", "robodesign.cli"]
+
+
+def _sigint_default():
+    """In the child: Ctrl-C as in a terminal, even when pytest itself runs with SIGINT ignored (a background
+    job of a non-interactive shell), which the child would inherit."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 PTP3 = TASKS / "simple" / "PTP_3.json"
 ARGS = ["optimize", str(PTP3), "--modules", str(IMPROV), "--budget", "48evals", "--batch-size", "8", "--seed", "3",
         "--workers", "1"]
@@ -29,7 +35,8 @@ def test_resume_reproduces_the_uninterrupted_search(tmp_path):
 
     out = tmp_path / "int.json"
     p = subprocess.Popen(RD + ARGS + ["--out", str(out), "--verbose"], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"))
+                         stderr=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONUNBUFFERED="1"),
+                         preexec_fn=_sigint_default)
     n = 0
     for line in p.stderr:
         n += line.startswith("[")

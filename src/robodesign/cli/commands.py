@@ -219,7 +219,7 @@ def cmd_optimize(args) -> int:
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
-            print(f"base pose    {base_pose_text(bp)}")
+            print(f"base pose    {base_pose_text(bp.tolist())}")
             print(f"cost         {args.cost} = {best.cost:.6g}")
             print(f"solution     {out} (checked valid)")
         else:

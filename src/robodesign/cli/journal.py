@@ -99,8 +99,13 @@ class Journal:
                              file=str(self.path)) from None
 
     def close(self, keep: bool) -> None:
-        """Close the journal; ``keep=False`` (the search ended) deletes it."""
+        """Close the journal; ``keep=False`` (the search ended) deletes it, and so does ``keep=True`` when it
+        holds no evaluation (a search stopped before its first result has nothing to resume)."""
         if getattr(self, "db", None) is not None:
+            try:
+                keep = keep and self.db.count(RUN_ID) > 0
+            except Exception:  # noqa: BLE001 - unreadable: keep it for the user to look at
+                pass
             self.db.close()
             self.db = None
         if not keep:

@@ -331,7 +331,8 @@ def best_solution_path(b: dict) -> str:
 
 
 def base_pose_text(bp) -> str:
-    if not bp:
+    """A base pose (4×4, nested lists or an array) as ``xyz = (x, y, z) m, yaw = ψ°``; "nominal" for none."""
+    if bp is None or np.size(bp) == 0:
         return "nominal"
     T = np.asarray(bp, dtype=float)
     if T.shape != (4, 4):
