@@ -61,6 +61,10 @@ class Journal:
         if self.resumed and not exists:
             raise InputError("no journal to resume (it is written beside --out while `optimize` runs and deleted "
                              "when the search ends; give the --out of the interrupted command)", file=str(self.path))
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)  # where --out goes (written at the end)
+        except OSError as e:
+            raise InputError(f"cannot create the folder of --out: {e.strerror}", file=str(self.path.parent)) from None
         self._lock()
         self.db = ExperimentDB(self.path, checkpoint_seconds=1.0)
         try:
