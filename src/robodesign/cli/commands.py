@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 import time
 from typing import List
 
@@ -164,8 +165,10 @@ def cmd_optimize(args) -> int:
     problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
                             base_search=not args.fixed_base)
     print_input_warnings(problem.task)
-    spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
-                         seed=args.seed)
+    if not (args.plan_time > 0 and math.isfinite(args.plan_time)):
+        raise InputError("--plan-time must be a positive number of seconds")
+    spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory,
+                                                      plan_time=args.plan_time), seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
     workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)
     if args.workers is None and short_budget(budget) and not (args.json or args.quiet):

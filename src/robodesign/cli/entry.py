@@ -295,6 +295,9 @@ def build_parser() -> argparse.ArgumentParser:
     op.add_argument("--max-links", type=int, help="max passive link modules between two joints (default 1)")
     op.add_argument("--fixed-base", action="store_true", help="keep the base at its nominal pose")
     op.add_argument("--planner", default="rrtconnect", help="OMPL planner of every evaluation")
+    op.add_argument("--plan-time", type=float, default=1.0,
+                    help="seconds per planning query of every evaluation (a wall-clock limit: on a busy machine a "
+                         "longer one keeps results independent of the load)")
     op.add_argument("--optimize-trajectory", action="store_true",
                     help="refine every move of every evaluated design with CasADi/ipopt for the cost (slow)")
     op.add_argument("--json", action="store_true", help="print the summary (best design, cost, evaluations) "

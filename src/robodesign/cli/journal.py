@@ -25,7 +25,7 @@ RUN_ID = "optimize"
 DEFAULT_OUT = "best_solution.json"
 #: the settings a resumed search must share with the interrupted one (the budget may grow)
 SETTINGS = ("task", "modules", "optimizer", "cost", "seed", "batch_size", "opt", "dof", "max_links", "fixed_base",
-            "planner", "optimize_trajectory")
+            "planner", "plan_time", "optimize_trajectory")
 
 
 def journal_path(out: Optional[str]) -> Path:
