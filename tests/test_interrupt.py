@@ -110,3 +110,30 @@ def test_interrupted_run_prints_its_resume_command(tmp_path):
     meta = json.loads((out / "meta.json").read_text())
     assert meta["sessions"][-1]["status"] == "interrupted: KeyboardInterrupt"
     assert stored() >= 5  # kept for the resume (which tests/test_experiment.py checks to be exact)
+
+
+@pytest.mark.slow
+def test_interrupted_serve_shuts_down_quietly(tmp_path):
+    """Ctrl-C on `robodesign serve` (its checker processes in the same process group): a clean shutdown,
+    no traceback from the server or a checker process."""
+    import socket
+    import time
+    import urllib.request
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    p = subprocess.Popen(RD + ["serve", "--port", str(port), "--data", str(tmp_path / "data"), "--workers", "1",
+                               "--no-builtin"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                         start_new_session=True, preexec_fn=_sigint_default)
+    deadline = time.time() + 300
+    while time.time() < deadline and p.poll() is None:
+        try:
+            urllib.request.urlopen(f"http://127.0.0.1:{port}/api/queue", timeout=5).read()
+            break
+        except OSError:
+            time.sleep(0.5)
+    assert p.poll() is None, p.communicate()[0]
+    os.killpg(p.pid, signal.SIGINT)
+    out = p.communicate(timeout=120)[0]
+    assert p.returncode == 0, out
+    assert "Application shutdown complete" in out and "Traceback" not in out and "KeyboardInterrupt" not in out, out
