@@ -127,18 +127,20 @@ def optimize_command(args, ctask: CollabTask) -> int:
     task (the budget applies per robot), then the best designs are combined by prioritized planning
     (:mod:`robodesign.collab.optimize`)."""
     from robodesign.cli.args import parse_options
-    from robodesign.cli.commands import optimize_executor, optimize_workers, search_rules
+    from robodesign.cli.workers import optimize_executor, optimize_workers, search_rules
     from robodesign.collab.optimize import optimize_collab
     from robodesign.design.optimize import Budget
     from robodesign.formats.module_io import load_module_set
     if args.optimize_trajectory:
         raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
+    if getattr(args, "resume", False):
+        raise InputError("--resume is not supported for a collaborative task yet (its search is not journaled)")
     budget = Budget.parse(args.budget)
     ms = load_module_set(args.modules)
     workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)  # budget: per robot
 
     def on_robot(rid, res):
-        if not args.json:
+        if not (args.json or getattr(args, "quiet", False)):
             feas = sum(e.feasible for e in res.history)
             print(f"robot {rid}: {len(res.history)} evaluations in {res.seconds:.1f} s ({workers} worker(s)), "
                   f"{feas} feasible alone")

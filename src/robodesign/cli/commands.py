@@ -2,13 +2,21 @@
 from __future__ import annotations
 
 import json
-import sys
+import math
 import time
-from typing import Dict, List, Optional
+from typing import List
 
-import numpy as np
-
+from robodesign.cli.journal import EXIT_INTERRUPTED, Journal, resume_command, write_best, write_interrupted
+from robodesign.cli.progress import Progress, progress_mode
+from robodesign.cli.workers import (  # noqa: F401 - re-exported: their home before cli.workers
+    POOL_MIN_EVALUATIONS,
+    optimize_executor,
+    optimize_workers,
+    search_rules,
+    short_budget,
+)
 from robodesign.core.errors import InputError
+from robodesign.experiment.report import base_pose_text
 
 
 def _base_pose(text, task):
@@ -87,8 +95,9 @@ def cmd_solve(args) -> int:
                           "goals_missed": res.goals_missed,
                           "solution": str(out) if out else None, "seconds": elapsed}))
     else:
-        for s in res.stages:
-            print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {s.message[:150]}")
+        for s in res.stages if not getattr(args, "quiet", False) else ():
+            msg = s.message if getattr(args, "verbose", False) else s.message[:150]
+            print(f"  {s.name:14s} {'ok ' if s.passed else 'FAIL'} {s.seconds * 1e3:8.1f} ms  {msg}")
         how = ("time-optimal (TOPP-RA)" if args.timing == "toppra" else "time-optimal (ruckig)") \
             if mode == "time-optimal" else f"optimized for {args.cost} (CasADi/ipopt)"
         chosen = " (--trajectory auto, from the cost)" if args.trajectory == "auto" and not args.optimize_trajectory \
@@ -141,17 +150,6 @@ def cmd_optimizers(args) -> int:
     return 0
 
 
-def search_rules(args) -> Dict[str, int]:
-    """The search-space rules of ``--dof`` and ``--max-links``."""
-    rules = {}
-    if args.dof:
-        lo, _, hi = args.dof.partition("-")
-        rules["min_dof"], rules["max_dof"] = int(lo), int(hi or lo)
-    if args.max_links is not None:
-        rules["max_links_between"] = args.max_links
-    return rules
-
-
 def cmd_optimize(args) -> int:
     from robodesign.cli.args import parse_options, print_input_warnings
     from robodesign.cli.collab import load_collab_task_file, optimize_command
@@ -167,25 +165,34 @@ def cmd_optimize(args) -> int:
     problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
                             base_search=not args.fixed_base)
     print_input_warnings(problem.task)
-    spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory),
-                         seed=args.seed)
+    if not (args.plan_time > 0 and math.isfinite(args.plan_time)):
+        raise InputError("--plan-time must be a positive number of seconds")
+    spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory,
+                                                      plan_time=args.plan_time), seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))
     workers = optimize_workers(args.workers, args.batch_size, args.chunk_size, budget)
-    if args.workers is None and short_budget(budget) and not args.json:
+    if args.workers is None and short_budget(budget) and not (args.json or args.quiet):
         print(f"evaluating in this process: {budget.evaluations} evaluations are fewer than a worker pool's "
               f"start-up pays for ({POOL_MIN_EVALUATIONS}); --workers N uses N processes")
+    journal = Journal(args, problem, budget)  # every evaluation committed: Ctrl-C loses nothing (--resume)
     executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
-    progress = _Progress(budget, quiet=args.json)
-    walls: List[float] = []  # wall time of each evaluation since the study started
+    progress = Progress(journal.budget, progress_mode(args))
+    walls: List[float] = []  # wall time of each evaluation (a resumed search: since the search began)
 
     def on_evaluation(i, e, best):
-        walls.append(time.perf_counter() - progress.t0)
+        walls.append(journal.storage.wall())
         progress(i, e, best)
+    res = None
     try:
-        res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation).run()
+        res = Study(opt, executor, journal.budget, batch_size=args.batch_size, storage=journal.storage,
+                    on_evaluation=on_evaluation, stop_on_interrupt=True).run()
+        if res.stopped == "interrupted":  # the best so far is saved before anything else can be interrupted
+            progress.close()
+            write_interrupted(args, res, journal)
     finally:
         progress.close()
-        close_executor()
+        close_executor(now=res is None or res.stopped == "interrupted")
+        journal.close(keep=res is None or res.stopped == "interrupted")
     from robodesign.experiment.suites import record_of_run
     run = record_of_run("", args.task, args.optimizer, args.seed, [
         {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
@@ -193,9 +200,7 @@ def cmd_optimize(args) -> int:
     best = res.best
     out = None
     if best is not None and best.feasible and best.solution is not None:
-        from robodesign.formats.solution import parse_solution
-        sol = parse_solution(best.solution, "best")
-        out = sol.write(args.out or "best_solution.json")
+        out = write_best(best, args.out)
     summary = {"optimizer": args.optimizer, "evaluations": len(res.history), "seconds": res.seconds,
                "workers": workers, "batch_size": args.batch_size,
                "messages": executor.pool.messages if workers > 1 else 0,
@@ -205,7 +210,9 @@ def cmd_optimize(args) -> int:
                                                   "cost": best.cost, "stage": best.stage, "message": best.message,
                                                   "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
-               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
+               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts,
+               "resumed_evaluations": journal.stored,
+               "resume": resume_command(getattr(args, "argv", None)) if res.stopped == "interrupted" else None}
     if args.json:
         print(json.dumps(summary))
     else:
@@ -215,7 +222,7 @@ def cmd_optimize(args) -> int:
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
-            print(f"base pose    xyz {np.round(bp[:3, 3], 4).tolist()}  yaw {np.degrees(np.arctan2(bp[1, 0], bp[0, 0])):.1f}°")
+            print(f"base pose    {base_pose_text(bp.tolist())}")
             print(f"cost         {args.cost} = {best.cost:.6g}")
             print(f"solution     {out} (checked valid)")
         else:
@@ -225,80 +232,6 @@ def cmd_optimize(args) -> int:
                 from robodesign.experiment.suites import stage_counts_text
                 print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
                       f"{stage_counts_text(run.stage_counts)})")
+    if res.stopped == "interrupted":
+        return EXIT_INTERRUPTED
     return 0 if best is not None and best.feasible else 1
-
-
-#: without ``--workers``, a budget of fewer evaluations than this (and no time limit) runs in this process:
-#: a worker pool's start-up (~0.7 s: spawn, import, load, warm up) costs more than it saves there (random
-#: search on PTP_3/IMPROV, the whole command: 50 evaluations 2.3 s in the process against 2.8 s with 2
-#: workers, 100: 2.7 / 3.3 s, 200: 4.4 / 4.2 s, 400: 5.4 / 4.7 s; docs/benchmarks.md)
-POOL_MIN_EVALUATIONS = 200
-
-
-def optimize_workers(workers, batch_size: int, chunk_size: Optional[int] = None, budget=None) -> int:
-    """``--workers`` (default: every core this process may use, or 1 for an evaluations-only ``budget`` below
-    :data:`POOL_MIN_EVALUATIONS`), at most one per candidate of a batch; ``--batch-size`` and
-    ``--chunk-size`` are checked on the way."""
-    import os
-    if batch_size < 1:
-        raise InputError(f"--batch-size must be at least 1, got {batch_size}")
-    if chunk_size is not None and chunk_size < 1:
-        raise InputError(f"--chunk-size must be at least 1, got {chunk_size}")
-    if workers is None:
-        if short_budget(budget):
-            return 1
-        try:
-            workers = len(os.sched_getaffinity(0))
-        except AttributeError:
-            workers = os.cpu_count() or 1
-    elif workers < 1:
-        raise InputError(f"--workers must be at least 1, got {workers}")
-    return max(1, min(int(workers), batch_size))
-
-
-def short_budget(budget) -> bool:
-    """Whether ``budget`` (a :class:`~robodesign.design.optimize.Budget`) is too short for a worker pool to pay off."""
-    return budget is not None and budget.seconds is None and budget.evaluations is not None \
-        and budget.evaluations < POOL_MIN_EVALUATIONS
-
-
-def optimize_executor(spec, workers: int, chunk_size: Optional[int] = None):
-    """The executor of ``robodesign optimize`` and a function that closes it: in this process for one worker,
-    else the experiments' process pool (results are the same for any number of workers)."""
-    from robodesign.design.evaluator import Evaluator
-    from robodesign.design.optimize import SerialExecutor
-    if workers == 1:
-        return SerialExecutor(Evaluator(spec)), lambda: None
-    from robodesign.experiment.executors import ProcessPool
-    pool = ProcessPool({"optimize": spec}, workers, chunk_size)
-    return pool.bind("optimize"), pool.close
-
-
-class _Progress:
-    """A rich progress bar on a terminal, one line per evaluation otherwise."""
-
-    def __init__(self, budget, quiet=False):
-        self.quiet = quiet
-        self.t0 = time.perf_counter()
-        self.bar = None
-        if not quiet and sys.stderr.isatty():
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed} evals"),
-                                TimeElapsedColumn(), transient=True)
-            self.bar.start()
-            self.task = self.bar.add_task("optimizing", total=budget.evaluations)
-
-    def __call__(self, i, ev, best):
-        if self.quiet:
-            return
-        b = f"{best.cost:.4g}" if best is not None and best.feasible else "—"
-        if self.bar is not None:
-            self.bar.update(self.task, advance=1, description=f"best {b}")
-        else:
-            state = f"cost {ev.cost:.4g}" if ev.feasible else f"failed at {ev.stage}"
-            print(f"[{i + 1:4d}] {time.perf_counter() - self.t0:7.1f}s  {ev.candidate.key():40s} {state:24s} best {b}",
-                  file=sys.stderr, flush=True)
-
-    def close(self):
-        if self.bar is not None:
-            self.bar.stop()

@@ -268,6 +268,7 @@ def build_parser() -> argparse.ArgumentParser:
     so.add_argument("--out", help="write the CoBRA solution here")
     so.add_argument("--json", action="store_true", help="print {feasible, stage, cost, costs, trajectory, stages, "
                                                         "solution, seconds} as one JSON object")
+    add_verbosity_arguments(so, "one line per pipeline stage")
     so.set_defaults(func=commands.cmd_solve)
 
     op = sub.add_parser("optimize", help="search module orders (and base poses) for the best robot")
@@ -294,10 +295,17 @@ def build_parser() -> argparse.ArgumentParser:
     op.add_argument("--max-links", type=int, help="max passive link modules between two joints (default 1)")
     op.add_argument("--fixed-base", action="store_true", help="keep the base at its nominal pose")
     op.add_argument("--planner", default="rrtconnect", help="OMPL planner of every evaluation")
+    op.add_argument("--plan-time", type=float, default=1.0,
+                    help="seconds per planning query of every evaluation (a wall-clock limit: on a busy machine a "
+                         "longer one keeps results independent of the load)")
     op.add_argument("--optimize-trajectory", action="store_true",
                     help="refine every move of every evaluated design with CasADi/ipopt for the cost (slow)")
     op.add_argument("--json", action="store_true", help="print the summary (best design, cost, evaluations) "
                                                         "as one JSON object; no progress lines")
+    op.add_argument("--resume", action="store_true",
+                    help="continue the interrupted search of this command (its journal <out>.journal.sqlite beside "
+                         "--out holds every evaluation so far; the same seed and budget end with the same best)")
+    add_verbosity_arguments(op, "progress: a bar on a terminal, otherwise a summary line every 5 s")
     op.set_defaults(func=commands.cmd_optimize)
 
     ol = sub.add_parser("optimizers", help="list installed optimizer plugins")
@@ -323,7 +331,8 @@ def build_parser() -> argparse.ArgumentParser:
     sv.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
     sv.add_argument("--port", type=int, default=8000, help="port (default 8000)")
     sv.add_argument("--max-upload-mb", type=float, default=20.0, help="request size limit in MiB (default 20)")
-    sv.add_argument("--workers", type=int, default=None, help="checker threads (default: number of CPUs, 2..8)")
+    sv.add_argument("--workers", type=int, default=None, help="checker processes (threads with --check-threads; "
+                                                             "default: number of CPUs, 2..8)")
     sv.add_argument("--admin-token", help="token that registers tasks and module sets (header X-Admin-Token or "
                                           "Authorization: Bearer); default: $ROBODESIGN_ADMIN_TOKEN (preferred: "
                                           "a command line is visible to other users)")
@@ -361,6 +370,50 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def add_verbosity_arguments(p: argparse.ArgumentParser, default: str) -> None:
+    """``--quiet`` and ``--verbose`` of a long command (``default``: what it prints without either)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--quiet", "-q", action="store_true", help=f"no progress output, only the result (default: {default})")
+    g.add_argument("--verbose", "-v", action="store_true", help="more progress output (optimize: one line per "
+                                                                 "evaluation)")
+
+
+def _close_matches(word: str, choices) -> str:
+    import difflib
+    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _did_you_mean(parser: argparse.ArgumentParser, message: str, argv: List[str]) -> tuple:
+    """The parser whose usage to show and ``message`` with "did you mean" for a misspelt subcommand or
+    option (``--budjet`` → ``--budget``)."""
+    sub = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+    if sub is None:
+        return parser, message
+    if message.startswith("argument COMMAND: invalid choice:"):
+        word = message.split("'")[1] if "'" in message else ""
+        return parser, f"unknown command {word!r}{_close_matches(word, sub.choices)}; commands: " \
+                       f"{', '.join(sub.choices)}"
+    if message.startswith("unrecognized arguments:"):
+        command = next((a for a in argv if a in sub.choices), None)
+        target = sub.choices[command] if command else parser
+        options = [o for a in target._actions for o in a.option_strings if o.startswith("--")]
+        words = message.split(":", 1)[1].split()
+        hints = []
+        for w in words:
+            if w.startswith("-"):
+                hints.append(f"{w}{_close_matches(w.split('=')[0], options)}")
+            else:
+                hints.append(repr(w))
+        return target, f"unrecognized arguments: {' '.join(hints)}"
+    return parser, message
+
+
+def _raise_interrupt(signum, frame):
+    """SIGTERM ends a command as Ctrl-C does (optimize keeps its best design, run its results)."""
+    raise KeyboardInterrupt
+
+
 def _fail(code: int, line: str, as_json: bool, error: Optional[str] = None, file: Optional[str] = None,
           path: Optional[str] = None) -> int:
     """One line on stderr; with --json also {"error", "file", "path"} on stdout. Returns ``code``."""
@@ -374,13 +427,21 @@ def main(argv: Optional[List[str]] = None) -> int:
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     as_json = "--json" in argv
     debug = "--debug" in argv or os.environ.get("ROBODESIGN_DEBUG", "") not in ("", "0")
+    import signal
+    import threading
+    old_term = None
+    if threading.current_thread() is threading.main_thread():
+        old_term = signal.signal(signal.SIGTERM, _raise_interrupt)
+    parser = build_parser()
     try:
-        args = build_parser().parse_args(argv)
+        args = parser.parse_args(argv)
+        args.argv = argv  # the command line as given (optimize prints its resume command)
         return int(args.func(args) or 0)
     except _UsageError as e:
-        e.parser.print_usage(sys.stderr)
-        command = e.parser.prog.removeprefix("robodesign").strip()
-        return _fail(EXIT_BAD_INPUT, f"{command}: {e}" if command else str(e), as_json)
+        target, message = (e.parser, str(e)) if e.parser is not parser else _did_you_mean(parser, str(e), argv)
+        target.print_usage(sys.stderr)
+        command = target.prog.removeprefix("robodesign").strip()
+        return _fail(EXIT_BAD_INPUT, f"{command}: {message}" if command else message, as_json)
     except InputError as e:
         return _fail(EXIT_BAD_INPUT, str(e), as_json, e.reason, e.file, e.json_path)
     except RobodesignError as e:
@@ -395,6 +456,9 @@ def main(argv: Optional[List[str]] = None) -> int:
         what = what if len(what) <= 200 else what[:197] + "..."
         hint = "with the output of --debug" if debug else "(run again with --debug for the traceback)"
         return _fail(EXIT_INTERNAL, f"{what}. This is a bug in robodesign, please report it {hint}", as_json)
+    finally:
+        if old_term is not None:
+            signal.signal(signal.SIGTERM, old_term)
 
 
 if __name__ == "__main__":

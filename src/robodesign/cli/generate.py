@@ -17,6 +17,9 @@ def add_generate_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="folder seed (default 0)")
     p.add_argument("--from", dest="from_task", metavar="TASK",
                    help="regenerate this generated task file from the provenance in its header (into --out)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors (default: one line per task)")
+    g.add_argument("--verbose", "-v", action="store_true", help="also print the family options used")
     seen = {}
     for fam in families().values():
         for o in fam.options:
@@ -53,7 +56,11 @@ def cmd_generate(args) -> int:
     if not args.out:
         raise InputError("--out is required")
     get_family(args.family)
+    if args.verbose:
+        print(f"{args.family}: seed {args.seed}, {args.count} task(s), options "
+              f"{', '.join(f'{k}={v}' for k, v in given.items()) or '(defaults)'}", flush=True)
     files = generate(args.family, Path(args.out), args.count, args.seed, given,
-                     progress=lambda p: print(p, flush=True))
-    print(f"robodesign: wrote {len(files)} {args.family} task(s) to {args.out}", file=sys.stderr)
+                     progress=None if args.quiet else (lambda p: print(p, flush=True)))
+    if not args.quiet:
+        print(f"robodesign: wrote {len(files)} {args.family} task(s) to {args.out}", file=sys.stderr)
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from robodesign.core.errors import InputError
@@ -27,8 +28,12 @@ def add_run_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--chunk-size", type=int, metavar="N",
                      help="candidates per message to a worker process or Ray actor (default: the config's "
                           "executor.chunk_size, else automatic from the batch size and --workers)")
-    run.add_argument("--progress", choices=("auto", "bar", "lines", "none"), default="auto",
-                     help="progress display (default: a bar on a terminal, one line per evaluation otherwise)")
+    run.add_argument("--progress", choices=("auto", "bar", "lines", "summary", "none"), default="auto",
+                     help="progress display: auto (default) is a bar on a terminal, otherwise a summary line every "
+                          "5 s at most; lines: one line per evaluation")
+    g = run.add_mutually_exclusive_group()
+    g.add_argument("--quiet", "-q", action="store_true", help="the same as --progress none")
+    g.add_argument("--verbose", "-v", action="store_true", help="the same as --progress lines")
     run.add_argument("--no-report", action="store_true", help="do not write the report (CSV, plots, HTML)")
 
 
@@ -39,7 +44,7 @@ def default_config_path() -> Path:
 
 def cmd_run(args) -> int:
     from robodesign.experiment.config import load_experiment
-    from robodesign.experiment.report import base_pose_text
+    from robodesign.experiment.report import base_pose_text, search_offsets_text
     from robodesign.experiment.runner import default_out_dir, load_resume, make_progress, run_experiment
 
     if args.workers is not None and args.workers < 1:
@@ -64,7 +69,7 @@ def cmd_run(args) -> int:
         cfg_path = Path(args.config) if args.config else default_config_path()
         exp, text = load_experiment(cfg_path, display=args.config or str(cfg_path))
         out = Path(args.out) if args.out else default_out_dir(exp.name)
-    progress = make_progress(args.progress)
+    progress = make_progress("none" if args.quiet else "lines" if args.verbose else args.progress)
     n_runs = len(list(exp.runs()))
     progress.message(f"experiment {exp.name}: {len(exp.problems)} task(s) × {len(exp.optimizers)} optimizer(s) × "
                      f"{len(exp.seeds)} seed(s) = {n_runs} runs → {out}")
@@ -72,6 +77,14 @@ def cmd_run(args) -> int:
         outcome = run_experiment(exp, out, config_text=text, config_path=cfg_path, resume=bool(args.resume),
                                  restart=args.restart, executor=executor, workers=args.workers, address=args.address,
                                  chunk_size=args.chunk_size, progress=progress, report=not args.no_report)
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: every evaluation so far is stored in the folder
+        progress.close()
+        if not (out / "meta.json").is_file():
+            raise
+        import shlex
+        print(f"robodesign: interrupted; the results so far are in {out}; continue with: "
+              f"robodesign run --resume {shlex.quote(str(out))}", file=sys.stderr, flush=True)
+        return 130
     finally:
         progress.close()
     print(f"\n{outcome.evaluations} evaluations ({outcome.new_evaluations} new) in {outcome.runs} runs, "
@@ -90,7 +103,7 @@ def cmd_run(args) -> int:
         print(f"best robot for {task}: {b['optimizer']} seed {b['run_seed']}, cost {sol.get('costFunction', '')} = "
               f"{b['cost']:.6g}")
         print(f"  module order  {','.join(json.loads(b['module_order']))}")
-        print(f"  base pose     {base_pose_text(bp)}" + (f"  (search parameters {[round(x, 4) for x in params]})"
+        print(f"  base pose     {base_pose_text(bp)}" + (f"  (search offsets {search_offsets_text(params)})"
                                                        if params else ""))
     if in_suite:
         print_suites(outcome.out_dir)

@@ -402,7 +402,7 @@ class StudyResult:
     best: Optional[Evaluation]
     history: List[Evaluation]
     seconds: float
-    stopped: str  # "budget" | "exhausted"
+    stopped: str  # "budget" | "exhausted" | "interrupted" (Study(stop_on_interrupt=True))
 
     @property
     def best_feasible(self) -> Optional[Evaluation]:
@@ -414,12 +414,14 @@ class Study:
 
     ``storage`` (optional) has ``load() -> list[Evaluation]`` (stored evaluations in ask order, for
     resuming) and ``append(index, evaluation)``. ``on_evaluation(index, evaluation, best)`` is called
-    after each evaluation (progress bars, anytime curves).
+    after each evaluation (progress bars, anytime curves). ``stop_on_interrupt``: Ctrl-C ends the study
+    with what it has (see :meth:`run`) instead of raising ``KeyboardInterrupt``.
     """
 
     def __init__(self, optimizer: Optimizer, executor, budget: Budget, batch_size: int = 1, storage=None,
-                 on_evaluation: Optional[Callable] = None):
+                 on_evaluation: Optional[Callable] = None, stop_on_interrupt: bool = False):
         self.optimizer = optimizer
+        self.stop_on_interrupt = bool(stop_on_interrupt)
         self.executor = executor
         self.budget = budget
         self.batch_size = max(1, int(batch_size))
@@ -427,8 +429,23 @@ class Study:
         self.on_evaluation = on_evaluation
 
     def run(self) -> StudyResult:
-        if getattr(self.optimizer, "independent_asks", False) and hasattr(self.executor, "imap"):
-            return self._run_ahead()
+        """Run the study until the budget ends or the optimizer is exhausted. With ``stop_on_interrupt``, a
+        ``KeyboardInterrupt`` (Ctrl-C; the CLI turns SIGTERM into one) ends it too: the result then holds the
+        evaluations told so far (``stopped == "interrupted"``); those stored are replayed by a resume, the
+        ones in flight are evaluated again."""
+        t0 = time.perf_counter()
+        try:
+            if getattr(self.optimizer, "independent_asks", False) and hasattr(self.executor, "imap"):
+                return self._run_ahead()
+            return self._run_batches()
+        except KeyboardInterrupt:
+            if not self.stop_on_interrupt:
+                raise
+            opt = self.optimizer
+            return StudyResult(best=opt.best, history=list(opt.history), seconds=time.perf_counter() - t0,
+                               stopped="interrupted")
+
+    def _run_batches(self) -> StudyResult:
         t0 = time.perf_counter()
         stored = self.storage.load() if self.storage is not None else []
         history: List[Evaluation] = []

@@ -19,6 +19,11 @@ the batch (16 candidates on 2 workers: 8 messages instead of 16). A stream (``im
 (``robodesign optimize --chunk-size``, ``robodesign run --chunk-size``, the experiment config's
 ``executor.chunk_size``) fixes it. ``messages`` counts the chunks sent.
 
+Interrupts (Ctrl-C, SIGTERM): only the driver handles them. Worker processes are started with SIGINT
+ignored (:func:`sigint_ignored` around their start, and again in their initializer; Ray actors in their
+``__init__``), so a Ctrl-C in a terminal, which reaches the whole process group, leaves them running until
+the driver shuts them down: no worker prints a ``KeyboardInterrupt`` traceback.
+
 Results do not depend on the executor: evaluations are pure functions of the candidate (per-candidate
 seeds) and the study tells them in ask order.
 
@@ -31,9 +36,12 @@ is sent at most :data:`MAX_ATTEMPTS` times. Either way no candidate is lost, and
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
 import os
+import signal
+import threading
 import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -53,6 +61,29 @@ MAX_ATTEMPTS = 4  # per chunk (the candidates sent in one message), counting the
 #: candidates a stream (``imap``) may have evaluated ahead of the one the caller waits for: a long
 #: evaluation holds back the delivery of the later ones, not the workers
 MAX_AHEAD = 1024
+
+
+@contextlib.contextmanager
+def sigint_ignored():
+    """SIGINT ignored in this process while the block runs (in the main thread; elsewhere a no-op): processes
+    started in the block inherit the ignored disposition, so a Ctrl-C in the terminal does not reach them.
+    A Ctrl-C during the block itself is lost (the block only starts processes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def ignore_sigint() -> None:
+    """In a worker process: leave SIGINT to the driver (it shuts the workers down)."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread (a Ray actor may run its __init__ elsewhere)
+        pass
 
 
 def auto_chunk_size(batch_size: int, workers: int) -> int:
@@ -164,8 +195,8 @@ class EvaluatorPool:
         for part in chunked(candidates, max(1, int(batch_size))):
             yield from self.map(spec_id, part)
 
-    def close(self) -> None:
-        pass
+    def close(self, now: bool = False) -> None:
+        """Release the workers (``now``: after an interrupt, without waiting for work in flight)."""
 
     def info(self) -> dict:
         return {"kind": self.kind, "workers": self.workers, "startup_seconds": round(self.startup_seconds, 3),
@@ -219,6 +250,7 @@ def _watch_parent(parent_pid: int, interval: float = 0.5) -> None:
 
 
 def _init_worker(specs: Dict[str, EvaluatorSpec], parent_pid: Optional[int] = None) -> None:
+    ignore_sigint()
     if parent_pid is not None:
         _watch_parent(parent_pid)
     _WORKER.clear()
@@ -399,10 +431,12 @@ class ProcessPool(ChunkedPool):
 
     def _start(self) -> None:
         ctx = multiprocessing.get_context("spawn")
-        self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
-                                         initargs=(self.specs, os.getpid()))
-        # start every worker now (and surface initializer errors before the first run)
-        futs = [self._pool.submit(_ping) for _ in range(self.workers)]
+        # start every worker now (and surface initializer errors before the first run); they are spawned by
+        # the submits (a spawn pool starts a process per submit while none is idle), SIGINT ignored
+        with sigint_ignored():
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
+                                             initargs=(self.specs, os.getpid()))
+            futs = [self._pool.submit(_ping) for _ in range(self.workers)]
         self.pids = sorted({f.result() for f in futs})
 
     def _restart(self) -> None:
@@ -429,8 +463,16 @@ class ProcessPool(ChunkedPool):
         self._restart()
         return 1
 
-    def close(self):
+    def close(self, now: bool = False):
+        """Shut the workers down: after their chunks in flight, or ``now`` (after an interrupt: the workers are
+        terminated, their chunks dropped; nothing is stored from them)."""
         if self._pool is not None:
+            if now:
+                for proc in list((getattr(self._pool, "_processes", None) or {}).values()):
+                    try:
+                        proc.terminate()
+                    except Exception:  # noqa: BLE001 - already gone
+                        pass
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
@@ -449,6 +491,7 @@ class EvaluatorActor:
     evaluations do not depend on where they ran (the two loops agree to ~1e-15, not bit for bit)."""
 
     def __init__(self, specs: Dict[str, EvaluatorSpec], jit: Optional[bool] = None):
+        ignore_sigint()
         if jit is not None:
             os.environ["ROBODESIGN_JIT"] = "wait" if jit else "0"
         self.evaluators = build_evaluators(specs)
@@ -487,16 +530,8 @@ class RayPool(ChunkedPool):
         t0 = time.perf_counter()
         self._owns = False
         if not ray.is_initialized():
-            if address:
-                host = address.rsplit(":", 1)[0]
-                # a cluster on this machine's loopback: the driver must present itself with the same
-                # address, or Ray looks for a local node under the machine's external IP and fails
-                local = host in ("127.0.0.1", "localhost") or host.startswith("127.")
-                ray.init(address=address, logging_level=logging.WARNING, log_to_driver=True,
-                         **({"_node_ip_address": "127.0.0.1"} if local else {}))
-            else:
-                ray.init(address="local", num_cpus=workers or max(1, os.cpu_count() or 1), include_dashboard=False,
-                         _node_ip_address="127.0.0.1", logging_level=logging.WARNING, log_to_driver=True)
+            with sigint_ignored():  # Ray's local processes leave Ctrl-C to the driver, as pool workers do
+                self._init_ray(ray, address, workers)
             self._owns = True
         if not workers:
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
@@ -516,6 +551,19 @@ class RayPool(ChunkedPool):
             raise InputError(f"Ray could not start {self.workers} evaluator actors within {start_timeout:.0f} s "
                              f"(the cluster has {cpus:g} CPUs; use --workers)") from None
         self.startup_seconds = time.perf_counter() - t0
+
+    @staticmethod
+    def _init_ray(ray, address: Optional[str], workers: Optional[int]) -> None:
+        if address:
+            host = address.rsplit(":", 1)[0]
+            # a cluster on this machine's loopback: the driver must present itself with the same
+            # address, or Ray looks for a local node under the machine's external IP and fails
+            local = host in ("127.0.0.1", "localhost") or host.startswith("127.")
+            ray.init(address=address, logging_level=logging.WARNING, log_to_driver=True,
+                     **({"_node_ip_address": "127.0.0.1"} if local else {}))
+        else:
+            ray.init(address="local", num_cpus=workers or max(1, os.cpu_count() or 1), include_dashboard=False,
+                     _node_ip_address="127.0.0.1", logging_level=logging.WARNING, log_to_driver=True)
 
     def _new_actor(self):
         # the specs are small plain data, passed inline: a restarted actor never depends on the object store
@@ -576,7 +624,7 @@ class RayPool(ChunkedPool):
         import ray
         return ray.get([a.pid.remote() for a in self.actors])
 
-    def close(self):
+    def close(self, now: bool = False):
         import ray
         if not ray.is_initialized():
             return

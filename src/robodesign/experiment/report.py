@@ -173,7 +173,33 @@ def _changes(v) -> List[int]:
     return out
 
 
-def plot_task(path: Path, task: str, curves: dict, optimizers: List[str]) -> Path:
+def cost_axis_label(cost: Optional[str]) -> str:
+    """The y axis of an anytime plot: the cost and its unit (``cyc [s]``), from the cost term's description;
+    a weighted sum of terms has no single unit (``Liu2 (weighted sum: mechEnergy [J], cyc [s])``)."""
+    if not cost:
+        return "best cost so far"
+    import re
+
+    from robodesign.formats.costs import cost_term, parse_cost
+    try:
+        terms = parse_cost(cost).terms
+    except Exception:  # noqa: BLE001 - an old results folder may name a cost this version does not know
+        return f"best {cost} so far"
+
+    def unit(name: str) -> str:
+        try:
+            m = re.search(r"\[([^\]]+)\]\s*$", cost_term(name).description)
+        except Exception:  # noqa: BLE001
+            return ""
+        return m.group(1) if m else ""
+    if len(terms) == 1 and terms[0][1] == 1:
+        u = unit(terms[0][0])
+        return f"best {cost} so far" + (f" [{u}]" if u else " (no unit)")
+    parts = ", ".join(f"{n} [{unit(n)}]" if unit(n) else n for n, _ in terms)
+    return f"best {cost} so far (weighted sum: {parts})"
+
+
+def plot_task(path: Path, task: str, curves: dict, optimizers: List[str], cost: Optional[str] = None) -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -202,7 +228,7 @@ def plot_task(path: Path, task: str, curves: dict, optimizers: List[str]) -> Pat
     axes[0].set_xlabel("evaluations")
     axes[1].set_xlabel("wall time [s]")
     for ax in axes:
-        ax.set_ylabel("best cost so far")
+        ax.set_ylabel(cost_axis_label(cost), fontsize=9)
         ax.grid(True, alpha=0.3)
         if not any_finite:
             ax.text(0.5, 0.5, "no feasible design found yet", ha="center", va="center", transform=ax.transAxes,
@@ -305,13 +331,31 @@ def best_solution_path(b: dict) -> str:
 
 
 def base_pose_text(bp) -> str:
-    if not bp:
+    """A base pose (4×4, nested lists or an array) as ``xyz = (x, y, z) m, yaw = ψ°``; "nominal" for none."""
+    if bp is None or np.size(bp) == 0:
         return "nominal"
     T = np.asarray(bp, dtype=float)
     if T.shape != (4, 4):
         return str(bp)
     yaw = math.degrees(math.atan2(T[1, 0], T[0, 0]))
-    return f"xyz = ({T[0, 3]:.3f}, {T[1, 3]:.3f}, {T[2, 3]:.3f}) m, yaw = {yaw:.1f}°"
+    x, y, z = (_mm(v) for v in T[:3, 3])
+    return f"xyz = ({x}, {y}, {z}) m, yaw = {_deg(yaw)}°"
+
+
+def _mm(v: float) -> str:
+    """A length in m to a tenth of a millimetre, without a negative zero."""
+    return f"{round(float(v), 4) + 0.0:.4f}"
+
+
+def search_offsets_text(params) -> str:
+    """A design's base search parameters (offsets from the nominal base: metres, the yaw in radians) with
+    the precision of :func:`base_pose_text`."""
+    return "[" + ", ".join(_mm(x) for x in params) + "]"
+
+
+def _deg(v: float) -> str:
+    """An angle in degrees to a tenth, without a negative zero."""
+    return f"{round(float(v), 1) + 0.0:.1f}"
 
 
 def view_path(solution_rel: str) -> str:
@@ -482,8 +526,9 @@ def write_report(out: Path, db: Optional[ExperimentDB] = None) -> Path:
         _write_csv(out / "anytime_evals.csv", ("task", "optimizer", "evaluation") + head, ev_rows)
         _write_csv(out / "anytime_time.csv", ("task", "optimizer", "time_s") + head, t_rows)
         plots = {}
+        costs = {p.get("name"): p.get("cost") for p in meta.get("problems", []) if isinstance(p, dict)}
         for task, by_opt in groups.items():
-            p = plot_task(out / "plots" / f"{_slug(task)}.png", task, curves, list(by_opt))
+            p = plot_task(out / "plots" / f"{_slug(task)}.png", task, curves, list(by_opt), costs.get(task))
             plots[task] = str(p.relative_to(out))
         summary = summarize(groups)
         write_summary(out, summary)

@@ -192,6 +192,33 @@ class LineProgress:
         pass
 
 
+class SummaryProgress(LineProgress):
+    """Off a terminal by default: the start and end of each run, and in between a summary line at most
+    every ``every`` seconds (not one per evaluation)."""
+
+    def __init__(self, stream=None, every: float = 5.0):
+        super().__init__(stream)
+        self.every = float(every)
+
+    def start_run(self, run, k, n, total, stored):
+        super().start_run(run, k, n, total, stored)
+        self.last = time.perf_counter()
+        self.t_run = self.last
+        self.count = self.feasible = 0
+
+    def evaluation(self, index: int, ev, best, replayed: bool):
+        self.count = index + 1
+        self.feasible += bool(ev.feasible)
+        now = time.perf_counter()
+        if replayed or now - self.last < self.every:
+            return
+        self.last = now
+        b = best.cost if best is not None and best.feasible else None
+        tot = f"/{self.total}" if self.total else ""
+        self._p(f"{self.tag}: {self.count}{tot} evaluations in {now - self.t_run:.0f} s, {self.feasible} feasible "
+                f"(this session), best {_fmt_cost(b)}")
+
+
 class RichProgress:
     """A rich progress bar per run (terminal)."""
 
@@ -248,6 +275,8 @@ class NoProgress:
 
 
 def make_progress(mode: str = "auto"):
+    """``bar`` (rich), ``lines`` (one per evaluation), ``summary`` (one every 5 s at most), ``none``;
+    ``auto``: a bar on a terminal, else the summary."""
     if mode == "none":
         return NoProgress()
     if mode == "bar" or (mode == "auto" and sys.stdout.isatty()):
@@ -255,7 +284,7 @@ def make_progress(mode: str = "auto"):
             return RichProgress()
         except ImportError:
             pass
-    return LineProgress()
+    return LineProgress() if mode == "lines" else SummaryProgress()
 
 
 # ------------------------------------------------------------------------------------------------
@@ -480,7 +509,8 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
         session["new_evaluations"] = total_new
         if pool is not None:
             session["executor"] = pool.info()
-            pool.close()
+            # after Ctrl-C / SIGTERM the workers are stopped at once (what they had in flight was not stored)
+            pool.close(now=session.get("status") != "complete")
         meta = json.loads((out / "meta.json").read_text())
         meta["sessions"][-1] = session
         _write_json(out / "meta.json", meta)

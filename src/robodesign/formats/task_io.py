@@ -10,6 +10,7 @@ and may not escape it.
 """
 from __future__ import annotations
 
+import difflib
 import json
 import math
 from pathlib import Path
@@ -62,7 +63,11 @@ def resolve_task_path(name_or_path: Union[str, Path]) -> Path:
     cand = builtin_tasks_dir() / (str(name_or_path) + ("" if str(name_or_path).endswith(".json") else ".json"))
     if cand.is_file():
         return cand
-    raise InputError("no such task file or built-in task", file=str(name_or_path))
+    builtin = sorted(f.relative_to(builtin_tasks_dir()).with_suffix("").as_posix()
+                     for f in builtin_tasks_dir().glob("*/*.json")) if builtin_tasks_dir().is_dir() else []
+    close = difflib.get_close_matches(str(name_or_path), builtin, n=1)
+    raise InputError("no such task file or built-in task" + (f" (did you mean {close[0]!r}?)" if close else "")
+                     + (f"; built-in tasks: {', '.join(builtin)}" if builtin else ""), file=str(name_or_path))
 
 
 def _package_root(file: Path, task_id: str) -> Path:

@@ -78,8 +78,10 @@ def _fmt_pose(T) -> str:
     yaw = math.atan2(R[1, 0], R[0, 0])
     pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
     roll = math.atan2(R[2, 1], R[2, 2])
-    return (f"xyz [{p[0]:.4g}, {p[1]:.4g}, {p[2]:.4g}] m, rpy [{math.degrees(roll):.4g}°, {math.degrees(pitch):.4g}°, "
-            f"{math.degrees(yaw):.4g}°]")
+    def num(v: float, digits: int) -> str:  # rounded, and never "-0"
+        return f"{round(float(v), digits) + 0.0:g}"
+    return (f"xyz [{num(p[0], 4)}, {num(p[1], 4)}, {num(p[2], 4)}] m, rpy [{num(math.degrees(roll), 2)}°, "
+            f"{num(math.degrees(pitch), 2)}°, {num(math.degrees(yaw), 2)}°]")
 
 
 def _panel(scene: dict) -> str:

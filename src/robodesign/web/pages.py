@@ -23,9 +23,10 @@ main { max-width:1100px; margin:1.5rem auto; padding:0 1.5rem; }
 h1 { font-size:1.5rem; margin:.2rem 0 1rem; } h2 { font-size:1.15rem; margin:1.6rem 0 .6rem; }
 a { color:var(--accent); }
 table { border-collapse:collapse; width:100%; background:#fff; border:1px solid var(--line); margin-bottom:1rem; }
-th, td { text-align:left; padding:.4rem .6rem; border-bottom:1px solid var(--line); vertical-align:top; }
+th, td { text-align:left; padding:.4rem .6rem; border-bottom:1px solid var(--line); vertical-align:top;
+         overflow-wrap:anywhere; }
 th { background:#eef1f6; font-weight:600; font-size:.9rem; }
-td.num, th.num { text-align:right; font-variant-numeric: tabular-nums; }
+td.num, th.num { text-align:right; font-variant-numeric: tabular-nums; overflow-wrap:normal; white-space:nowrap; }
 code, .mono { font-family: ui-monospace, SFMono-Regular, Menlo, Consolas, monospace; font-size:.88rem; }
 .muted { color:var(--muted); } .small { font-size:.85rem; }
 .card { background:#fff; border:1px solid var(--line); border-radius:6px; padding:1rem 1.2rem; margin-bottom:1rem; }
@@ -38,7 +39,7 @@ button { background:var(--accent); color:#fff; border:0; border-radius:4px; padd
          cursor:pointer; margin-top:.8rem; }
 form.inline select { padding:.35rem; border:1px solid var(--line); border-radius:4px; font:inherit; max-width:16rem; }
 form.inline button { margin-top:0; margin-left:.4rem; }
-.links a { display:block; white-space:nowrap; }
+.links a { display:block; overflow-wrap:anywhere; }  /* long collaborative benchmark IDs wrap, never scroll */
 .grid { display:grid; grid-template-columns: repeat(auto-fill, minmax(15rem, 1fr)); gap:.3rem .8rem; }
 iframe.viewer { width:100%; height:560px; border:1px solid var(--line); background:#fff; }
 .rank1 td { background:#fff8e1; }

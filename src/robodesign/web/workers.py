@@ -16,6 +16,7 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Optional
 
+from robodesign.experiment.executors import ignore_sigint, sigint_ignored
 from robodesign.web.service import Bench, Settings
 
 log = logging.getLogger("robodesign.web")
@@ -26,6 +27,7 @@ CHECKER_NICE = 10  # checker processes yield the CPU to the process that serves 
 
 def _init_worker(settings: Settings) -> None:
     global _worker_bench
+    ignore_sigint()  # Ctrl-C on `robodesign serve` reaches the whole process group: the server shuts us down
     try:
         os.nice(CHECKER_NICE)
     except OSError:  # not permitted here: the checks run at the server's priority
@@ -68,9 +70,11 @@ class ProcessChecker:
             return self._pool
 
     def start(self) -> None:
-        """Start the processes now (instead of at the first upload)."""
-        pool = self._get_pool()
-        for f in [pool.submit(int, 0) for _ in range(self.processes)]:
+        """Start the processes now (instead of at the first upload), SIGINT ignored from their first instant."""
+        with sigint_ignored():
+            pool = self._get_pool()
+            futures = [pool.submit(int, 0) for _ in range(self.processes)]
+        for f in futures:
             f.result()
 
     def check(self, text, fname, meta, token, unwrap) -> dict:
