@@ -17,7 +17,8 @@ from robodesign.formats.tolerance import ToleratedPose
 from robodesign.model.robot import Robot
 
 HEAVY = ROOT / "assets" / "modules" / "robodesign_heavy"
-EXAMPLE_A = ("1", "21", "22", "7", "24", "11", "26", "25", "26", "16")  # README.md, example A
+EXAMPLE_A = ("1", "21", "22", "7", "24", "11", "25", "26", "25", "16")  # README.md, example A
+EXAMPLE_B = ("1", "21", "22", "8", "24", "12", "25", "26", "25", "16")  # README.md, example B
 G = 9.81
 
 
@@ -94,9 +95,9 @@ def test_every_inertia_is_physical_and_fits_its_geometry(name):
             assert eig.max() <= b.mass * rho ** 2, (b.id, eig.max(), b.mass, rho)
 
 
-def test_example_a_weighs_like_a_ur10e(heavy):
-    mass = sum(heavy[m].mass for m in EXAMPLE_A)
-    assert mass == pytest.approx(33.5, rel=0.05)  # UR10e data sheet: 33.5 kg
+def test_examples_weigh_like_a_ur10e(heavy):
+    for order in (EXAMPLE_A, EXAMPLE_B):
+        assert sum(heavy[m].mass for m in order) == pytest.approx(33.5, rel=0.05)  # UR10e data sheet: 33.5 kg
 
 
 def test_stretched_arm_gravity_torque_by_hand(heavy):
@@ -105,37 +106,40 @@ def test_stretched_arm_gravity_torque_by_hand(heavy):
     robot = Robot.from_order(heavy, EXAMPLE_A)
     tau = robot.gravity_torque([0.0, math.pi / 2, 0.0, 0.0, 0.0, 0.0])
     tube_32 = 2700 * math.pi * (0.045 ** 2 - 0.042 ** 2) * (0.3 - 0.010 - 0.008)
-    levers = [  # (kg, m from the elbow axis)
+    levers = [  # (kg, m from the elbow axis); module starts 0.115, 0.415, 0.55, 0.73, 0.865 m beyond it
         (0.5, 0.09),                                                    # 24 output flange
         (0.22, 0.115 + 0.005), (tube_32, 0.115 + 0.010 + 0.141), (0.12, 0.115 + 0.296),  # link_32_300
-        (0.3, 0.415 + 0.02), (1.4, 0.415 + 0.09), (0.3, 0.415 + 0.16),  # 26 wrist pitch: neck, drum, output
-        (1.7, 0.595 + 0.055), (0.3, 0.595 + 0.1225),                    # 25 wrist roll
-        (0.3, 0.73 + 0.02), (1.4, 0.73 + 0.09), (0.3, 0.73 + 0.16),     # 26 again
-        (0.15, 0.91 + 0.0075), (0.3, 0.91 + 0.05), (0.04, 0.91 + 0.11),  # tool flange
+        (1.7, 0.415 + 0.055), (0.3, 0.415 + 0.1225),                    # 25 wrist roll: housing, flange
+        (0.3, 0.55 + 0.02), (1.4, 0.55 + 0.09), (0.3, 0.55 + 0.16),     # 26 wrist pitch: neck, drum, output
+        (1.7, 0.73 + 0.055), (0.3, 0.73 + 0.1225),                      # 25 again
+        (0.15, 0.865 + 0.0075), (0.3, 0.865 + 0.05), (0.04, 0.865 + 0.11),  # tool flange
     ]
     elbow = G * sum(m * r for m, r in levers)
-    assert elbow == pytest.approx(46.34, abs=0.01)
-    assert abs(tau[2]) == pytest.approx(elbow, rel=1e-6)
-    assert abs(tau[1]) == pytest.approx(125.62, abs=0.01) and abs(tau[1]) < 330.0
-    assert abs(tau[0]) < 1e-9 and abs(tau[4]) < 1e-6  # roll joints carry no moment
+    assert elbow == pytest.approx(44.750, abs=0.001)
+    assert abs(tau[2]) == pytest.approx(elbow, rel=1e-6) and abs(tau[2]) < 150.0
+    assert abs(tau[1]) == pytest.approx(124.03, abs=0.01) and abs(tau[1]) < 330.0
+    assert max(abs(tau[0]), abs(tau[3]), abs(tau[5])) < 1e-6  # roll joints carry no moment
 
 
 def test_a_design_holds_a_1_3_m_goal_below_the_base(heavy):
-    """Example A reaches a goal 1.3 m from its base, 0.3 m below the base plane, tool pointing down (±1 mm,
-    0.5°), and holds the pose within every joint's torque limit; robodesign_arm's example A cannot reach it."""
+    """Example B reaches goals 1.3 m from its base, 0.3 m below the base plane, tool pointing down (±1 mm, 0.5°),
+    in four directions, and holds each pose within every joint's torque limit; robodesign_arm's example A
+    cannot reach them."""
     from robodesign.solvers.ik import solve_ik
-    T = np.eye(4)
-    T[:3, :3] = np.diag([1.0, -1.0, -1.0])  # Rx(π): TCP z axis down
-    T[:3, 3] = (math.sqrt(1.3 ** 2 - 0.3 ** 2), 0.0, -0.3)
-    goal = ToleratedPose(T, ("x", "y", "z", "Theta_R"), ((-1e-3, 1e-3),) * 3 + ((0.0, math.radians(0.5)),))
-    robot = Robot.from_order(heavy, EXAMPLE_A)
-    res = solve_ik(robot, goal, rng=0, max_restarts=300)
-    assert res.success, res.stats
-    assert goal.valid(robot.fk(res.q))
-    assert np.all(np.abs(robot.gravity_torque(res.q)) <= robot.tau_max)
+    robot = Robot.from_order(heavy, EXAMPLE_B)
     arm = Robot.from_order(load_module_set("robodesign_arm"), ("1", "21", "22", "4", "22", "3", "23", "24", "23", "12"))
     o, R = arm.reach_bound()
-    assert np.linalg.norm(T[:3, 3] - o) > R
+    d = math.sqrt(1.3 ** 2 - 0.3 ** 2)
+    for x, y in ((d, 0.0), (0.0, d), (-d, 0.0), (d / math.sqrt(2), -d / math.sqrt(2))):
+        T = np.eye(4)
+        T[:3, :3] = np.diag([1.0, -1.0, -1.0])  # Rx(π): TCP z axis down
+        T[:3, 3] = (x, y, -0.3)
+        goal = ToleratedPose(T, ("x", "y", "z", "Theta_R"), ((-1e-3, 1e-3),) * 3 + ((0.0, math.radians(0.5)),))
+        res = solve_ik(robot, goal, rng=0, max_restarts=300)
+        assert res.success, (x, y, res.stats)
+        assert goal.valid(robot.fk(res.q))
+        assert np.all(np.abs(robot.gravity_torque(res.q)) <= robot.tau_max)
+        assert np.linalg.norm(T[:3, 3] - o) > R
 
 
 def test_heavy_readme_lists_every_module(heavy):

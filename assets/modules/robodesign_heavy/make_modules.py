@@ -210,11 +210,11 @@ def build() -> dict:
 # self-check
 EXAMPLES = {
     # UR10e-like proportions: roll-pitch shoulder (size 4), tapered 0.4 m upper arm, size-3 elbow, tapered
-    # 0.3 m forearm, size-2 pitch-roll-pitch wrist, tool
-    "A": ["1", "21", "22", "7", "24", "11", "26", "25", "26", "16"],
-    # the longest arm of the examples: 0.6 m upper arm and 0.5 m forearm
-    "B": ["1", "21", "22", "8", "24", "12", "26", "25", "26", "16"],
-    # pedestal, size-3 wrist roll after the elbow, size-2 pitch-roll wrist
+    # 0.3 m forearm, size-2 roll-pitch-roll wrist (a spherical wrist: full orientation), tool
+    "A": ["1", "21", "22", "7", "24", "11", "25", "26", "25", "16"],
+    # the longest arm of the examples: 0.6 m upper arm and 0.5 m forearm (goals 1.0-1.5 m away)
+    "B": ["1", "21", "22", "8", "24", "12", "25", "26", "25", "16"],
+    # pedestal, size-3 roll after the elbow, adapter, size-2 pitch-roll wrist
     "C": ["2", "21", "22", "8", "24", "23", "4", "26", "25", "16"],
 }
 G = 9.81
