@@ -206,7 +206,7 @@ def test_proof_free_base_needs_the_spread_of_two_goals(tmp_path):
     assert reach_proof(_task(tmp_path, [(0, 0, 0), (2 * R - 0.1, 0, 0)], None, "close"), space) is None
     p = reach_proof(_task(tmp_path, [(0, 0, 0), (0, 2 * R + 0.4, 0)], None, "apart"), space)
     assert p is not None and p.kind == "spread" and set(p.goals) == {"g0", "g1"}
-    assert p.needed == pytest.approx(R + 0.2 - TOL, abs=1e-9)
+    assert p.needed == pytest.approx(R + 0.2 - TOL, abs=1e-9) and p.distance == pytest.approx(2 * R + 0.4)
 
 
 # -- the diagnosis ---------------------------------------------------------------------------------------------

@@ -206,6 +206,9 @@ def cmd_optimize(args) -> int:
                                                   "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
                "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
+    from robodesign.design.diagnosis import diagnose
+    diagnosis = diagnose(problem, res.history, res.stopped)  # why nothing valid was found (docs/diagnosis.md)
+    summary["diagnosis"] = diagnosis.to_json()
     if args.json:
         print(json.dumps(summary))
     else:
@@ -225,6 +228,7 @@ def cmd_optimize(args) -> int:
                 from robodesign.experiment.suites import stage_counts_text
                 print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
                       f"{stage_counts_text(run.stage_counts)})")
+            print(f"diagnosis    {diagnosis.message}")
     return 0 if best is not None and best.feasible else 1
 
 

@@ -96,9 +96,9 @@ def diagnose(problem: Problem, evaluations: Sequence[Any], stopped: str = "budge
         (need, limit, joint), _ = min(torque, key=lambda te: te[0][0] - te[0][1])
         d.verdict = "torque"
         d.torque_needed, d.torque_limit, d.torque_shortfall = need, limit, need - limit
-        d.message = (f"torque-infeasible at every tried design: no design got past static_torque "
-                     f"({len(torque)} of {n} failed there); the best one needs {need:.1f} Nm at joint {joint} "
-                     f"(limit {limit:.1f}), {need - limit:.1f} Nm short")
+        d.message = (f"torque-infeasible at every tried design that reached the goals: {len(torque)} of {n} designs "
+                     f"had IK solutions and none could hold them (static_torque); the best needs {need:.1f} Nm at "
+                     f"joint {joint} (limit {limit:.1f}), {need - limit:.1f} Nm short")
         return d
     why = "the search exhausted its space" if stopped == "exhausted" else "the search ran out of budget"
     if far is None:

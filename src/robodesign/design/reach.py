@@ -244,13 +244,15 @@ def base_is_free(task: Task) -> bool:
 class ReachProof:
     """Why no design of the module set reaches the task: ``kind`` is ``"goal"`` (goal ``goals[0]`` is
     ``needed`` m from every allowed base position, counting its tolerance) or ``"spread"`` (goals ``goals[0]``
-    and ``goals[1]`` are ``2·needed`` apart: a base between them is ``needed`` from one of them); ``bound``
-    is the set's reach bound, ``order`` the longest arm."""
+    and ``goals[1]`` are ``distance`` apart, ``2·needed`` counting their tolerances: any base is ``needed``
+    from one of them); ``bound`` is the set's reach bound, ``order`` the longest arm. ``distance``: the
+    nominal distance (goal: from the base region; spread: between the two goals)."""
     kind: str
     bound: float
     needed: float
     goals: Tuple[str, ...]
     order: Tuple[str, ...]
+    distance: float = math.nan
 
     @property
     def message(self) -> str:
@@ -258,12 +260,13 @@ class ReachProof:
         if self.kind == "goal":
             return (f"provably out of reach: goal {self.goals[0]} is at least {self.needed:.3f} m from every "
                     f"allowed base position; {arm}")
-        return (f"provably out of reach: goals {self.goals[0]} and {self.goals[1]} are {2 * self.needed:.3f} m "
-                f"apart, so one of them is at least {self.needed:.3f} m from any base; {arm}")
+        return (f"provably out of reach: goals {self.goals[0]} and {self.goals[1]} are {self.distance:.3f} m "
+                f"apart, so one of them is at least {self.needed:.3f} m from any base (counting their tolerances); "
+                f"{arm}")
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "bound": self.bound, "needed": self.needed, "goals": list(self.goals),
-                "order": list(self.order), "message": self.message}
+        return {"kind": self.kind, "bound": self.bound, "needed": self.needed, "distance": self.distance,
+                "goals": list(self.goals), "order": list(self.order), "message": self.message}
 
 
 def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None) -> Optional[ReachProof]:
@@ -277,13 +280,15 @@ def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None
     best: Optional[ReachProof] = None
     if not base_is_free(task):
         for gid, p, tol in pts:
-            need = distance_to_region(task.base_placement, p) - tol
+            dist = distance_to_region(task.base_placement, p)
+            need = dist - tol
             if need > R and (best is None or need > best.needed):
-                best = ReachProof("goal", R, need, (gid,), reach.order)
+                best = ReachProof("goal", R, need, (gid,), reach.order, dist)
     if best is None:
         for i, (ga, pa, ta) in enumerate(pts):
             for gb, pb, tb in pts[i + 1:]:
-                need = (float(np.linalg.norm(pa - pb)) - ta - tb) / 2.0
+                dist = float(np.linalg.norm(pa - pb))
+                need = (dist - ta - tb) / 2.0
                 if need > R and (best is None or need > best.needed):
-                    best = ReachProof("spread", R, need, (ga, gb), reach.order)
+                    best = ReachProof("spread", R, need, (ga, gb), reach.order, dist)
     return best

@@ -1,0 +1,97 @@
+"""The diagnosis of unsolved tasks in `robodesign optimize` (text and --json) and in the suite summary
+(solved / provably out of reach / not found per task and per family; docs/diagnosis.md)."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from robodesign.cli.entry import main
+from robodesign.design.reach import set_reach
+from robodesign.design.search_space import SearchSpace
+from robodesign.experiment.suites import Diagnoser, SuiteRecord, markdown, summarize_suites, task_rows, unsolved_rows
+from robodesign.formats.module_io import load_module_set
+
+FIXED = {"x": [-1e-3, 1e-3], "y": [-1e-3, 1e-3], "z": [-1e-3, 1e-3]}
+
+
+def _task_file(path, goals, base=FIXED):
+    cons = [{"type": "joint", "parts": ["q", "tau"]}, {"type": "allGoalsFulfilled"}]
+    if base is not None:
+        cons.append({"type": "basePlacement", "pose": {"nominal": np.eye(4).tolist(),
+                                                       "toleranceProjection": list(base),
+                                                       "tolerance": list(base.values())}})
+    gs = []
+    for i, p in enumerate(goals):
+        T = np.eye(4)
+        T[:3, 3] = p
+        gs.append({"ID": f"g{i}", "type": "reach", "goalPose": {
+            "nominal": T.tolist(), "toleranceProjection": ["x", "y", "z"], "tolerance": [[-1e-3, 1e-3]] * 3}})
+    path.write_text(json.dumps({
+        "header": {"ID": f"test/{path.stem}", "version": "2022", "taskName": path.stem, "author": ["t"],
+                   "affiliation": ["t"], "email": ["t@t"], "tags": [], "date": "2026-11-26", "timeStepSize": 0.01,
+                   "gravity": [0, 0, -9.81]},
+        "obstacles": [], "constraints": cons, "goals": gs}))
+    return path
+
+
+def test_optimize_says_provably_out_of_reach(tmp_path, capsys):
+    R = set_reach(SearchSpace(load_module_set("robodesign_arm"))).bound
+    assert R == pytest.approx(5.422)
+    f = _task_file(tmp_path / "far.json", [(0.5, 0.0, 0.3), (7.0, 0.0, 0.0)])
+    code = main(["optimize", str(f), "--modules", "robodesign_arm", "--optimizer", "random", "--budget", "4evals",
+                 "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1 and not out["feasible"]
+    d = out["diagnosis"]
+    assert d["verdict"] == "out_of_reach" and d["label"] == "provably out of reach"
+    # 7 m from a base held within ±1 mm, minus the base box (1 mm along x) and the goal's corner (√3 mm)
+    assert d["proof"]["needed"] == pytest.approx(7.0 - 1e-3 - math.sqrt(3) * 1e-3, abs=1e-9)
+    assert d["proof"]["bound"] == pytest.approx(R) and d["proof"]["goals"] == ["g1"]
+    assert main(["optimize", str(f), "--modules", "robodesign_arm", "--optimizer", "random",
+                 "--budget", "4evals"]) == 1
+    text = capsys.readouterr().out
+    assert "diagnosis    provably out of reach: goal g1 is at least 6.997 m from every allowed base position; " \
+           "the longest arm of the module set reaches at most 5.422 m from its base" in text
+
+
+def test_optimize_not_found_names_the_best_stage(tmp_path, capsys):
+    # reachable in principle (well within the bound), but 3 random designs at a fixed base find nothing
+    f = _task_file(tmp_path / "hard.json", [(1.9, 0.0, -0.5), (-1.9, 0.0, -0.5)])
+    code = main(["optimize", str(f), "--modules", "robodesign_arm", "--optimizer", "random", "--budget", "3evals",
+                 "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1
+    d = out["diagnosis"]
+    assert d["verdict"] in ("not_found", "torque") and d["label"] == "not found" and d["proof"] is None
+    assert d["best_stage"] == out["stopped_at"] and d["evaluations"] == 3
+    assert d["reach_bound"] == pytest.approx(5.422)
+
+
+def test_suite_summary_counts_each_class(tmp_path):
+    far = _task_file(tmp_path / "far.json", [(0.0, 0.0, 0.5), (9.0, 0.0, 0.0)])
+    free = _task_file(tmp_path / "free.json", [(0.0, 0.0, 0.5), (9.0, 0.0, 0.0)], base=None)
+    apart = _task_file(tmp_path / "apart.json", [(0.0, 0.0, 0.5), (0.0, 12.0, 0.5)], base=None)
+    problems = {n: {"name": n, "task": str(f), "modules": "robodesign_arm", "cost": "cyc",
+                    "rules": {"min_dof": 6, "max_dof": 6}} for n, f in (("far", far), ("free", free), ("apart", apart))}
+    diag = Diagnoser(problems)
+    rows = [{"feasible": False, "stage": "reach", "stage_index": 2, "message": "goal g1 is far", "cost": None}]
+    recs = [SuiteRecord("fam", "solved1", "random", 0, True, best=3.0, verdict="solved"),
+            diag(SuiteRecord("fam", "far", "random", 0, False, stopped_at="reach"), rows),
+            diag(SuiteRecord("fam", "free", "random", 0, False, stopped_at="reach"), rows),
+            diag(SuiteRecord("fam", "apart", "random", 0, False, stopped_at="reach"), rows)]
+    assert [r.verdict for r in recs] == ["solved", "out_of_reach", "not_found", "out_of_reach"]
+    assert [r.result for r in recs] == ["solved", "provably out of reach", "not found", "provably out of reach"]
+    assert recs[3].diagnosis.startswith("provably out of reach: goals g0 and g1 are 12.000 m apart, so one of them is "
+                                       "at least 5.998 m from any base")
+    (s,) = summarize_suites(recs)
+    assert (s["runs"], s["solved"], s["out_of_reach"], s["not_found"]) == (4, 1, 2, 1)
+    assert s["solved_pct"] == pytest.approx(25.0) and s["solved_pct_reachable"] == pytest.approx(50.0)
+    tasks = task_rows(recs)
+    assert [t["reach_bound"] for t in tasks[1:]][0] == pytest.approx(5.422)
+    assert math.isnan(tasks[2]["reach_bound"]) and tasks[0]["best_cost"] == 3.0
+    md = markdown([s], unsolved_rows(recs), tasks)
+    assert "| fam | far | random | 0 | provably out of reach | – | 5.422 |" in md
+    assert "| fam | free | random | 0 | not found | – | – | not found: the search ran out of budget" in md
