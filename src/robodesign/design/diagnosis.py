@@ -75,13 +75,14 @@ def diagnose(problem: Problem, evaluations: Sequence[Any], stopped: str = "budge
              reach: Optional[SetReach] = None) -> Diagnosis:
     """The diagnosis of a search over ``problem`` whose evaluations are ``evaluations`` (Evaluation objects or
     dicts with ``feasible``, ``stage``, ``stage_index``, ``message``). ``reach``: a precomputed set reach of
-    ``problem.space`` (computed here otherwise; milliseconds for the built-in sets)."""
+    ``problem.space`` (computed here otherwise: 0.1–0.4 s for the built-in sets)."""
     n = len(evaluations)
     if any(_get(e, "feasible") for e in evaluations):
         return Diagnosis("solved", f"solved: a valid design among {n} evaluations", evaluations=n, stopped=stopped)
     reach = reach or set_reach(problem.space)
     proof = reach_proof(problem.task, problem.space, reach)
-    far = max(evaluations, key=lambda e: _get(e, "stage_index", -1), default=None)
+    # the furthest design: latest stage, then most goals reached (the evaluator's ranking of infeasible ones)
+    far = max(evaluations, key=lambda e: (_get(e, "stage_index", -1), _get(e, "goals_reached", 0) or 0), default=None)
     best_stage = "" if far is None else str(_get(far, "stage", ""))
     best_message = "" if far is None else str(_get(far, "message", "") or "")
     d = Diagnosis("not_found", "", evaluations=n, reach_bound=reach.bound, best_stage=best_stage,

@@ -284,11 +284,17 @@ def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None
             need = dist - tol
             if need > R and (best is None or need > best.needed):
                 best = ReachProof("goal", R, need, (gid,), reach.order, dist)
-    if best is None:
-        for i, (ga, pa, ta) in enumerate(pts):
-            for gb, pb, tb in pts[i + 1:]:
-                dist = float(np.linalg.norm(pa - pb))
-                need = (dist - ta - tb) / 2.0
-                if need > R and (best is None or need > best.needed):
-                    best = ReachProof("spread", R, need, (ga, gb), reach.order, dist)
+    if best is None and len(pts) > 1:
+        # every pair (a sound proof needs only one; beyond _MAX_SPREAD poses, evenly spaced ones are compared)
+        sel = pts if len(pts) <= _MAX_SPREAD else [pts[int(i)] for i in np.linspace(0, len(pts) - 1, _MAX_SPREAD)]
+        P = np.array([p for _, p, _ in sel])
+        tol = np.array([t for _, _, t in sel])
+        D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
+        need = (D - tol[:, None] - tol[None, :]) / 2.0
+        i, j = np.unravel_index(int(np.argmax(need)), need.shape)
+        if need[i, j] > R:
+            best = ReachProof("spread", R, float(need[i, j]), (sel[i][0], sel[j][0]), reach.order, float(D[i, j]))
     return best
+
+
+_MAX_SPREAD = 1500  # goal poses compared pairwise by the spread proof
