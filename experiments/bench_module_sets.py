@@ -11,7 +11,9 @@ direction, 0.6 m below to 0.6 m above the base plane, full orientation (±1 mm, 
 down, tilted up to 30° and turned at random), no obstacles, joint q/τ and allGoalsFulfilled. It then runs
 ``robodesign optimize TASK --modules SET --optimizer genetic --cost cyc --budget B --workers 1 --json`` for
 every set and task and prints one row per run: solved (best cycle time) / provably out of reach / not found,
-the diagnosis, and where the candidates stopped.
+the diagnosis, and where the candidates stopped. Part 3 (``--part reference`` or ``all``) solves every task
+with one fixed reference design per set (``robodesign solve --order``: robodesign_arm's example A,
+robodesign_heavy's example B, from their READMEs): does a design of the set exist, whatever the search finds?
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from robodesign.design.reach import module_set_reach
 from robodesign.formats.module_io import load_module_set
 
 ROOT = Path(__file__).resolve().parents[1]
+REFERENCE = {"robodesign_arm": "1,21,22,4,22,3,23,24,23,12", "robodesign_heavy": "1,21,22,8,24,12,25,26,25,16"}
 
 
 def rot(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -69,6 +72,7 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--sets", default="robodesign_arm,robodesign_heavy")
     ap.add_argument("--out", type=Path, default=ROOT / "experiments" / "results" / "module_sets")
+    ap.add_argument("--part", choices=("search", "reference", "all"), default="all")
     args = ap.parse_args()
     sets = args.sets.split(",")
 
@@ -86,6 +90,10 @@ def main() -> int:
         f = args.out / f"far_goals_s{args.seed}_{i:02d}.json"
         make_task(f, rng)
         tasks.append(f)
+    if args.part in ("reference", "all"):
+        reference(args, tasks, sets)
+    if args.part == "reference":
+        return 0
     rows = []
     print("\n| task | module set | result | cyc [s] | evaluations | stopped at (failures per stage) | diagnosis |\n"
           "|---|---|---|---|---|---|---|")
@@ -116,6 +124,28 @@ def main() -> int:
               f"{sum(r['result'] == 'provably out of reach' for r in mine)}, torque-infeasible {torque}, "
               f"median cycle time {med:.2f} s")
     return 0
+
+
+def reference(args, tasks, sets) -> None:
+    print("\n| task | module set | reference order | result | cyc [s] | stage | message |\n|---|---|---|---|---|---|---|")
+    solved = {name: 0 for name in sets}
+    for f in tasks:
+        for name in sets:
+            order = REFERENCE.get(name)
+            if order is None:
+                continue
+            cmd = [sys.executable, "-m", "robodesign.cli", "solve", str(f), "--modules", name, "--order", order,
+                   "--cost", "cyc", "--seed", str(args.seed), "--json", "--out", str(args.out / f"{f.stem}_{name}_ref.json")]
+            out = json.loads(subprocess.run(cmd, capture_output=True, text=True).stdout)
+            ok = bool(out.get("feasible"))
+            solved[name] += ok
+            print(f"| {f.stem} | {name} | {order} | {'valid' if ok else 'no solution'} | "
+                  f"{out['cost']:.2f} | done | |" if ok else
+                  f"| {f.stem} | {name} | {order} | no solution | | {out.get('stage', '')} | "
+                  f"{str(out.get('message', ''))[:120]} |", flush=True)
+    print()
+    for name, k in solved.items():
+        print(f"{name} reference design: valid on {k}/{len(tasks)} tasks")
 
 
 if __name__ == "__main__":
