@@ -95,3 +95,31 @@ def test_suite_summary_counts_each_class(tmp_path):
     md = markdown([s], unsolved_rows(recs), tasks)
     assert "| fam | far | random | 0 | provably out of reach | – | 5.422 |" in md
     assert "| fam | free | random | 0 | not found | – | – | not found: the search ran out of budget" in md
+
+
+
+def test_torque_verdict_reads_the_pipelines_own_message(tmp_path):
+    """A real static_torque failure: robodesign_arm with its shoulder pitch joint (module 22) limited to 5 Nm.
+    The pipeline's own message is parsed into the torque the pose needs; the shortfall is that minus 5 Nm."""
+    from robodesign.core.paths import builtin_module_sets
+    from robodesign.design.diagnosis import diagnose, torque_shortfall
+    from robodesign.design.problem import Problem
+    from robodesign.design.solve import solve
+
+    data = json.loads((builtin_module_sets()["robodesign_arm"] / "modules.json").read_text())
+    for m in data["modules"]:
+        if m["header"]["ID"] == "22":
+            m["joints"][0]["limits"]["peakTorque"] = 5.0
+    weak = tmp_path / "weak"
+    weak.mkdir()
+    (weak / "modules.json").write_text(json.dumps(data))
+    (weak / "meshes").symlink_to(builtin_module_sets()["robodesign_arm"] / "meshes")
+    task = _task_file(tmp_path / "near.json", [(0.6, 0.0, 0.4)])
+    prob = Problem.build(task, weak, "cyc")
+    res = solve(prob.task, prob.module_set, ["1", "21", "22", "4", "22", "3", "23", "24", "23", "12"], np.eye(4))
+    assert res.stage == "static_torque"
+    need, limit, joint = torque_shortfall(res.message)
+    assert limit == 5.0 and joint in (1, 2) and need > 5.0
+    d = diagnose(prob, [{"feasible": False, "stage": res.stage, "stage_index": res.stage_index,
+                         "message": res.message}])
+    assert d.verdict == "torque" and d.torque_shortfall == pytest.approx(need - 5.0)
