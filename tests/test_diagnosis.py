@@ -123,3 +123,31 @@ def test_torque_verdict_reads_the_pipelines_own_message(tmp_path):
     d = diagnose(prob, [{"feasible": False, "stage": res.stage, "stage_index": res.stage_index,
                          "message": res.message}])
     assert d.verdict == "torque" and d.torque_shortfall == pytest.approx(need - 5.0)
+
+
+def test_run_suite_report_lists_each_task_with_its_class(tmp_path, capsys):
+    """`robodesign run` on a folder suite with a provably out-of-reach task: suites.csv counts it, suites_tasks.csv
+    and suites.md list it with the set's reach bound, and the printed suite line says so."""
+    import csv
+    tasks = tmp_path / "tasks"
+    tasks.mkdir()
+    _task_file(tasks / "far.json", [(0.0, 0.0, 0.5), (8.0, 0.0, 0.0)])
+    _task_file(tasks / "near.json", [(0.5, 0.2, 0.4)])
+    cfg = tmp_path / "suite.yaml"
+    cfg.write_text("name: diag\nmodules: robodesign_arm\nsuites:\n  - name: cells\n    folder: tasks\n"
+                   "optimizers: [random]\nbudget: 2evals\nseeds: [0]\n")
+    out = tmp_path / "out"
+    assert main(["run", str(cfg), "--out", str(out), "--progress", "none"]) == 0
+    printed = capsys.readouterr().out
+    with open(out / "suites.csv") as f:
+        (s,) = list(csv.DictReader(f))
+    with open(out / "suites_tasks.csv") as f:
+        rows = {r["task"]: r for r in csv.DictReader(f)}
+    assert (int(s["runs"]), int(s["out_of_reach"])) == (2, 1)
+    assert int(s["solved"]) + int(s["not_found"]) == 1
+    far = rows["cells/far"]
+    assert far["result"] == "provably out of reach" and float(far["reach_bound"]) == pytest.approx(5.422)
+    assert far["diagnosis"].startswith("provably out of reach: goal g1 is at least 7.99")
+    assert rows["cells/near"]["result"] in ("solved", "not found") and rows["cells/near"]["reach_bound"] == ""
+    assert "| cells | cells/far | random | 0 | provably out of reach | – | 5.422 |" in (out / "suites.md").read_text()
+    assert "1 provably out of reach" in printed
