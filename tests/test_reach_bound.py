@@ -231,7 +231,8 @@ def test_diagnose_each_verdict(tmp_path):
     d = diagnose(prob, evs)
     assert d.verdict == "torque" and d.label == "not found"
     assert d.torque_shortfall == pytest.approx(14.5) and d.torque_failures == 2 and d.torque_needed == 101.5
-    assert "14.5 Nm short" in d.message
+    assert "14.5 Nm short; stronger built-in sets: robodesign_heavy (joints up to 330 Nm; --modules robodesign_heavy)" \
+        in d.message
     d = diagnose(prob, evs + [_ev("plan", "no path")])
     assert d.verdict == "not_found" and d.best_stage == "plan" and "ran out of budget" in d.message
     assert diagnose(prob, evs + [_ev("done", feasible=True)]).verdict == "solved"

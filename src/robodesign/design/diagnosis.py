@@ -17,11 +17,13 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, List, Optional, Sequence, Tuple
 
+from robodesign.core.paths import builtin_module_sets
 from robodesign.design.problem import Problem
 from robodesign.design.reach import ReachProof, SetReach, reach_proof, set_reach
 from robodesign.design.solve import STAGES
+from robodesign.formats.module_io import load_module_set
 
 VERDICTS = ("solved", "out_of_reach", "torque", "not_found")
 
@@ -36,6 +38,20 @@ def torque_shortfall(message: str) -> Optional[Tuple[float, float, int]]:
     if m is None:
         return None
     return float(m["need"]), float(m["limit"]), int(m["joint"])
+
+
+def stronger_builtin_sets(torque: float, exclude: str = "") -> List[Tuple[str, float]]:
+    """(name, strongest joint's peak torque [Nm]) of every built-in module set other than ``exclude`` that has a
+    joint of at least ``torque``."""
+    out = []
+    for name in builtin_module_sets():
+        if name == exclude:
+            continue
+        ms = load_module_set(name)
+        strongest = max((j.limits.torque for m in ms for j in m.joints if j.actuated), default=0.0)
+        if strongest >= torque:
+            out.append((name, float(strongest)))
+    return out
 
 
 def _get(e: Any, key: str, default=None):
@@ -100,6 +116,10 @@ def diagnose(problem: Problem, evaluations: Sequence[Any], stopped: str = "budge
         d.message = (f"torque-infeasible at every tried design that reached the goals: {len(torque)} of {n} designs "
                      f"had IK solutions and none could hold them (static_torque); the best needs {need:.1f} Nm at "
                      f"joint {joint} (limit {limit:.1f}), {need - limit:.1f} Nm short")
+        stronger = stronger_builtin_sets(need, exclude=problem.module_set.name)
+        if stronger:
+            d.message += "; stronger built-in sets: " + ", ".join(
+                f"{n} (joints up to {t:.0f} Nm; --modules {n})" for n, t in stronger)
         return d
     why = "the search exhausted its space" if stopped == "exhausted" else "the search ran out of budget"
     if far is None:
