@@ -95,6 +95,17 @@ def test_every_inertia_is_physical_and_fits_its_geometry(name):
             assert eig.max() <= b.mass * rho ** 2, (b.id, eig.max(), b.mass, rho)
 
 
+@pytest.mark.parametrize("name", ["robodesign_arm", "robodesign_heavy"])
+def test_joint_bodies_have_the_density_of_an_actuator(name):
+    """Each joint body's mass over its collision cylinders' volume (housings with motor, gear and air inside):
+    between 500 and 4,000 kg/m³ (aluminium is 2,700; the UR10e's size-4 shoulder link, 7.37 kg in about
+    Ø 0.15 × 0.18 m, is about 2,300)."""
+    for m in load_module_set(name):
+        for b in m.bodies if m.dof else ():
+            vol = sum(math.pi * g.size[0] ** 2 * g.size[1] for g in b.collision if g.kind == "cylinder")
+            assert 500 <= b.mass / vol <= 4000, (m.id, b.id, b.mass / vol)
+
+
 def test_examples_weigh_like_a_ur10e(heavy):
     for order in (EXAMPLE_A, EXAMPLE_B):
         assert sum(heavy[m].mass for m in order) == pytest.approx(33.5, rel=0.05)  # UR10e data sheet: 33.5 kg
