@@ -15,6 +15,7 @@ evaluations) and the suite report (the stored rows of a run).
 """
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Any, List, Optional, Sequence, Tuple
@@ -80,7 +81,9 @@ class Diagnosis:
 
     def to_json(self) -> dict:
         return {"verdict": self.verdict, "label": self.label, "message": self.message,
-                "evaluations": self.evaluations, "reach_bound": self.reach_bound,
+                "evaluations": self.evaluations,
+                "reach_bound": self.reach_bound if self.reach_bound is not None and math.isfinite(self.reach_bound)
+                else None,  # strict JSON: an unbounded (or empty) set has no figure
                 "proof": None if self.proof is None else self.proof.to_json(),
                 "torque_needed": self.torque_needed, "torque_limit": self.torque_limit,
                 "torque_shortfall": self.torque_shortfall, "torque_failures": self.torque_failures,
