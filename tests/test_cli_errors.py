@@ -272,7 +272,7 @@ def test_solve_energy_cost_optimizes_the_trajectory_by_default(capsys):
 def test_check_and_view_say_pass_modules_when_the_module_set_is_not_local(capsys, tmp_path, ptp3_solution):
     sol = tmp_path / "sol.json"
     sol.write_text(json.dumps(ptp3_solution))  # moduleSet "IMPROV": not a folder here, not built in
-    msg = ("module set 'IMPROV' is not found locally (built-in: robodesign_arm); pass --modules DIR "
+    msg = ("module set 'IMPROV' is not found locally (built-in: robodesign_arm, robodesign_heavy); pass --modules DIR "
            "(the folder holding its modules.json)")
     for argv in (["check", PTP3, sol], ["view", sol, "--task", PTP3, "--no-plots", "--out", tmp_path / "v.html"]):
         code, out, err = run(capsys, *argv)

@@ -16,6 +16,7 @@ from robodesign.cli.workers import (  # noqa: F401 - re-exported: their home bef
     short_budget,
 )
 from robodesign.core.errors import InputError
+from robodesign.design.diagnosis import diagnose
 from robodesign.experiment.report import base_pose_text
 
 
@@ -213,6 +214,8 @@ def cmd_optimize(args) -> int:
                "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts,
                "resumed_evaluations": journal.stored,
                "resume": resume_command(getattr(args, "argv", None)) if res.stopped == "interrupted" else None}
+    diagnosis = diagnose(problem, res.history, res.stopped)  # why nothing valid was found (docs/diagnosis.md)
+    summary["diagnosis"] = diagnosis.to_json()
     if args.json:
         print(json.dumps(summary))
     else:
@@ -232,6 +235,7 @@ def cmd_optimize(args) -> int:
                 from robodesign.experiment.suites import stage_counts_text
                 print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
                       f"{stage_counts_text(run.stage_counts)})")
+            print(f"diagnosis    {diagnosis.message}")
     if res.stopped == "interrupted":
         return EXIT_INTERRUPTED
     return 0 if best is not None and best.feasible else 1

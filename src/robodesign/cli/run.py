@@ -119,10 +119,11 @@ def print_suites(out: Path) -> None:
     import json
 
     from robodesign.experiment.storage import ExperimentDB
-    from robodesign.experiment.suites import cell, records_from_db, suite_of_problems, summarize_suites
+    from robodesign.experiment.suites import cell, problems_of, records_from_db, suite_of_problems, summarize_suites
     db = ExperimentDB(out / "evaluations.sqlite")
     try:
-        summary = summarize_suites(records_from_db(db, suite_of_problems(json.loads((out / "meta.json").read_text()))))
+        meta = json.loads((out / "meta.json").read_text())
+        summary = summarize_suites(records_from_db(db, suite_of_problems(meta), problems_of(meta)))
     finally:
         db.close()
     for s in summary:
@@ -131,6 +132,9 @@ def print_suites(out: Path) -> None:
                 f"{cell('', s['best_cost_median'])} [min {cell('', s['best_cost_min'])}, max "
                 f"{cell('', s['best_cost_max'])}]; first feasible after {cell('', s['first_feasible_s_median'])} s "
                 f"(median)")
+        if s["out_of_reach"]:
+            line += (f"; {s['out_of_reach']} provably out of reach, solved {cell('solved_pct', s['solved_pct_reachable'])}"
+                     f" of the rest")
         if s["unsolved_stopped_at"]:
             line += f"; unsolved runs stopped at: {s['unsolved_stopped_at']}"
         print(line)

@@ -487,27 +487,33 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
 
 
 def write_suites(out: Path, meta: dict, db: ExperimentDB) -> str:
-    """``suites.csv``, ``suites_unsolved.csv`` and ``suites.md`` when the experiment has suites; returns the
-    HTML tables for the report page ("" without suites)."""
+    """``suites.csv``, ``suites_unsolved.csv``, ``suites_tasks.csv`` and ``suites.md`` when the experiment has
+    suites (every unsolved run diagnosed: provably out of reach or not found); returns the HTML tables for
+    the report page ("" without suites)."""
     from robodesign.experiment.suites import (
         SUITE_COLUMNS,
+        TASK_COLUMNS,
         UNSOLVED_COLUMNS,
         html_tables,
         markdown,
+        problems_of,
         records_from_db,
         suite_of_problems,
         summarize_suites,
+        task_rows,
         unsolved_rows,
     )
     suite_of = suite_of_problems(meta)
     if not suite_of:
         return ""
-    recs = records_from_db(db, suite_of)
-    summary, unsolved = summarize_suites(recs), unsolved_rows(recs)
+    recs = records_from_db(db, suite_of, problems_of(meta))
+    summary, unsolved, tasks = summarize_suites(recs), unsolved_rows(recs), task_rows(recs)
     _write_csv(out / "suites.csv", SUITE_COLUMNS, ([_f(s[c], 10) if isinstance(s[c], float) else s[c]
                                                     for c in SUITE_COLUMNS] for s in summary))
     _write_csv(out / "suites_unsolved.csv", UNSOLVED_COLUMNS, ([u[c] for c in UNSOLVED_COLUMNS] for u in unsolved))
-    (out / "suites.md").write_text(markdown(summary, unsolved))
+    _write_csv(out / "suites_tasks.csv", TASK_COLUMNS, ([_f(t[c], 10) if isinstance(t[c], float) else t[c]
+                                                        for c in TASK_COLUMNS] for t in tasks))
+    (out / "suites.md").write_text(markdown(summary, unsolved, tasks))
     return html_tables(summary, unsolved)
 
 

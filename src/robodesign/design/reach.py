@@ -1,0 +1,300 @@
+"""How far the arms of a module set can reach: an admissible bound over every valid module order, and the
+proof that a task's goals lie beyond it.
+
+**The set's reach bound** (:func:`set_reach`). For every module, :func:`module_extent` bounds the distance
+between the connector it is attached by and the connector the next module attaches to (the TCP for an end
+effector, the base connector for a base), over every joint configuration: a rigid path is its length; a path
+over one revolute joint is exactly ``√(h² + (r_a + r_b)²)`` (h: the two points' distance along the axis, r_a,
+r_b: their distances from it; the joint turns freely, limits ignored); a longer path sums the distances
+between its joint origins (revolute joints keep them) plus the stroke of each prismatic joint. By the
+triangle inequality, no TCP of an order is farther from its base pose's origin (the base connector's origin)
+than the sum of its modules' extents. :func:`set_reach` maximises that sum over every order the
+:class:`~robodesign.design.search_space.SearchSpace` allows (dynamic programming over its chaining states;
+the states are a superset of the valid orders, so the maximum is still an upper bound) and returns the
+longest order as the witness.
+
+**The proof** (:func:`reach_proof`). A design solves a task only if every goal position lies within that
+bound of one base position. With the base confined by the task's ``basePlacement`` (a box, cylinder or ball
+around its nominal position), a goal farther than ``bound`` + its own position tolerance from every
+allowed base position is out of reach; with any base placement, two goals farther apart than twice the
+bound (plus their tolerances) cannot both be reached. A task without a ``basePlacement`` constraint
+allows any base pose (as the reference judges it): only the second argument applies.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from robodesign.design.search_space import SearchSpace
+from robodesign.design.solve import goal_poses
+from robodesign.formats.module_spec import Module, ModuleSet
+from robodesign.formats.task_spec import Task
+from robodesign.formats.tolerance import ToleratedPose
+
+
+# -- per module --------------------------------------------------------------------------------------------
+def _body_frames(m: Module) -> Dict[str, np.ndarray]:
+    """Every body's frame in the first body's frame at q = 0 (joints form a tree over the bodies)."""
+    frames = {m.bodies[0].id: np.eye(4)}
+    pending = list(m.joints)
+    while pending:
+        progressed = False
+        for j in list(pending):
+            if j.parent in frames:
+                frames[j.child] = frames[j.parent] @ j.pose_parent @ j.pose_child
+            elif j.child in frames:
+                frames[j.parent] = frames[j.child] @ np.linalg.inv(j.pose_parent @ j.pose_child)
+            else:
+                continue
+            pending.remove(j)
+            progressed = True
+        if not progressed:  # bodies not joined to the first one: they cannot be on a path
+            break
+    return frames
+
+
+def _joint_path(m: Module, a: str, b: str) -> Optional[list]:
+    """The joints on the path from body ``a`` to body ``b`` (breadth-first over the joint tree)."""
+    prev: Dict[str, Tuple[Optional[str], object]] = {a: (None, None)}
+    queue = [a]
+    while queue:
+        u = queue.pop(0)
+        if u == b:
+            break
+        for j in m.joints:
+            for x, y in ((j.parent, j.child), (j.child, j.parent)):
+                if x == u and y not in prev:
+                    prev[y] = (u, j)
+                    queue.append(y)
+    if b not in prev:
+        return None
+    path, u = [], b
+    while prev[u][0] is not None:
+        u, j = prev[u]
+        path.append(j)
+    return path[::-1]
+
+
+def _stroke(j) -> float:
+    lo, hi = j.limits.lower, j.limits.upper
+    return max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
+
+
+def connector_distance_bound(m: Module, con_a: str, con_b: str) -> float:
+    """The largest distance between connectors ``con_a`` and ``con_b`` of module ``m`` over every joint
+    configuration (exact for zero or one revolute joint between them, an upper bound otherwise)."""
+    frames = _body_frames(m)
+    ca, cb = m.connector(con_a), m.connector(con_b)
+    if ca.body_id not in frames or cb.body_id not in frames:
+        return math.inf
+    pa = (frames[ca.body_id] @ ca.pose)[:3, 3]
+    pb = (frames[cb.body_id] @ cb.pose)[:3, 3]
+    path = _joint_path(m, ca.body_id, cb.body_id)
+    if path is None:
+        return math.inf
+    if not path:
+        return float(np.linalg.norm(pb - pa))
+    moving = [j for j in path if j.type != "fixed"]
+    if len(moving) == 1 and moving[0].type == "revolute":
+        j = moving[0]
+        # the joint frame at q = 0, seen from the side of its parent body
+        J = frames[j.parent] @ j.pose_parent
+        Ji = np.linalg.inv(J)
+        qa, qb = Ji[:3, :3] @ pa + Ji[:3, 3], Ji[:3, :3] @ pb + Ji[:3, 3]
+        return float(math.hypot(qa[2] - qb[2], math.hypot(qa[0], qa[1]) + math.hypot(qb[0], qb[1])))
+    # several joints: joint origins (on their axes) keep their distances along the path
+    pts = [pa] + [(frames[j.parent] @ j.pose_parent)[:3, 3] for j in path] + [pb]
+    d = sum(float(np.linalg.norm(pts[i + 1] - pts[i])) for i in range(len(pts) - 1))
+    return d + sum(_stroke(j) for j in path if j.type == "prismatic")
+
+
+def module_extent(m: Module) -> float:
+    """An upper bound of the distance a module spans in a serial chain: base connector → any other connector
+    (a base), any connector → the TCP (an end effector), else the largest distance between any two of its
+    connectors; over every joint configuration."""
+    cons = m.connectors
+    if m.is_base:
+        pairs = [(a.id, b.id) for a in cons if a.type == "base" for b in cons if b.type != "base"]
+    elif m.is_end_effector:
+        pairs = [(a.id, b.id) for a in cons if a.type != "eef" for b in cons if b.type == "eef"]
+    else:
+        pairs = [(a.id, b.id) for i, a in enumerate(cons) for b in cons[i + 1:]]
+    return max((connector_distance_bound(m, a, b) for a, b in pairs), default=0.0)
+
+
+# -- per module set ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SetReach:
+    """``bound`` [m]: no TCP of any order the search space allows is farther than this from its base pose's
+    origin; ``order``: an order whose module extents sum to it (the longest arm); ``extents``: per module."""
+    bound: float
+    order: Tuple[str, ...]
+    extents: Dict[str, float] = field(default_factory=dict)
+
+
+def set_reach(space: SearchSpace) -> SetReach:
+    """The longest arm ``space`` allows: the largest sum of :func:`module_extent` over its valid orders."""
+    ms = space.module_set
+    ext = {m.id: module_extent(m) for m in ms}
+    memo: Dict[tuple, Tuple[float, Tuple[str, ...]]] = {}
+
+    def best(state) -> Tuple[float, Tuple[str, ...]]:
+        hit = memo.get(state)
+        if hit is not None:
+            return hit
+        out: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
+        for nxt, st in space._step(state)[2]:  # (module, state after it or None when it completes the order)
+            if st is None:
+                cand = (ext[nxt], (nxt,))
+            else:
+                d, tail = best(st)
+                cand = (ext[nxt] + d, (nxt,) + tail)
+            if cand[0] > out[0]:
+                out = cand
+        memo[state] = out
+        return out
+
+    top: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
+    for b in space.base_modules:
+        state, _ = space._root(b)
+        d, tail = best(state)
+        if ext[b] + d > top[0]:
+            top = (ext[b] + d, (b,) + tail)
+    return SetReach(bound=float(top[0]), order=top[1], extents=ext)
+
+
+def module_set_reach(ms: ModuleSet, **rules) -> SetReach:
+    """:func:`set_reach` of ``ms`` under search-space ``rules`` (``min_dof``, ``max_dof``, ...)."""
+    return set_reach(SearchSpace(ms, **rules))
+
+
+# -- regions ------------------------------------------------------------------------------------------------
+def _frame_boxes(tp: ToleratedPose) -> Dict[str, dict]:
+    """Per tolerance frame: the x/y/z intervals, the r_cyl and r_sph radii (the position constraints)."""
+    out: Dict[str, dict] = {}
+    for name, (lo, hi), frame in tp.entries:
+        f = out.setdefault(frame, {"x": (-math.inf, math.inf), "y": (-math.inf, math.inf),
+                                   "z": (-math.inf, math.inf), "r_cyl": math.inf, "r_sph": math.inf})
+        if name in ("x", "y", "z"):
+            a, b = f[name]
+            f[name] = (max(a, lo), min(b, hi))
+        elif name in ("r_cyl", "r_sph"):
+            f[name] = min(f[name], hi)
+    return out
+
+
+def _frame_rotation(tp: ToleratedPose, frame: str) -> np.ndarray:
+    """Q_f: nominal axes → the frame's axes (tolerance.py, "Frames")."""
+    Q = getattr(tp, "_Q", {}).get(frame)
+    if Q is None:
+        Q = tp.nominal[:3, :3] if frame == "world" else np.eye(3)
+    return np.asarray(Q, dtype=float)
+
+
+def position_radius(tp: ToleratedPose) -> float:
+    """An upper bound of how far a position allowed by ``tp`` can be from its nominal position (inf when
+    some direction is unbounded)."""
+    best = math.inf
+    for f in _frame_boxes(tp).values():
+        box = [max(abs(a), abs(b)) for a, b in (f["x"], f["y"], f["z"])]
+        best = min(best, math.sqrt(sum(v * v for v in box)), f["r_sph"],
+                   math.hypot(f["r_cyl"], box[2]) if math.isfinite(f["r_cyl"]) else math.inf)
+    return best
+
+
+def distance_to_region(tp: ToleratedPose, point: Sequence[float]) -> float:
+    """A lower bound of the distance from world ``point`` to every position ``tp`` allows (0 when a direction
+    is unbounded and the point lies that way)."""
+    d_nom = tp.nominal[:3, :3].T @ (np.asarray(point, dtype=float) - tp.nominal[:3, 3])
+    best = 0.0
+    for frame, f in _frame_boxes(tp).items():
+        v = _frame_rotation(tp, frame) @ d_nom
+        lo = np.array([f[k][0] for k in "xyz"])
+        hi = np.array([f[k][1] for k in "xyz"])
+        best = max(best, float(np.linalg.norm(v - np.clip(v, lo, hi))))
+        if math.isfinite(f["r_sph"]):
+            best = max(best, float(np.linalg.norm(v)) - f["r_sph"])
+        if math.isfinite(f["r_cyl"]):
+            radial = max(0.0, math.hypot(v[0], v[1]) - f["r_cyl"])
+            axial = max(0.0, v[2] - hi[2], lo[2] - v[2])
+            best = max(best, math.hypot(radial, axial))
+    return best
+
+
+def goal_points(task: Task) -> List[Tuple[str, np.ndarray, float]]:
+    """(goal ID, nominal world position, position tolerance radius) of every pose a goal must reach."""
+    out = []
+    for g in task.goals:
+        for tp in goal_poses(g):
+            out.append((g.id, np.asarray(tp.nominal[:3, 3], dtype=float), position_radius(tp)))
+    return out
+
+
+def base_is_free(task: Task) -> bool:
+    """Whether the task allows any base pose (no basePlacement, or one that constrains nothing)."""
+    bp = task.base_placement
+    return bp is None or bool(getattr(bp, "is_unconstrained", False))
+
+
+# -- proof --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ReachProof:
+    """Why no design of the module set reaches the task: ``kind`` is ``"goal"`` (goal ``goals[0]`` is
+    ``needed`` m from every allowed base position, counting its tolerance) or ``"spread"`` (goals ``goals[0]``
+    and ``goals[1]`` are ``distance`` apart, ``2·needed`` counting their tolerances: any base is ``needed``
+    from one of them); ``bound`` is the set's reach bound, ``order`` the longest arm. ``distance``: the
+    nominal distance (goal: from the base region; spread: between the two goals)."""
+    kind: str
+    bound: float
+    needed: float
+    goals: Tuple[str, ...]
+    order: Tuple[str, ...]
+    distance: float = math.nan
+
+    @property
+    def message(self) -> str:
+        arm = f"the longest arm of the module set reaches at most {self.bound:.3f} m from its base"
+        if self.kind == "goal":
+            return (f"provably out of reach: goal {self.goals[0]} is at least {self.needed:.3f} m from every "
+                    f"allowed base position; {arm}")
+        return (f"provably out of reach: goals {self.goals[0]} and {self.goals[1]} are {self.distance:.3f} m "
+                f"apart, so one of them is at least {self.needed:.3f} m from any base (counting their tolerances); "
+                f"{arm}")
+
+    def to_json(self) -> dict:
+        return {"kind": self.kind, "bound": self.bound, "needed": self.needed, "distance": self.distance,
+                "goals": list(self.goals), "order": list(self.order), "message": self.message}
+
+
+def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None) -> Optional[ReachProof]:
+    """A proof that no order of ``space`` at any base pose the task allows reaches every goal, or None.
+    The base region is the task's basePlacement (not the search space's bounds: the proof is about the task)."""
+    reach = reach or set_reach(space)
+    R = reach.bound
+    if not math.isfinite(R):
+        return None
+    pts = goal_points(task)
+    best: Optional[ReachProof] = None
+    if not base_is_free(task):
+        for gid, p, tol in pts:
+            dist = distance_to_region(task.base_placement, p)
+            need = dist - tol
+            if need > R and (best is None or need > best.needed):
+                best = ReachProof("goal", R, need, (gid,), reach.order, dist)
+    if best is None and len(pts) > 1:
+        # every pair (a sound proof needs only one; beyond _MAX_SPREAD poses, evenly spaced ones are compared)
+        sel = pts if len(pts) <= _MAX_SPREAD else [pts[int(i)] for i in np.linspace(0, len(pts) - 1, _MAX_SPREAD)]
+        P = np.array([p for _, p, _ in sel])
+        tol = np.array([t for _, _, t in sel])
+        D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
+        need = (D - tol[:, None] - tol[None, :]) / 2.0
+        i, j = np.unravel_index(int(np.argmax(need)), need.shape)
+        if need[i, j] > R:
+            best = ReachProof("spread", R, float(need[i, j]), (sel[i][0], sel[j][0]), reach.order, float(D[i, j]))
+    return best
+
+
+_MAX_SPREAD = 1500  # goal poses compared pairwise by the spread proof
