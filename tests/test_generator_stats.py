@@ -142,3 +142,21 @@ def test_statistics_match_the_published_figures(folders):
     assert 0.1 <= d.min() <= 0.35 and 0.5 <= np.median(d) <= 0.75 and 0.75 <= d.max() <= 1.0  # 0.15 / 0.66 / 0.90
     assert 0.10 <= s["liu"].below <= 0.35  # 21 %
     assert set(s["liu"].obstacle_counts) == {1} and s["liu"].obstacle_kinds == ["mesh"]
+
+
+def test_easy_variant_cells_pass_the_reader_too():
+    """The easy variants' constraint blocks hold π and −π bounds (Theta_R, N_z): written exactly as well."""
+    from robodesign.generate import bpo2024, liu2020, whitman2020
+    from robodesign.generate.common import Provenance, task_text
+    prov = Provenance("x", 1, 0, 0, ())
+    cells = [liu2020._cell("t", prov, "assets/m.stl", 1.0, np.eye(4), [], {}),
+             bpo2024._cell("t", prov, {"structure": "x", "difficulty": "easy"}, [], 0.0, []),
+             {"constraints": [whitman2020.base_constraint("xyz_any_rot", 1.0)]}]
+    bounds = {}
+    for cell in cells:
+        for pose in _poses(json.loads(task_text(cell))):
+            for p, (lo, hi) in zip(pose.get("toleranceProjection", []), pose.get("tolerance", [])):
+                a, b = ALLOWED[p]
+                assert a <= lo <= hi <= b, (p, lo, hi)
+                bounds.setdefault(p, set()).add((lo, hi))
+    assert (-math.pi, math.pi) in bounds["N_z"] and (0, math.pi) in bounds["Theta_R"]

@@ -31,6 +31,7 @@ from robodesign.core.errors import InputError, RobodesignError
 from robodesign.core.spatial import rot_y
 from robodesign.generate.common import (
     AABB,
+    NEG_PI,
     PI,
     ObstacleField,
     Provenance,
@@ -175,7 +176,7 @@ def _cell(tid: str, prov: Provenance, mesh_ref: str, scale: float, machine_pose:
              for (oid, name), t in zip((("tray_in", "input tray"), ("tray_out", "output tray")), trays)],
         "constraints": [
             {"type": "basePlacement", "pose": tolerated(transform((0, 0, BASE_Z)), x=rb, y=rb, z=BASE_Z_RANGE,
-                                                        N_x=(-0.001, 0.001), N_y=(-0.001, 0.001), N_z=(-PI, PI))},
+                                                        N_x=(-0.001, 0.001), N_y=(-0.001, 0.001), N_z=(NEG_PI, PI))},
             {"type": "joint", "parts": ["q", "dq", "tau"]},
             {"type": "selfCollisionFree"},
             {"type": "collisionFree"},
