@@ -22,6 +22,14 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.core.spatial import homogeneous
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.assembly import Assembly
+from robodesign.formats.geometry import coal_shapes
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.task_io import parse_task
+from robodesign.formats.tolerance import ToleratedPose
+from robodesign.model.cell import build_robot
+from robodesign.solvers.ik import solve_ik
 
 
 class Exact(float):
@@ -268,7 +276,6 @@ def set_reach_bound(module_set_name: str = REFERENCE_MODULE_SET, max_dof: int = 
     the longest joint module, (``max_dof`` + 1) · ``max_links_between`` times the longest link and the longest
     end effector, each module counted by :func:`module_span` (triangle inequality). A goal farther than this
     from every allowed base position is out of reach for every design of the set."""
-    from robodesign.formats.module_io import load_module_set
     ms = load_module_set(module_set_name)
     span: Dict[str, float] = {}
     for m in ms:
@@ -288,7 +295,6 @@ class ObstacleField:
     """The obstacles of a task (as the generators write it), for distance queries with coal."""
 
     def __init__(self, task_dict: dict, folder: Path):
-        from robodesign.formats.task_io import parse_task
         self.task = parse_task(clean(task_dict), folder / "_probe.json")
 
     def clearance(self, p) -> float:
@@ -300,7 +306,6 @@ class ObstacleField:
         """Distance (coal) of a coal shape at ``pose`` from the cell's obstacles (≤ 0 when they touch)."""
         import coal
 
-        from robodesign.formats.geometry import coal_shapes
         if not hasattr(self, "_obstacles"):
             self._obstacles = [coal.CollisionObject(s, coal.Transform3s(g.pose[:3, :3], g.pose[:3, 3]))
                                for o in self.task.obstacles for g in o.collision for s in coal_shapes(g)]
@@ -321,9 +326,6 @@ class ReferenceArm(ObstacleField):
 
     def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
                  ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
-        from robodesign.formats.assembly import Assembly
-        from robodesign.formats.module_io import load_module_set
-        from robodesign.model.cell import build_robot
         super().__init__(task_dict, folder)
         self.module_set = load_module_set(REFERENCE_MODULE_SET)
         asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
@@ -333,8 +335,6 @@ class ReferenceArm(ObstacleField):
         self.rng = np.random.default_rng(seed)
 
     def reaches(self, goal_pose: dict) -> bool:
-        from robodesign.formats.tolerance import ToleratedPose
-        from robodesign.solvers.ik import solve_ik
         tp = ToleratedPose.from_json(clean(goal_pose))
         o, R = self.robot.reach_bound()
         if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
@@ -362,9 +362,6 @@ def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.nd
     OMPL is seeded, so the answer is the same on every run unless a planning query runs into the time limit:
     a query that needs seconds on an idle machine could be cut on an overloaded one. The generous limit makes
     that unlikely (a successful query returns at once; only failing cells pay the full limit)."""
-    from robodesign.design.solve import SolveSettings, solve
-    from robodesign.formats.module_io import load_module_set
-    from robodesign.formats.task_io import parse_task
     task = parse_task(clean(task_dict), folder / "_probe.json")
     res = solve(task, load_module_set(REFERENCE_MODULE_SET), list(REFERENCE_ORDER), base_pose=base_pose,
                 settings=SolveSettings(seed=0, plan_time=VERIFY_PLAN_TIME))

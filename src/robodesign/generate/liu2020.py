@@ -29,6 +29,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError, RobodesignError
 from robodesign.core.spatial import rot_y
+from robodesign.formats.geometry import load_mesh_arrays
 from robodesign.generate.common import (
     AABB,
     NEG_PI,
@@ -140,7 +141,6 @@ def _machine_source(opts: Dict[str, object]):
 
 
 def _auto_scale(file: Path) -> float:
-    from robodesign.formats.geometry import load_mesh_arrays
     V = np.concatenate([v for v, _ in load_mesh_arrays(str(file), (1.0, 1.0, 1.0))])
     return 0.001 if float(np.max(V.max(axis=0) - V.min(axis=0))) > 20.0 else 1.0
 

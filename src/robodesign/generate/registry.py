@@ -11,14 +11,18 @@ from typing import Callable, Dict, List, Optional, Tuple
 
 from robodesign.core.errors import InputError
 from robodesign.core.jsonio import load_json
-from robodesign.generate import bpo2024, liu2020, whitman2020
+from robodesign.generate.bpo2024 import FAMILY as BPO2024
 from robodesign.generate.common import Provenance
 from robodesign.generate.family import VARIANT, VERIFY, Family, GeneratedTask, Option, copy_file
+from robodesign.generate.liu2020 import FAMILY as LIU2020
+from robodesign.generate.whitman2020 import FAMILY as WHITMAN2020
+
+FAMILIES: Tuple[Family, ...] = (WHITMAN2020, LIU2020, BPO2024)  # the order of ``robodesign generate --list``
 
 
 def families() -> Dict[str, Family]:
     """name → Family, in the order of ``robodesign generate --list``."""
-    return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY, bpo2024.FAMILY)}
+    return {f.name: f for f in FAMILIES}
 
 
 def get_family(name: str) -> Family:
