@@ -160,3 +160,16 @@ def test_easy_variant_cells_pass_the_reader_too():
                 assert a <= lo <= hi <= b, (p, lo, hi)
                 bounds.setdefault(p, set()).add((lo, hi))
     assert (-math.pi, math.pi) in bounds["N_z"] and (0, math.pi) in bounds["Theta_R"]
+
+
+def test_published_variants_are_deterministic_and_regenerate(folders, tmp_path):
+    from robodesign.generate import regenerate
+    for key in ("w55free", "bpo", "liu"):
+        f = folders[key][7]
+        tags = json.loads(f.read_text())["header"]["tags"]
+        assert "robodesign-generate:variant=published" in tags and not any("verify=" in t for t in tags)
+        out = regenerate(f, tmp_path / key)
+        assert out.name == f.name and out.read_bytes() == f.read_bytes()
+    # the BPO24 archetypes cycle with the task index, medium for tasks 0-9, hard for 10-19
+    names = [f.name for f in folders["bpo"]]
+    assert names[0] == "bpo2024_middle_oven_medium_s0_0000.json" and names[12] == "bpo2024_cross_hard_s0_0012.json"
