@@ -3,7 +3,7 @@
 ``Whitman2020/with_torque/...``, 3 goals / 3 cubes and 5 goals / 5 cubes, base fixed or free).
 
 ``--variant published`` (default) follows the published task files (docs/generators.md, table): goal
-positions uniform in the cube [-1, 1]³ m around the nominal base (half of them below the base plane), goal
+positions uniform in [-1, 1] × [-1, 1] × [-1, 0.8] m around the nominal base (56 % below the base plane), goal
 orientations uniform on SO(3), tolerance x, y, z ± 1 mm and ``Theta_R`` ≤ 0.5° (the reference's default,
 written as the published files write it); cube centres uniform in [-0.8, 0.8]³ m; constraints ``joint``
 q, tau, collisionFree, allGoalsFulfilled (no selfCollisionFree, no dq); base ``fixed`` (± 1 mm, 0.5°) or
@@ -45,7 +45,8 @@ from robodesign.generate.common import (
 from robodesign.generate.family import VARIANT, VERIFY, Family, GeneratedTask, Option
 
 VERSION = 4  # 4: the published variant (default); 3: what is now --variant easy
-WORKSPACE = 1.0  # m: published goals are uniform in [-WORKSPACE, WORKSPACE]³ about the nominal base
+WORKSPACE = 1.0  # m: goals are uniform in x, y ∈ [-WORKSPACE, WORKSPACE] about the nominal base ...
+GOAL_TOP = 0.8  # m: ... and z ∈ [-WORKSPACE, GOAL_TOP] (56 % below the base plane, published 51-67 %)
 CUBE_REGION = 0.8  # m: cube centres uniform in [-CUBE_REGION, CUBE_REGION]³ (matches the published goal clearance)
 BASE_KEEPOUT = 0.10  # m: a cube keeps this distance from the nominal base position (the base module stands there)
 PUBLISHED_CELL_TRIES = 200
@@ -206,7 +207,7 @@ def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> 
         cubes = _published_cubes(rng, m)
         goals = []
         for _ in range(n):
-            T = transform(rng.uniform(-WORKSPACE, WORKSPACE, 3))
+            T = transform(rng.uniform([-WORKSPACE, -WORKSPACE, -WORKSPACE], [WORKSPACE, WORKSPACE, GOAL_TOP]))
             T[:3, :3] = random_rotation(rng)
             goals.append(T)
         ok = all(all(c.distance(T[:3, 3]) > 0.0 for c in cubes) and box_distance(T[:3, 3], lo, hi) <= reach
@@ -224,7 +225,7 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
 FAMILY = Family(
     name="whitman2020",
     version=VERSION,
-    summary="N full-pose reach goals (±1 mm, 0.5°) among M axis-aligned 0.25 m cubes in [-1, 1]³ m; base fixed "
+    summary="N full-pose reach goals (±1 mm, 0.5°) among M axis-aligned 0.25 m cubes within 1 m of the base; base fixed "
             "or free (--variant easy: ±5 mm, orientation free, goals checked by the reference design)",
     options=(
         VARIANT,
