@@ -91,7 +91,7 @@ def test_suite_folder_errors_name_the_field(tmp_path, capsys):
 FAMILIES = {  # family → generator options of a small suite: the easy variants with verify ik (quick to generate,
     # and the 16-evaluation budget solves some of them, so the statistics below are not all empty; the built-in set
     # does not solve the published variants of issue 21 in a few random evaluations). 8 evaluations solved none of the
-    # easy tasks either (on main too, after the Panda joint limits), so the budget is 16
+    # easy tasks either (on main too), so the budget is 16
     "whitman2020": {"goals": 3, "obstacles": 3, "base": "xyz_any_rot", "variant": "easy", "verify": "ik"},
     "liu2020": {"machine": str(TASKS / "assets" / "DMU_125P_compress.stl"), "variant": "easy", "verify": "ik"},
     "bpo2024": {"structure": "mixed", "difficulty": "mixed", "variant": "easy", "verify": "ik"},
