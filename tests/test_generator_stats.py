@@ -170,6 +170,7 @@ def test_published_variants_are_deterministic_and_regenerate(folders, tmp_path):
         assert "robodesign-generate:variant=published" in tags and not any("verify=" in t for t in tags)
         out = regenerate(f, tmp_path / key)
         assert out.name == f.name and out.read_bytes() == f.read_bytes()
-    # the BPO24 archetypes cycle with the task index, medium for tasks 0-9, hard for 10-19
+    # the BPO24 archetypes cycle with the task index; the level alternates, shifted by one every 10 tasks
     names = [f.name for f in folders["bpo"]]
-    assert names[0] == "bpo2024_middle_oven_medium_s0_0000.json" and names[12] == "bpo2024_cross_hard_s0_0012.json"
+    assert names[:2] == ["bpo2024_middle_oven_medium_s0_0000.json", "bpo2024_oven_hard_s0_0001.json"]
+    assert names[10] == "bpo2024_middle_oven_hard_s0_0010.json" and names[12] == "bpo2024_cross_hard_s0_0012.json"

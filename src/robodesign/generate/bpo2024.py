@@ -293,12 +293,13 @@ def mutate(rng: np.random.Generator, archetype: str, level: str):
 
 
 def published_resolved(prov: Provenance, opts: Dict[str, object]) -> Dict[str, object]:
-    """``mixed`` cycles with the task index: archetype index mod 10, level (index // 10) mod 2."""
+    """``mixed`` cycles with the task index: archetype index mod 10, level (index + index // 10) mod 2, so that
+    any few tasks mix medium and hard and every 20 tasks hold each archetype at both levels."""
     out = dict(opts)
     if out["archetype"] == "mixed":
         out["archetype"] = list(ARCHETYPES)[prov.index % len(ARCHETYPES)]
     if out["level"] == "mixed":
-        out["level"] = LEVELS[(prov.index // len(ARCHETYPES)) % len(LEVELS)]
+        out["level"] = LEVELS[(prov.index + prov.index // len(ARCHETYPES)) % len(LEVELS)]
     return out
 
 
@@ -359,7 +360,8 @@ FAMILY = Family(
         VARIANT,
         Option("archetype", str, "mixed", "published variant: the edge-case archetype; mixed: by task index, "
                                           + ", ".join(ARCHETYPES) + " in turn", choices=("mixed", *ARCHETYPES)),
-        Option("level", str, "mixed", "published variant: medium or hard shifts; mixed: 10 medium, 10 hard, …",
+        Option("level", str, "mixed", "published variant: medium or hard shifts; mixed: by task index, "
+                                      "alternating (each archetype at both levels in every 20 tasks)",
                choices=("mixed", *LEVELS)),
         Option("structure", str, "mixed", "--variant easy: the structure; mixed: by task index, x, cross, house, oven, random, x, …",
                choices=("mixed", *STRUCTURES)),
