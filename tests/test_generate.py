@@ -22,8 +22,9 @@ from conftest import TASKS as COBRA_TASKS
 
 COBRA_ASSETS = COBRA_TASKS / "assets"
 
-WHITMAN_SETS = [({"goals": 3, "obstacles": 3, "base": "fixed"}, 3),
-                ({"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}, 3)]
+EASY = {"variant": "easy"}  # the earlier robodesign variants (the published ones: tests/test_generator_stats.py)
+WHITMAN_SETS = [({"goals": 3, "obstacles": 3, "base": "fixed", **EASY}, 3),
+                ({"goals": 5, "obstacles": 5, "base": "xyz_any_rot", **EASY}, 3)]
 
 
 @pytest.fixture(scope="module")
@@ -77,10 +78,10 @@ def test_list_names_every_family(capsys):
 
 def test_whitman_same_seed_same_bytes_other_seed_differs(tmp_path, whitman):
     a = tmp_path / "a"
-    generate("whitman2020", a, 3, seed=7, options={"goals": 3, "obstacles": 3})
+    generate("whitman2020", a, 3, seed=7, options={"goals": 3, "obstacles": 3, **EASY})
     assert _bytes(a) == _bytes(whitman[(3, "fixed")])
     b = tmp_path / "b"
-    generate("whitman2020", b, 3, seed=8, options={"goals": 3, "obstacles": 3})
+    generate("whitman2020", b, 3, seed=8, options={"goals": 3, "obstacles": 3, **EASY})
     ta = [json.loads(p.read_text()) for p in _files(a)]
     tb = [json.loads(p.read_text()) for p in _files(b)]
     for x, y in zip(ta, tb):
@@ -131,11 +132,12 @@ def test_whitman_cells(whitman, opts, n):
 def test_whitman_header_regenerates_the_file(whitman, tmp_path):
     f = _files(whitman[(5, "xyz_any_rot")])[2]
     tags = json.loads(f.read_text())["header"]["tags"]
-    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=3",
+    for t in ("robodesign-generate:generator=whitman2020", "robodesign-generate:version=4",
               "robodesign-generate:seed=7", "robodesign-generate:index=2", "robodesign-generate:goals=5",
               "robodesign-generate:obstacles=5", "robodesign-generate:base=xyz_any_rot",
-              "robodesign-generate:verify=solve"):
+              "robodesign-generate:variant=easy"):
         assert t in tags
+    assert not any("verify=" in t for t in tags)  # --verify not given: the easy variant's default (solve)
     out = regenerate(f, tmp_path)
     assert out.name == f.name and out.read_bytes() == f.read_bytes()
     # and through the CLI
@@ -162,6 +164,8 @@ def test_cli_bad_input_exit_2(tmp_path, capsys):
     assert main(["generate", "nosuchfamily", "--out", str(tmp_path)]) == 2
     assert main(["generate", "whitman2020"]) == 2  # no --out
     assert main(["generate", "whitman2020", "--out", str(tmp_path), "--count", "0"]) == 2
+    assert main(["generate", "whitman2020", "--out", str(tmp_path), "--verify", "ik"]) == 2  # only --variant easy
+    assert "--verify" in capsys.readouterr().err
     assert main(["generate", "--from", str(tmp_path / "missing.json"), "--out", str(tmp_path)]) == 2
     assert list(tmp_path.glob("*.json")) == []
 
@@ -184,7 +188,7 @@ def liu(tmp_path_factory):
     out = {}
     for key, machine in (("default", None), ("quaser", QUASER)):
         d = tmp_path_factory.mktemp(f"liu_{key}")
-        generate("liu2020", d, 3, seed=5, options={"machine": str(machine)} if machine else {})
+        generate("liu2020", d, 3, seed=5, options={"machine": str(machine), **EASY} if machine else EASY)
         out[key] = d
     return out
 
@@ -280,10 +284,10 @@ def test_liu_cells(liu):
 
 def test_liu_deterministic_and_regenerates(liu, tmp_path):
     again = tmp_path / "again"
-    generate("liu2020", again, 3, seed=5, options={"machine": str(QUASER)})
+    generate("liu2020", again, 3, seed=5, options={"machine": str(QUASER), **EASY})
     assert _bytes(again) == _bytes(liu["quaser"])
     other = tmp_path / "other"
-    generate("liu2020", other, 1, seed=6, options={"machine": str(QUASER)})
+    generate("liu2020", other, 1, seed=6, options={"machine": str(QUASER), **EASY})
     assert _files(other)[0].read_bytes() != _files(liu["quaser"])[0].read_bytes()
     f = _files(liu["quaser"])[1]
     assert "robodesign-generate:machine=QUASER_MV205_v3_compressed.stl" in json.loads(f.read_text())["header"]["tags"]
@@ -319,7 +323,7 @@ def test_liu_bad_machine_input(tmp_path, capsys):
 
 
 def test_verify_ik_skips_the_solve_but_keeps_the_goal_tests(tmp_path):
-    generate("whitman2020", tmp_path, 1, seed=7, options={"verify": "ik"})
+    generate("whitman2020", tmp_path, 1, seed=7, options={"verify": "ik", **EASY})
     raw = json.loads(_files(tmp_path)[0].read_text())
     assert "robodesign-generate:verify=ik" in raw["header"]["tags"]
     task = load_task(_files(tmp_path)[0])
@@ -354,17 +358,17 @@ def test_bpo_structures_and_spots_by_hand():
 @pytest.fixture(scope="module")
 def bpo(tmp_path_factory):
     d = tmp_path_factory.mktemp("bpo")
-    generate("bpo2024", d, 3, seed=2)  # mixed: x, cross, house (easy)
+    generate("bpo2024", d, 3, seed=2, options=EASY)  # mixed: x, cross, house (easy)
     h = tmp_path_factory.mktemp("bpo_hard")
-    generate("bpo2024", h, 2, seed=2, options={"structure": "oven", "difficulty": "hard"})
+    generate("bpo2024", h, 2, seed=2, options={"structure": "oven", "difficulty": "hard", **EASY})
     return d, h
 
 
 @pytest.mark.slow
 def test_bpo_cells(bpo):
     d, h = bpo
-    assert [f.name for f in _files(d)] == ["bpo2024_cross_easy_s2_0001.json", "bpo2024_house_easy_s2_0002.json",
-                                           "bpo2024_x_easy_s2_0000.json"]
+    assert [f.name for f in _files(d)] == ["bpo2024easy_cross_easy_s2_0001.json",
+                                           "bpo2024easy_house_easy_s2_0002.json", "bpo2024easy_x_easy_s2_0000.json"]
     for folder, clearance, near in ((d, 0.08, 1), (h, 0.04, 2)):
         for f in _files(folder):
             task = load_task(f)
@@ -396,7 +400,7 @@ def _point_distance_one(obstacle, p):
 def test_bpo_deterministic_regenerates_and_round_trip(bpo, tmp_path, ms):
     d, h = bpo
     again = tmp_path / "again"
-    generate("bpo2024", again, 2, seed=2, options={"structure": "oven", "difficulty": "hard"})
+    generate("bpo2024", again, 2, seed=2, options={"structure": "oven", "difficulty": "hard", **EASY})
     assert _bytes(again) == _bytes(h)
     f = _files(d)[1]
     assert regenerate(f, tmp_path / "re").read_bytes() == f.read_bytes()

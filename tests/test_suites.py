@@ -88,10 +88,13 @@ def test_suite_folder_errors_name_the_field(tmp_path, capsys):
     assert "suites[0].generate[0]: unknown generator family 'nosuch'" in capsys.readouterr().err
 
 
-FAMILIES = {  # family → generator options of a small suite (verify: ik makes generating them quicker)
-    "whitman2020": {"goals": 3, "obstacles": 3, "base": "xyz_any_rot", "verify": "ik"},
-    "liu2020": {"machine": str(TASKS / "assets" / "DMU_125P_compress.stl"), "verify": "ik"},
-    "bpo2024": {"structure": "mixed", "difficulty": "mixed", "verify": "ik"},
+FAMILIES = {  # family → generator options of a small suite: the easy variants with verify ik (quick to generate,
+    # and the 16-evaluation budget solves some of them, so the statistics below are not all empty; the built-in set
+    # does not solve the published variants of issue 21 in a few random evaluations). 8 evaluations solved none of the
+    # easy tasks either (on main too), so the budget is 16
+    "whitman2020": {"goals": 3, "obstacles": 3, "base": "xyz_any_rot", "variant": "easy", "verify": "ik"},
+    "liu2020": {"machine": str(TASKS / "assets" / "DMU_125P_compress.stl"), "variant": "easy", "verify": "ik"},
+    "bpo2024": {"structure": "mixed", "difficulty": "mixed", "variant": "easy", "verify": "ik"},
 }
 
 
@@ -117,7 +120,7 @@ def test_suite_summary_matches_a_hand_count(tmp_path, capsys):
         f"    generate: {{family: {fam}, count: 3, seed: 1, options: {json.dumps(opts)}}}\n"
         for fam, opts in FAMILIES.items())
     cfg = tmp_path / "fam.yaml"
-    cfg.write_text(f"name: fam\nmodules: robodesign_arm\nsuites:\n{suites}optimizers: [random]\nbudget: 8evals\n")
+    cfg.write_text(f"name: fam\nmodules: robodesign_arm\nsuites:\n{suites}optimizers: [random]\nbudget: 16evals\n")
     out = tmp_path / "out"
     assert main(["run", str(cfg), "--out", str(out), "--progress", "none"]) == 0
     printed = capsys.readouterr().out

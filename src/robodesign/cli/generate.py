@@ -6,10 +6,10 @@ import sys
 from pathlib import Path
 
 from robodesign.core.errors import InputError
+from robodesign.generate.registry import families, generate, get_family, regenerate
 
 
 def add_generate_arguments(p: argparse.ArgumentParser) -> None:
-    from robodesign.generate.registry import families
     p.add_argument("family", nargs="?", help="generator family (see --list)")
     p.add_argument("--list", action="store_true", help="list the families, their versions and options")
     p.add_argument("--out", help="output folder (task files <ID>.json, meshes in assets/)")
@@ -35,7 +35,6 @@ def _default(o) -> str:
 
 
 def cmd_generate(args) -> int:
-    from robodesign.generate.registry import families, generate, get_family, regenerate
     if args.list:
         for fam in families().values():
             print(f"{fam.name}  (version {fam.version})  {fam.summary}")

@@ -22,10 +22,23 @@ import numpy as np
 
 from robodesign.core.errors import RobodesignError
 from robodesign.core.spatial import rot_z
-from robodesign.generate.common import PI, Provenance, ReferenceArm, header, tolerated, transform, verified
-from robodesign.generate.registry import VERIFY, Family, GeneratedTask, Option
+from robodesign.generate.common import (
+    AABB,
+    PI,
+    Provenance,
+    ReferenceArm,
+    box_distance,
+    full_pose,
+    header,
+    set_reach_bound,
+    tolerated,
+    transform,
+    verified,
+)
+from robodesign.generate.family import VARIANT, VERIFY, Family, GeneratedTask, Option
 
-VERSION = 2
+VERSION = 3  # 3: the published edge cases (default); 2: what is now --variant easy
+PUBLISHED_CELL_TRIES = 200
 CUBE = 0.25
 N_GOALS = 3
 POS_TOL = 0.005
@@ -158,10 +171,10 @@ def resolved(prov: Provenance, opts: Dict[str, object]) -> Dict[str, object]:
 
 
 def task_id(prov: Provenance, opts) -> str:
-    return f"bpo2024_{opts['structure']}_{opts['difficulty']}_s{prov.seed}_{prov.index:04d}"
+    return f"bpo2024easy_{opts['structure']}_{opts['difficulty']}_s{prov.seed}_{prov.index:04d}"
 
 
-def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build_easy(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
     opts = resolved(prov, opts)
     rng = prov.rng()
     tid = task_id(prov, opts)
@@ -204,15 +217,155 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
                           f"goals in {CELL_TRIES} draws (seed {prov.seed}, index {prov.index})")
 
 
+# ---------------------------------------------------------------------------------------------------------
+# the published variant: the edge-case archetypes of Mayer and Althoff (2024)
+# Each archetype is (goal voxels, obstacle voxels, goal rotation) on a grid of 0.25 m voxels whose index
+# (i, j, k) has its centre at GRID · (i - 2, j - 2, k - 2) (a 5-voxel grid centred on the nominal base). The
+# voxel data are those of the published generator (Dang and Mayer, base_opt "edge_case" tasks, 2024).
+_R1 = ((0, 0, 1), (0, 1, 0), (-1, 0, 0))
+_R2 = ((0, 0, 1), (-1, 0, 0), (0, -1, 0))
+_R3 = ((-0.17470792, -0.31766705, -0.93196823), (0.05754346, 0.94161355, -0.33174188),
+       (0.98293738, -0.11158661, -0.14622769))
+_OVEN_GOALS = ((3, -3, 0), (-1, 3, 0), (-4, 4, 1))
+_EASY_GOALS = ((1, -1, 0), (-1, 2, 0), (-4, 4, 2))
+ARCHETYPES: Dict[str, Tuple[Tuple[Cell, ...], Tuple[Cell, ...], tuple]] = {
+    "middle_oven": (((3, -3, 0), (-1, 2, 0), (-4, 4, 2)),
+                    ((-3, 4, 2), (-4, 4, 1), (-4, 4, 3), (-3, 4, 3), (-3, 4, 1), (-4, 3, 2), (-4, 3, 3), (-4, 3, 1)),
+                    _R1),
+    "oven": (_OVEN_GOALS,
+             ((-3, 4, 2), (-4, 4, 2), (-4, 4, 3), (-3, 4, 3), (-3, 4, 1), (-4, 3, 2), (-4, 3, 3), (-4, 3, 1)), _R2),
+    "cross": (_EASY_GOALS, ((-3, 4, 2), (-4, 4, 1), (-4, 4, 3), (-4, 3, 2)), _R2),
+    "mystic_cube": (((1, 4, 2), (1, 3, 1), (-4, 4, 2)),
+                    ((-4, 4, 1), (-4, 4, 3), (-3, 3, 3), (-3, 3, 1), (-3, 5, 3), (-3, 5, 1), (-4, 3, 2), (-5, 5, 1),
+                     (-5, 5, 3), (-5, 3, 1), (-5, 3, 3)), _R2),
+    "equality_sim": (_EASY_GOALS,
+                     ((-4, 4, 1), (-4, 4, 3), (-3, 4, 3), (-3, 4, 1), (-3, 3, 3), (-3, 3, 1), (-3, 5, 3), (-3, 5, 1),
+                      (-4, 3, 3), (-4, 3, 1), (-4, 5, 1), (-4, 5, 3), (-5, 5, 1), (-5, 5, 3), (-5, 4, 1), (-5, 4, 3),
+                      (-5, 3, 1), (-5, 3, 3)), _R2),
+    "cross_cube": (_EASY_GOALS,
+                   ((-3, 4, 3), (-3, 4, 1), (-3, 3, 2), (-4, 3, 3), (-4, 3, 1), (-4, 5, 1), (-4, 5, 3), (-5, 5, 2),
+                    (-5, 4, 1), (-5, 4, 3), (-5, 3, 2)), _R3),
+    "house": (((0, 6, 2), (-2, 5, 3), (-4, 4, 2)),
+              ((-4, 4, 1), (-4, 4, 3), (-3, 4, 3), (-3, 4, 1), (-3, 3, 1), (-3, 3, 2), (-3, 5, 3), (-3, 5, 1),
+               (-4, 3, 3), (-4, 3, 1), (-4, 5, 1), (-4, 5, 3), (-5, 5, 1), (-5, 5, 3), (-5, 5, 2), (-5, 4, 1),
+               (-5, 4, 3), (-5, 3, 1), (-5, 3, 3), (-5, 3, 2)), _R3),
+    "c_sim": (((0, 5, 1), (1, 4, 1), (-4, 4, 2)),
+              ((-4, 4, 1), (-4, 4, 3), (-3, 4, 3), (-3, 4, 1), (-3, 4, 2), (-3, 3, 1), (-3, 3, 2), (-3, 5, 2),
+               (-3, 5, 3), (-3, 5, 1), (-4, 3, 3), (-4, 3, 1), (-4, 5, 1), (-4, 5, 3), (-5, 5, 1), (-5, 5, 3),
+               (-5, 4, 1), (-5, 4, 3), (-5, 3, 1), (-5, 3, 3)), _R2),
+    "XI_cube": (((1, -1, 0), (-2, 2, 0), (-4, 4, 2)),
+                ((-4, 4, 1), (-4, 4, 3), (-3, 4, 1), (-3, 3, 3), (-3, 3, 1), (-3, 5, 3), (-3, 5, 1), (-4, 3, 2),
+                 (-5, 5, 1), (-5, 5, 3), (-5, 4, 1), (-5, 3, 1), (-5, 3, 3)), _R3),
+    "mystic_field": (_EASY_GOALS,
+                     ((-3, 4, 1), (-3, 4, 3), (-2, 3, 3), (-1, 3, 1), (-2, 5, 3), (-1, 5, 1), (-4, 2, 2), (-4, 6, 2),
+                      (-5, 5, 1), (-4, 5, 3), (-5, 3, 1), (-4, 3, 3)), _R2),
+}
+LEVELS = ("medium", "hard")
+GRID_CENTRE = 2  # voxel index of the grid centre (grid of 5)
+_QUARTER_TURN = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])
+
+
+def voxel_centre(c) -> np.ndarray:
+    return CUBE * (np.asarray(c, float) - GRID_CENTRE)
+
+
+def mutate(rng: np.random.Generator, archetype: str, level: str):
+    """The published mutation of an archetype: the whole structure shifts by (dx, dy, dz) voxels, the goals
+    other than the last by a further (dx_g, dy_g, dz_g); with probability 1/2 the goal rotation is turned by
+    a quarter turn about its z axis. Returns (goal voxels, obstacle voxels, goal rotation)."""
+    goals, obstacles, R = ARCHETYPES[archetype]
+    R = np.array(R, float)
+    if level == "hard":
+        dx = int(rng.choice([9, 8, 1, 0, -1]))
+        dy, dz = int(rng.integers(-2, 3)), int(rng.integers(-2, 4))
+        gx, gy, gz = int(rng.integers(-1, 1)), int(rng.integers(-2, 2)), int(rng.integers(-1, 2))
+    else:
+        dx = int(rng.choice([9, 8, 7, 1, 0]))
+        dy, dz = int(rng.integers(-3, 1)), int(rng.integers(-2, 3))
+        gx, gy, gz = int(rng.integers(-1, 1)), int(rng.integers(0, 2)), int(rng.integers(-1, 2))
+    last = goals[-1]
+    g = tuple((x + dx, y + dy, z + dz) if (x, y, z) == last else (x + dx + gx, y + dy + gy, z + dz + gz)
+              for x, y, z in goals)
+    o = tuple((x + dx, y + dy, z + dz) for x, y, z in obstacles)
+    if rng.random() < 0.5:
+        R = R @ _QUARTER_TURN
+    return g, o, R
+
+
+def published_resolved(prov: Provenance, opts: Dict[str, object]) -> Dict[str, object]:
+    """``mixed`` cycles with the task index: archetype index mod 10, level (index + index // 10) mod 2, so that
+    any few tasks mix medium and hard and every 20 tasks hold each archetype at both levels."""
+    out = dict(opts)
+    if out["archetype"] == "mixed":
+        out["archetype"] = list(ARCHETYPES)[prov.index % len(ARCHETYPES)]
+    if out["level"] == "mixed":
+        out["level"] = LEVELS[(prov.index + prov.index // len(ARCHETYPES)) % len(LEVELS)]
+    return out
+
+
+def _published_cell(tid: str, prov: Provenance, opts, cubes: List[np.ndarray], goals: List[np.ndarray]) -> dict:
+    r = (-BASE_RANGE, BASE_RANGE)
+    return {
+        "header": header(tid, f"BPO 2024 edge case: {opts['archetype']} ({opts['level']})", prov,
+                         ["BPO24", "base pose optimization 2024", "Any base rotation", "edge_case",
+                          str(opts["archetype"]), f"edge_case_{opts['level']}", "3 goals"]),
+        "obstacles": [{"ID": f"obstacle_{k}", "name": f"Obstacle {k}",
+                       "collision": [{"type": "box", "parameters": {"x": CUBE, "y": CUBE, "z": CUBE},
+                                      "pose": transform(p)}]} for k, p in enumerate(cubes)],
+        "constraints": [
+            {"type": "joint", "parts": ["q", "dq", "tau"]},
+            {"type": "collisionFree"},
+            {"type": "allGoalsFulfilled"},
+            {"type": "basePlacement", "pose": tolerated(transform(), x=r, y=r, z=r)},
+        ],
+        "goals": [{"ID": f"goal_{k}", "type": "reach", "goalPose": full_pose(T)} for k, T in enumerate(goals)],
+    }
+
+
+def published_task_id(prov: Provenance, opts) -> str:
+    return f"bpo2024_{opts['archetype']}_{opts['level']}_s{prov.seed}_{prov.index:04d}"
+
+
+def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+    """Draw mutations until every goal lies outside every cube and within the module set's reach bound of
+    the base region (the published set also holds goals inside a cube, which no design can reach)."""
+    opts = published_resolved(prov, opts)
+    rng = prov.rng()
+    tid = published_task_id(prov, opts)
+    reach = set_reach_bound()
+    lo, hi = np.full(3, -BASE_RANGE), np.full(3, BASE_RANGE)
+    for _ in range(PUBLISHED_CELL_TRIES):
+        g, o, R = mutate(rng, str(opts["archetype"]), str(opts["level"]))
+        cubes = [voxel_centre(c) for c in o]
+        boxes = [AABB.cube(c, CUBE) for c in cubes]
+        goals = [transform(voxel_centre(c), R) for c in g]
+        if all(all(b.distance(T[:3, 3]) > 0.0 for b in boxes) and box_distance(T[:3, 3], lo, hi) <= reach
+               for T in goals):
+            return GeneratedTask(tid, _published_cell(tid, prov, opts, cubes, goals))
+    raise RobodesignError(f"bpo2024: no {opts['archetype']} ({opts['level']}) cell with every goal outside the cubes "
+                          f"in {PUBLISHED_CELL_TRIES} draws (seed {prov.seed}, index {prov.index})")
+
+
+def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+    return build_easy(prov, opts, folder) if opts["variant"] == "easy" else build_published(prov, opts, folder)
+
+
 FAMILY = Family(
     name="bpo2024",
     version=VERSION,
-    summary="edge cases: structures of 0.25 m cubes (x, cross, house, oven, random), 3 goals in their "
-            "hard-to-reach spots; base free ±1 m in x, y, z, any rotation",
+    summary="edge cases (Mayer & Althoff 2024): 10 archetypes of 4-20 cubes of 0.25 m shifted by up to 2.25 m, 3 "
+            "full-pose goals (±1 mm, 0.5°) in their pockets; base free ±1 m in x, y, z, any rotation "
+            "(--variant easy: our own structures, ±5 mm goals checked by the reference design)",
     options=(
-        Option("structure", str, "mixed", "the structure; mixed: by task index, x, cross, house, oven, random, x, …",
+        VARIANT,
+        Option("archetype", str, "mixed", "published variant: the edge-case archetype; mixed: by task index, "
+                                          + ", ".join(ARCHETYPES) + " in turn", choices=("mixed", *ARCHETYPES)),
+        Option("level", str, "mixed", "published variant: medium or hard shifts; mixed: by task index, "
+                                      "alternating (each archetype at both levels in every 20 tasks)",
+               choices=("mixed", *LEVELS)),
+        Option("structure", str, "mixed", "--variant easy: the structure; mixed: by task index, x, cross, house, oven, random, x, …",
                choices=("mixed", *STRUCTURES)),
-        Option("difficulty", str, "mixed", "how enclosed the goal spots are; mixed: by task index, 5 easy, 5 medium, "
+        Option("difficulty", str, "mixed", "--variant easy: how enclosed the goal spots are; mixed: by task index, 5 easy, 5 medium, "
                                            "5 hard, 5 easy, …", choices=("mixed", *DIFFICULTIES)),
         VERIFY,
     ),

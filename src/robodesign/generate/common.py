@@ -1,9 +1,11 @@
 """What every task generator shares: pose and geometry helpers, the deterministic JSON writer, the
-provenance header and the reachability test with the reference arm.
+provenance header, the geometric reachability bound of a module set (the published variants) and
+the reachability test with the reference arm (the easy variants).
 
 Determinism: a generator draws every number from one ``numpy.random.Generator`` seeded from
-(family, folder seed, task index), rounds every float to 10 decimals and writes with a fixed layout,
-so the same arguments give byte-identical files on any machine with the same numpy bit generator
+(family, folder seed, task index), rounds every float to 10 decimals (except exact constants marked
+:class:`Exact`, such as the bound π, which are written with all their digits) and writes with a fixed
+layout, so the same arguments give byte-identical files on any machine with the same numpy bit generator
 (PCG64).
 """
 from __future__ import annotations
@@ -12,6 +14,7 @@ import json
 import math
 import zlib
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -19,8 +22,26 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.core.spatial import homogeneous
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.assembly import Assembly
+from robodesign.formats.geometry import coal_shapes
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.task_io import parse_task
+from robodesign.formats.tolerance import ToleratedPose
+from robodesign.model.cell import build_robot
+from robodesign.solvers.ik import solve_ik
 
-PI = math.pi
+
+class Exact(float):
+    """A float written with all its digits (``repr``), never rounded: bounds such as π that a reader compares
+    exactly (the reference rejects ``Theta_R`` ≤ 3.1415926536, which is larger than π). Arithmetic on it gives
+    a plain float, so only the constant itself is exact."""
+
+
+PI = Exact(math.pi)
+NEG_PI = Exact(-math.pi)
+HALF_DEGREE = Exact(math.pi / 360)  # rad: the reference's default orientation tolerance of a goal, 0.5°
+MM = 0.001  # m: the reference's default position tolerance of a goal (x, y, z ± 1 mm)
 DATE = "2026-01-01"  # fixed: the date is part of the bytes
 DT = 0.01
 GRAVITY = [0.0, 0.0, -9.81]
@@ -45,6 +66,22 @@ def tolerated(nominal: np.ndarray, **tol) -> dict:
         out["toleranceProjection"] = list(tol)
         out["tolerance"] = [list(v) for v in tol.values()]
     return out
+
+
+def full_pose(nominal: np.ndarray) -> dict:
+    """A goal pose with the reference's default tolerance, as the published CoBRA files write it: x, y, z ± 1 mm
+    and the absolute rotation ``Theta_R`` ∈ [0, 0.5°] (Timor's ``ToleratedPose(T)`` default)."""
+    t = (-MM, MM)
+    return tolerated(nominal, x=t, y=t, z=t, Theta_R=(0.0, HALF_DEGREE))
+
+
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    """A rotation matrix uniform on SO(3) (a unit quaternion from four normal numbers)."""
+    q = rng.normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def box(center, size) -> dict:
@@ -138,7 +175,10 @@ def header(task_id: str, title: str, prov: Provenance, tags: Sequence[str] = ())
 # ---------------------------------------------------------------------------------------------------------
 # deterministic JSON (also used by assets/tasks/make_tasks.py for the built-in tasks)
 def clean(obj):
-    """JSON-ready copy: arrays to lists, floats rounded to 10 decimals (integral ones to int, -0 to 0)."""
+    """JSON-ready copy: arrays to lists, floats rounded to 10 decimals (integral ones to int, -0 to 0);
+    an :class:`Exact` float keeps every digit."""
+    if isinstance(obj, Exact):
+        return float(obj)
     if isinstance(obj, np.ndarray):
         return clean(obj.tolist())
     if isinstance(obj, dict):
@@ -187,27 +227,78 @@ def task_text(task: dict) -> str:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# reachability with the reference arm
-class ReferenceArm:
-    """robodesign_arm in REFERENCE_ORDER at a given base pose, in a cell of obstacles: tests whether a
-    tolerated goal has a collision-free IK solution that holds its pose within the torque limits."""
+# geometric reachability: a bound on every design of a module set (no solve, no design of ours)
+def module_span(module) -> float:
+    """Upper bound on the distance between any two connectors of a module over all joint values (a path
+    through its bodies and joints; a prismatic joint adds its stroke). Infinite for an unbounded stroke."""
+    import itertools
+    pos = {}  # connector → (body id, position in the body frame)
+    for b in module.bodies:
+        for c in b.connectors:
+            pos[c.id] = (b.id, np.asarray(c.pose, float)[:3, 3])
+    # body graph: body → [(neighbour, offset to the joint origin in this body, in the neighbour, stroke)]
+    adj: Dict[str, list] = {b.id: [] for b in module.bodies}
+    for j in module.joints:
+        stroke = 0.0
+        if j.type == "prismatic":
+            lo, hi = j.limits.lower, j.limits.upper
+            stroke = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
+        a = np.asarray(j.pose_parent, float)[:3, 3]
+        b = np.linalg.inv(np.asarray(j.pose_child, float))[:3, 3]
+        adj[j.parent].append((j.child, a, b, stroke))
+        adj[j.child].append((j.parent, b, a, stroke))
 
-    def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
-                 ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
-        from robodesign.formats.assembly import Assembly
-        from robodesign.formats.module_io import load_module_set
-        from robodesign.formats.task_io import parse_task
-        from robodesign.model.cell import build_robot
+    def farthest(body, p, seen) -> float:
+        """Longest bound from point p of ``body`` to each connector reachable from it (dict con → bound)."""
+        out = {cid: float(np.linalg.norm(q - p)) for cid, (bid, q) in pos.items() if bid == body}
+        for nb, here, there, stroke in adj[body]:
+            if nb in seen:
+                continue
+            head = float(np.linalg.norm(here - p)) + stroke
+            for cid, d in farthest(nb, there, seen | {nb}).items():
+                out[cid] = max(out.get(cid, 0.0), head + d)
+        return out
+
+    best = 0.0
+    for (ca, (ba, pa)), _ in itertools.product(pos.items(), [None]):
+        for cid, d in farthest(ba, pa, {ba}).items():
+            if cid != ca:
+                best = max(best, d)
+    return best
+
+
+@lru_cache(maxsize=None)
+def set_reach_bound(module_set_name: str = REFERENCE_MODULE_SET, max_dof: int = 6,
+                    max_links_between: int = 1) -> float:
+    """Upper bound [m] on the distance from the base frame (the base connector) to the TCP of *any* serial
+    design of the set under robodesign's search rules (at most ``max_dof`` joint modules, at most
+    ``max_links_between`` link modules before, between and after them): the longest base, ``max_dof`` times
+    the longest joint module, (``max_dof`` + 1) · ``max_links_between`` times the longest link and the longest
+    end effector, each module counted by :func:`module_span` (triangle inequality). A goal farther than this
+    from every allowed base position is out of reach for every design of the set."""
+    ms = load_module_set(module_set_name)
+    span: Dict[str, float] = {}
+    for m in ms:
+        span[m.kind] = max(span.get(m.kind, 0.0), module_span(m))
+    return (span.get("base", 0.0) + max_dof * span.get("joint", 0.0)
+            + (max_dof + 1) * max_links_between * span.get("link", 0.0) + span.get("eef", 0.0))
+
+
+def box_distance(p, lo, hi) -> float:
+    """Euclidean distance of point ``p`` from the axis-aligned box [lo, hi] (0 inside)."""
+    p = np.asarray(p, float)
+    d = np.maximum(np.maximum(np.asarray(lo, float) - p, p - np.asarray(hi, float)), 0.0)
+    return float(np.linalg.norm(d))
+
+
+class ObstacleField:
+    """The obstacles of a task (as the generators write it), for distance queries with coal."""
+
+    def __init__(self, task_dict: dict, folder: Path):
         self.task = parse_task(clean(task_dict), folder / "_probe.json")
-        self.module_set = load_module_set(REFERENCE_MODULE_SET)
-        asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
-        self.robot = build_robot(self.task, self.module_set, asm,
-                                 np.eye(4) if base_pose is None else np.asarray(base_pose, float))
-        self.ik_restarts, self.min_converged = ik_restarts, min_converged
-        self.rng = np.random.default_rng(seed)
 
     def clearance(self, p) -> float:
-        """Distance (coal) of point ``p`` from the cell's obstacles."""
+        """Distance (coal) of point ``p`` from the cell's obstacles (≤ 0 inside one)."""
         import coal
         return self.distance(coal.Sphere(1e-6), transform(p))
 
@@ -215,7 +306,6 @@ class ReferenceArm:
         """Distance (coal) of a coal shape at ``pose`` from the cell's obstacles (≤ 0 when they touch)."""
         import coal
 
-        from robodesign.formats.geometry import coal_shapes
         if not hasattr(self, "_obstacles"):
             self._obstacles = [coal.CollisionObject(s, coal.Transform3s(g.pose[:3, :3], g.pose[:3, 3]))
                                for o in self.task.obstacles for g in o.collision for s in coal_shapes(g)]
@@ -227,9 +317,24 @@ class ReferenceArm:
             best = min(best, res.min_distance)
         return best
 
+
+# ---------------------------------------------------------------------------------------------------------
+# reachability with the reference arm (the easy variants only)
+class ReferenceArm(ObstacleField):
+    """robodesign_arm in REFERENCE_ORDER at a given base pose, in a cell of obstacles: tests whether a
+    tolerated goal has a collision-free IK solution that holds its pose within the torque limits."""
+
+    def __init__(self, task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None,
+                 ik_restarts: int = 60, min_converged: int = 4, seed: int = 0):
+        super().__init__(task_dict, folder)
+        self.module_set = load_module_set(REFERENCE_MODULE_SET)
+        asm = Assembly.from_order(self.module_set, list(REFERENCE_ORDER))
+        self.robot = build_robot(self.task, self.module_set, asm,
+                                 np.eye(4) if base_pose is None else np.asarray(base_pose, float))
+        self.ik_restarts, self.min_converged = ik_restarts, min_converged
+        self.rng = np.random.default_rng(seed)
+
     def reaches(self, goal_pose: dict) -> bool:
-        from robodesign.formats.tolerance import ToleratedPose
-        from robodesign.solvers.ik import solve_ik
         tp = ToleratedPose.from_json(clean(goal_pose))
         o, R = self.robot.reach_bound()
         if np.linalg.norm(tp.nominal[:3, 3] - o) > R:
@@ -247,7 +352,7 @@ VERIFY_PLAN_TIME = 10.0  # s per planning query of the verification solve
 
 def verified(task_dict: dict, opts: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:
     """The ``--verify`` decision for a task whose goals passed the goal tests: always true for ``ik``."""
-    return opts["verify"] == "ik" or solved_by_reference(task_dict, folder, base_pose)
+    return (opts.get("verify") or "solve") == "ik" or solved_by_reference(task_dict, folder, base_pose)
 
 
 def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.ndarray] = None) -> bool:
@@ -257,9 +362,6 @@ def solved_by_reference(task_dict: dict, folder: Path, base_pose: Optional[np.nd
     OMPL is seeded, so the answer is the same on every run unless a planning query runs into the time limit:
     a query that needs seconds on an idle machine could be cut on an overloaded one. The generous limit makes
     that unlikely (a successful query returns at once; only failing cells pay the full limit)."""
-    from robodesign.design.solve import SolveSettings, solve
-    from robodesign.formats.module_io import load_module_set
-    from robodesign.formats.task_io import parse_task
     task = parse_task(clean(task_dict), folder / "_probe.json")
     res = solve(task, load_module_set(REFERENCE_MODULE_SET), list(REFERENCE_ORDER), base_pose=base_pose,
                 settings=SolveSettings(seed=0, plan_time=VERIFY_PLAN_TIME))

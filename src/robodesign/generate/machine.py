@@ -24,6 +24,8 @@ from typing import List, Tuple
 
 import numpy as np
 
+from robodesign.formats.geometry import load_mesh_arrays
+
 STEP = 0.1  # m, grid of the probes
 WORK_Z = (0.6, 1.6)  # m above the machine's floor
 COVER_UP = 1.5  # m: mesh above a work-area point within this height
@@ -105,7 +107,6 @@ def _rotz(V: np.ndarray, yaw: float) -> np.ndarray:
 @lru_cache(maxsize=16)
 def analyse(file: str, scale: float) -> MachineFrame:
     """Place the machine mesh (file, uniform scale) with its work area towards the robot (-x side)."""
-    from robodesign.formats.geometry import load_mesh_arrays
     parts = load_mesh_arrays(file, (scale, scale, scale))
     V0 = np.concatenate([v for v, _ in parts])
     offs = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])

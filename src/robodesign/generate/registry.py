@@ -1,95 +1,28 @@
 """The task-generator families and their options (a small registry, one module per family).
 
-A family is a :class:`Family`: a name, a version (bumped whenever the same arguments would write
+A family is a :class:`Family` (generate.family): a name, a version (bumped whenever the same arguments would write
 different bytes), its options, and ``build(prov, folder) -> GeneratedTask``. ``generate()`` writes a
 folder of tasks; ``regenerate()`` rebuilds one task from the provenance tags in its header.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Tuple
 
 from robodesign.core.errors import InputError
-from robodesign.generate.common import Provenance, task_text
+from robodesign.core.jsonio import load_json
+from robodesign.generate.bpo2024 import FAMILY as BPO2024
+from robodesign.generate.common import Provenance
+from robodesign.generate.family import VARIANT, VERIFY, Family, GeneratedTask, Option, copy_file
+from robodesign.generate.liu2020 import FAMILY as LIU2020
+from robodesign.generate.whitman2020 import FAMILY as WHITMAN2020
 
-
-@dataclass(frozen=True)
-class Option:
-    name: str  # CLI spelling without dashes, e.g. "goals" (→ --goals)
-    kind: type  # int | float | str
-    default: object
-    help: str
-    choices: Optional[Tuple[str, ...]] = None
-    minimum: Optional[float] = None
-    path: bool = False  # a file given by the user (copied into the output folder)
-
-    def parse(self, value, family: str) -> object:
-        where = f"{family} --{self.name.replace('_', '-')}"
-        if self.kind is str:
-            v = str(value)
-            if self.choices and v not in self.choices:
-                raise InputError(f"{where}: expected one of {', '.join(self.choices)}, got {v!r}")
-            return v
-        try:
-            v = self.kind(value)
-        except (TypeError, ValueError):
-            raise InputError(f"{where}: expected {'an integer' if self.kind is int else 'a number'}, got {value!r}") \
-                from None
-        if v != v or v in (float("inf"), float("-inf")):
-            raise InputError(f"{where}: expected a finite number, got {value!r}")
-        if self.minimum is not None and v < self.minimum:
-            raise InputError(f"{where}: must be at least {self.minimum:g}, got {value!r}")
-        return v
-
-
-VERIFY = Option("verify", str, "solve",
-                "solve: the reference design (robodesign_arm, default order) must solve the whole task and pass the "
-                "checker; ik: every goal needs a collision-free, torque-feasible IK solution of it (strictly "
-                "deterministic, faster, but a task may be unsolvable as a whole)", choices=("solve", "ik"))
-
-
-@dataclass
-class GeneratedTask:
-    task_id: str
-    task: dict  # JSON-ready task (assets such as meshes are written by the family's build into <out>/assets/)
-
-    @property
-    def text(self) -> str:
-        return task_text(self.task)
-
-    @property
-    def filename(self) -> str:
-        return self.task_id + ".json"
-
-
-@dataclass(frozen=True)
-class Family:
-    name: str
-    version: int
-    summary: str
-    options: Tuple[Option, ...]
-    build: Callable[[Provenance, Dict[str, object], Path], GeneratedTask]
-
-    def option(self, name: str) -> Option:
-        for o in self.options:
-            if o.name == name:
-                return o
-        raise InputError(f"{self.name} has no option --{name.replace('_', '-')} "
-                         f"(its options: {', '.join('--' + o.name.replace('_', '-') for o in self.options) or 'none'})")
-
-    def resolve(self, given: Dict[str, object]) -> Dict[str, object]:
-        """Typed values of every option (defaults filled in); unknown options are an error."""
-        for k in given:
-            self.option(k)
-        return {o.name: o.parse(given[o.name], self.name) if given.get(o.name) is not None else o.default
-                for o in self.options}
+FAMILIES: Tuple[Family, ...] = (WHITMAN2020, LIU2020, BPO2024)  # the order of ``robodesign generate --list``
 
 
 def families() -> Dict[str, Family]:
     """name → Family, in the order of ``robodesign generate --list``."""
-    from robodesign.generate import bpo2024, liu2020, whitman2020
-    return {f.name: f for f in (whitman2020.FAMILY, liu2020.FAMILY, bpo2024.FAMILY)}
+    return {f.name: f for f in FAMILIES}
 
 
 def get_family(name: str) -> Family:
@@ -147,7 +80,6 @@ def regenerate(task_file: Path, out: Path) -> Path:
 
     A family that reads a user file (liu2020 ``--machine``) takes the copy the generator made in ``assets/``
     beside the task."""
-    from robodesign.core.jsonio import load_json
     task_file = Path(task_file)
     data = load_json(task_file, display_name=task_file.name)
     head = data.get("header") if isinstance(data, dict) else None
@@ -180,13 +112,5 @@ def _find_asset(task_file: Path, name: str) -> Path:
                      file=task_file.name, path=["header", "tags"])
 
 
-def copy_file(src: Path) -> bytes:
-    """The bytes of a user-given file (a clear error when it is missing)."""
-    src = Path(src)
-    if not src.is_file():
-        raise InputError("no such file", file=str(src))
-    return src.read_bytes()
-
-
-__all__ = ["Family", "GeneratedTask", "Option", "VERIFY", "families", "get_family", "generate", "regenerate",
+__all__ = ["Family", "GeneratedTask", "Option", "VARIANT", "VERIFY", "families", "get_family", "generate", "regenerate",
            "copy_file", "build_one", "write_task"]
