@@ -93,3 +93,63 @@ def test_old_flat_module_names_still_import(old, new, monkeypatch):
     b = importlib.import_module(f"robodesign.{new}")
     assert a is b
     assert any(issubclass(w.category, DeprecationWarning) and f"robodesign.{new}" in str(w.message) for w in caught)
+
+
+def _edges():
+    """module → the robodesign modules it imports (anywhere in the file); ``from pkg import sub`` counts as
+    an import of ``pkg.sub``, not of the package."""
+    mods = dict(_modules())
+    graph = {}
+    for mod, path in mods.items():
+        out = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "robodesign":
+                subs = {f"{node.module}.{a.name}" for a in node.names} & mods.keys()
+                out |= subs
+                if node.module in mods and len(subs) < len(node.names):
+                    out.add(node.module)
+            elif isinstance(node, ast.Import):
+                out |= {a.name for a in node.names} & mods.keys()
+        out.discard(mod)
+        graph[mod] = out
+    return graph
+
+
+def _cycles(graph):
+    """The strongly connected components of more than one module (Tarjan)."""
+    index, low, stack, on, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycles():
+    assert _cycles(_edges()) == []
+
+
+def test_the_cycle_check_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

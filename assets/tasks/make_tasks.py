@@ -27,7 +27,8 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 # the writer (floats rounded to 10 decimals, fixed layout) is shared with `robodesign generate`
-from robodesign.generate.common import clean as _clean, dumps
+from robodesign.generate.common import NEG_PI, PI, dumps
+from robodesign.generate.common import clean as _clean
 
 HERE = Path(__file__).resolve().parent
 PACKAGE = "robodesign"
@@ -39,7 +40,7 @@ MODULE_SET = "robodesign_arm"
 # ---------------------------------------------------------------------------------------------------------
 # small pose helpers
 # ---------------------------------------------------------------------------------------------------------
-PI = math.pi
+
 
 
 def rx(a):
@@ -310,7 +311,7 @@ def base_placement() -> dict:
         ],
         "constraints": [
             {"type": "basePlacement", "pose": tolerated(T(), x=(-0.4, 0.4), y=(-0.4, 0.4), z=(0.0, 0.0),
-                                                         N_x=(-0.001, 0.001), N_y=(-0.001, 0.001), N_z=(-PI, PI))},
+                                                         N_x=(-0.001, 0.001), N_y=(-0.001, 0.001), N_z=(NEG_PI, PI))},
             {"type": "joint", "parts": ["q", "dq", "tau"]},
             {"type": "collisionFree", "safety_margin": 0.01},
             {"type": "allGoalsFulfilled"},
