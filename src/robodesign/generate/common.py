@@ -22,6 +22,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.core.spatial import homogeneous
+from robodesign.design.reach import module_set_reach
 from robodesign.design.solve import SolveSettings, solve
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import coal_shapes
@@ -228,60 +229,16 @@ def task_text(task: dict) -> str:
 
 # ---------------------------------------------------------------------------------------------------------
 # geometric reachability: a bound on every design of a module set (no solve, no design of ours)
-def module_span(module) -> float:
-    """Upper bound on the distance between any two connectors of a module over all joint values (a path
-    through its bodies and joints; a prismatic joint adds its stroke). Infinite for an unbounded stroke."""
-    import itertools
-    pos = {}  # connector → (body id, position in the body frame)
-    for b in module.bodies:
-        for c in b.connectors:
-            pos[c.id] = (b.id, np.asarray(c.pose, float)[:3, 3])
-    # body graph: body → [(neighbour, offset to the joint origin in this body, in the neighbour, stroke)]
-    adj: Dict[str, list] = {b.id: [] for b in module.bodies}
-    for j in module.joints:
-        stroke = 0.0
-        if j.type == "prismatic":
-            lo, hi = j.limits.lower, j.limits.upper
-            stroke = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
-        a = np.asarray(j.pose_parent, float)[:3, 3]
-        b = np.linalg.inv(np.asarray(j.pose_child, float))[:3, 3]
-        adj[j.parent].append((j.child, a, b, stroke))
-        adj[j.child].append((j.parent, b, a, stroke))
-
-    def farthest(body, p, seen) -> float:
-        """Longest bound from point p of ``body`` to each connector reachable from it (dict con → bound)."""
-        out = {cid: float(np.linalg.norm(q - p)) for cid, (bid, q) in pos.items() if bid == body}
-        for nb, here, there, stroke in adj[body]:
-            if nb in seen:
-                continue
-            head = float(np.linalg.norm(here - p)) + stroke
-            for cid, d in farthest(nb, there, seen | {nb}).items():
-                out[cid] = max(out.get(cid, 0.0), head + d)
-        return out
-
-    best = 0.0
-    for (ca, (ba, pa)), _ in itertools.product(pos.items(), [None]):
-        for cid, d in farthest(ba, pa, {ba}).items():
-            if cid != ca:
-                best = max(best, d)
-    return best
-
-
 @lru_cache(maxsize=None)
 def set_reach_bound(module_set_name: str = REFERENCE_MODULE_SET, max_dof: int = 6,
                     max_links_between: int = 1) -> float:
     """Upper bound [m] on the distance from the base frame (the base connector) to the TCP of *any* serial
     design of the set under robodesign's search rules (at most ``max_dof`` joint modules, at most
-    ``max_links_between`` link modules before, between and after them): the longest base, ``max_dof`` times
-    the longest joint module, (``max_dof`` + 1) · ``max_links_between`` times the longest link and the longest
-    end effector, each module counted by :func:`module_span` (triangle inequality). A goal farther than this
-    from every allowed base position is out of reach for every design of the set."""
-    ms = load_module_set(module_set_name)
-    span: Dict[str, float] = {}
-    for m in ms:
-        span[m.kind] = max(span.get(m.kind, 0.0), module_span(m))
-    return (span.get("base", 0.0) + max_dof * span.get("joint", 0.0)
-            + (max_dof + 1) * max_links_between * span.get("link", 0.0) + span.get("eef", 0.0))
+    ``max_links_between`` link modules before, between and after them): the longest arm of
+    :func:`robodesign.design.reach.set_reach`. A goal farther than this from every allowed base position is out
+    of reach for every design of the set."""
+    return module_set_reach(load_module_set(module_set_name), max_dof=max_dof,
+                            max_links_between=max_links_between).bound
 
 
 def box_distance(p, lo, hi) -> float:
