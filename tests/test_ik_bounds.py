@@ -1,0 +1,102 @@
+"""Provable IK early failure (solvers.ik.ChainBounds): a goal the bounds reject has no solution, and a
+reachable goal is never rejected — checked against poses the arm does reach (forward kinematics of random
+configurations, nominal moved inside the tolerance) and against the full restart loop on random goals."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from robodesign.core.spatial import homogeneous, rpy_to_matrix
+from robodesign.formats.module_io import load_module_set
+from robodesign.formats.tolerance import ToleratedPose
+from robodesign.model.robot import Robot
+from robodesign.solvers.ik import chain_bounds, provably_unreachable, solve_ik
+
+from conftest import IMPROV, PRIMITIVES
+
+BASE = homogeneous(rpy_to_matrix(0.3, -0.2, 1.0), [1.0, 2.0, 0.5])
+
+
+@pytest.fixture(scope="module")
+def robots(tmp_path_factory):
+    from test_urdf import reversed_robot
+    imp = load_module_set(IMPROV)
+    prim = load_module_set(PRIMITIVES)
+    return [Robot.from_order(imp, ["1", "21", "4", "22", "5", "23", "12"]),
+            Robot.from_order(imp, ["1", "22", "5", "23", "15", "29", "101"], base_pose=BASE),
+            Robot.from_order(imp, ["1", "21", "23", "22", "12"]),
+            Robot.from_order(prim, ["base", "J2", "i_30", "J1", "l_15", "J2", "eef"]),
+            reversed_robot(tmp_path_factory.mktemp("rev"))]
+
+
+def random_rotation(rng):
+    return rpy_to_matrix(*rng.uniform(-math.pi, math.pi, 3))
+
+
+def moved_inside(T, rng, r, th):
+    """A nominal pose from which T lies within position r and angle th (so the goal is reachable)."""
+    u = rng.normal(size=3)
+    w = rng.normal(size=3)
+    N = np.array(T)
+    N[:3, 3] = T[:3, 3] + u / np.linalg.norm(u) * r * rng.uniform(0.0, 0.999)
+    a = th * rng.uniform(0.0, 0.999)
+    k = w / np.linalg.norm(w)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    N[:3, :3] = T[:3, :3] @ (np.eye(3) + math.sin(a) * K + (1 - math.cos(a)) * K @ K)
+    return N
+
+
+def test_reachable_goals_are_never_rejected(robots):
+    rng = np.random.default_rng(0)
+    for robot in robots:
+        for _ in range(300):
+            T = robot.fk(robot.random_configuration(rng))
+            r, th = rng.choice([0.0005, 0.01, 0.1]), rng.choice([0.001, 0.05, 0.5, 3.0])
+            goal = ToleratedPose(moved_inside(T, rng, r, th), ("r_sph", "Theta_R"), ((0.0, r), (0.0, th)))
+            assert goal.valid(T)
+            assert provably_unreachable(robot, goal) == ""
+            box = ToleratedPose(moved_inside(T, rng, r, 0.0), ("x", "y", "z", "N_x", "N_y", "N_z"),
+                                ((-r / 2, r / 2),) * 3 + ((-th / 2, th / 2),) * 3)
+            if box.valid(T):
+                assert provably_unreachable(robot, box) == ""
+
+
+def test_rejected_goals_fail_the_full_restart_loop(robots):
+    """Random goals around each arm: every goal the bounds reject also fails 300 restarts (without
+    collisions, so only kinematics decides), and the tighter bounds reject goals the sphere does not."""
+    rng = np.random.default_rng(1)
+    counts = {"out_of_reach": 0, "out_of_orientation_reach": 0, "sphere": 0, "tighter": 0}
+    for robot in robots[:3]:
+        cb = chain_bounds(robot)
+        assert cb.circle is not None
+        for _ in range(60):
+            N = np.eye(4)
+            N[:3, :3] = random_rotation(rng)
+            N[:3, 3] = cb.o + rng.uniform(-1.0, 1.0, 3) * cb.R
+            goal = ToleratedPose(N, ("r_sph", "Theta_R"), ((0.0, 0.01), (0.0, 0.05)))
+            why = provably_unreachable(robot, goal)
+            sphere = np.linalg.norm(N[:3, 3] - cb.o) - 0.01 > cb.R + 1e-9
+            counts["sphere"] += sphere
+            if not why:
+                assert not sphere
+                continue
+            counts[why] += 1
+            counts["tighter"] += not sphere
+            if not sphere:   # the full loop, without the early exit, also finds nothing
+                full = solve_ik(robot, goal, 0, max_restarts=300, check_collision=False, reach_bounds=False)
+                assert not full.success and full.stats["attempts"] == 300
+    assert counts["tighter"] >= 5 and counts["out_of_orientation_reach"] >= 3, counts
+
+
+def test_early_exit_costs_no_restarts(robots):
+    robot = robots[0]
+    cb = chain_bounds(robot)
+    N = np.eye(4)
+    c, a, rho = cb.circle
+    N[:3, 3] = c - a * (cb.R1 + 0.05)     # below the base along its axis: inside the sphere, beyond R' of C1
+    assert np.linalg.norm(N[:3, 3] - cb.o) < cb.R
+    goal = ToleratedPose(N, ("r_sph",), ((0.0, 0.01),))
+    res = solve_ik(robot, goal, 0)
+    assert not res.success and res.stats["reason"] == "out_of_reach" and res.stats["attempts"] == 0
