@@ -111,9 +111,12 @@ def main() -> None:
     ap.add_argument("--only", default="", help="comma-separated subset: ptp3, good, whitman2020_g5o5, bpo2024")
     args = ap.parse_args()
     only = set(filter(None, args.only.split(",")))
-    warm_up()
     from robodesign.solvers import ik_kernel
-    ik_kernel.warm_up()
+    # the compiled IK loop, compiled in this process if the cache is cold (before solve's warm_up, which would
+    # otherwise start the background compilation and run the Python loop for the whole process)
+    if not ik_kernel.warm_up():
+        print("note: ROBODESIGN_JIT=0 or no numba: the Python IK loop runs")
+    warm_up()
     out = []
 
     ptp3 = Problem.build(SHARED / "tasks" / "simple" / "PTP_3.json", SHARED / "modules" / "IMPROV", "cyc")

@@ -433,11 +433,37 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
 # ==============================================================================================
 # toppra: blended polyline path and dynamics constraint
 # ==============================================================================================
+_TOPPRA = None
+
+
 def _toppra():
-    import toppra  # noqa: F401  (slow import: 1.3 s, only when needed)
-    import toppra.algorithm  # noqa: F401
-    import toppra.constraint  # noqa: F401
-    return toppra
+    global _TOPPRA
+    if _TOPPRA is None:
+        import toppra  # noqa: F401  (slow import: 1.3 s, only when needed)
+        import toppra.algorithm  # noqa: F401
+        import toppra.constraint  # noqa: F401
+        import toppra.solverwrapper as sw
+        # toppra asks the file system for its optional solvers (qpoases, cvxpy) at every TOPPRA set-up
+        # (importlib.util.find_spec, ~2 ms); the answer cannot change within a process, so ask once
+        found = sw.available_solvers(False)
+        sw.available_solvers = lambda output_msg=True: found
+        _TOPPRA = toppra
+    return _TOPPRA
+
+
+_VEL_CONSTRAINTS: Dict[bytes, object] = {}
+
+
+def _velocity_constraint(vmax: np.ndarray):
+    """toppra's JointVelocityConstraint for ±vmax, built once per limit vector (its set-up formats the limits
+    into a description string, several ms per call; the object keeps no state of a path)."""
+    key = np.asarray(vmax, float).tobytes()
+    c = _VEL_CONSTRAINTS.get(key)
+    if c is None:
+        if len(_VEL_CONSTRAINTS) > 256:
+            _VEL_CONSTRAINTS.clear()
+        c = _VEL_CONSTRAINTS[key] = _toppra().constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    return c
 
 
 def preload() -> None:
@@ -581,6 +607,7 @@ class _PathTerms:
         N1, dof = q.shape
         G, A, BR = np.empty((N1, dof)), np.empty((N1, dof)), np.empty((N1, dof))
         BL = BR if qss_l is qss_r else np.empty((N1, dof))
+        same = np.all(qss_l == qss_r, axis=1)     # where the left and right limits of q'' agree
         zero = np.zeros(dof)
         rnea = pin.rnea
         for i in range(N1):
@@ -589,7 +616,7 @@ class _PathTerms:
             A[i] = rnea(model, data, q[i], zero, qs[i]) - g
             BR[i] = rnea(model, data, q[i], qs[i], qss_r[i]) - g
             if BL is not BR:
-                BL[i] = BR[i] if np.array_equal(qss_l[i], qss_r[i]) else rnea(model, data, q[i], qs[i], qss_l[i]) - g
+                BL[i] = BR[i] if same[i] else rnea(model, data, q[i], qs[i], qss_l[i]) - g
         self.g, self.a, self.bR, self.bL = G, A, BR, BL
 
 
@@ -687,7 +714,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     if _DYN_CLS is None:
         _DYN_CLS = _dynamics_constraint_class()
     grid = path.gridpoints(grid_step)
-    vel = tp.constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    vel = _velocity_constraint(vmax)
     tau = np.asarray(robot.tau_max, float)
     use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
     qs = np.abs(path(grid, 1))
