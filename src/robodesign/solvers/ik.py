@@ -25,9 +25,15 @@ How the tolerance is used (robodesign's decisions; projections as in :mod:`robod
   exact check of the analytic constraints passes (tested to agree with ``valid``). Projections without an
   analytic row (R/P/Y, Euler angles, quaternions) fall back to a full rotation error towards a fixed valid
   orientation (``goal.project_nominal()``), active while any of them is violated.
-* A goal whose position set is farther from the first joint than an upper bound of the arm's reach
-  (distances between consecutive joint origins + prismatic strokes + TCP offset) fails at once
-  (``reason="out_of_reach"``); only ``r_sph`` and complete x/y/z boxes are used for this bound.
+* A goal that provably no configuration reaches fails at once, before any restart (:class:`ChainBounds`):
+  its position set farther from the first joint than an upper bound of the arm's reach (distances between
+  consecutive joint origins + prismatic strokes + TCP offset), or farther than the rest of that bound from
+  the circle the second joint's origin describes about a revolute first joint (``reason="out_of_reach"``);
+  or, when the goal bounds the orientation (``Theta_R`` or N_x/N_y/N_z), the last joint's origin, which then
+  lies within ``r + 2·sin(θ/2)·|c|`` of ``p_nominal − R_nominal·c`` (c: that origin seen from the TCP),
+  farther from that circle than the chain between them reaches (``"out_of_orientation_reach"``). Only
+  ``r_sph``, complete x/y/z boxes, ``Theta_R`` and complete N_x/N_y/N_z boxes are used; joint limits and
+  collisions are ignored, so the bounds never reject a reachable goal (tests/test_ik_bounds.py).
 
 Inner loop: damping ``λ = 0.02·‖e‖² + 1e-6`` (Sugihara's LM: damped far from the goal, Gauss–Newton close
 to it), the step capped at 1 (Euclidean, rad), clamping to the joint limits. An attempt ends on acceptance,
