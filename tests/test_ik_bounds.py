@@ -100,3 +100,32 @@ def test_early_exit_costs_no_restarts(robots):
     goal = ToleratedPose(N, ("r_sph",), ((0.0, 0.01),))
     res = solve_ik(robot, goal, 0)
     assert not res.success and res.stats["reason"] == "out_of_reach" and res.stats["attempts"] == 0
+
+
+def test_bounds_change_nothing_when_they_pass():
+    """On the PTP_3 goals (r_sph 1 cm, Theta_R 0.01 rad) with the CNC mesh: for arms whose goals the bounds
+    let through, the same seed gives bit-identical solutions and counters with and without the bounds; arms
+    they stop fail with the full loop as well."""
+    from robodesign.formats.task_io import load_task
+    from robodesign.formats.assembly import Assembly
+    from robodesign.model.cell import build_robot
+    from robodesign.solvers.schedule import static_cell
+    from conftest import TASKS
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    ms = load_module_set(IMPROV)
+    passed = stopped = 0
+    for order in (["1", "21", "4", "22", "5", "23", "12"], ["1", "22", "7", "29", "4", "21", "16"],
+                  ["1", "21", "23", "22", "12"], ["1", "23", "5", "21", "14", "22", "101"]):
+        robot = build_robot(static_cell(task), ms, Assembly.from_order(ms, order), task.nominal_base_pose)
+        for g in task.goals[:2]:
+            a = solve_ik(robot, g.pose, 3, max_restarts=60, n_solutions=4)
+            b = solve_ik(robot, g.pose, 3, max_restarts=60, n_solutions=4, reach_bounds=False)
+            if a.stats["reason"] in ("out_of_reach", "out_of_orientation_reach"):
+                stopped += 1
+                assert not b.success and a.stats["attempts"] == 0
+                continue
+            passed += 1
+            assert len(a.solutions) == len(b.solutions)
+            assert all(np.array_equal(x, y) for x, y in zip(a.solutions, b.solutions))
+            assert {k: v for k, v in a.stats.items() if k != "time"} == {k: v for k, v in b.stats.items() if k != "time"}
+    assert passed >= 3
