@@ -61,6 +61,12 @@ def test_reachable_goals_are_never_rejected(robots):
                                 ((-r / 2, r / 2),) * 3 + ((-th / 2, th / 2),) * 3)
             if box.valid(T):
                 assert provably_unreachable(robot, box) == ""
+            # the tool axis within th of the nominal's, any turn about it (as the Liu goals)
+            yaw = rng.uniform(-math.pi, math.pi)
+            Nt = moved_inside(T, rng, r, 0.0) @ homogeneous(rpy_to_matrix(rng.uniform(-th, th) / 2, 0.0, yaw), np.zeros(3))
+            axis = ToleratedPose(Nt, ("x", "y", "z", "N_x", "N_y"), ((-r, r),) * 3 + ((-th, th),) * 2)
+            if axis.valid(T):
+                assert provably_unreachable(robot, axis) == ""
 
 
 def test_rejected_goals_fail_the_full_restart_loop(robots):
@@ -75,7 +81,8 @@ def test_rejected_goals_fail_the_full_restart_loop(robots):
             N = np.eye(4)
             N[:3, :3] = random_rotation(rng)
             N[:3, 3] = cb.o + rng.uniform(-1.0, 1.0, 3) * cb.R
-            goal = ToleratedPose(N, ("r_sph", "Theta_R"), ((0.0, 0.01), (0.0, 0.05)))
+            goal = ToleratedPose(N, ("r_sph", "Theta_R"), ((0.0, 0.01), (0.0, 0.05))) if _ % 2 else \
+                ToleratedPose(N, ("r_sph", "N_x", "N_y"), ((0.0, 0.01), (-0.1, 0.1), (-0.1, 0.1)))
             why = provably_unreachable(robot, goal)
             sphere = np.linalg.norm(N[:3, 3] - cb.o) - 0.01 > cb.R + 1e-9
             counts["sphere"] += sphere

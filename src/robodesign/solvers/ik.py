@@ -551,6 +551,27 @@ class GoalModel:
                 r = min(r, math.sqrt(sum(max(abs(d[n][0]), abs(d[n][1])) ** 2 for n in "xyz")))
         return max(r, 0.0)
 
+    def rotation_slack(self, c: np.ndarray) -> float:
+        """An upper bound on |R_Δ·c − c| over every valid orientation R_Δ = R_nominalᵀ·R (c in TCP axes; inf if
+        unbounded): 2·sin(θ/2)·|c| from :meth:`rotation_radius`, and, for N_* rows bounding two components of
+        the rotation vector ω in a frame (the third free, e.g. a tool axis within ±0.1 rad and any turn about
+        it), |c_a|·|ω_⊥| + 2·|c_⊥| with a the free axis (|R·e_a − e_a| = 2·sin(φ/2)·|n_⊥| ≤ |ω_⊥|)."""
+        c = np.asarray(c, dtype=float)
+        nc = float(np.linalg.norm(c))
+        best = 2.0 * math.sin(min(self.rotation_radius(), math.pi) / 2.0) * nc \
+            if math.isfinite(self.rotation_radius()) else math.inf
+        for frame, d in self.rot_boxes.items():
+            Q = self._Qs.get(frame)
+            cf = c if Q is None else Q @ c
+            for a, axis in enumerate("xyz"):
+                others = [n for n in "xyz" if n != axis]
+                if not all(n in d for n in others):
+                    continue
+                w = math.sqrt(sum(max(abs(d[n][0]), abs(d[n][1])) ** 2 for n in others))
+                c_perp = math.sqrt(max(nc * nc - cf[a] * cf[a], 0.0))
+                best = min(best, abs(float(cf[a])) * min(w, 2.0) + 2.0 * c_perp)
+        return best
+
     def position_lower_bound(self, point: np.ndarray) -> float:
         """A lower bound on the distance from ``point`` (world) to any valid TCP position (0 if unknown)."""
         pd = self.N_inv[:3, :3].dot(np.asarray(point, float)) + self.N_inv[:3, 3]
@@ -641,10 +662,10 @@ class ChainBounds:
         c, a, rho = self.circle
         if _circle_distance(pn, c, a, rho) - rp > self.R1 + 1e-9:
             return "out_of_reach"
-        th = gm.rotation_radius()
-        if math.isfinite(th):
+        rs = gm.rotation_slack(self.c_tcp)
+        if math.isfinite(rs):
             w = pn - np.asarray(N[:3, :3], float) @ self.c_tcp
-            slack = rp + 2.0 * math.sin(min(th, math.pi) / 2.0) * float(np.linalg.norm(self.c_tcp))
+            slack = rp + rs
             if _circle_distance(w, c, a, rho) - slack > self.R2 + 1e-9:
                 return "out_of_orientation_reach"
         return ""
