@@ -55,6 +55,17 @@ def test_plan_around_the_box(robot):
     assert check_path(robot, P, 0.005) == (True, -1)
     assert dense_ok(robot, P, 0.005)
     assert res.stats["length"] == pytest.approx(float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1))))
+    # every state is evaluated once: the final dense check of the shortcut path only revisits states the
+    # shortcuts decided, so fewer states are evaluated than looked up, and each evaluation is one collision query
+    calls = []
+    real = robot.in_collision
+    robot.in_collision = lambda q: calls.append(1) or real(q)
+    try:
+        again = plan_path(robot, QA, QB, time_limit=5.0, seed=1)
+    finally:
+        del robot.in_collision
+    assert np.array_equal(again.path, P)
+    assert len(calls) == again.stats["distinct_states"] < again.stats["lookups"]
 
 
 def test_same_seed_same_path(robot):

@@ -336,12 +336,25 @@ class GoalPlanner:
 
     # -- IK ------------------------------------------------------------------------------------
     def solve_ik(self) -> None:
-        from robodesign.solvers.ik import solve_ik
+        from robodesign.solvers.ik import provably_unreachable, solve_ik
+        # a goal that provably no configuration reaches (solvers.ik.ChainBounds) fails the stage whatever
+        # comes before it. The last IK goal before it then only needs to show whether it is reachable: its
+        # first solution decides that exactly as when ik_solutions are wanted (the attempts up to the first
+        # accepted one are the same), and nothing after it draws from the random generator any more (the
+        # earlier goals keep collecting: collecting draws perturbations that later goals' starts depend on)
+        doomed = next((i for i, g in enumerate(self.order)
+                       if any(provably_unreachable(self.robot, p) for p in goal_poses(g))), None)
+        probe = None
+        if doomed is not None:
+            before = [i for i in range(doomed) if isinstance(self.order[i], (At, Reach, Follow))]
+            if before and isinstance(self.order[before[-1]], (At, Reach)):
+                probe = before[-1]
         reached = 0
-        for g in self.order:
+        for i, g in enumerate(self.order):
             if isinstance(g, (At, Reach)):
+                n_sol = 1 if i == probe else self.settings.ik_solutions
                 r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
-                             n_solutions=self.settings.ik_solutions)
+                             n_solutions=n_sol)
                 sols, reason = r.solutions, str(r.stats.get("reason"))
                 if not sols:
                     self.res.goals_reached = reached

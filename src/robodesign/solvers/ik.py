@@ -25,9 +25,15 @@ How the tolerance is used (robodesign's decisions; projections as in :mod:`robod
   exact check of the analytic constraints passes (tested to agree with ``valid``). Projections without an
   analytic row (R/P/Y, Euler angles, quaternions) fall back to a full rotation error towards a fixed valid
   orientation (``goal.project_nominal()``), active while any of them is violated.
-* A goal whose position set is farther from the first joint than an upper bound of the arm's reach
-  (distances between consecutive joint origins + prismatic strokes + TCP offset) fails at once
-  (``reason="out_of_reach"``); only ``r_sph`` and complete x/y/z boxes are used for this bound.
+* A goal that provably no configuration reaches fails at once, before any restart (:class:`ChainBounds`):
+  its position set farther from the first joint than an upper bound of the arm's reach (distances between
+  consecutive joint origins + prismatic strokes + TCP offset), or farther than the rest of that bound from
+  the circle the second joint's origin describes about a revolute first joint (``reason="out_of_reach"``);
+  or, when the goal bounds the orientation (``Theta_R`` or N_x/N_y/N_z), the last joint's origin, which then
+  lies within ``r + 2·sin(θ/2)·|c|`` of ``p_nominal − R_nominal·c`` (c: that origin seen from the TCP),
+  farther from that circle than the chain between them reaches (``"out_of_orientation_reach"``). Only
+  ``r_sph``, complete x/y/z boxes, ``Theta_R`` and complete N_x/N_y/N_z boxes are used; joint limits and
+  collisions are ignored, so the bounds never reject a reachable goal (tests/test_ik_bounds.py).
 
 Inner loop: damping ``λ = 0.02·‖e‖² + 1e-6`` (Sugihara's LM: damped far from the goal, Gauss–Newton close
 to it), the step capped at 1 (Euclidean, rad), clamping to the joint limits. An attempt ends on acceptance,
@@ -66,7 +72,8 @@ import pinocchio as pin
 from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
 
-__all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL"]
+__all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
+           "provably_unreachable"]
 
 DISTINCT_TOL = 0.1          # rad: solutions closer than this (Euclidean, joint space) count as one
 _SHRINK = 0.25              # dead-zone: shrink each bounded side by this fraction of the interval width
@@ -324,6 +331,8 @@ class GoalModel:
         self.fallback: List = []          # constraints without an analytic row (rpy, euler, quat)
         self.boxes: Dict[str, Dict[str, Tuple[float, float]]] = {}
         self.sphere_hi = math.inf
+        self.theta_hi = math.inf           # upper bound of Theta_R (rad)
+        self.rot_boxes: Dict[str, Dict[str, Tuple[float, float]]] = {}   # N_x/N_y/N_z per frame
         self.term_specs: List[tuple] = []  # (projection, Q, pieces, target, periodic): the compiled kernel's input
         Rn = N[:3, :3]
         Qs: Dict[str, Optional[np.ndarray]] = {}
@@ -349,6 +358,11 @@ class GoalModel:
             elif c.projection in ("x", "y", "z"):
                 d = self.boxes.setdefault(c.frame, {})
                 d[c.projection] = (min(a for a, _ in pieces), max(b for _, b in pieces))
+            elif c.projection == "Theta_R":
+                self.theta_hi = min(self.theta_hi, max(b for _, b in pieces))
+            elif c.projection in ("N_x", "N_y", "N_z"):
+                d = self.rot_boxes.setdefault(c.frame, {})
+                d[c.projection[-1]] = (min(a for a, _ in pieces), max(b for _, b in pieces))
         self._Qs = Qs
         self.need_p = any(nm in ("x", "y", "z", "r_sph", "r_cyl", "phi_cyl", "phi_sph", "theta")
                           for nm in self.names)
@@ -519,6 +533,45 @@ class GoalModel:
                 Js[:] = 0.0
         return f
 
+    def position_radius(self) -> float:
+        """An upper bound on ‖p − p_nominal‖ over every valid TCP position p (inf if unbounded): from
+        ``r_sph`` and complete x/y/z boxes (their farthest corner)."""
+        r = self.sphere_hi
+        for d in self.boxes.values():
+            if all(n in d for n in "xyz"):
+                r = min(r, math.sqrt(sum(max(abs(d[n][0]), abs(d[n][1])) ** 2 for n in "xyz")))
+        return max(r, 0.0)
+
+    def rotation_radius(self) -> float:
+        """An upper bound on the angle between a valid TCP orientation and the nominal one (inf if
+        unbounded): from ``Theta_R`` and complete N_x/N_y/N_z boxes (‖log3(R_Δ)‖ ≤ the farthest corner)."""
+        r = self.theta_hi
+        for d in self.rot_boxes.values():
+            if all(n in d for n in "xyz"):
+                r = min(r, math.sqrt(sum(max(abs(d[n][0]), abs(d[n][1])) ** 2 for n in "xyz")))
+        return max(r, 0.0)
+
+    def rotation_slack(self, c: np.ndarray) -> float:
+        """An upper bound on |R_Δ·c − c| over every valid orientation R_Δ = R_nominalᵀ·R (c in TCP axes; inf if
+        unbounded): 2·sin(θ/2)·|c| from :meth:`rotation_radius`, and, for N_* rows bounding two components of
+        the rotation vector ω in a frame (the third free, e.g. a tool axis within ±0.1 rad and any turn about
+        it), |c_a|·|ω_⊥| + 2·|c_⊥| with a the free axis (|R·e_a − e_a| = 2·sin(φ/2)·|n_⊥| ≤ |ω_⊥|)."""
+        c = np.asarray(c, dtype=float)
+        nc = float(np.linalg.norm(c))
+        best = 2.0 * math.sin(min(self.rotation_radius(), math.pi) / 2.0) * nc \
+            if math.isfinite(self.rotation_radius()) else math.inf
+        for frame, d in self.rot_boxes.items():
+            Q = self._Qs.get(frame)
+            cf = c if Q is None else Q @ c
+            for a, axis in enumerate("xyz"):
+                others = [n for n in "xyz" if n != axis]
+                if not all(n in d for n in others):
+                    continue
+                w = math.sqrt(sum(max(abs(d[n][0]), abs(d[n][1])) ** 2 for n in others))
+                c_perp = math.sqrt(max(nc * nc - cf[a] * cf[a], 0.0))
+                best = min(best, abs(float(cf[a])) * min(w, 2.0) + 2.0 * c_perp)
+        return best
+
     def position_lower_bound(self, point: np.ndarray) -> float:
         """A lower bound on the distance from ``point`` (world) to any valid TCP position (0 if unknown)."""
         pd = self.N_inv[:3, :3].dot(np.asarray(point, float)) + self.N_inv[:3, 3]
@@ -536,6 +589,110 @@ class GoalModel:
 
 
 _GOAL_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Provable reachability bounds (decided before any restart)
+# ---------------------------------------------------------------------------------------------------------
+def _circle_distance(x: np.ndarray, center: np.ndarray, axis: np.ndarray, radius: float) -> float:
+    """Distance from point x to the circle (center, unit axis, radius)."""
+    v = x - center
+    h = float(v @ axis)
+    w = float(np.linalg.norm(v - h * axis))
+    return math.hypot(h, w - radius)
+
+
+_REVOLUTE_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
+
+
+class ChainBounds:
+    """What the TCP chain of a robot (at its base pose) can reach, as bounds that hold for every q.
+
+    * the sphere of :meth:`Robot.reach_bound` (centre o₁, the first joint's origin, radius R);
+    * when the first joint is revolute, the *torus*: the second joint's origin o₂ moves on a circle C₁
+      about the first joint's axis, and the TCP lies within R' = R − |o₁o₂| of o₂, so within R' of C₁;
+    * given the TCP's orientation (a goal bounding it), the origin of the last joint's moving frame is
+      ``p − R·c`` (c: that origin seen from the TCP, fixed), within R'' = R' − |c| of C₁.
+
+    ``circle`` is None when the first joint is not revolute or the chain has fewer than two joints."""
+
+    def __init__(self, robot):
+        self.o, self.R = robot.reach_bound()
+        self.circle = None
+        m = robot.model
+        chain = robot.tcp_chain()
+        fr = m.frames[robot.tcp_frame]
+        self.c_tcp = np.asarray(fr.placement.rotation, float).T @ np.asarray(fr.placement.translation, float)
+        if len(chain) < 2 or not math.isfinite(self.R):
+            return
+        j1, j2 = chain[0], chain[1]
+        jm = m.joints[j1]
+        name = jm.shortname()
+        if name in _REVOLUTE_AXES:
+            ax = np.array(_REVOLUTE_AXES[name])
+        elif name == "JointModelRevoluteUnaligned":
+            ax = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float)
+        else:
+            return
+        F1 = m.jointPlacements[j1]            # the first joint's frame in the world (its parent is the world)
+        if m.parents[j1] != 0 or m.parents[j2] != j1:
+            return
+        R1, p1 = np.asarray(F1.rotation, float), np.asarray(F1.translation, float)
+        t2 = np.asarray(m.jointPlacements[j2].translation, float)
+        along = float(ax @ t2)
+        self.circle = (p1 + R1 @ (ax * along), R1 @ ax / np.linalg.norm(ax),
+                       float(np.linalg.norm(t2 - ax * along)))
+        self.R1 = self.R - float(np.linalg.norm(t2))                           # R'
+        self.R2 = self.R1 - float(np.linalg.norm(fr.placement.translation))    # R''
+        self.key = robot.base_pose.tobytes()
+
+    def unreachable(self, gm: "GoalModel") -> str:
+        """Why no configuration can put the TCP into the goal ('' when the bounds allow it)."""
+        if gm.unconstrained:
+            return ""
+        if gm.position_lower_bound(self.o) > self.R + 1e-9:
+            return "out_of_reach"
+        if self.circle is None:
+            return ""
+        rp = gm.position_radius()
+        if not math.isfinite(rp):
+            return ""
+        N = gm.goal.nominal
+        pn = np.asarray(N[:3, 3], float)
+        c, a, rho = self.circle
+        if _circle_distance(pn, c, a, rho) - rp > self.R1 + 1e-9:
+            return "out_of_reach"
+        rs = gm.rotation_slack(self.c_tcp)
+        if math.isfinite(rs):
+            w = pn - np.asarray(N[:3, :3], float) @ self.c_tcp
+            slack = rp + rs
+            if _circle_distance(w, c, a, rho) - slack > self.R2 + 1e-9:
+                return "out_of_orientation_reach"
+        return ""
+
+
+_BOUNDS_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def chain_bounds(robot) -> ChainBounds:
+    """The robot's :class:`ChainBounds` (cached per robot and base pose)."""
+    hit = _BOUNDS_CACHE.get(robot)
+    if hit is not None and hit.key == robot.base_pose.tobytes():
+        return hit
+    cb = ChainBounds(robot)
+    cb.key = robot.base_pose.tobytes()
+    try:
+        _BOUNDS_CACHE[robot] = cb
+    except TypeError:
+        pass
+    return cb
+
+
+def provably_unreachable(robot, goal: ToleratedPose) -> str:
+    """'' or the reason ("out_of_reach", "out_of_orientation_reach") why no configuration of ``robot`` puts
+    its TCP into ``goal``: the bounds of :class:`ChainBounds`, which hold for every q (joint limits and
+    collisions ignored), so a goal they reject is unreachable, and :func:`solve_ik` returns at once."""
+    return chain_bounds(robot).unreachable(goal_model(goal))
 
 
 def goal_model(goal: ToleratedPose) -> GoalModel:
@@ -626,7 +783,8 @@ _trace: Optional[list] = None   # development hook: a list receives (converged, 
 
 def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
              max_iter: int = 40, check_collision: bool = True, n_solutions: int = 1,
-             time_limit: Optional[float] = None, distinct_tol: float = DISTINCT_TOL) -> IKResult:
+             time_limit: Optional[float] = None, distinct_tol: float = DISTINCT_TOL,
+             reach_bounds: bool = True) -> IKResult:
     """Joint configurations whose TCP pose lies inside the tolerated ``goal``.
 
     ``rng``: a ``np.random.Generator`` or a seed (the result is deterministic for a given seed unless
@@ -634,10 +792,12 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     ``robot.random_configuration(rng)``. ``max_restarts`` counts attempts (including the seeded one);
     ``max_iter`` bounds the LM iterations of one attempt. With ``check_collision`` a solution must be
     free of self-collision and of contact with the obstacles set on the robot (``robot.in_collision``).
+    With ``reach_bounds`` (default) a goal that :class:`ChainBounds` proves out of reach fails at once
+    (no restart; reason "out_of_reach" or "out_of_orientation_reach"); False runs the restarts anyway.
     Up to ``n_solutions`` solutions are collected that are pairwise more than ``distinct_tol`` apart
     (Euclidean joint distance). ``time_limit`` (s) stops the search after the current attempt.
     ``stats``: attempts, iterations, converged, rejected_limits, rejected_collision, rejected_duplicate,
-    time, reason ("found" | "max_restarts" | "time_limit" | "out_of_reach").
+    time, reason ("found" | "max_restarts" | "time_limit" | "out_of_reach" | "out_of_orientation_reach").
     """
     t0 = time.perf_counter()
     if not isinstance(goal, ToleratedPose):
@@ -669,10 +829,9 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         if q_seed.shape != (n,):
             raise InputError(f"q_seed must have {n} values, got shape {q_seed.shape}")
 
-    if not gm.unconstrained:
-        o, R = robot.reach_bound()
-        if gm.position_lower_bound(o) > R + 1e-9:
-            return finish("out_of_reach")
+    why = chain_bounds(robot).unreachable(gm) if reach_bounds else ""
+    if why:
+        return finish(why)
 
     evaluate, E, JJ = gm.evaluator(n)
     m_rows = len(E)

@@ -82,11 +82,18 @@ def fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw):
     joint index). ``chain[k]`` is the 4×4 placement of chain joint k in its parent (the previous
     chain joint, the world for k = 0); ``kind`` 0 revolute / 1 prismatic about ``sign``·z."""
     nk = chain.shape[0]
+    fk_jacobian_ws(q, chain, kind, sign, iq, tcp, T, Jv, Jw, np.empty((4, 4)), np.empty((4, 4)),
+                   np.empty((nk, 3)), np.empty((nk, 3)))
+
+@njit(cache=True, nogil=True)
+def fk_jacobian_ws(q, chain, kind, sign, iq, tcp, T, Jv, Jw, M, tmp, origins, axes):
+    """:func:`fk_jacobian` with its scratch arrays given (M, tmp: 4×4; origins, axes: k×3): no allocation
+    in the LM loop."""
+    nk = chain.shape[0]
     n = q.shape[0]
-    M = np.eye(4)
-    tmp = np.empty((4, 4))
-    origins = np.empty((nk, 3))
-    axes = np.empty((nk, 3))
+    for r in range(4):
+        for c in range(4):
+            M[r, c] = 1.0 if r == c else 0.0
     for j in range(n):
         for r in range(3):
             Jv[r, j] = 0.0
@@ -219,9 +226,15 @@ def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
     True when every term's value lies in its exact interval. ``tvec[t]`` = (a, b, ta, tb, Q row 0..2,
     Q row 1 0..2) — the exact interval, the target interval and the frame rows used by the term."""
     n = Jv.shape[1]
+    return goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, np.empty((3, 3)), np.empty((3, n)),
+                        np.empty((3, n)), np.empty((3, 3)), np.empty((3, 3)))
+
+@njit(cache=True, nogil=True)
+def goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, Rd, Jp, Jr, JL, G):
+    """:func:`goal_rows` with its scratch arrays given (Rd, JL, G: 3×3; Jp, Jr: 3×n)."""
+    n = Jv.shape[1]
     pd = work[0]
     rv = work[1]
-    Rd = np.empty((3, 3))
     for r in range(3):
         for c in range(3):
             Rd[r, c] = Ninv[r, 0] * T[0, c] + Ninv[r, 1] * T[1, c] + Ninv[r, 2] * T[2, c]
@@ -230,8 +243,6 @@ def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
     for t in range(tkind.shape[0]):
         if tkind[t] == K_R_ROW or tkind[t] == K_THETA:
             need_r = True
-    Jp = np.empty((3, n))
-    Jr = np.empty((3, n))
     # d p_Δ/dq = R_N⁻¹ Jv ;  d log3(R_Δ)/dq = Jlog3(R_Δ) Rᵀ Jw
     for r in range(3):
         for j in range(n):
@@ -239,9 +250,8 @@ def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
     th = 0.0
     if need_r:
         th = log3(Rd, rv)
-        JL = np.empty((3, 3))
         jlog3(th, rv, JL)
-        G = np.empty((3, 3))      # Jlog3 · Rᵀ
+        # G = Jlog3 · Rᵀ
         for r in range(3):
             for c in range(3):
                 G[r, c] = JL[r, 0] * T[c, 0] + JL[r, 1] * T[c, 1] + JL[r, 2] * T[c, 2]
@@ -353,23 +363,30 @@ def lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, 
     """One LM descent from q (modified in place). Returns (status, iterations): status 1 = every
     analytic constraint holds at q (T holds its TCP pose), 0 = stalled / out of iterations / zero
     residual outside the exact set, −1 = non-finite step."""
+    ws = Workspace(q.shape[0], E.shape[0], chain.shape[0])
+    return lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, ws)
+
+@njit(cache=True, nogil=True)
+def Workspace(n, m, nk):
+    """Every scratch array of one LM descent (allocated once per batch of descents, not per iteration)."""
+    msz = m if m <= n else n
+    return (np.empty((3, n)), np.empty((3, n)), np.empty((2, 3)), np.empty((msz, msz)), np.empty(msz),
+            np.empty(msz), np.empty(n), np.empty((4, 4)), np.empty((4, 4)), np.empty((nk, 3)), np.empty((nk, 3)),
+            np.empty((3, 3)), np.empty((3, n)), np.empty((3, n)), np.empty((3, 3)), np.empty((3, 3)))
+
+@njit(cache=True, nogil=True)
+def lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, ws):
+    """:func:`lm_descend` with its scratch arrays given (``Workspace``): the same arithmetic."""
     n = q.shape[0]
     m = E.shape[0]
     lam_f, lam_b, max_step, stall_ratio, stall_window = params[0], params[1], params[2], params[3], int(params[4])
-    Jv = np.empty((3, n))
-    Jw = np.empty((3, n))
-    work = np.empty((2, 3))
+    Jv, Jw, work, A, rhs, x, dq, M4, tmp4, origins, axes, Rd, Jp, Jr, JL, G = ws
     small = m <= n
-    msz = m if small else n
-    A = np.empty((msz, msz))
-    rhs = np.empty(msz)
-    x = np.empty(msz)
-    dq = np.empty(n)
     best = math.inf
     since = 0
     for it in range(iters):
-        fk_jacobian(q, chain, kind, sign, iq, tcp, T, Jv, Jw)
-        ok = goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work)
+        fk_jacobian_ws(q, chain, kind, sign, iq, tcp, T, Jv, Jw, M4, tmp4, origins, axes)
+        ok = goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, Rd, Jp, Jr, JL, G)
         if ok:
             return 1, it + 1
         err = 0.0
@@ -442,11 +459,12 @@ def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, t
     analytic constraints: returns (its index or ``stop``, iterations of all descents); the configuration
     is left in ``q_out`` and its TCP pose in T."""
     total = 0
+    ws = Workspace(q_out.shape[0], E.shape[0], chain.shape[0])
     for r in range(a, stop):
         for j in range(q_out.shape[0]):
             q_out[j] = starts[r, j]
-        status, its = lm_descend(q_out, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T,
-                                 params)
+        status, its = lm_descend_ws(q_out, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T,
+                                    params, ws)
         total += its
         if status == 1:
             return r, total

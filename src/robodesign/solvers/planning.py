@@ -16,6 +16,9 @@ Decisions:
   steps are then ≤ ``resolution`` in every joint (conservative by up to √dof). :func:`check_path` steps
   by the largest joint difference directly (``ceil(max|Δq| / resolution)`` sub-steps per segment).
 * **Straight line first**: if the direct segment passes the dense check, no planner is called.
+* **Each state is evaluated once per call**: the validity verdicts are remembered by the configuration's
+  exact bytes, so the shortcuts and the final dense check do not re-query states the planner's checks already
+  decided (``stats["distinct_states"]`` counts the evaluated ones, ``lookups`` every verdict asked for).
 * **Post-processing** (``simplify=True``): a greedy shortcut (from each kept waypoint jump to the
   farthest one reachable in a straight line), then 40 random partial shortcuts between points on two
   segments (seeded from ``seed``; a fixed count keeps the result deterministic), then collinear
@@ -106,6 +109,24 @@ def _config_validator(robot, static_torque: bool = False):
     return valid
 
 
+def _memoized(valid):
+    """``valid`` remembering its verdict per configuration (by its exact bytes) for one planning call: the
+    shortcuts and the final dense check revisit states the planner's checks already decided (the same
+    interpolation formula gives the same floats), and a verdict never changes within a call."""
+    memo: Dict[bytes, bool] = {}
+
+    def cached(q: np.ndarray) -> bool:
+        cached.lookups += 1
+        key = q.tobytes()
+        v = memo.get(key)
+        if v is None:
+            v = memo[key] = valid(q)
+        return v
+    cached.memo = memo
+    cached.lookups = 0
+    return cached
+
+
 def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter: Optional[List[int]] = None,
                 include_start: bool = False) -> bool:
     """Check the states of a→b at steps of at most ``resolution`` per joint (end included).
@@ -151,7 +172,8 @@ def _bisection_order(n: int) -> List[int]:
     return out
 
 
-def check_path(robot, path, resolution: float = 0.01, static_torque: bool = False) -> Tuple[bool, int]:
+def check_path(robot, path, resolution: float = 0.01, static_torque: bool = False,
+               _valid=None) -> Tuple[bool, int]:
     """Dense check of a joint path (K×dof waypoints, linearly interpolated).
 
     Returns ``(True, -1)`` if every waypoint and every interpolated state (steps of at most
@@ -170,7 +192,7 @@ def check_path(robot, path, resolution: float = 0.01, static_torque: bool = Fals
     if not np.all(np.isfinite(P)):
         bad = int(np.nonzero(~np.all(np.isfinite(P), axis=1))[0][0])
         return False, bad
-    valid = _config_validator(robot, static_torque)
+    valid = _config_validator(robot, static_torque) if _valid is None else _valid
     if not valid(P[0]):
         return False, 0
     for i in range(len(P) - 1):
@@ -271,7 +293,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         if q.shape != (n,) or not np.all(np.isfinite(q)):
             raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
     counter = [0]
-    valid = _config_validator(robot, static_torque)
+    valid = _memoized(_config_validator(robot, static_torque))
     stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
                                 "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
                                 "length": 0.0, "reason": ""}
@@ -279,6 +301,8 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     def done(path: Optional[np.ndarray], reason: str) -> PlanResult:
         stats["reason"] = reason
         stats["checks"] = counter[0]
+        stats["lookups"] = valid.lookups                # validity verdicts asked for, the final check's included
+        stats["distinct_states"] = len(valid.memo)      # states actually evaluated (the lookups revisit some)
         stats["time"] = time.perf_counter() - t0
         if path is None:
             return PlanResult(np.zeros((0, n)), False, stats)
@@ -316,7 +340,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         stats["simplify_time"] = time.perf_counter() - ts
         candidates.insert(0, P)
     for P in candidates:
-        ok, _ = check_path(robot, P, resolution, static_torque)
+        ok, _ = check_path(robot, P, resolution, static_torque, _valid=valid)
         if ok:
             return done(P, "planned")
     return done(None, "final_check_failed")

@@ -433,11 +433,37 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
 # ==============================================================================================
 # toppra: blended polyline path and dynamics constraint
 # ==============================================================================================
+_TOPPRA = None
+
+
 def _toppra():
-    import toppra  # noqa: F401  (slow import: 1.3 s, only when needed)
-    import toppra.algorithm  # noqa: F401
-    import toppra.constraint  # noqa: F401
-    return toppra
+    global _TOPPRA
+    if _TOPPRA is None:
+        import toppra  # noqa: F401  (slow import: 1.3 s, only when needed)
+        import toppra.algorithm  # noqa: F401
+        import toppra.constraint  # noqa: F401
+        import toppra.solverwrapper as sw
+        # toppra asks the file system for its optional solvers (qpoases, cvxpy) at every TOPPRA set-up
+        # (importlib.util.find_spec, ~2 ms); the answer cannot change within a process, so ask once
+        found = sw.available_solvers(False)
+        sw.available_solvers = lambda output_msg=True: found
+        _TOPPRA = toppra
+    return _TOPPRA
+
+
+_VEL_CONSTRAINTS: Dict[bytes, object] = {}
+
+
+def _velocity_constraint(vmax: np.ndarray):
+    """toppra's JointVelocityConstraint for ±vmax, built once per limit vector (its set-up formats the limits
+    into a description string, several ms per call; the object keeps no state of a path)."""
+    key = np.asarray(vmax, float).tobytes()
+    c = _VEL_CONSTRAINTS.get(key)
+    if c is None:
+        if len(_VEL_CONSTRAINTS) > 256:
+            _VEL_CONSTRAINTS.clear()
+        c = _VEL_CONSTRAINTS[key] = _toppra().constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    return c
 
 
 def preload() -> None:
@@ -560,6 +586,40 @@ class BlendedPolyline:
         return g
 
 
+class _PathTerms:
+    """What the dynamics constraint needs of a path on a grid and does not depend on the viscous tangent
+    points: q'(s), q''(s) (right and left limits) and the RNEA terms g(q), a = M(q)·q' and
+    b = M(q)·q'' + C(q, q')·q' per grid point. Built once per path and shared by every torque pass."""
+
+    def __init__(self, robot, path, grid: np.ndarray, use_torque: bool):
+        self.path, self.grid = path, np.array(grid, dtype=float)
+        self.qs = path(grid, 1)
+        self.qss_r = path(grid, 2)
+        self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
+        self.g = self.a = self.bR = self.bL = None
+        if not use_torque:
+            return
+        import pinocchio as pin
+        model = robot.model
+        data = model.createData()
+        q = path(grid, 0)
+        qs, qss_r, qss_l = self.qs, self.qss_r, self.qss_l
+        N1, dof = q.shape
+        G, A, BR = np.empty((N1, dof)), np.empty((N1, dof)), np.empty((N1, dof))
+        BL = BR if qss_l is qss_r else np.empty((N1, dof))
+        same = np.all(qss_l == qss_r, axis=1)     # where the left and right limits of q'' agree
+        zero = np.zeros(dof)
+        rnea = pin.rnea
+        for i in range(N1):
+            g = rnea(model, data, q[i], zero, zero).copy()
+            G[i] = g
+            A[i] = rnea(model, data, q[i], zero, qs[i]) - g
+            BR[i] = rnea(model, data, q[i], qs[i], qss_r[i]) - g
+            if BL is not BR:
+                BL[i] = BR[i] if same[i] else rnea(model, data, q[i], qs[i], qss_l[i]) - g
+        self.g, self.a, self.bR, self.bL = G, A, BR, BL
+
+
 def _dynamics_constraint_class():
     _toppra()
     from toppra.constraint import LinearConstraint
@@ -567,21 +627,20 @@ def _dynamics_constraint_class():
     class DynamicsConstraint(LinearConstraint):
         """Joint acceleration + (conservative) drivetrain torque limits, interpolation discretization."""
 
-        def __init__(self, robot, amax, tau_max, x0: Optional[np.ndarray], use_torque: bool):
+        def __init__(self, robot, amax, tau_max, x0: Optional[np.ndarray], use_torque: bool,
+                     terms: Optional["_PathTerms"] = None):
             super().__init__()
             self.robot, self.amax, self.tau_max, self.x0, self.use_torque = robot, amax, tau_max, x0, use_torque
+            self.terms = terms
             self.identical = True
 
         def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
-            import pinocchio as pin
-            robot = self.robot
-            model, data = robot.model, robot.model.createData()
+            tm = self.terms
+            if tm is None or tm.path is not path or not np.array_equal(tm.grid, gridpoints):
+                tm = _PathTerms(self.robot, path, gridpoints, self.use_torque)
             N1 = len(gridpoints)
             dof = path.dof
-            q = path(gridpoints, 0)
-            qs = path(gridpoints, 1)
-            qss_r = path(gridpoints, 2)
-            qss_l = path.eval_left(gridpoints, 2) if hasattr(path, "eval_left") else qss_r
+            qs, qss_r, qss_l = tm.qs, tm.qss_r, tm.qss_l
             nb = 3 if self.use_torque else 1
             a = np.zeros((N1, nb * dof))
             bR = np.zeros((N1, nb * dof))
@@ -592,34 +651,28 @@ def _dynamics_constraint_class():
             bL[:, :dof] = qss_l
             g_lim = [self.amax, self.amax]
             if self.use_torque:
+                robot = self.robot
                 tmax = self.tau_max
                 finite = np.isfinite(tmax)
                 fv, fc = robot.friction_viscous, robot.friction_coulomb
-                zero = np.zeros(dof)
                 x0 = np.maximum(self.x0, 1e-8)
-                for i in range(N1):
-                    g = pin.rnea(model, data, q[i], zero, zero).copy()
-                    ai = pin.rnea(model, data, q[i], zero, qs[i]) - g
-                    bri = pin.rnea(model, data, q[i], qs[i], qss_r[i]) - g
-                    if qss_l is qss_r or np.array_equal(qss_l[i], qss_r[i]):
-                        bli = bri
-                    else:
-                        bli = pin.rnea(model, data, q[i], qs[i], qss_l[i]) - g
-                    sq = math.sqrt(x0[i])
-                    pos, neg = qs[i] > 0, qs[i] < 0
-                    beta_up = np.where(pos, fv * qs[i] / (2 * sq), 0.0)
-                    gam_up = np.where(pos, fc + fv * qs[i] * sq / 2, 0.0)
-                    beta_lo = np.where(neg, fv * -qs[i] / (2 * sq), 0.0)
-                    gam_lo = np.where(neg, fc + fv * -qs[i] * sq / 2, 0.0)
-                    sl_up, sl_lo = slice(dof, 2 * dof), slice(2 * dof, 3 * dof)
-                    a[i, sl_up] = np.where(finite, ai, 0.0)
-                    a[i, sl_lo] = np.where(finite, ai, 0.0)
-                    bR[i, sl_up] = np.where(finite, bri + beta_up, 0.0)
-                    bR[i, sl_lo] = np.where(finite, bri - beta_lo, 0.0)
-                    bL[i, sl_up] = np.where(finite, bli + beta_up, 0.0)
-                    bL[i, sl_lo] = np.where(finite, bli - beta_lo, 0.0)
-                    cc[i, sl_up] = np.where(finite, g + gam_up, 0.0)
-                    cc[i, sl_lo] = np.where(finite, g - gam_lo, 0.0)
+                # the same arithmetic as one grid point at a time, on every grid point at once
+                sq = np.sqrt(x0)[:, None]
+                g, ai, bri, bli = tm.g, tm.a, tm.bR, tm.bL
+                pos, neg = qs > 0, qs < 0
+                beta_up = np.where(pos, fv * qs / (2 * sq), 0.0)
+                gam_up = np.where(pos, fc + fv * qs * sq / 2, 0.0)
+                beta_lo = np.where(neg, fv * -qs / (2 * sq), 0.0)
+                gam_lo = np.where(neg, fc + fv * -qs * sq / 2, 0.0)
+                sl_up, sl_lo = slice(dof, 2 * dof), slice(2 * dof, 3 * dof)
+                a[:, sl_up] = np.where(finite, ai, 0.0)
+                a[:, sl_lo] = np.where(finite, ai, 0.0)
+                bR[:, sl_up] = np.where(finite, bri + beta_up, 0.0)
+                bR[:, sl_lo] = np.where(finite, bri - beta_lo, 0.0)
+                bL[:, sl_up] = np.where(finite, bli + beta_up, 0.0)
+                bL[:, sl_lo] = np.where(finite, bli - beta_lo, 0.0)
+                cc[:, sl_up] = np.where(finite, g + gam_up, 0.0)
+                cc[:, sl_lo] = np.where(finite, g - gam_lo, 0.0)
                 tl = np.where(finite, tmax, 1.0)
                 g_lim += [tl, tl]
             m = nb * dof
@@ -661,7 +714,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     if _DYN_CLS is None:
         _DYN_CLS = _dynamics_constraint_class()
     grid = path.gridpoints(grid_step)
-    vel = tp.constraint.JointVelocityConstraint(np.column_stack([-vmax, vmax]))
+    vel = _velocity_constraint(vmax)
     tau = np.asarray(robot.tau_max, float)
     use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
     qs = np.abs(path(grid, 1))
@@ -674,9 +727,10 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     # viscous tangent points: pass 1 at a quarter of the velocity-limit curve (halving it on failure),
     # later passes at the previous solution (which stays feasible, so they never get slower)
     x0 = x_vel / 4.0
+    terms = _PathTerms(robot, path, grid, use_torque)   # RNEA along the path once, not once per pass
     p = 0
     while p < passes:
-        dyn = _DYN_CLS(robot, amax, tau, x0, use_torque)
+        dyn = _DYN_CLS(robot, amax, tau, x0, use_torque, terms)
         algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
         algo.compute_parameterization(0.0, 0.0)
         pd = algo.problem_data
