@@ -156,3 +156,43 @@ def test_static_torque_planning_avoids_configurations_the_joints_cannot_hold():
     assert worst <= 1.0 and dense_ok(r, res.path, 0.005)
     traj = time_parameterize(r, res.path, dt=0.01)                          # and it can be timed
     np.testing.assert_allclose(traj.q[-1], FOLD_B, atol=1e-9)
+
+
+def test_a_busy_machine_plans_the_same_path(robot, monkeypatch):
+    """The planner's limit is a count of validity checks, not seconds: making every check 40x slower (as a
+    loaded machine does) leaves the path and the check count unchanged, although the slowed solve takes far
+    longer than its nominal time limit."""
+    import time as _time
+
+    from robodesign.solvers import planning
+    quick = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
+    assert quick.success and quick.stats["reason"] == "planned"
+    check = robot.in_collision
+
+    def slow(q):
+        t = _time.perf_counter()
+        while _time.perf_counter() - t < 2e-4:   # busy-wait: ~40x the cost of a check
+            pass
+        return check(q)
+    monkeypatch.setattr(robot, "in_collision", slow)
+    slowed = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
+    assert slowed.success and slowed.stats["checks"] == quick.stats["checks"]
+    assert np.array_equal(slowed.path, quick.path)
+    assert slowed.stats["plan_time"] > quick.stats["plan_time"]
+    assert planning.CHECKS_PER_SECOND * 0.5 > quick.stats["checks"]   # it stopped on a solution, not the budget
+
+
+def test_the_work_budget_stops_a_planner_that_cannot_succeed(robot, monkeypatch):
+    """A query with no solution (the goal region walled off) spends exactly its check budget in OMPL."""
+    from robodesign.solvers import planning
+    monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 2000)
+    calls = []
+    check = robot.in_collision
+
+    def walled(q):   # a wall across joint 0 halfway between the two configurations
+        calls.append(1)
+        return check(q) or abs(q[0] - 0.5 * (QA[0] + QB[0])) < 0.05
+    monkeypatch.setattr(robot, "in_collision", walled)
+    res = plan_path(robot, QA, QB, time_limit=0.25, seed=0)
+    assert not res.success and res.stats["reason"] == "no_solution"
+    assert 500 <= res.stats["checks"] <= 500 + 2 + 2000   # 0.25 s x 2000 checks/s, plus the straight-line checks

@@ -26,16 +26,18 @@ Decisions:
   checker its B-spline smoothing and Euclidean-resolution checks took 0.3–1.5 s per path. Finally the
   path is re-checked densely with :func:`check_path`; a path that fails is never returned (the raw
   planner path is tried next, else the result is a failure).
-* **Time limit**: ``time_limit`` bounds OMPL's solve; planners that overrun it (FMT/BFMT sample a fixed
-  number of states) are stopped by the validity checker, which reports every state invalid from
-  1.1·time_limit + 50 ms after the start of the solve. The straight-line check and post-processing
-  come on top (the shortcuts are bounded by their count; a 120 s cap is only a safety net, so a busy
-  machine does not change the path).
+* **Work limit, not wall-clock time**: ``time_limit`` (s) is converted into a budget of validity checks,
+  :data:`CHECKS_PER_SECOND` per second (the rate of one quiet core), and OMPL's solve stops when the budget
+  is spent (the validity checker ends the solve's termination condition once the count is reached). A busy
+  machine therefore takes longer but plans the same path, and a query that succeeds on a quiet machine
+  succeeds under load too. A wall-clock cap of :data:`WALL_FACTOR`·time_limit + 50 ms stays as a safety net
+  (the validity checker then reports every state invalid, which also stops planners that ignore the
+  condition, such as FMT/BFMT sampling a fixed number of states). The straight-line check and post-
+  processing come on top (the shortcuts are bounded by their count).
 * **Determinism**: ``ou.RNG.setSeed(seed % (2³¹−2) + 1)`` before anything that samples is created
   (OMPL seeds each RNG instance from that generator; seed 0 is reserved by OMPL). The result is
-  deterministic for a given seed as long as the planner stops on a solution rather than on the time
-  limit (``optimize=False``); PRM/PRM* grow their roadmap in a second thread, so their check counts
-  (not their paths, in our tests) vary.
+  deterministic for a given seed (the work limit counts checks, not seconds); PRM/PRM* grow their roadmap
+  in a second thread, so their check counts (not their paths, in our tests) vary.
 * **Anytime planners** (rrtstar, prmstar, bitstar, informedrrtstar, sorrtstar, ...): by default the
   path-length objective gets an infinite cost threshold, so every planner returns its first solution;
   ``optimize=True`` lets them refine until ``time_limit``.
@@ -52,7 +54,13 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 
-__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "PLANNERS"]
+__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "PLANNERS", "CHECKS_PER_SECOND"]
+
+#: validity checks per second of ``time_limit``: what one quiet core does on IMPROV and built-in arms
+#: (5–7k per CPU second measured with other jobs on the machine); the planner's work limit
+CHECKS_PER_SECOND = 8000
+#: the wall-clock safety net, as a multiple of ``time_limit`` (reached only on a machine ~10x slower)
+WALL_FACTOR = 10.0
 
 # name → OMPL class name (only the classes present in the installed OMPL are offered)
 PLANNERS: Dict[str, str] = {
@@ -269,7 +277,8 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     """A collision-free joint path from ``q_start`` to ``q_goal`` (both kept exactly).
 
     ``planner``: one of :func:`available_planners` (case-insensitive). ``time_limit`` (s) bounds the
-    OMPL solve. ``seed``: OMPL's and the shortcutting RNG seed. ``resolution``: largest joint step (rad
+    OMPL solve as a work limit of ``time_limit`` × :data:`CHECKS_PER_SECOND` validity checks (the same path on
+    a quiet and on a busy machine). ``seed``: OMPL's and the shortcutting RNG seed. ``resolution``: largest joint step (rad
     or m) between checked states. ``simplify``: shortcut the planner's path. ``optimize``: let anytime
     planners refine the path length until ``time_limit`` instead of returning their first solution.
     ``static_torque``: every state must also be held against gravity within the torque limits (see
@@ -372,11 +381,15 @@ def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimiz
         rng_idx = range(n)
 
         hard_deadline = [math.inf]   # set when solving starts
+        budget = [math.inf]          # the last check count the planner may reach
+        stop: list = []              # the solve's termination condition, ended from the validity checker
 
         def is_valid(s) -> bool:
             counter[0] += 1
-            if time.perf_counter() > hard_deadline[0]:
-                return False         # past the time limit: make planners that ignore it (FMT) stop soon
+            if counter[0] >= budget[0] or time.perf_counter() > hard_deadline[0]:
+                if stop:
+                    stop[0].terminate()   # the work limit is spent: OMPL ends the solve
+                return False         # and planners that ignore the condition (FMT) stop soon
             return valid(np.array([s[i] for i in rng_idx]))   # the same test as the dense checks
 
         ss.setStateValidityChecker(is_valid)
@@ -393,8 +406,11 @@ def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimiz
         ss.setOptimizationObjective(obj)
         ss.setPlanner(getattr(og, PLANNERS[name])(si))
         ss.setup()
-        hard_deadline[0] = time.perf_counter() + 1.1 * float(time_limit) + 0.05
-        ss.solve(float(time_limit))
+        budget[0] = counter[0] + max(1, int(float(time_limit) * CHECKS_PER_SECOND))
+        hard_deadline[0] = time.perf_counter() + WALL_FACTOR * float(time_limit) + 0.05
+        # a C++ condition (a Python one would be called from PRM's roadmap thread and deadlock on the GIL)
+        stop.append(ob.timedPlannerTerminationCondition(WALL_FACTOR * float(time_limit)))
+        ss.solve(stop[0])
         stats["plan_time"] = ss.getLastPlanComputationTime()
         if not ss.haveExactSolutionPath():
             return None
