@@ -370,7 +370,53 @@ def _fail(code: int, line: str, as_json: bool, error: Optional[str] = None, file
     return code
 
 
+class _PipeGuard:
+    """``sys.stdout`` while a command runs: once the reader has gone (``robodesign check ... | head``), further
+    output is dropped instead of raising BrokenPipeError, so the command still ends with its own exit code."""
+
+    def __init__(self, inner):
+        self._inner, self.broken = inner, False
+
+    def _close_pipe(self) -> None:
+        self.broken = True
+        try:  # the interpreter's last flush at exit must not fail either
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._inner.fileno())
+            os.close(devnull)
+        except (OSError, AttributeError, ValueError):
+            pass
+
+    def write(self, text):
+        if not self.broken:
+            try:
+                return self._inner.write(text)
+            except BrokenPipeError:
+                self._close_pipe()
+        return len(text)
+
+    def flush(self):
+        if not self.broken:
+            try:
+                self._inner.flush()
+            except BrokenPipeError:
+                self._close_pipe()
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
 def main(argv: Optional[List[str]] = None) -> int:
+    out = sys.stdout
+    guard = sys.stdout = _PipeGuard(out)
+    try:
+        return _main(argv)
+    finally:
+        guard.flush()
+        if sys.stdout is guard:
+            sys.stdout = out
+
+
+def _main(argv: Optional[List[str]] = None) -> int:
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     as_json = "--json" in argv
     debug = "--debug" in argv or os.environ.get("ROBODESIGN_DEBUG", "") not in ("", "0")
