@@ -13,6 +13,7 @@ import json
 import logging
 import math
 import os
+import secrets
 import time
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
@@ -37,8 +38,10 @@ from robodesign.web.service import (
     Limits,
     NotFound,
     Settings,
+    check_token,
     clean_json,
     files_source,
+    hash_token,
     solution_summary,
 )
 from robodesign.web.throttle import Busy, CheckQueue, RateLimiter
@@ -46,6 +49,8 @@ from robodesign.web.workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
 MiB = 1 << 20
+MAX_FORM_FILES = 256  # files in one multipart body (more: send a zip); the parser stops at the first one beyond
+MAX_FORM_FIELDS = 32  # other fields of one form
 
 PAGE_CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'none'; object-src 'none'; "
             "base-uri 'none'; form-action 'self'; frame-ancestors 'self'; frame-src 'self'")
@@ -163,6 +168,26 @@ class GuardMiddleware:
         return await self.app(scope, receive, send)
 
 
+class HeadMiddleware:
+    """``HEAD`` on every page and API route: answered as ``GET`` without the body (same status and headers)."""
+
+    def __init__(self, app):
+        self.app = app
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http" or scope.get("method") != "HEAD":
+            return await self.app(scope, receive, send)
+
+        async def no_body(message):
+            if message["type"] == "http.response.body":
+                if message.get("more_body", False):
+                    return
+                message = {"type": "http.response.body", "body": b"", "more_body": False}
+            await send(message)
+
+        return await self.app({**scope, "method": "GET"}, receive, no_body)
+
+
 async def _noop_receive():
     return {"type": "http.disconnect"}
 
@@ -218,10 +243,12 @@ async def read_upload(request: Request) -> Upload:
     up.content_type = ct
     if ct in ("multipart/form-data", "application/x-www-form-urlencoded"):
         try:
-            form = await request.form(max_files=5000, max_fields=200, max_part_size=4 * MiB)
+            form = await request.form(max_files=MAX_FORM_FILES, max_fields=MAX_FORM_FIELDS, max_part_size=4 * MiB)
         except (_BodyTooLarge, _BodyTooSlow):
             raise
-        except Exception as e:  # malformed multipart body
+        except Exception as e:  # malformed multipart body, or too many parts (stopped at the first beyond)
+            if "Too many" in str(e):
+                raise TooLarge(f"{str(e).removeprefix('400: ')} (send many files as one zip)") from None
             raise InputError(f"malformed form data ({e})") from None
         for key, value in form.multi_items():
             if isinstance(value, UploadFile):
@@ -307,18 +334,20 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @contextlib.asynccontextmanager
     async def lifespan(_app):
+        resume_pending()
         yield
         queue.close()
         checker.close()
         bench.close()
 
-    app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url="/api/docs",
+    app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url=None,
                   redoc_url=None, openapi_url="/api/openapi.json")
     app.state.bench, app.state.queue, app.state.checker = bench, queue, checker
     app.state.viewer_cache = viewer_cache = ByteLRU(viewer_cache_bytes)
     app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes, timeout=body_timeout)
     app.add_middleware(GuardMiddleware, reads=RateLimiter(read_rate, max(1.0, 5 * read_rate)),
                        writes=RateLimiter(upload_rate / 60.0, max(1.0, upload_rate / 3)))
+    app.add_middleware(HeadMiddleware)
 
     def require_admin(request: Request) -> None:
         if open_registration:
@@ -380,20 +409,51 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return resp
 
     # ---------------------------------------------------------------- the check queue
-    async def submit(request: Request, read: Callable[[Upload], tuple]):
-        """Take a place in the check queue (429 when full), read the upload, put it in line; parsing, validation
-        and the checker run on a checker thread/process (``Bench.check_upload``: 201 / 422 / 400 / 413).
-        → (job, future of {status, body, result}, place in line when it joined)."""
+    async def submit(request: Request, read: Callable[[Upload], tuple], durable: bool = False):
+        """Read the upload (its body within the body deadline, counted among the bodies being received, never in
+        the check queue), then take a place in the check queue (429 when full) and put it in line; parsing,
+        validation and the checker run on a checker thread/process (``Bench.check_upload``: 201 / 422 / 400 / 413).
+        ``durable`` (async uploads): the upload is committed to the database before this returns, and resumed
+        after a restart. → (job, future of {status, body, result}, place in line when it joined, extra answer
+        fields)."""
         client = (request.client.host if request.client else "?")
-        job = queue.reserve(client)
+        queue.start_receiving(client)
         try:
             up = await read_upload(request)
-            args = read(up)  # (text, file name, meta, token, unwrap)
-            fut = queue.submit(job, lambda: checker.check(*args), big=len(args[0]) > big_upload_bytes)
+        finally:
+            queue.done_receiving(client)
+        text, fname, meta, token, unwrap = read(up)
+        big = len(text) > big_upload_bytes
+        job = queue.reserve(client)
+        extra: dict = {}
+        try:
+            if durable:
+                if token:
+                    check_token(token)
+                else:  # the answer tells the token now: the result may be read after a restart
+                    token = extra["token"] = secrets.token_urlsafe(24)
+                token_hash = await run_in_threadpool(hash_token, token)
+                await run_in_threadpool(bench.add_pending, job.id, text, fname, meta, token_hash, unwrap, big)
+                kw = {"token_hash": token_hash, "pending": job.id}
+                fut = queue.submit(job, lambda: checker.check(text, fname, meta, None, unwrap, **kw), big=big)
+            else:
+                fut = queue.submit(job, lambda: checker.check(text, fname, meta, token, unwrap), big=big)
         except BaseException:
             queue.release(job)
             raise
-        return job, fut, queue.status(job)["position"]
+        return job, fut, queue.status(job)["position"], extra
+
+    def resume_pending() -> int:
+        """Put the async uploads that a stopped server had accepted but not judged back in line."""
+        rows = bench.pending_checks()
+        for row in rows:
+            job = queue.restore(row.job_id)
+            args = (row.text, row.fname, json.loads(row.meta_json or "{}"), None, row.unwrap)
+            kw = {"token_hash": row.token_hash, "pending": row.job_id}
+            queue.submit(job, lambda a=args, k=kw: checker.check(*a, **k), big=row.big)
+        if rows:
+            log.info("resumed %d pending check(s) of async uploads", len(rows))
+        return len(rows)
 
     def wants_async(request: Request) -> bool:
         return request.query_params.get("async", "") in ("1", "true", "yes") or \
@@ -403,6 +463,10 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.get("/static/style.css", include_in_schema=False)
     def css():
         return Response(pages.CSS, media_type="text/css", headers={"Cache-Control": "max-age=3600"})
+
+    @app.get("/api/docs", response_class=HTMLResponse, include_in_schema=False)
+    def api_docs():
+        return pages.api_docs(app.openapi())
 
     @app.get("/healthz", include_in_schema=False)
     def healthz():
@@ -489,7 +553,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/upload", response_class=HTMLResponse, include_in_schema=False)
     async def upload_submit(request: Request):
-        _job, fut, _pos = await submit(request, read_form_upload)
+        _job, fut, _pos, _extra = await submit(request, read_form_upload)
         out = await asyncio.wrap_future(fut)
         if "result" not in out:
             return _error(request, out["status"], out["body"]["detail"])
@@ -613,18 +677,22 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/api/solutions", status_code=201)
     async def api_submit(request: Request):
-        job, fut, position = await submit(request, read_api_upload(request))
-        if wants_async(request):
-            return JSONResponse({**queue.status(job), "status_url": f"/api/checks/{job.id}"}, status_code=202,
-                                headers={"Location": f"/api/checks/{job.id}"})
+        is_async = wants_async(request)
+        job, fut, position, extra = await submit(request, read_api_upload(request), durable=is_async)
+        if is_async:  # stored already: answered only now
+            return JSONResponse({**queue.status(job), "status_url": f"/api/checks/{job.id}", **extra},
+                                status_code=202, headers={"Location": f"/api/checks/{job.id}"})
         out = await asyncio.wrap_future(fut)
         return JSONResponse({**out["body"], "queue_position": position}, status_code=out["status"])
 
     @app.get("/api/checks/{job_id}")
     def api_check_status(job_id: str):
         job = queue.get(job_id)
-        if job is None:
-            raise NotFound("unknown or expired check (results are kept for an hour)")
+        if job is None:  # an async upload of an earlier run of the server, or one judged over an hour ago
+            stored = bench.pending_status(job_id)
+            if stored is None:
+                raise NotFound("unknown check")
+            return clean_json(stored)
         return clean_json(queue.status(job))
 
     @app.get("/api/queue")

@@ -12,6 +12,7 @@ import logging
 import multiprocessing
 import os
 import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Optional
@@ -24,8 +25,32 @@ _worker_bench: Optional[Bench] = None  # the Bench of a checker process
 CHECKER_NICE = 10  # checker processes yield the CPU to the process that serves the pages
 
 
+def die_with_parent(poll: float = 0.25) -> None:
+    """Make this (worker) process end when the process that started it ends, even by ``kill -9``: a daemon thread
+    watches the parent process ID (a killed parent's children are re-parented). Linux also gets
+    ``PR_SET_PDEATHSIG`` (SIGKILL), immediate, when the starting thread is still alive."""
+    parent = os.getppid()
+    try:  # Linux: the kernel sends SIGKILL when the parent goes
+        import ctypes
+        import signal
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:  # gone already
+        os._exit(0)
+
+    def watch():
+        while True:
+            time.sleep(poll)
+            if os.getppid() != parent:
+                os._exit(0)
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
 def _init_worker(settings: Settings) -> None:
     global _worker_bench
+    die_with_parent()
     try:
         os.nice(CHECKER_NICE)
     except OSError:  # not permitted here: the checks run at the server's priority
@@ -34,8 +59,8 @@ def _init_worker(settings: Settings) -> None:
 
 
 def _check_in_worker(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
-                     unwrap: bool) -> dict:
-    return _worker_bench.check_upload(text, fname, meta, token, unwrap)
+                     unwrap: bool, extra: dict) -> dict:
+    return _worker_bench.check_upload(text, fname, meta, token, unwrap, **extra)
 
 
 class ThreadChecker:
@@ -44,8 +69,8 @@ class ThreadChecker:
     def __init__(self, bench: Bench):
         self.bench = bench
 
-    def check(self, text, fname, meta, token, unwrap) -> dict:
-        return self.bench.check_upload(text, fname, meta, token, unwrap)
+    def check(self, text, fname, meta, token, unwrap, **extra) -> dict:
+        return self.bench.check_upload(text, fname, meta, token, unwrap, **extra)
 
     def close(self) -> None:
         pass
@@ -73,10 +98,11 @@ class ProcessChecker:
         for f in [pool.submit(int, 0) for _ in range(self.processes)]:
             f.result()
 
-    def check(self, text, fname, meta, token, unwrap) -> dict:
+    def check(self, text, fname, meta, token, unwrap, **extra) -> dict:
+        """``extra``: ``token_hash``, ``pending`` of :meth:`Bench.check_upload`."""
         pool = self._get_pool()
         try:
-            res = pool.submit(_check_in_worker, text, fname, meta, token, unwrap).result()
+            res = pool.submit(_check_in_worker, text, fname, meta, token, unwrap, extra).result()
         except BrokenProcessPool:
             log.error("a checker process died; starting new ones")
             with self._lock:
