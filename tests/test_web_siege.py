@@ -143,3 +143,138 @@ def test_repeated_log_lines_are_rate_limited():
     # the first line of the second window reports what the first window dropped (10,000 lines in 10 s, 5 shown)
     assert "[9995 more like this suppressed]" in lines[5] and "Traceback" in lines[5]
     assert sum(len(x) for x in lines) < 5_000
+
+
+# ------------------------------------------------------------------------------------------------------------
+# 10: an accepted upload is never lost
+# ------------------------------------------------------------------------------------------------------------
+def _children(pid: int) -> set:
+    out = set()
+    import os
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat") as f:
+                    if int(f.read().rsplit(")", 1)[1].split()[1]) == pid:
+                        out.add(int(d))
+            except (OSError, ValueError, IndexError):
+                pass
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _start_server(data, seed, port):
+    import subprocess
+    import sys
+    cmd = [sys.executable, "-m", "robodesign.cli.entry", "serve", "--data", str(data), "--seed", str(seed),
+           "--no-builtin", "--port", str(port), "--workers", "1", "--queue", "100", "--per-client-queue", "100",
+           "--upload-rate", "0", "--read-rate", "0"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, "the server stopped"
+        try:
+            if get(port, timeout=5).startswith("HTTP/1.1 200"):
+                return proc
+        except OSError:
+            pass
+        time.sleep(0.2)
+    proc.kill()
+    raise AssertionError("the server did not start")
+
+
+def _post_async(port, k: float):
+    import urllib.request
+    body = json.dumps({"solution": sol_json(k), "author": f"A{k:g}"}).encode()
+    req = urllib.request.Request(f"http://127.0.0.1:{port}/api/solutions?async=1", data=body, method="POST",
+                                 headers={"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=60) as r:
+            return r.status, json.loads(r.read())
+    except Exception as e:  # noqa: BLE001 (the server was killed under it: not acknowledged)
+        return None, repr(e)
+
+
+def _status(port, path):
+    import urllib.error
+    import urllib.request
+    try:
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}{path}", timeout=30) as r:
+            return r.status, json.loads(r.read())
+    except urllib.error.HTTPError as e:
+        return e.code, json.loads(e.read() or b"null")
+
+
+@pytest.mark.slow
+def test_kill_9_during_async_uploads_loses_none_answered_202(tmp_path, seed_dir):
+    import os
+    import signal
+    from concurrent.futures import ThreadPoolExecutor
+    n = 24
+    port = free_port()
+    data = tmp_path / "data"
+    server = _start_server(data, seed_dir, port)
+    try:
+        checkers = _children(server.pid)
+        assert checkers  # the checker process(es) and multiprocessing's helper
+        acked = []
+        with ThreadPoolExecutor(8) as pool:
+            futs = [pool.submit(_post_async, port, 1.0 + k / 100) for k in range(n)]
+            for f in futs[: n // 2]:  # kill -9 once half the uploads have been answered, the others in flight
+                status, body = f.result()
+                if status == 202:
+                    acked.append(body)
+            os.kill(server.pid, signal.SIGKILL)
+            server.wait(30)
+            for f in futs[n // 2:]:
+                status, body = f.result()
+                if status == 202:
+                    acked.append(body)
+        assert len(acked) >= n // 2
+        # the checker processes die with their server
+        deadline = time.monotonic() + 30
+        while any(_alive(p) for p in checkers) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [p for p in checkers if _alive(p)]
+        import sqlite3
+        with contextlib.closing(sqlite3.connect(data / "bench.db")) as con:
+            queued = con.execute("SELECT count(*) FROM pending_checks WHERE state = 'queued'").fetchone()[0]
+            stored = con.execute("SELECT count(*) FROM pending_checks").fetchone()[0]
+        print(f"{len(acked)} uploads answered 202, {stored} stored, {queued} not judged when the server was killed")
+        assert stored >= len(acked) and queued >= 1  # the restart has checks to resume
+        server = _start_server(data, seed_dir, port)  # the same data: pending checks resume
+        results = {}
+        deadline = time.monotonic() + 300
+        for a in acked:
+            while True:
+                code, s = _status(port, a["status_url"])
+                assert code == 200, (code, s)
+                if s["state"] == "done":
+                    results[a["job"]] = s
+                    break
+                assert time.monotonic() < deadline, s
+                time.sleep(0.2)
+        assert len(results) == len(acked)
+        ids = []
+        for a in acked:
+            s = results[a["job"]]
+            assert s["status"] == 201, s
+            code, sol = _status(port, f"/api/solutions/{s['result']['id']}")
+            assert code == 200 and sol["valid"] and sol["author"] == a.get("author", sol["author"])
+            ids.append(s["result"]["id"])
+            # the token given with the 202 answer withdraws it: it belongs to this upload
+            assert len(a["token"]) >= 16
+        assert len(set(ids)) == len(ids)  # none judged twice
+        code, board = _status(port, f"/api/leaderboard/{BOARD}")
+        assert code == 200 and set(ids) <= {e["id"] for e in board["entries"]}
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            server.kill()
+        server.wait(30)
