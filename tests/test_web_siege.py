@@ -278,3 +278,68 @@ def test_kill_9_during_async_uploads_loses_none_answered_202(tmp_path, seed_dir)
         with contextlib.suppress(ProcessLookupError):
             server.kill()
         server.wait(30)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# 9: the viewer off the web process
+# ------------------------------------------------------------------------------------------------------------
+def _long_rest_solution(extra: int) -> dict:
+    """The valid toy solution followed by ``extra`` samples at rest (a valid, long, boring upload)."""
+    from test_checker import DT
+    sol = sol_json(1.0)
+    tr = sol["trajectory"]
+    t_end, q_end = tr["t"][-1], tr["q"][-1]
+    zero = [0.0] * len(q_end)
+    tr["t"] += [round(t_end + DT * (k + 1), 9) for k in range(extra)]
+    tr["q"] += [q_end] * extra
+    tr["dq"] += [zero] * extra
+    tr["ddq"] += [zero] * extra
+    return sol
+
+
+@pytest.mark.slow
+def test_viewer_pages_are_built_off_the_web_process_decimated_and_cached(site):
+    pytest.importorskip("robodesign.viewer", reason="the 3D viewer is not installed")
+    import os
+    from concurrent.futures import ThreadPoolExecutor
+
+    from robodesign.viewer.html import decode_page_data
+    sol = _long_rest_solution(20_000)  # 203 s of motion: 5,000 frames at 25 fps, 20,000 samples
+    n = len(sol["trajectory"]["t"])
+    r = upload(site, sol, author="Rest")
+    assert r.status_code == 201, r.text
+    sid = r.json()["id"]
+    viewer = site.app.state.viewer
+    with ThreadPoolExecutor(3) as pool:  # three clients ask for the page at once: one build
+        pages = list(pool.map(lambda _: site.get(f"/solutions/{sid}/viewer"), range(3)))
+    assert [p.status_code for p in pages] == [200, 200, 200] and viewer.builds == 1
+    assert pages[0].content == pages[1].content == pages[2].content
+    procs = list(viewer._pool._processes.values())
+    assert procs and all(p.pid != os.getpid() for p in procs)  # built in the viewer process
+    data = decode_page_data(pages[0].text)
+    anim = data["animation"]
+    assert n > 20_000 and len(anim["t"]) <= viewer.max_frames + 10  # + the goal instants
+    assert anim["t"][-1] == pytest.approx(sol["trajectory"]["t"][-1])  # the last sample is kept
+    assert len(pages[0].content) < 8 * 2 ** 20
+    assert viewer.path(sid).read_bytes() == pages[0].content  # kept as a file: a restart does not rebuild it
+    site.app.state.viewer_cache.max_bytes = 0  # (the in-memory cache off) served from the file, not built again
+    site.app.state.viewer_cache.put(sid, b"x")  # too large for the cache now: dropped
+    assert site.get(f"/solutions/{sid}/viewer").content == pages[0].content and viewer.builds == 1
+    # a build that takes too long is stopped (its process killed): 503 with Retry-After, and the next one works
+    viewer.timeout = 0.001
+    viewer.path(sid).unlink()
+    r = site.get(f"/solutions/{sid}/viewer")
+    assert r.status_code == 503 and r.headers["retry-after"] == "60" and "took longer" in r.text
+    assert all(not p.is_alive() for p in procs) or viewer._pool is None
+
+
+def test_decimation_keeps_first_last_and_goal_samples():
+    import numpy as np
+
+    from robodesign.web.viewer_pages import decimate_indices
+    t = np.arange(100_001) * 0.01
+    idx = decimate_indices(t, 1000, goal_times=[123.456, 5.0])
+    assert idx[0] == 0 and idx[-1] == 100_000 and len(idx) <= 1002
+    assert np.searchsorted(t, 123.456) in idx and 500 in idx
+    assert np.all(np.diff(idx) > 0)
+    assert list(decimate_indices(t[:50], 1000)) == list(range(50))

@@ -45,6 +45,7 @@ from robodesign.web.service import (
     solution_summary,
 )
 from robodesign.web.throttle import Busy, CheckQueue, RateLimiter
+from robodesign.web.viewer_pages import ViewerFailed, ViewerPages
 from robodesign.web.workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
@@ -306,7 +307,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                admin_token: Optional[str] = None, open_registration: bool = False, queue_size: int = 8,
                per_client_queue: int = 2, upload_rate: float = 30.0, read_rate: float = 20.0,
                body_timeout: float = 120.0, viewer_cache_bytes: int = 64 * MiB, big_upload_bytes: int = 2 * MiB,
-               limits: Optional[Limits] = None, check_processes: bool = False) -> FastAPI:
+               limits: Optional[Limits] = None, check_processes: bool = False, viewer_timeout: float = 60.0) -> FastAPI:
     """Build the website (docs/website.md). ``db_url``: SQLAlchemy URL (default SQLite ``<data_dir>/bench.db``;
     ``postgresql://`` uses psycopg 3). ``seed``: extra folders to register tasks/module sets from at startup (after
     the built-in ``assets/`` when ``seed_builtin``).
@@ -317,7 +318,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     but one; ``check_processes``: run the checks in as many separate processes (robodesign.web.workers).
     ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client rate limits (0 = none);
     ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
-    of one solution."""
+    of one solution; ``viewer_timeout``: seconds a viewer page may take to build (robodesign.web.viewer_pages)."""
     settings = Settings(data_dir=Path(data_dir), db_url=db_url, max_request_bytes=int(max_request_bytes),
                         max_unzipped_bytes=int(max_unzipped_bytes), seed_dirs=tuple(Path(s) for s in seed),
                         seed_builtin=seed_builtin, limits=limits or Limits())
@@ -338,12 +339,14 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         yield
         queue.close()
         checker.close()
+        viewer.close()
         bench.close()
 
     app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url=None,
                   redoc_url=None, openapi_url="/api/openapi.json")
     app.state.bench, app.state.queue, app.state.checker = bench, queue, checker
     app.state.viewer_cache = viewer_cache = ByteLRU(viewer_cache_bytes)
+    app.state.viewer = viewer = ViewerPages(settings, timeout=viewer_timeout)
     app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes, timeout=body_timeout)
     app.add_middleware(GuardMiddleware, reads=RateLimiter(read_rate, max(1.0, 5 * read_rate)),
                        writes=RateLimiter(upload_rate / 60.0, max(1.0, upload_rate / 3)))
@@ -387,6 +390,12 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.exception_handler(Forbidden)
     async def _forbidden(request, exc):
         return _error(request, 403, str(exc))
+
+    @app.exception_handler(ViewerFailed)
+    async def _viewer_failed(request, exc):
+        resp = _error(request, 503, str(exc))
+        resp.headers["Retry-After"] = "60"
+        return resp
 
     @app.exception_handler(Busy)
     async def _busy(request, exc):
@@ -510,26 +519,18 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return pages.solution_page(row, ok, note)
 
     @app.get("/solutions/{sid}/viewer", response_class=HTMLResponse, include_in_schema=False)
-    def solution_viewer(sid: str):
+    async def solution_viewer(sid: str):
         ok, note = _viewer_available()
         if not ok:
             raise NotFound(note)
-        row = bench.solution_row(sid)
-        html = viewer_cache.get(row.id)
-        if html is None:
-            verdict = json.loads(row.verdict_json or "{}") or None
-            if row.collaborative:  # every robot animating together on the common time base
-                from robodesign.viewer import collab_page
-                csol = bench.solution(row.id)
-                html = collab_page(bench.collab_task(row.task_id), csol,
-                                   {rid: bench.module_set(s.module_set) for rid, s in csol.robots},
-                                   verdict=pages.collab_viewer_verdict(verdict))
-            else:
-                from robodesign.viewer import solution_page as render
-                html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
-                              verdict=verdict)
-            viewer_cache.put(row.id, html)
-        return HTMLResponse(html, headers={"Content-Security-Policy": VIEWER_CSP})
+        rid = (await run_in_threadpool(bench.solution_row, sid)).id
+        html = viewer_cache.get(rid)
+        if html is None:  # built in the viewer process (bounded in time, memory, frames and size), kept as a file
+            path = await run_in_threadpool(viewer.get, rid)
+            html = await run_in_threadpool(path.read_bytes)
+            viewer_cache.put(rid, html)
+        return Response(html, media_type="text/html; charset=utf-8",
+                        headers={"Content-Security-Policy": VIEWER_CSP, "Cache-Control": "max-age=3600"})
 
     @app.post("/solutions/{sid}/withdraw", response_class=HTMLResponse, include_in_schema=False)
     async def withdraw_form(sid: str, request: Request):
