@@ -343,3 +343,92 @@ def test_decimation_keeps_first_last_and_goal_samples():
     assert np.searchsorted(t, 123.456) in idx and 500 in idx
     assert np.all(np.diff(idx) > 0)
     assert list(decimate_indices(t[:50], 1000)) == list(range(50))
+
+
+# ------------------------------------------------------------------------------------------------------------
+# 7: slow bodies hold no place in the check queue
+# ------------------------------------------------------------------------------------------------------------
+def test_slow_bodies_do_not_block_honest_uploads(tmp_path, seed_dir):
+    import urllib.request
+    app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, upload_rate=0, read_rate=0,
+                     queue_size=8, per_client_queue=2, body_timeout=120.0)
+    stop = threading.Event()
+    with guarded_server(app, header_timeout=10.0) as (port, _proto):
+        slow = []
+        for _ in range(8):  # 8 uploads of 1 MB announced, sent at a byte or two a second (the attack of the issue)
+            s = socket.create_connection(("127.0.0.1", port), timeout=10)
+            s.sendall(b"POST /api/solutions HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                      b"Content-Length: 1000000\r\n\r\n{")
+            slow.append(s)
+
+        def trickle():
+            while not stop.wait(0.5):
+                for s in slow:
+                    with contextlib.suppress(OSError):
+                        s.sendall(b" ")
+        th = threading.Thread(target=trickle, daemon=True)
+        th.start()
+        try:
+            deadline = time.monotonic() + 10
+            while app.state.queue.stats()["receiving"] < 8:
+                assert time.monotonic() < deadline, app.state.queue.stats()
+                time.sleep(0.05)
+            assert app.state.queue.stats()["waiting"] == 0  # receiving, not in the queue
+            answers = []
+            for k in range(6):  # six honest uploads, one after another, all checked
+                body = json.dumps({"solution": sol_json(1.0 + k / 10), "author": f"H{k}"}).encode()
+                req = urllib.request.Request(f"http://127.0.0.1:{port}/api/solutions", data=body, method="POST",
+                                             headers={"Content-Type": "application/json"})
+                with urllib.request.urlopen(req, timeout=120) as r:
+                    answers.append((r.status, json.loads(r.read())))
+            assert [a[0] for a in answers] == [201] * 6
+            assert [a[1]["cost"] for a in answers] == pytest.approx([3.5 * (1 + k / 10) for k in range(6)])
+            assert app.state.queue.stats()["receiving"] == 8  # the slow ones are still being received
+        finally:
+            stop.set()
+            th.join(5)
+            for s in slow:
+                s.close()
+
+
+# ------------------------------------------------------------------------------------------------------------
+# 11: many-part bodies, /api/docs under the CSP, HEAD
+# ------------------------------------------------------------------------------------------------------------
+def test_a_4900_part_multipart_body_is_refused_early(site):
+    from robodesign.web.app import MAX_FORM_FILES
+    parts = b"".join(b'--B\r\nContent-Disposition: form-data; name="files"; filename="f%d"\r\n\r\nx\r\n' % i
+                     for i in range(4900))
+    seen = []
+    import python_multipart.multipart as mp  # count the parts the parser actually handled
+    original = mp.MultipartParser.callback
+
+    def counting(self, name, *a, **kw):
+        if name == "part_begin":
+            seen.append(1)
+        return original(self, name, *a, **kw)
+    mp.MultipartParser.callback = counting
+    try:
+        r = site.post("/api/solutions", content=parts + b"--B--\r\n",
+                      headers={"content-type": "multipart/form-data; boundary=B"})
+    finally:
+        mp.MultipartParser.callback = original
+    assert r.status_code == 413 and f"Maximum number of files is {MAX_FORM_FILES}" in r.json()["detail"]
+    assert 100 < len(seen) <= MAX_FORM_FILES + 1  # stopped at the first part beyond the limit, not after 4,900
+    assert site.app.state.queue.stats() == {"workers": site.app.state.queue.workers, "checking": 0, "waiting": 0,
+                                            "receiving": 0, "max_waiting": 8}
+
+
+def test_api_docs_work_under_the_csp_and_head_works_on_pages(site):
+    r = site.get("/api/docs")
+    assert r.status_code == 200 and "script-src 'none'" in r.headers["content-security-policy"]
+    html = r.text
+    assert "<script" not in html and "cdn" not in html.lower() and "http://" not in html and "https://" not in html
+    for route in ("/api/solutions", "/api/leaderboard/{bid}", "/api/checks/{job_id}"):
+        assert f"<code>{route}</code>" in html
+    assert site.get("/api/openapi.json").json()["paths"]["/api/solutions"]["post"]
+    for path in ("/", "/upload", "/api/docs", "/api/tasks", f"/leaderboard/{BOARD}", "/healthz", "/static/style.css"):
+        g, h = site.get(path), site.head(path)
+        assert h.status_code == g.status_code == 200, path
+        assert h.content == b"" and h.headers["content-length"] == str(len(g.content))
+        assert h.headers["content-type"] == g.headers["content-type"]
+    assert site.head("/solutions/999").status_code == 404
