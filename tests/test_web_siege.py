@@ -432,3 +432,26 @@ def test_api_docs_work_under_the_csp_and_head_works_on_pages(site):
         assert h.content == b"" and h.headers["content-length"] == str(len(g.content))
         assert h.headers["content-type"] == g.headers["content-type"]
     assert site.head("/solutions/999").status_code == 404
+
+
+def test_a_pending_upload_judged_by_two_processes_is_stored_once(site):
+    """Two server processes that both resume one pending upload (several processes on one database): the second
+    finds the job done when it marks it, rolls its solution back and reports the stored result."""
+    from robodesign.web.service import hash_token
+    bench = site.app.state.bench
+    text = json.dumps(sol_json(1.0))
+    bench.add_pending("job-twice", text, "solution.json", {"author": "Twice"}, hash_token("secret-token-1"), False,
+                      False)
+    assert [r.job_id for r in bench.pending_checks()] == ["job-twice"]
+    first = bench.check_upload(text, "solution.json", {"author": "Twice"}, None, False,
+                               token_hash=hash_token("secret-token-1"), pending="job-twice")
+    second = bench.check_upload(text, "solution.json", {"author": "Twice"}, None, False,
+                                token_hash=hash_token("secret-token-1"), pending="job-twice")
+    assert first["status"] == 201 and "token" not in first["body"]  # the uploader got it with the 202 answer
+    assert second["status"] == 200 and second["body"]["state"] == "done"
+    assert second["body"]["result"]["id"] == first["body"]["id"]
+    entries = site.get(f"/api/leaderboard/{BOARD}").json()["entries"]
+    assert [e["author"] for e in entries] == ["Twice"] and bench.pending_checks() == []
+    # the token hashed at acceptance withdraws it
+    assert site.delete(f"/api/solutions/{first['body']['id']}", headers={"X-Author-Token": "secret-token-1"}
+                       ).status_code == 200

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple, Union
 
-from sqlalchemy import func, select
+from sqlalchemy import func, select, update
 from sqlalchemy.exc import IntegrityError
 
 from robodesign.collab.core import (
@@ -77,6 +77,10 @@ class NotFound(RobodesignError):
 
 class Forbidden(RobodesignError):
     pass
+
+
+class AlreadyJudged(Exception):
+    """An async upload's job was finished by another server process (it stays stored once)."""
 
 
 @dataclass
@@ -754,8 +758,9 @@ class Bench:
             rid = row.id
             res = SubmitResult(True, row.benchmark_id, vj, cost, id=rid, token=token, task_id=sol.task_id,
                                module_set=row.module_set, costs=costs)
-            if pending is not None:
-                self._finish_pending(s, pending, 201, res.to_json())
+            if pending is not None and not self._finish_pending(s, pending, 201, res.to_json()):
+                s.rollback()  # judged meanwhile by another server process that resumed it too: stored once
+                raise AlreadyJudged(pending)
             s.commit()
         return res
 
@@ -793,11 +798,14 @@ class Bench:
         return out
 
     @staticmethod
-    def _finish_pending(s, job_id: str, status: int, body: dict) -> None:
-        row = s.scalar(select(db.PendingRow).where(db.PendingRow.job_id == job_id))
-        if row is not None:
-            row.state, row.status, row.result_json = "done", int(status), json.dumps(clean_json(body))
-            row.text, row.finished = "", db.utcnow()
+    def _finish_pending(s, job_id: str, status: int, body: dict) -> bool:
+        """Mark the job done in session ``s`` → False when it was done already (the row lock of the UPDATE makes a
+        second process that judged the same job wait, then find it done)."""
+        P = db.PendingRow
+        res = s.execute(update(P).where(P.job_id == job_id, P.state == "queued")
+                        .values(state="done", status=int(status), result_json=json.dumps(clean_json(body)), text="",
+                                finished=db.utcnow()))
+        return res.rowcount == 1
 
     def finish_pending(self, job_id: str, status: int, body: dict) -> None:
         with self.Session() as s:
@@ -830,6 +838,8 @@ class Bench:
             out = {"status": 413, "body": {"detail": self.public(str(e))}}
         except InputError as e:
             out = {"status": 400, "body": {"detail": self.public(str(e))}}
+        except AlreadyJudged:
+            return {"status": 200, "body": self.pending_status(pending) or {}}
         except Exception as e:
             if pending is not None:  # never resumed again: it would fail the same way at every start
                 self.finish_pending(pending, 500, {"detail": f"internal error ({type(e).__name__})"})
