@@ -455,3 +455,19 @@ def test_a_pending_upload_judged_by_two_processes_is_stored_once(site):
     # the token hashed at acceptance withdraws it
     assert site.delete(f"/api/solutions/{first['body']['id']}", headers={"X-Author-Token": "secret-token-1"}
                        ).status_code == 200
+
+
+def test_decimate_json_cuts_every_trajectory_list_alike():
+    from robodesign.web.viewer_pages import decimate_json
+    sol = _long_rest_solution(10_000)
+    n = len(sol["trajectory"]["t"])
+    small = decimate_json(sol, 500)
+    tr = small["trajectory"]
+    assert len(tr["t"]) == len(tr["q"]) == len(tr["dq"]) == len(tr["ddq"]) <= 500 + len(tr["goal2time"])
+    assert tr["t"][0] == sol["trajectory"]["t"][0] and tr["t"][-1] == sol["trajectory"]["t"][-1]
+    k = sol["trajectory"]["t"].index(tr["t"][7])  # the rows stay together
+    assert tr["q"][7] == sol["trajectory"]["q"][k] and tr["ddq"][7] == sol["trajectory"]["ddq"][k]
+    assert len(sol["trajectory"]["t"]) == n  # the input is not changed
+    collab = {"taskID": "x", "robots": [{"ID": "a", "trajectory": sol["trajectory"]}, {"ID": "b"}]}
+    assert len(decimate_json(collab, 500)["robots"][0]["trajectory"]["q"]) == len(tr["q"])
+    assert decimate_json({"trajectory": {"t": "bad"}}, 10) == {"trajectory": {"t": "bad"}}
