@@ -118,6 +118,7 @@ def test_repeated_log_lines_are_rate_limited():
     f = RateLimitFilter(burst=5, window=10.0, clock=lambda: now[0])
     logger = logging.getLogger("robodesign.test.flood")
     logger.propagate = False
+    logger.setLevel(logging.INFO)
     lines = []
 
     class Keep(logging.Handler):
@@ -134,15 +135,17 @@ def test_repeated_log_lines_are_rate_limited():
             except OSError:
                 logger.error("socket.accept() out of system resource", exc_info=True)
         logger.warning("something else")
+        for i in range(100):  # distinct lines (access log: one template, other arguments) all pass
+            logger.info('%s - "GET %s HTTP/1.1" %d', "127.0.0.1", f"/solutions/{i}", 200)
     finally:
         logger.removeHandler(h)
         logger.removeFilter(f)
     tracebacks = sum("Traceback" in x for x in lines)
-    # 2 windows of 10 s: 5 lines each (one with its traceback) + the other message
-    assert len(lines) == 11 and tracebacks == 2
+    # 2 windows of 10 s: 5 lines each (one with its traceback) + the other message + 100 distinct lines
+    assert len(lines) == 111 and tracebacks == 2 and lines[-1] == '127.0.0.1 - "GET /solutions/99 HTTP/1.1" 200'
     # the first line of the second window reports what the first window dropped (10,000 lines in 10 s, 5 shown)
     assert "[9995 more like this suppressed]" in lines[5] and "Traceback" in lines[5]
-    assert sum(len(x) for x in lines) < 5_000
+    assert sum(len(x) for x in lines[:10]) < 5_000
 
 
 # ------------------------------------------------------------------------------------------------------------

@@ -8,8 +8,9 @@ and every failed ``accept()`` (out of file descriptors) logs a traceback. Here:
   connection is closed after ``keep_alive`` seconds as before); at most ``max_connections`` connections are open
   at once (a connection beyond is closed at once, before it costs anything but its socket). The body's deadline is
   the application's (``--body-timeout``, :class:`robodesign.web.app.BodyLimitMiddleware`).
-* :class:`RateLimitFilter` on the server's loggers: a repeated log line (the same message from the same place) is
-  written at most ``burst`` times per ``window`` seconds, its traceback only once; then one summary line.
+* :class:`RateLimitFilter` on the server's loggers: a repeated log line (the same text from the same logger) is
+  written at most ``burst`` times per ``window`` seconds, its traceback only once; the next one shown says how many
+  were dropped.
 * :func:`raise_fd_limit`: the soft limit of open files raised to the hard one (at most 65,536).
 
 docs/website.md ("Production") says how to run the site behind a reverse proxy as well.
@@ -29,9 +30,9 @@ LOGGERS = ("asyncio", "uvicorn", "uvicorn.error", "uvicorn.access", "robodesign.
 
 
 class RateLimitFilter(logging.Filter):
-    """Let through at most ``burst`` records of one kind (logger, message template, exception type) per ``window``
-    seconds; only the first of a window keeps its traceback. The first record of a kind after suppressed ones
-    says how many were dropped."""
+    """Let through at most ``burst`` records of one kind (logger, message and its arguments, exception type) per
+    ``window`` seconds (so distinct access-log lines all pass); only the first of a window keeps its traceback. The
+    first record of a kind after suppressed ones says how many were dropped."""
 
     def __init__(self, burst: int = 5, window: float = 10.0, clock=time.monotonic, max_kinds: int = 1000):
         super().__init__()
@@ -41,7 +42,7 @@ class RateLimitFilter(logging.Filter):
 
     def filter(self, record: logging.LogRecord) -> bool:
         exc = record.exc_info[0].__name__ if record.exc_info and record.exc_info[0] else ""
-        kind = (record.name, str(record.msg)[:200], exc)
+        kind = (record.name, str(record.msg)[:200], str(record.args)[:200], exc)  # access lines differ by args
         now = self.clock()
         with self._lock:
             st = self._seen.get(kind)
