@@ -27,24 +27,16 @@ CHECKER_NICE = 10  # checker processes yield the CPU to the process that serves 
 
 def die_with_parent(poll: float = 0.25) -> None:
     """Make this (worker) process end when the process that started it ends, even by ``kill -9``: a daemon thread
-    watches the parent process ID (a killed parent's children are re-parented). Linux also gets
-    ``PR_SET_PDEATHSIG`` (SIGKILL), immediate, when the starting thread is still alive."""
+    watches the parent process ID (a killed parent's children are re-parented) and exits within ``poll`` seconds.
+    (Not ``PR_SET_PDEATHSIG``: it fires when the *thread* that started the process ends, and pools start processes
+    from short-lived request threads.)"""
     parent = os.getppid()
-    try:  # Linux: the kernel sends SIGKILL when the parent goes
-        import ctypes
-        import signal
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-    if os.getppid() != parent:  # gone already
-        os._exit(0)
 
     def watch():
         while True:
-            time.sleep(poll)
             if os.getppid() != parent:
                 os._exit(0)
+            time.sleep(poll)
     threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
 
 
