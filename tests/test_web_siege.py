@@ -19,11 +19,10 @@ import pytest
 
 pytest.importorskip("fastapi", reason="the website needs fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
+from test_web import ADMIN, ADMIN_HEADERS, BOARD, free_port, seed_dir, sol_json, upload  # noqa: E402,F401
 
 from robodesign.web import create_app  # noqa: E402
 from robodesign.web.server import RateLimitFilter, server_config  # noqa: E402
-
-from test_web import ADMIN, ADMIN_HEADERS, BOARD, free_port, seed_dir, sol_json, upload  # noqa: E402,F401
 
 
 @pytest.fixture
