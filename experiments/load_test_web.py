@@ -1,5 +1,10 @@
-"""Load test of the benchmark website (issue 13, section 3): page latency and upload acknowledgement while two
-~20 MiB uploads are being checked.
+"""Load test of the benchmark website: ``--scenario big`` (issue 13, the default): page latency and upload
+acknowledgement while two ~20 MiB uploads are being checked; ``--scenario siege`` (issue 22): an honest upload's
+time to verdict and page p99 without and then with the slow-body, slow-header and viewer attacks in one run;
+``--scenario kill`` (issue 22): ``kill -9`` of the server during 100 async uploads, then a restart: every upload
+answered 202 must be stored and judged.
+
+Scenario big:
 
 What it does (everything on 127.0.0.1, bounded in count and time):
 
@@ -103,6 +108,17 @@ def rss_mib(pid: int) -> float:
 
 
 def main(argv=None) -> int:
+    if argv is None:
+        argv = sys.argv[1:]
+    if "--scenario" in argv:
+        i = argv.index("--scenario")
+        scenario, argv = argv[i + 1], argv[:i] + argv[i + 2:]
+        if scenario == "siege":
+            return siege(argv)
+        if scenario == "kill":
+            return kill_test(argv)
+        if scenario != "big":
+            raise SystemExit(f"--scenario: big, siege or kill, not {scenario!r}")
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--clients", type=int, default=50)
     ap.add_argument("--think", type=float, nargs=2, default=(0.25, 0.75), metavar=("MIN", "MAX"),
@@ -121,7 +137,7 @@ def main(argv=None) -> int:
     port = free_port()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
     env.pop("ROBODESIGN_ADMIN_TOKEN", None)
-    server = subprocess.Popen([sys.executable, "-m", "robodesign.cli", "serve", "--data", str(tmp / "data"),
+    server = subprocess.Popen([sys.executable, "-m", "robodesign.cli.entry", "serve", "--data", str(tmp / "data"),
                                "--seed", str(seed), "--no-builtin", "--port", str(port), "--host", "127.0.0.1",
                                "--max-upload-mb", str(args.big_mib + 1), "--workers", str(args.workers)],
                               stdout=subprocess.DEVNULL, stderr=open(tmp / "server.log", "w"), env=env)
@@ -273,6 +289,290 @@ def main(argv=None) -> int:
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=2))
     return 0 if targets else 1
+
+
+# ------------------------------------------------------------------------------------------------------------
+# issue 22: the site under attack, and kill -9 during async uploads
+# ------------------------------------------------------------------------------------------------------------
+def start_server(tmp: Path, seed: Path, port: int, extra=()) -> subprocess.Popen:
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")]))
+    env.pop("ROBODESIGN_ADMIN_TOKEN", None)
+    log = open(tmp / "server.log", "a")
+    server = subprocess.Popen([sys.executable, "-m", "robodesign.cli.entry", "serve", "--data", str(tmp / "data"),
+                               "--seed", str(seed), "--no-builtin", "--port", str(port), "--host", "127.0.0.1",
+                               *extra], stdout=subprocess.DEVNULL, stderr=log, env=env)
+    deadline = time.time() + 180
+    while True:
+        try:
+            if request(port, "GET", "/healthz", timeout=2)[0] == 200:
+                return server
+        except OSError:
+            pass
+        if server.poll() is not None or time.time() > deadline:
+            server.kill()
+            raise SystemExit(f"the server did not start: {(tmp / 'server.log').read_text()[-2000:]}")
+        time.sleep(0.2)
+
+
+def stop_server(server: subprocess.Popen) -> None:
+    server.send_signal(signal.SIGTERM)
+    try:
+        server.wait(30)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        server.wait(30)
+
+
+def rest_solution_text(extra: int) -> str:
+    """The valid toy solution followed by ``extra`` samples at rest (the issue's 13 MiB upload: 83,000 samples)."""
+    sol = sol_json(1.0)
+    tr = sol["trajectory"]
+    t_end, q_end = tr["t"][-1], tr["q"][-1]
+    zero = [0.0] * len(q_end)
+    tr["t"] += [round(t_end + test_checker.DT * (k + 1), 9) for k in range(extra)]
+    tr["q"] += [q_end] * extra
+    tr["dq"] += [zero] * extra
+    tr["ddq"] += [zero] * extra
+    return json.dumps(sol)
+
+
+def siege(argv) -> int:
+    ap = argparse.ArgumentParser(description="issue 22: honest upload and page latency without and with attacks")
+    ap.add_argument("--clients", type=int, default=10, help="page clients (default 10)")
+    ap.add_argument("--think", type=float, nargs=2, default=(0.25, 0.75), metavar=("MIN", "MAX"))
+    ap.add_argument("--phase", type=float, default=30.0, help="seconds of each phase (default 30)")
+    ap.add_argument("--slow-bodies", type=int, default=8, help="connections sending 1 MB at 1 byte/s (default 8)")
+    ap.add_argument("--slow-headers", type=int, default=300, help="connections sending headers at 1 byte/s")
+    ap.add_argument("--viewer-clients", type=int, default=3, help="clients loading the big solution's viewer")
+    ap.add_argument("--rest-samples", type=int, default=83_000, help="rest samples of the big solution")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--json", help="also write the figures to this file")
+    args = ap.parse_args(argv)
+    tmp = Path(tempfile.mkdtemp(prefix="robodesign-siege-"))
+    seed = make_seed(tmp / "seed")
+    port = free_port()
+    server = start_server(tmp, seed, port, ["--workers", str(args.workers)])
+    stop_all = threading.Event()
+    out: dict = {"clients": args.clients, "phase_s": args.phase, "workers": args.workers}
+    try:
+        def upload(text: str, client: str, author: str):
+            return request(port, "POST", f"/api/solutions?author={author}", body=text.encode(),
+                           headers={"Content-Type": "application/json", "X-Forwarded-For": client})
+        for i in range(20):
+            st, _, body = upload(json.dumps(sol_json(1 + 0.01 * i)), f"10.0.0.{i + 1}", f"row{i}")
+            assert st == 201, (st, body)
+        sid = body["id"]
+        big = rest_solution_text(args.rest_samples)
+        st, dt, body = upload(big, "10.0.1.1", "rest")
+        assert st == 201, (st, body)
+        big_id = body["id"]
+        out["big_solution"] = {"mib": round(len(big) / 2 ** 20, 1), "samples": args.rest_samples + 351,
+                               "check_s": round(dt, 1)}
+        print(f"big rest solution #{big_id}: {len(big) / 2 ** 20:.1f} MiB, checked in {dt:.1f} s", flush=True)
+        pages = ["/", f"/leaderboard/{BOARD}", f"/api/leaderboard/{BOARD}", "/api/solutions", "/tasks/toy/all",
+                 f"/solutions/{sid}"]
+
+        def run_phase(name: str, attack: bool) -> dict:
+            stop = threading.Event()
+            samples, lock, threads, socks = [], threading.Lock(), [], []
+            viewer = []
+
+            def page_client(i):
+                rng = random.Random(i)
+                headers = {"X-Forwarded-For": f"10.1.{i // 250}.{i % 250 + 1}"}
+                k = i
+                while not stop.is_set():
+                    path = pages[k % len(pages)]
+                    k += 1
+                    try:
+                        st, dt, _ = request(port, "GET", path, headers=headers, timeout=60)
+                    except OSError:
+                        st, dt = -1, 60.0
+                    with lock:
+                        samples.append((dt, st))
+                    stop.wait(rng.uniform(*args.think))
+
+            def viewer_client(i):  # the issue's viewer attack: one big solution's viewer, again and again
+                headers = {"X-Forwarded-For": f"10.5.0.{i + 1}"}
+                while not stop.is_set():
+                    try:
+                        st, dt, _ = request(port, "GET", f"/solutions/{big_id}/viewer", headers=headers, timeout=300)
+                    except OSError:
+                        st, dt = -1, 0.0
+                    viewer.append((st, dt))
+                    stop.wait(0.2)
+
+            def slow_body(i):
+                try:
+                    s = socket.create_connection(("127.0.0.1", port), timeout=10)
+                except OSError:
+                    return
+                socks.append(s)
+                try:
+                    s.sendall("POST /api/solutions HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                              f"X-Forwarded-For: 10.6.0.{i + 1}\r\nContent-Length: 1000000\r\n\r\n".encode())
+                    while not stop.wait(1.0):
+                        s.sendall(b" ")
+                except OSError:
+                    pass
+
+            def slow_headers(first, count):
+                mine = []
+                for _ in range(count):
+                    try:
+                        mine.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+                    except OSError:
+                        break
+                socks.extend(mine)
+                while not stop.wait(1.0):
+                    for s in list(mine):
+                        try:
+                            s.sendall(b"X")
+                        except OSError:  # closed by the header deadline: open a new one (the attacker keeps on)
+                            mine.remove(s)
+                            try:
+                                n = socket.create_connection(("127.0.0.1", port), timeout=10)
+                                mine.append(n)
+                                socks.append(n)
+                            except OSError:
+                                pass
+
+            threads += [threading.Thread(target=page_client, args=(i,), daemon=True) for i in range(args.clients)]
+            if attack:
+                threads += [threading.Thread(target=slow_body, args=(i,), daemon=True)
+                            for i in range(args.slow_bodies)]
+                threads += [threading.Thread(target=slow_headers, args=(0, args.slow_headers), daemon=True)]
+                threads += [threading.Thread(target=viewer_client, args=(i,), daemon=True)
+                            for i in range(args.viewer_clients)]
+            for t in threads:
+                t.start()
+            time.sleep(2.0)
+            honest = []  # an honest upload every 3 s: time until its verdict
+            t_start = time.perf_counter()
+            n = 0
+            while time.perf_counter() - t_start < args.phase:
+                n += 1
+                st, dt, body = upload(json.dumps(sol_json(2 + 0.01 * n + (0.5 if attack else 0))),
+                                      f"10.3.{int(attack)}.{n}", f"{name}{n}")
+                honest.append((st, dt))
+                time.sleep(3.0)
+            rss = rss_mib(server.pid)
+            stop.set()
+            for s in socks:
+                try:
+                    s.close()
+                except OSError:
+                    pass
+            for t in threads:
+                t.join(10)
+            lat = np.array([x[0] for x in samples]) * 1000
+            statuses: dict = {}
+            for _, st in samples:
+                statuses[st] = statuses.get(st, 0) + 1
+            res = {"page_requests": len(lat),
+                   "page_ms": {q: round(float(np.percentile(lat, v)), 1) for q, v in
+                               (("p50", 50), ("p95", 95), ("p99", 99), ("max", 100))},
+                   "page_statuses": statuses,
+                   "honest_upload_s": [round(x[1], 2) for x in honest],
+                   "honest_statuses": sorted({x[0] for x in honest}),
+                   "server_rss_mib": round(rss)}
+            if attack:
+                vs = [x for x in viewer if x[0] == 200]
+                res["viewer"] = {"requests": len(viewer), "ok": len(vs),
+                                 "first_s": round(viewer[0][1], 2) if viewer else None,
+                                 "p50_s": round(float(np.median([x[1] for x in vs])), 3) if vs else None,
+                                 "statuses": sorted({x[0] for x in viewer})}
+            print(f"{name}: page p99 {res['page_ms']['p99']} ms over {len(lat)} requests; honest upload to verdict "
+                  f"max {max(x[1] for x in honest):.2f} s ({len(honest)} uploads, statuses {res['honest_statuses']})"
+                  + (f"; viewer {res['viewer']}" if attack else ""), flush=True)
+            return res
+
+        out["without_attack"] = run_phase("calm", False)
+        out["with_attack"] = run_phase("siege", True)
+        q = request(port, "GET", "/api/queue", headers={"X-Forwarded-For": "10.9.9.9"})[2]
+        out["queue_after"] = q
+    finally:
+        stop_all.set()
+        stop_server(server)
+    log_bytes = (tmp / "server.log").stat().st_size
+    out["server_log_bytes"] = log_bytes
+    print(json.dumps(out, indent=2))
+    w = out["with_attack"]
+    ok = (w["page_ms"]["p99"] < 100 and max(w["honest_upload_s"]) <= 5 and w["honest_statuses"] == [201]
+          and set(w["page_statuses"]) <= {200})
+    print("targets met (attack: honest verdict <= 5 s, page p99 < 100 ms)" if ok else "TARGETS MISSED")
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=2))
+    return 0 if ok else 1
+
+
+def kill_test(argv) -> int:
+    ap = argparse.ArgumentParser(description="issue 22: kill -9 during async uploads, restart, count")
+    ap.add_argument("--uploads", type=int, default=100)
+    ap.add_argument("--kill-after", type=int, default=40, help="kill -9 once this many were answered 202")
+    ap.add_argument("--json")
+    args = ap.parse_args(argv)
+    from concurrent.futures import ThreadPoolExecutor
+    tmp = Path(tempfile.mkdtemp(prefix="robodesign-kill-"))
+    seed = make_seed(tmp / "seed")
+    port = free_port()
+    opts = ["--workers", "1", "--queue", str(args.uploads), "--per-client-queue", str(args.uploads),
+            "--upload-rate", "0", "--read-rate", "0"]
+    server = start_server(tmp, seed, port, opts)
+    acked, lock = [], threading.Lock()
+    killed = threading.Event()
+
+    def one(k):
+        body = json.dumps({"solution": sol_json(1 + k / 1000), "author": f"K{k}"}).encode()
+        try:
+            st, _, res = request(port, "POST", "/api/solutions?async=1", body=body,
+                                 headers={"Content-Type": "application/json"}, timeout=60)
+        except OSError:
+            return
+        if st == 202:
+            with lock:
+                acked.append(res)
+                if len(acked) >= args.kill_after and not killed.is_set():
+                    killed.set()
+                    os.kill(server.pid, signal.SIGKILL)
+    with ThreadPoolExecutor(8) as pool:
+        list(pool.map(one, range(args.uploads)))
+    if not killed.is_set():
+        os.kill(server.pid, signal.SIGKILL)
+    server.wait(30)
+    t0 = time.perf_counter()
+    server = start_server(tmp, seed, port, opts)
+    try:
+        done, lost, bad = 0, [], []
+        deadline = time.perf_counter() + 600
+        for a in acked:
+            while True:
+                st, _, s = request(port, "GET", a["status_url"])
+                if st != 200:
+                    lost.append((a["job"], st))
+                    break
+                if s["state"] == "done":
+                    if s["status"] != 201:
+                        bad.append(s)
+                    else:
+                        done += 1
+                    break
+                if time.perf_counter() > deadline:
+                    lost.append((a["job"], "timeout"))
+                    break
+                time.sleep(0.2)
+        t_resume = time.perf_counter() - t0
+        board = request(port, "GET", f"/api/leaderboard/{BOARD}")[2]
+    finally:
+        stop_server(server)
+    out = {"uploads": args.uploads, "answered_202": len(acked), "judged_201_after_restart": done, "lost": lost,
+           "not_201": len(bad), "leaderboard_entries": len(board["entries"]), "restart_to_all_judged_s": round(t_resume, 1)}
+    print(json.dumps(out, indent=2))
+    ok = not lost and not bad and done == len(acked) and len(board["entries"]) >= done
+    print("every upload answered 202 was stored and judged" if ok else "UPLOADS LOST")
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=2))
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -304,3 +304,91 @@ def test_fuzz_through_real_subprocesses(seeds, tmp_path):
                            timeout=300, env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
         assert p.returncode == 2, p.stderr
         assert_contract(p.returncode, p.stdout, p.stderr, " ".join(args))
+
+
+# ----------------------------------------------------------------------------------------- issue 22: check + upload
+N_TOY = int(os.environ.get("ROBODESIGN_FUZZ_TOY", "2500"))  # per path: 2 × 2,500 ≥ 5,000 inputs
+def short_toy_seed(folder: Path):
+    """A seed folder with the toy module set and task ``toy/short`` (the toy task with goals A and a 0.03 s pause
+    only) and a valid 6-sample solution of it, resting at A: checked in ~0.1 s, so thousands fit in a test."""
+    from conftest import toy_module_set
+    from test_checker import DT, QA, hold, solution, task_json
+    toy_module_set(folder / "modules")
+    t = task_json(extra_goals=False)
+    t["header"]["ID"] = "toy/short"
+    t["goals"] = [dict(g, duration=0.03) if g["ID"] == "P" else g for g in t["goals"] if g["ID"] in ("A", "P")]
+    t["constraints"] = [c for c in t["constraints"] if c["type"] != "allGoalsFulfilledInOrder"]
+    write(folder / "tasks" / "toy" / "short.json", json.dumps(t))
+    q, dq, ddq = hold(QA, 0.05)
+    sol = solution(np.arange(len(q)) * DT, q, dq, ddq, {"A": 0.0, "P": 0.05}).to_json()
+    sol["taskID"] = "toy/short"
+    return folder, sol
+
+
+@pytest.fixture(scope="module")
+def toy_site(tmp_path_factory):
+    """The short toy task and its module set as files (for ``check``) and as a website (in process)."""
+    pytest.importorskip("fastapi", reason="the website needs fastapi")
+    from fastapi.testclient import TestClient
+
+    from robodesign.web import create_app
+    d = tmp_path_factory.mktemp("toyfuzz")
+    seed, sol = short_toy_seed(d / "seed")
+    app = create_app(data_dir=d / "data", seed=[seed], seed_builtin=False, upload_rate=0, read_rate=0,
+                     queue_size=64, per_client_queue=64)
+    with TestClient(app, raise_server_exceptions=False) as c:
+        yield {"ws": d, "task": seed / "tasks" / "toy" / "short.json", "modules": seed / "modules" / "toy",
+               "solution": sol, "client": c}
+
+
+def _check_toy(site, data):
+    f = write(site["ws"] / "sol.json", mutated_text(data, site["solution"]))
+    return f, run_cli("check", site["task"], f, "--modules", site["modules"], "--json")
+
+
+def _upload_toy(site, data):
+    """A mutated solution through POST /api/solutions: raw JSON (sometimes wrapped, sometimes async) or a form."""
+    c = site["client"]
+    text = mutated_text(data, site["solution"])
+    body = text.encode("utf-8", "surrogatepass")
+    how = data.draw(st.sampled_from(["raw", "raw", "wrapped", "form", "async"]), label="how")
+    if how == "form":
+        r = c.post("/api/solutions", files={"file": ("s.json", body, "application/json")}, data={"author": "F"})
+    elif how == "wrapped":
+        r = c.post("/api/solutions", content=b'{"author": "W", "solution": ' + body + b"}",
+                   headers={"content-type": "application/json"})
+    else:
+        r = c.post("/api/solutions", content=body, headers={"content-type": "application/json"},
+                   params={"author": "R", **({"async": 1} if how == "async" else {})})
+    if r.status_code == 202:  # stored, then judged: its result must be a verdict or a 4xx too
+        url = r.json()["status_url"]
+        for _ in range(2000):
+            s = c.get(url).json()
+            if s["state"] in ("done", "failed"):
+                break
+            import time
+            time.sleep(0.005)
+        return (how, text[:200]), s["status"], s["result"]
+    return (how, text[:200]), r.status_code, r.json()
+
+
+@pytest.mark.slow
+def test_fuzz_5000_inputs_through_check_and_the_upload_route(toy_site):
+    """Issue 22: ≥ 5,000 mutated solutions, half through ``check`` in process, half through the upload route:
+    0 tracebacks, 0 exit 3, 0 HTTP 500."""
+    f = write(toy_site["ws"] / "sol.json", json.dumps(toy_site["solution"]))  # the unmutated seed is valid
+    assert run_cli("check", toy_site["task"], f, "--modules", toy_site["modules"], "--json")[0] == 0
+    codes = _fuzz(toy_site, lambda s, d: _check_toy(s, d), N_TOY)
+    assert {0, 1, 2} <= set(codes) and len(codes) >= N_TOY * SCALE
+    statuses = []
+
+    @settings(max_examples=max(1, int(N_TOY * SCALE)), **FUZZ)
+    @given(st.data())
+    def one(data):
+        where, status, body = _upload_toy(toy_site, data)
+        assert status in (201, 400, 413, 422), (where, status, body)
+        assert isinstance(body, dict) and (body.get("detail") or status == 201), (where, body)
+        statuses.append(status)
+
+    one()
+    assert len(statuses) >= N_TOY * SCALE and {201, 400, 422} <= set(statuses)

@@ -302,9 +302,9 @@ def _gate(app):
     bench = app.state.bench
     original = bench.judge
 
-    def judge(sub):
+    def judge(sub, **kw):
         assert gate.wait(60)
-        return original(sub)
+        return original(sub, **kw)
 
     bench.judge = judge
     return gate
@@ -336,7 +336,7 @@ def test_check_queue_full_is_429_and_reports_the_position(make_site):
         assert r.status_code == 202 and r.json()["state"] == "queued"
         assert r.json()["position"] == i - 1  # jobs ahead of it in the line
         jobs.append(r.json()["job"])
-    # the line is full: 429 before the body is even read, with a Retry-After
+    # the line is full: 429 (once the body has arrived: a slow sender holds no place), with a Retry-After
     r = clients[3].post("/api/solutions", json={"solution": sol_json(1.5), "author": "late"})
     assert r.status_code == 429 and int(r.headers["retry-after"]) >= 1
     assert "queue is full (2 uploads waiting)" in r.json()["detail"]
@@ -397,6 +397,16 @@ def test_small_upload_is_not_stuck_behind_big_checks(make_site):
 # ------------------------------------------------------------------------------------------------------------
 # slow bodies, stale staging folders, the viewer cache
 # ------------------------------------------------------------------------------------------------------------
+def _read_all(s: socket.socket) -> str:
+    """Everything the server sends until it closes the connection (the head and the body may come apart)."""
+    chunks = []
+    while True:
+        b = s.recv(65536)
+        if not b:
+            return b"".join(chunks).decode()
+        chunks.append(b)
+
+
 def test_slow_body_is_408_and_the_server_stays_up(tmp_path, seed_dir):
     app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, body_timeout=1.0)
     with running_server(app) as url:
@@ -404,11 +414,9 @@ def test_slow_body_is_408_and_the_server_stays_up(tmp_path, seed_dir):
         with socket.create_connection((host, int(port)), timeout=10) as s:
             s.sendall(b"POST /api/solutions HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
                       b"Content-Length: 100000\r\n\r\n" + b"[" * 100)
-            t0 = time.time()
-            reply = s.recv(4096).decode()
-            waited = time.time() - t0
+            reply = _read_all(s)
         assert reply.startswith("HTTP/1.1 408"), reply
-        assert "did not arrive within 1 s" in reply and 0.8 < waited < 5
+        assert "did not arrive within 1 s" in reply
         assert app.state.queue.stats()["receiving"] == 0  # its place in the queue was given back
         import urllib.request
         with urllib.request.urlopen(f"{url}/healthz", timeout=10) as r:
@@ -547,3 +555,54 @@ def test_checks_in_processes(make_site):
     if r.status_code == 500:  # the broken pool noticed on this upload
         r = upload(c, sol_json(1.1), author="After")
     assert r.status_code == 201 and r.json()["cost"] == pytest.approx(3.85)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# issue 22 case 11: text that is not text (lone surrogates), on both databases
+# ------------------------------------------------------------------------------------------------------------
+LONE = "\ud800"  # json.dumps writes it as the escape \ud800
+
+
+@pytest.mark.parametrize("field", ["key", "author", "email", "affiliation", "token", "goal2time"])
+def test_lone_surrogates_are_400_naming_the_field(site, field):
+    sol = sol_json(1.0)
+    body = {"solution": sol, "author": "A"}
+    if field == "key":
+        sol["x" + LONE] = 1
+        where, in_file = "solution.json: solution.x\\ud800", "solution.json: x\\ud800"
+    elif field == "goal2time":
+        g = next(iter(sol["trajectory"]["goal2time"]))
+        sol["trajectory"]["goal2time"][g + LONE] = sol["trajectory"]["goal2time"].pop(g)
+        in_file = f"solution.json: trajectory.goal2time.{g}\\ud800"
+        where = in_file.replace(": ", ": solution.")
+    else:
+        body[field] = "x" * 8 + LONE
+        where = f"solution.json: {field}"
+    text = json.dumps(body)
+    assert "\\ud800" in text
+    r = raw_post(site, text)
+    assert r.status_code == 400 and r.json()["detail"].startswith(where), r.text
+    assert "lone UTF-16 surrogate" in r.json()["detail"]
+    # the same as an async upload: accepted (stored), then judged 400, and its job page answers
+    r = raw_post(site, text, params={"async": 1})
+    assert r.status_code == 202, r.text
+    done = _wait_state(site, r.json()["job"], "done")
+    assert done["status"] == 400 and done["result"]["detail"].startswith(where)
+    # and through the form: the solution file holds it
+    if field in ("key", "goal2time"):
+        r = upload(site, sol)
+        assert r.status_code == 400 and r.json()["detail"].startswith(in_file), r.text
+    assert board(site).json()["entries"] == []
+    assert site.get("/api/solutions").json() == []
+
+
+def test_invalid_utf8_in_form_fields_is_not_a_500(site):
+    body = (b"--B\r\nContent-Disposition: form-data; name=\"author\"\r\n\r\n\xed\xa0\x80\r\n"
+            b"--B\r\nContent-Disposition: form-data; name=\"file\"; filename=\"s.json\"\r\n"
+            b"Content-Type: application/json\r\n\r\n" + json.dumps(sol_json(1.0)).encode() + b"\r\n--B--\r\n")
+    r = site.post("/api/solutions", content=body, headers={"content-type": "multipart/form-data; boundary=B"})
+    assert r.status_code in (201, 400), r.text
+    if r.status_code == 201:  # the parser falls back to Latin-1 for a field that is not UTF-8: text all the same
+        sid = r.json()["id"]
+        assert site.get(f"/api/solutions/{sid}").json()["author"] == b"\xed\xa0\x80".decode("latin-1")
+        assert site.get(f"/solutions/{sid}").status_code == 200

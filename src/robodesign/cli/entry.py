@@ -127,7 +127,7 @@ def cmd_check(args) -> int:
 def cmd_serve(args) -> int:
     """Run the benchmark website (docs/website.md)."""
     try:
-        import uvicorn
+        import uvicorn  # noqa: F401  (only: is it there?)
 
         from robodesign.web import create_app
     except ImportError as e:
@@ -137,8 +137,11 @@ def cmd_serve(args) -> int:
     for opt in ("queue", "per_client_queue", "upload_rate", "read_rate"):
         if getattr(args, opt) < 0 or not math.isfinite(getattr(args, opt)):
             raise InputError(f"--{opt.replace('_', '-')} must be a finite number ≥ 0")
-    if not (args.body_timeout > 0 and math.isfinite(args.body_timeout)):
-        raise InputError("--body-timeout must be a positive number of seconds")
+    for opt in ("body_timeout", "header_timeout", "keep_alive"):
+        if not (getattr(args, opt) > 0 and math.isfinite(getattr(args, opt))):
+            raise InputError(f"--{opt.replace('_', '-')} must be a positive number of seconds")
+    if args.max_connections < 1:
+        raise InputError("--max-connections must be at least 1")
     app = create_app(db_url=args.db, data_dir=args.data, seed=args.seed or (), seed_builtin=not args.no_builtin,
                      max_request_bytes=int(args.max_upload_mb * (1 << 20)), check_workers=args.workers,
                      admin_token=args.admin_token, open_registration=args.open_registration, queue_size=args.queue,
@@ -154,7 +157,9 @@ def cmd_serve(args) -> int:
     elif not (args.admin_token or os.environ.get("ROBODESIGN_ADMIN_TOKEN")):
         print("robodesign: no admin token (ROBODESIGN_ADMIN_TOKEN / --admin-token): registering tasks and module "
               "sets is disabled; seeds still work", file=sys.stderr)
-    uvicorn.run(app, host=args.host, port=args.port, log_level="info")
+    from robodesign.web.server import serve
+    serve(app, args.host, args.port, header_timeout=args.header_timeout, keep_alive=args.keep_alive,
+          max_connections=args.max_connections)
     return 0
 
 
@@ -350,6 +355,11 @@ def build_parser() -> argparse.ArgumentParser:
                                                                  "(default: in --workers separate processes)")
     sv.add_argument("--body-timeout", type=float, default=120.0, help="seconds a request body may take to "
                                                                       "arrive (default 120; slower: 408)")
+    sv.add_argument("--header-timeout", type=float, default=10.0, help="seconds a connection may take to send a "
+                                                                       "request's headers (default 10; then closed)")
+    sv.add_argument("--keep-alive", type=float, default=5.0, help="seconds an idle keep-alive connection stays open")
+    sv.add_argument("--max-connections", type=int, default=1000, help="open connections at most (beyond: closed at "
+                                                                      "once)")
     sv.set_defaults(func=cmd_serve)
 
     ge = sub.add_parser("generate", help="write seeded CoBRA tasks of a published task family into a folder "
@@ -423,7 +433,53 @@ def _fail(code: int, line: str, as_json: bool, error: Optional[str] = None, file
     return code
 
 
+class _PipeGuard:
+    """``sys.stdout`` while a command runs: once the reader has gone (``robodesign check ... | head``), further
+    output is dropped instead of raising BrokenPipeError, so the command still ends with its own exit code."""
+
+    def __init__(self, inner):
+        self._inner, self.broken = inner, False
+
+    def _close_pipe(self) -> None:
+        self.broken = True
+        try:  # the interpreter's last flush at exit must not fail either
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._inner.fileno())
+            os.close(devnull)
+        except (OSError, AttributeError, ValueError):
+            pass
+
+    def write(self, text):
+        if not self.broken:
+            try:
+                return self._inner.write(text)
+            except BrokenPipeError:
+                self._close_pipe()
+        return len(text)
+
+    def flush(self):
+        if not self.broken:
+            try:
+                self._inner.flush()
+            except BrokenPipeError:
+                self._close_pipe()
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
 def main(argv: Optional[List[str]] = None) -> int:
+    out = sys.stdout
+    guard = sys.stdout = _PipeGuard(out)
+    try:
+        return _main(argv)
+    finally:
+        guard.flush()
+        if sys.stdout is guard:
+            sys.stdout = out
+
+
+def _main(argv: Optional[List[str]] = None) -> int:
     argv = [str(a) for a in (sys.argv[1:] if argv is None else argv)]
     as_json = "--json" in argv
     debug = "--debug" in argv or os.environ.get("ROBODESIGN_DEBUG", "") not in ("", "0")

@@ -54,10 +54,61 @@ def _construct_mapping(loader, node, deep=False):
 _UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 
 
+MAX_YAML_NODES = 100_000
+"""Most values a config may hold once its aliases (``*name``) are expanded: an "alias bomb" (each level repeating the
+one before ten times) is refused before it is built instead of taking minutes and gigabytes."""
+
+
+def _expanded_size(root) -> int:
+    """Nodes of the YAML node graph ``root`` with every alias expanded (aliases share node objects), counted
+    without expanding: each distinct node once, memoised, iteratively; capped at MAX_YAML_NODES + 1 (also for a
+    node that contains itself)."""
+    cap = MAX_YAML_NODES + 1
+    sizes: Dict[int, int] = {}
+    open_: set = set()
+    stack = [(root, False)]
+    while stack:
+        node, done = stack.pop()
+        if isinstance(node, yaml.SequenceNode):
+            kids = list(node.value)
+        elif isinstance(node, yaml.MappingNode):
+            kids = [x for pair in node.value for x in pair]
+        else:
+            sizes[id(node)] = 1
+            continue
+        if done:
+            open_.discard(id(node))
+            sizes[id(node)] = min(cap, 1 + sum(sizes[id(k)] for k in kids))
+            continue
+        if id(node) in sizes:
+            continue
+        if any(id(k) in open_ or k is node for k in kids):
+            return cap  # recursive: infinite once expanded
+        open_.add(id(node))
+        stack.append((node, True))
+        stack.extend((k, False) for k in kids if id(k) not in sizes)
+    return sizes[id(root)]
+
+
+def _load_yaml(text: str, display: str) -> Any:
+    loader = _UniqueKeyLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        n = _expanded_size(node)
+        if n > MAX_YAML_NODES:
+            raise InputError(f"the YAML holds more than {MAX_YAML_NODES} values once its aliases (*name) are "
+                             "expanded; write the values out or use fewer aliases", file=display)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
 def read_yaml(text: str, display: str) -> Any:
     from robodesign.core.jsonio import MAX_DEPTH, check_values
     try:
-        return check_values(yaml.load(text, Loader=_UniqueKeyLoader), display)
+        return check_values(_load_yaml(text, display), display)
     except RecursionError:
         raise InputError(f"YAML nested deeper than {MAX_DEPTH} levels", file=display) from None
     except yaml.MarkedYAMLError as e:

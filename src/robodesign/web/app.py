@@ -13,6 +13,7 @@ import json
 import logging
 import math
 import os
+import secrets
 import time
 from pathlib import Path
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
@@ -37,15 +38,20 @@ from robodesign.web.service import (
     Limits,
     NotFound,
     Settings,
+    check_token,
     clean_json,
     files_source,
+    hash_token,
     solution_summary,
 )
 from robodesign.web.throttle import Busy, CheckQueue, RateLimiter
+from robodesign.web.viewer_pages import ViewerFailed, ViewerPages
 from robodesign.web.workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
 MiB = 1 << 20
+MAX_FORM_FILES = 256  # files in one multipart body (more: send a zip); the parser stops at the first one beyond
+MAX_FORM_FIELDS = 32  # other fields of one form
 
 PAGE_CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'none'; object-src 'none'; "
             "base-uri 'none'; form-action 'self'; frame-ancestors 'self'; frame-src 'self'")
@@ -163,6 +169,26 @@ class GuardMiddleware:
         return await self.app(scope, receive, send)
 
 
+class HeadMiddleware:
+    """``HEAD`` on every page and API route: answered as ``GET`` without the body (same status and headers)."""
+
+    def __init__(self, app):
+        self.app = app
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http" or scope.get("method") != "HEAD":
+            return await self.app(scope, receive, send)
+
+        async def no_body(message):
+            if message["type"] == "http.response.body":
+                if message.get("more_body", False):
+                    return
+                message = {"type": "http.response.body", "body": b"", "more_body": False}
+            await send(message)
+
+        return await self.app({**scope, "method": "GET"}, receive, no_body)
+
+
 async def _noop_receive():
     return {"type": "http.disconnect"}
 
@@ -218,10 +244,12 @@ async def read_upload(request: Request) -> Upload:
     up.content_type = ct
     if ct in ("multipart/form-data", "application/x-www-form-urlencoded"):
         try:
-            form = await request.form(max_files=5000, max_fields=200, max_part_size=4 * MiB)
+            form = await request.form(max_files=MAX_FORM_FILES, max_fields=MAX_FORM_FIELDS, max_part_size=4 * MiB)
         except (_BodyTooLarge, _BodyTooSlow):
             raise
-        except Exception as e:  # malformed multipart body
+        except Exception as e:  # malformed multipart body, or too many parts (stopped at the first beyond)
+            if "Too many" in str(e):
+                raise TooLarge(f"{str(e).removeprefix('400: ')} (send many files as one zip)") from None
             raise InputError(f"malformed form data ({e})") from None
         for key, value in form.multi_items():
             if isinstance(value, UploadFile):
@@ -279,7 +307,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
                admin_token: Optional[str] = None, open_registration: bool = False, queue_size: int = 8,
                per_client_queue: int = 2, upload_rate: float = 30.0, read_rate: float = 20.0,
                body_timeout: float = 120.0, viewer_cache_bytes: int = 64 * MiB, big_upload_bytes: int = 2 * MiB,
-               limits: Optional[Limits] = None, check_processes: bool = False) -> FastAPI:
+               limits: Optional[Limits] = None, check_processes: bool = False, viewer_timeout: float = 60.0) -> FastAPI:
     """Build the website (docs/website.md). ``db_url``: SQLAlchemy URL (default SQLite ``<data_dir>/bench.db``;
     ``postgresql://`` uses psycopg 3). ``seed``: extra folders to register tasks/module sets from at startup (after
     the built-in ``assets/`` when ``seed_builtin``).
@@ -290,7 +318,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     but one; ``check_processes``: run the checks in as many separate processes (robodesign.web.workers).
     ``upload_rate`` (per minute) and ``read_rate`` (per second) are the per-client rate limits (0 = none);
     ``body_timeout``: seconds a request body may take to arrive; ``limits``: the size caps
-    of one solution."""
+    of one solution; ``viewer_timeout``: seconds a viewer page may take to build (robodesign.web.viewer_pages)."""
     settings = Settings(data_dir=Path(data_dir), db_url=db_url, max_request_bytes=int(max_request_bytes),
                         max_unzipped_bytes=int(max_unzipped_bytes), seed_dirs=tuple(Path(s) for s in seed),
                         seed_builtin=seed_builtin, limits=limits or Limits())
@@ -307,18 +335,22 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @contextlib.asynccontextmanager
     async def lifespan(_app):
+        resume_pending()
         yield
         queue.close()
         checker.close()
+        viewer.close()
         bench.close()
 
-    app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url="/api/docs",
+    app = FastAPI(title="robodesign benchmark", version="1", lifespan=lifespan, docs_url=None,
                   redoc_url=None, openapi_url="/api/openapi.json")
     app.state.bench, app.state.queue, app.state.checker = bench, queue, checker
     app.state.viewer_cache = viewer_cache = ByteLRU(viewer_cache_bytes)
+    app.state.viewer = viewer = ViewerPages(settings, timeout=viewer_timeout)
     app.add_middleware(BodyLimitMiddleware, limit=settings.max_request_bytes, timeout=body_timeout)
     app.add_middleware(GuardMiddleware, reads=RateLimiter(read_rate, max(1.0, 5 * read_rate)),
                        writes=RateLimiter(upload_rate / 60.0, max(1.0, upload_rate / 3)))
+    app.add_middleware(HeadMiddleware)
 
     def require_admin(request: Request) -> None:
         if open_registration:
@@ -359,6 +391,12 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     async def _forbidden(request, exc):
         return _error(request, 403, str(exc))
 
+    @app.exception_handler(ViewerFailed)
+    async def _viewer_failed(request, exc):
+        resp = _error(request, 503, str(exc))
+        resp.headers["Retry-After"] = "60"
+        return resp
+
     @app.exception_handler(Busy)
     async def _busy(request, exc):
         resp = _error(request, 429, str(exc))
@@ -380,20 +418,51 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return resp
 
     # ---------------------------------------------------------------- the check queue
-    async def submit(request: Request, read: Callable[[Upload], tuple]):
-        """Take a place in the check queue (429 when full), read the upload, put it in line; parsing, validation
-        and the checker run on a checker thread/process (``Bench.check_upload``: 201 / 422 / 400 / 413).
-        → (job, future of {status, body, result}, place in line when it joined)."""
+    async def submit(request: Request, read: Callable[[Upload], tuple], durable: bool = False):
+        """Read the upload (its body within the body deadline, counted among the bodies being received, never in
+        the check queue), then take a place in the check queue (429 when full) and put it in line; parsing,
+        validation and the checker run on a checker thread/process (``Bench.check_upload``: 201 / 422 / 400 / 413).
+        ``durable`` (async uploads): the upload is committed to the database before this returns, and resumed
+        after a restart. → (job, future of {status, body, result}, place in line when it joined, extra answer
+        fields)."""
         client = (request.client.host if request.client else "?")
-        job = queue.reserve(client)
+        queue.start_receiving(client)
         try:
             up = await read_upload(request)
-            args = read(up)  # (text, file name, meta, token, unwrap)
-            fut = queue.submit(job, lambda: checker.check(*args), big=len(args[0]) > big_upload_bytes)
+        finally:
+            queue.done_receiving(client)
+        text, fname, meta, token, unwrap = read(up)
+        big = len(text) > big_upload_bytes
+        job = queue.reserve(client)
+        extra: dict = {}
+        try:
+            if durable:
+                if token:
+                    check_token(token)
+                else:  # the answer tells the token now: the result may be read after a restart
+                    token = extra["token"] = secrets.token_urlsafe(24)
+                token_hash = await run_in_threadpool(hash_token, token)
+                await run_in_threadpool(bench.add_pending, job.id, text, fname, meta, token_hash, unwrap, big)
+                kw = {"token_hash": token_hash, "pending": job.id}
+                fut = queue.submit(job, lambda: checker.check(text, fname, meta, None, unwrap, **kw), big=big)
+            else:
+                fut = queue.submit(job, lambda: checker.check(text, fname, meta, token, unwrap), big=big)
         except BaseException:
             queue.release(job)
             raise
-        return job, fut, queue.status(job)["position"]
+        return job, fut, queue.status(job)["position"], extra
+
+    def resume_pending() -> int:
+        """Put the async uploads that a stopped server had accepted but not judged back in line."""
+        rows = bench.pending_checks()
+        for row in rows:
+            job = queue.restore(row.job_id)
+            args = (row.text, row.fname, json.loads(row.meta_json or "{}"), None, row.unwrap)
+            kw = {"token_hash": row.token_hash, "pending": row.job_id}
+            queue.submit(job, lambda a=args, k=kw: checker.check(*a, **k), big=row.big)
+        if rows:
+            log.info("resumed %d pending check(s) of async uploads", len(rows))
+        return len(rows)
 
     def wants_async(request: Request) -> bool:
         return request.query_params.get("async", "") in ("1", "true", "yes") or \
@@ -403,6 +472,10 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @app.get("/static/style.css", include_in_schema=False)
     def css():
         return Response(pages.CSS, media_type="text/css", headers={"Cache-Control": "max-age=3600"})
+
+    @app.get("/api/docs", response_class=HTMLResponse, include_in_schema=False)
+    def api_docs():
+        return pages.api_docs(app.openapi())
 
     @app.get("/healthz", include_in_schema=False)
     def healthz():
@@ -446,26 +519,18 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
         return pages.solution_page(row, ok, note)
 
     @app.get("/solutions/{sid}/viewer", response_class=HTMLResponse, include_in_schema=False)
-    def solution_viewer(sid: str):
+    async def solution_viewer(sid: str):
         ok, note = _viewer_available()
         if not ok:
             raise NotFound(note)
-        row = bench.solution_row(sid)
-        html = viewer_cache.get(row.id)
-        if html is None:
-            verdict = json.loads(row.verdict_json or "{}") or None
-            if row.collaborative:  # every robot animating together on the common time base
-                from robodesign.viewer import collab_page
-                csol = bench.solution(row.id)
-                html = collab_page(bench.collab_task(row.task_id), csol,
-                                   {rid: bench.module_set(s.module_set) for rid, s in csol.robots},
-                                   verdict=pages.collab_viewer_verdict(verdict))
-            else:
-                from robodesign.viewer import solution_page as render
-                html = render(bench.task(row.task_id), bench.solution(row.id), bench.module_set(row.module_set),
-                              verdict=verdict)
-            viewer_cache.put(row.id, html)
-        return HTMLResponse(html, headers={"Content-Security-Policy": VIEWER_CSP})
+        rid = (await run_in_threadpool(bench.solution_row, sid)).id
+        html = viewer_cache.get(rid)
+        if html is None:  # built in the viewer process (bounded in time, memory, frames and size), kept as a file
+            path = await run_in_threadpool(viewer.get, rid)
+            html = await run_in_threadpool(path.read_bytes)
+            viewer_cache.put(rid, html)
+        return Response(html, media_type="text/html; charset=utf-8",
+                        headers={"Content-Security-Policy": VIEWER_CSP, "Cache-Control": "max-age=3600"})
 
     @app.post("/solutions/{sid}/withdraw", response_class=HTMLResponse, include_in_schema=False)
     async def withdraw_form(sid: str, request: Request):
@@ -489,7 +554,7 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/upload", response_class=HTMLResponse, include_in_schema=False)
     async def upload_submit(request: Request):
-        _job, fut, _pos = await submit(request, read_form_upload)
+        _job, fut, _pos, _extra = await submit(request, read_form_upload)
         out = await asyncio.wrap_future(fut)
         if "result" not in out:
             return _error(request, out["status"], out["body"]["detail"])
@@ -613,18 +678,22 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
 
     @app.post("/api/solutions", status_code=201)
     async def api_submit(request: Request):
-        job, fut, position = await submit(request, read_api_upload(request))
-        if wants_async(request):
-            return JSONResponse({**queue.status(job), "status_url": f"/api/checks/{job.id}"}, status_code=202,
-                                headers={"Location": f"/api/checks/{job.id}"})
+        is_async = wants_async(request)
+        job, fut, position, extra = await submit(request, read_api_upload(request), durable=is_async)
+        if is_async:  # stored already: answered only now
+            return JSONResponse({**queue.status(job), "status_url": f"/api/checks/{job.id}", **extra},
+                                status_code=202, headers={"Location": f"/api/checks/{job.id}"})
         out = await asyncio.wrap_future(fut)
         return JSONResponse({**out["body"], "queue_position": position}, status_code=out["status"])
 
     @app.get("/api/checks/{job_id}")
     def api_check_status(job_id: str):
         job = queue.get(job_id)
-        if job is None:
-            raise NotFound("unknown or expired check (results are kept for an hour)")
+        if job is None:  # an async upload of an earlier run of the server, or one judged over an hour ago
+            stored = bench.pending_status(job_id)
+            if stored is None:
+                raise NotFound("unknown check")
+            return clean_json(stored)
         return clean_json(queue.status(job))
 
     @app.get("/api/queue")

@@ -1,8 +1,8 @@
 """Database schema and engine of the benchmark website (SQLAlchemy 2; SQLite by default, PostgreSQL by URL).
 
-Tables: ``tasks``, ``module_sets``, ``cost_functions``, ``solutions``. Task and module-set *files* (JSON and
-meshes) live in the data folder; the rows hold the JSON text, the folder (relative to the data folder) and a
-list of the stored assets with their SHA-256.
+Tables: ``tasks``, ``module_sets``, ``cost_functions``, ``solutions``, ``pending_checks`` (async uploads until
+judged). Task and module-set *files* (JSON and meshes) live in the data folder; the rows hold the JSON text, the
+folder (relative to the data folder) and a list of the stored assets with their SHA-256.
 """
 from __future__ import annotations
 
@@ -107,6 +107,26 @@ class SolutionRow(Base):
     created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
     withdrawn: Mapped[bool] = mapped_column(Boolean, default=False)
     withdrawn_at: Mapped[Optional[_dt.datetime]] = mapped_column(DateTime, nullable=True)
+
+
+class PendingRow(Base):
+    """An upload answered 202 (``?async=1``): stored *before* the answer, so that a server killed before its check
+    ends resumes it at start-up. ``text`` is emptied once the check is done (a valid solution is then in
+    ``solutions``, written in the same transaction as ``state = "done"``)."""
+    __tablename__ = "pending_checks"
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    job_id: Mapped[str] = mapped_column(String(40), unique=True, index=True)
+    state: Mapped[str] = mapped_column(String(20), default="queued", index=True)  # queued | done
+    text: Mapped[str] = mapped_column(Text)  # the upload as received (UTF-8 text)
+    fname: Mapped[str] = mapped_column(String(300), default="solution.json")
+    meta_json: Mapped[str] = mapped_column(Text, default="{}")  # author / email / affiliation given outside the file
+    token_hash: Mapped[Optional[str]] = mapped_column(String(200), nullable=True)
+    unwrap: Mapped[bool] = mapped_column(Boolean, default=False)
+    big: Mapped[bool] = mapped_column(Boolean, default=False)
+    status: Mapped[Optional[int]] = mapped_column(Integer, nullable=True)  # HTTP status of the result
+    result_json: Mapped[Optional[str]] = mapped_column(Text, nullable=True)
+    created: Mapped[_dt.datetime] = mapped_column(DateTime, default=utcnow)
+    finished: Mapped[Optional[_dt.datetime]] = mapped_column(DateTime, nullable=True)
 
 
 Index("ix_solutions_board", SolutionRow.task_id, SolutionRow.module_set, SolutionRow.cost_key, SolutionRow.cost)

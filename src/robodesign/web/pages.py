@@ -380,3 +380,24 @@ def error_page(status: int, message: str) -> str:
     body = f"""<h1>Error {status}</h1><div class="card banner-bad" id="result"><p class="bad">{e(message)}</p></div>
 <p><a href="/">back to the benchmarks</a></p>"""
     return layout(f"Error {status}", body)
+
+
+def api_docs(schema: dict) -> str:
+    """``/api/docs``: the JSON API described from its OpenAPI schema, as a plain page of the site (no script, so the
+    site's own Content-Security-Policy holds; the machine-readable schema is ``/api/openapi.json``)."""
+    rows = []
+    for path, ops in sorted((schema.get("paths") or {}).items()):
+        for method, op in ops.items():
+            if not isinstance(op, dict):
+                continue
+            params = ", ".join(f"{p.get('name')} ({p.get('in')}{', required' if p.get('required') else ''})"
+                               for p in op.get("parameters") or [])
+            answers = ", ".join(sorted((op.get("responses") or {}).keys()))
+            text = op.get("description") or op.get("summary") or ""
+            rows.append([f"<code>{e(method.upper())}</code>", f"<code>{e(path)}</code>", e(text.split("\n")[0]),
+                         e(params), e(answers)])
+    body = (f"<h1>{e(schema.get('info', {}).get('title', 'API'))}: JSON API</h1>"
+            '<p>Every route of the JSON API. The machine-readable description is '
+            '<a href="/api/openapi.json">/api/openapi.json</a> (OpenAPI); docs/website.md has the details and '
+            'examples.</p>' + table(["Method", "Path", "What", "Parameters", "Answers"], rows))
+    return layout("API", body)

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple, Union
 
-from sqlalchemy import func, select
+from sqlalchemy import func, select, update
 from sqlalchemy.exc import IntegrityError
 
 from robodesign.collab.core import (
@@ -79,6 +79,10 @@ class Forbidden(RobodesignError):
     pass
 
 
+class AlreadyJudged(Exception):
+    """An async upload's job was finished by another server process (it stays stored once)."""
+
+
 @dataclass
 class Limits:
     """What one uploaded solution may hold (docs/website.md, "Limits"). Beyond them: 413 naming the field."""
@@ -124,7 +128,7 @@ class SubmitResult:
         out = {"id": self.id, "valid": self.valid, "cost": self.cost, "benchmark_id": self.benchmark_id}
         if self.collaborative:
             out.update(collaborative=True, costs=self.costs, totalCost=self.cost)
-        if self.valid:
+        if self.valid and self.token is not None:  # (an async upload got its token with the 202 answer)
             out["token"] = self.token
         else:
             out["violations"] = self.verdict.get("violations", [])
@@ -713,20 +717,21 @@ class Bench:
             raise InputError("the author name is required (form field 'author' or the solution's 'author')")
         email = (email or "").strip() or first("email")
         affiliation = (affiliation or "").strip() or first("affiliation")
-        if token is not None and token != "" and not (8 <= len(token) <= 200):
-            raise InputError("a chosen token must have 8 to 200 characters (or leave it empty to get a random one)")
+        if token is not None and token != "":
+            check_token(token)
         row.benchmark_id, row.task_id, row.solution_json, row.token_hash, row.valid = \
             display, sol.task_id, text, "", True
         row.author_name, row.author_email, row.author_affiliation = author, email, affiliation
         db.check_row(row, {"author_name": "author", "author_email": "email", "author_affiliation": "affiliation",
                            "cost_key": "costFunction", "cost_function": "costFunction", "benchmark_id": "benchmark ID"})
-        if token and "\x00" in token:
-            raise InputError("the token contains a NUL character")
         return Submission(sol, task, ms, row, token or None)
 
-    def judge(self, sub: "Submission") -> SubmitResult:
+    def judge(self, sub: "Submission", token_hash: Optional[str] = None, pending: Optional[str] = None) -> SubmitResult:
         """Run the checker on a prepared submission; store it when valid. A collaborative solution is judged by
-        :func:`robodesign.collab.core.check_collab`, the judge of ``robodesign check``; its ``cost`` is totalCost."""
+        :func:`robodesign.collab.core.check_collab`, the judge of ``robodesign check``; its ``cost`` is totalCost.
+        ``token_hash``: the stored hash of the token given with an async upload (when the file names none);
+        ``pending``: that upload's job ID, whose row is marked done in the same transaction that stores the
+        solution (so a server killed in between neither loses nor doubles it)."""
         sol, row = sub.solution, sub.row
         if isinstance(sol, CollabSolution):
             cverdict = check_collab(sub.task, sol, sub.module_set)
@@ -742,26 +747,84 @@ class Bench:
         if not valid:
             return SubmitResult(False, row.benchmark_id, vj, cost, task_id=sol.task_id, module_set=row.module_set,
                                 costs=costs)
-        token = sub.token or secrets.token_urlsafe(24)
-        row.token_hash, row.cost, row.dof = hash_token(token), cost, dof
+        token = sub.token or (None if token_hash else secrets.token_urlsafe(24))
+        row.token_hash, row.cost, row.dof = (hash_token(token) if token else token_hash), cost, dof
         row.costs_json, row.verdict_json = json.dumps(all_costs), json.dumps(vj)
         if costs is not None:
             row.cost_tuple = json.dumps(costs)
         with self.Session() as s:
             s.add(row)
-            s.commit()
+            s.flush()
             rid = row.id
-        return SubmitResult(True, row.benchmark_id, vj, cost, id=rid, token=token, task_id=sol.task_id,
-                            module_set=row.module_set, costs=costs)
+            res = SubmitResult(True, row.benchmark_id, vj, cost, id=rid, token=token, task_id=sol.task_id,
+                               module_set=row.module_set, costs=costs)
+            if pending is not None and not self._finish_pending(s, pending, 201, res.to_json()):
+                s.rollback()  # judged meanwhile by another server process that resumed it too: stored once
+                raise AlreadyJudged(pending)
+            s.commit()
+        return res
+
+    # ----------------------------------------------------------------------------------------------------
+    # async uploads: stored before the 202 answer, resumed at start-up
+    # ----------------------------------------------------------------------------------------------------
+    def add_pending(self, job_id: str, text: str, fname: str, meta: Dict[str, Optional[str]],
+                    token_hash: Optional[str], unwrap: bool, big: bool) -> None:
+        """Store an accepted async upload (committed when this returns)."""
+        row = db.PendingRow(job_id=job_id, text=text, fname=fname[:300], meta_json=json.dumps(meta),
+                            token_hash=token_hash, unwrap=unwrap, big=big, state="queued")
+        db.check_row(row, {"text": "request body", "fname": "file name", "meta_json": "author/email/affiliation"})
+        with self.Session() as s:
+            s.add(row)
+            s.commit()
+
+    def pending_checks(self) -> List[db.PendingRow]:
+        """Async uploads not judged yet, oldest first."""
+        with self.Session() as s:
+            return list(s.scalars(select(db.PendingRow).where(db.PendingRow.state == "queued")
+                                  .order_by(db.PendingRow.id)))
+
+    def pending_status(self, job_id: str) -> Optional[dict]:
+        """The stored state of an async upload (``{"job", "state", "status", "result"}``), or None."""
+        if len(job_id) > 40:
+            return None
+        cols = [db.PendingRow.job_id, db.PendingRow.state, db.PendingRow.status, db.PendingRow.result_json]
+        with self.Session() as s:
+            row = s.execute(select(*cols).where(db.PendingRow.job_id == job_id)).first()
+        if row is None:
+            return None
+        out = {"job": row.job_id, "state": row.state if row.state == "done" else "queued"}
+        if row.state == "done":
+            out.update(status=row.status, result=json.loads(row.result_json or "null"))
+        return out
+
+    @staticmethod
+    def _finish_pending(s, job_id: str, status: int, body: dict) -> bool:
+        """Mark the job done in session ``s`` → False when it was done already (the row lock of the UPDATE makes a
+        second process that judged the same job wait, then find it done)."""
+        P = db.PendingRow
+        res = s.execute(update(P).where(P.job_id == job_id, P.state == "queued")
+                        .values(state="done", status=int(status), result_json=json.dumps(clean_json(body)), text="",
+                                finished=db.utcnow()))
+        return res.rowcount == 1
+
+    def finish_pending(self, job_id: str, status: int, body: dict) -> None:
+        with self.Session() as s:
+            self._finish_pending(s, job_id, status, body)
+            s.commit()
 
     def submit_solution(self, text: str, fname: str = "solution.json", author: Optional[str] = None,
                         email: Optional[str] = None, affiliation: Optional[str] = None,
-                        token: Optional[str] = None) -> SubmitResult:
-        """Prepare, check and (when valid) store one solution, in the calling thread."""
-        return self.judge(self.prepare_submission(text, fname, author, email, affiliation, token))
+                        token: Optional[str] = None, token_hash: Optional[str] = None,
+                        pending: Optional[str] = None) -> SubmitResult:
+        """Prepare, check and (when valid) store one solution, in the calling thread (``token_hash``, ``pending``:
+        see :meth:`judge`)."""
+        sub = self.prepare_submission(text, fname, author, email, affiliation, token)
+        if token_hash is None and pending is None:
+            return self.judge(sub)
+        return self.judge(sub, token_hash=token_hash, pending=pending)
 
     def check_upload(self, text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
-                     unwrap: bool = False) -> dict:
+                     unwrap: bool = False, token_hash: Optional[str] = None, pending: Optional[str] = None) -> dict:
         """One upload from start to end, as the website answers it: ``{"status": 201 | 422 | 400 | 413, "body":
         JSON answer, "result": SubmitResult (201/422 only)}``. ``unwrap``: ``text`` may be the JSON wrapper
         ``{"solution": ..., "author", "email", "affiliation", "token"}`` (its fields win over ``meta``/``token``).
@@ -770,12 +833,24 @@ class Bench:
             if unwrap:
                 text, meta, token = unwrap_upload(text, fname, meta, token)
             res = self.submit_solution(text, fname, meta.get("author"), meta.get("email"), meta.get("affiliation"),
-                                       token or None)
+                                       token or None, token_hash=None if token else token_hash, pending=pending)
         except TooLarge as e:
-            return {"status": 413, "body": {"detail": self.public(str(e))}}
+            out = {"status": 413, "body": {"detail": self.public(str(e))}}
         except InputError as e:
-            return {"status": 400, "body": {"detail": self.public(str(e))}}
-        return {"status": 201 if res.valid else 422, "body": res.to_json(), "result": res}
+            out = {"status": 400, "body": {"detail": self.public(str(e))}}
+        except AlreadyJudged:
+            return {"status": 200, "body": self.pending_status(pending) or {}}
+        except Exception as e:
+            if pending is not None:  # never resumed again: it would fail the same way at every start
+                self.finish_pending(pending, 500, {"detail": f"internal error ({type(e).__name__})"})
+            raise
+        else:
+            out = {"status": 201 if res.valid else 422, "body": res.to_json(), "result": res}
+            if res.valid:
+                return out  # (a pending row was finished with the solution's own transaction)
+        if pending is not None:
+            self.finish_pending(pending, out["status"], out["body"])
+        return out
 
     def public(self, message: str) -> str:
         """A message without the server's own paths."""
@@ -942,6 +1017,15 @@ def unwrap_upload(text: str, fname: str, meta: Dict[str, Optional[str]], token: 
     if data.get("token") is not None:
         token = str(data["token"])
     return (sol if isinstance(sol, str) else json.dumps(sol)), meta, token
+
+
+def check_token(token: str) -> str:
+    """A token chosen by the uploader: 8 to 200 characters, no NUL (else InputError)."""
+    if not (8 <= len(token) <= 200):
+        raise InputError("a chosen token must have 8 to 200 characters (or leave it empty to get a random one)")
+    if "\x00" in token:
+        raise InputError("the token contains a NUL character")
+    return token
 
 
 def parse_task_file(data, file: Path) -> Union[Task, CollabTask]:

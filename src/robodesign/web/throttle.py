@@ -2,9 +2,10 @@
 
 * :class:`RateLimiter`: a token bucket per client (``rate`` requests per second, bursts of ``burst``); a refused
   request learns how long to wait (HTTP 429 with ``Retry-After``).
-* :class:`CheckQueue`: the checker threads and the line in front of them. A place is taken *before* the upload is
-  read (:meth:`CheckQueue.reserve`), so a full queue answers 429 at once and never buffers more uploads than it has
-  places; each client holds at most ``per_client`` places. Big checks (many trajectory values) run on at most
+* :class:`CheckQueue`: the checker threads and the line in front of them. An upload takes a place only once its
+  body has arrived completely (:meth:`CheckQueue.reserve` after reading it): a client that sends its body slowly
+  holds no place, only one of the ``max_receiving`` bodies being received (at most ``per_client_receiving`` per
+  client, each with its deadline); each client holds at most ``per_client`` places. Big checks (many trajectory values) run on at most
   ``big_slots`` of the threads, so a small upload never waits behind two slow ones. Every job has a random ID
   whose status (place in the line, result) the uploader can ask for.
 """
@@ -17,7 +18,7 @@ import time
 from collections import OrderedDict
 from concurrent.futures import Future
 from dataclasses import dataclass, field
-from typing import Callable, List, Optional
+from typing import Callable, Dict, List, Optional
 
 
 class Busy(Exception):
@@ -76,11 +77,14 @@ class CheckQueue:
     """``workers`` checker threads and at most ``max_waiting`` jobs waiting or being received in front of them."""
 
     def __init__(self, workers: int, max_waiting: int, per_client: int, big_slots: Optional[int] = None,
-                 keep_done: int = 1000, keep_seconds: float = 3600.0):
+                 keep_done: int = 1000, keep_seconds: float = 3600.0, max_receiving: int = 64,
+                 per_client_receiving: int = 16):
         self.workers = max(1, int(workers))
         self.max_waiting, self.per_client = max(0, int(max_waiting)), max(1, int(per_client))
         self.big_slots = max(1, self.workers - 1) if big_slots is None else max(1, int(big_slots))
         self.keep_done, self.keep_seconds = keep_done, keep_seconds
+        self.max_receiving, self.per_client_receiving = max(1, int(max_receiving)), max(1, int(per_client_receiving))
+        self._receiving: Dict[str, int] = {}
         self._cond = threading.Condition()
         self._jobs: "OrderedDict[str, Job]" = OrderedDict()  # every job still known, oldest first
         self._line: List[Job] = []  # queued, in arrival order
@@ -98,8 +102,34 @@ class CheckQueue:
         return sum(1 for j in self._jobs.values() if j.state in ("receiving", "queued", "checking")
                    and (client is None or j.client == client))
 
+    def start_receiving(self, client: str) -> None:
+        """Count a body about to be read (:class:`Busy` beyond the limits); :meth:`done_receiving` when read."""
+        with self._cond:
+            total = sum(self._receiving.values())
+            mine = self._receiving.get(client, 0)
+            if mine >= self.per_client_receiving:
+                raise Busy(f"you are already sending {mine} uploads; wait until they have arrived", 5)
+            if total >= self.max_receiving:
+                raise Busy(f"the server is receiving {total} uploads; try again later", 5)
+            self._receiving[client] = mine + 1
+
+    def done_receiving(self, client: str) -> None:
+        with self._cond:
+            n = self._receiving.get(client, 0) - 1
+            if n > 0:
+                self._receiving[client] = n
+            else:
+                self._receiving.pop(client, None)
+
+    def restore(self, job_id: str, client: str = "resumed") -> Job:
+        """A job of an upload accepted before a restart (its ID kept; no limits: it was accepted already)."""
+        with self._cond:
+            job = Job(job_id, client)
+            self._jobs[job.id] = job
+            return job
+
     def reserve(self, client: str) -> Job:
-        """A place in the line for an upload about to be read, or :class:`Busy`."""
+        """A place in the line for an upload whose body has arrived, or :class:`Busy`."""
         with self._cond:
             if self._active(client) >= self.per_client:
                 raise Busy(f"you already have {self.per_client} upload(s) being checked; wait for a result",
@@ -154,7 +184,7 @@ class CheckQueue:
     def stats(self) -> dict:
         with self._cond:
             return {"workers": self.workers, "checking": self._running, "waiting": len(self._line),
-                    "receiving": self._active() - self._running - len(self._line), "max_waiting": self.max_waiting}
+                    "receiving": sum(self._receiving.values()), "max_waiting": self.max_waiting}
 
     # ------------------------------------------------------------------------------------------------ workers
     def _next(self) -> Optional[Job]:

@@ -12,6 +12,7 @@ import logging
 import multiprocessing
 import os
 import threading
+import time
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, Optional
@@ -25,9 +26,25 @@ _worker_bench: Optional[Bench] = None  # the Bench of a checker process
 CHECKER_NICE = 10  # checker processes yield the CPU to the process that serves the pages
 
 
+def die_with_parent(poll: float = 0.25) -> None:
+    """Make this (worker) process end when the process that started it ends, even by ``kill -9``: a daemon thread
+    watches the parent process ID (a killed parent's children are re-parented) and exits within ``poll`` seconds.
+    (Not ``PR_SET_PDEATHSIG``: it fires when the *thread* that started the process ends, and pools start processes
+    from short-lived request threads.)"""
+    parent = os.getppid()
+
+    def watch():
+        while True:
+            if os.getppid() != parent:
+                os._exit(0)
+            time.sleep(poll)
+    threading.Thread(target=watch, name="parent-watchdog", daemon=True).start()
+
+
 def _init_worker(settings: Settings) -> None:
     global _worker_bench
     ignore_sigint()  # Ctrl-C on `robodesign serve` reaches the whole process group: the server shuts us down
+    die_with_parent()
     try:
         os.nice(CHECKER_NICE)
     except OSError:  # not permitted here: the checks run at the server's priority
@@ -36,8 +53,8 @@ def _init_worker(settings: Settings) -> None:
 
 
 def _check_in_worker(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
-                     unwrap: bool) -> dict:
-    return _worker_bench.check_upload(text, fname, meta, token, unwrap)
+                     unwrap: bool, extra: dict) -> dict:
+    return _worker_bench.check_upload(text, fname, meta, token, unwrap, **extra)
 
 
 class ThreadChecker:
@@ -46,8 +63,8 @@ class ThreadChecker:
     def __init__(self, bench: Bench):
         self.bench = bench
 
-    def check(self, text, fname, meta, token, unwrap) -> dict:
-        return self.bench.check_upload(text, fname, meta, token, unwrap)
+    def check(self, text, fname, meta, token, unwrap, **extra) -> dict:
+        return self.bench.check_upload(text, fname, meta, token, unwrap, **extra)
 
     def close(self) -> None:
         pass
@@ -77,10 +94,11 @@ class ProcessChecker:
         for f in futures:
             f.result()
 
-    def check(self, text, fname, meta, token, unwrap) -> dict:
+    def check(self, text, fname, meta, token, unwrap, **extra) -> dict:
+        """``extra``: ``token_hash``, ``pending`` of :meth:`Bench.check_upload`."""
         pool = self._get_pool()
         try:
-            res = pool.submit(_check_in_worker, text, fname, meta, token, unwrap).result()
+            res = pool.submit(_check_in_worker, text, fname, meta, token, unwrap, extra).result()
         except BrokenProcessPool:
             log.error("a checker process died; starting new ones")
             with self._lock:
