@@ -27,6 +27,7 @@ import numpy as np
 
 from robodesign.collab.core import parse_collab_solution
 from robodesign.core.jsonio import loads_json
+from robodesign.experiment.executors import ignore_sigint
 from robodesign.formats.solution import parse_solution
 from robodesign.web import pages
 from robodesign.web.service import Bench, Settings
@@ -87,6 +88,7 @@ def decimate_json(data, max_samples: int):
 
 def _init(settings: Settings, memory_mb: int) -> None:
     global _bench
+    ignore_sigint()  # Ctrl-C on `robodesign serve` reaches the process group: the server shuts the pool down
     die_with_parent()
     try:
         os.nice(CHECKER_NICE)
