@@ -30,7 +30,7 @@ HILL_CLIMBER = '''
 """A hill-climber: the minimal robodesign optimizer plugin."""
 from dataclasses import dataclass
 
-from robodesign.design.optimize import Candidate, Optimizer, option
+from robodesign.plugin import Candidate, Optimizer, option
 
 
 class HillClimber(Optimizer):
