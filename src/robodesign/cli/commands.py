@@ -174,6 +174,7 @@ def cmd_optimize(args) -> int:
     if args.workers is None and short_budget(budget) and not args.json:
         print(f"evaluating in this process: {budget.evaluations} evaluations are fewer than a worker pool's "
               f"start-up pays for ({POOL_MIN_EVALUATIONS}); --workers N uses N processes")
+    clock_start = time.perf_counter()  # a time budget counts from here: the worker pool's start-up is spent from it
     executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
     progress = _Progress(budget, quiet=args.json)
     walls: List[float] = []  # wall time of each evaluation since the study started
@@ -182,7 +183,8 @@ def cmd_optimize(args) -> int:
         walls.append(time.perf_counter() - progress.t0)
         progress(i, e, best)
     try:
-        res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation).run()
+        res = Study(opt, executor, budget, batch_size=args.batch_size, on_evaluation=on_evaluation,
+                    clock_start=clock_start).run()
     finally:
         progress.close()
         close_executor()
@@ -205,13 +207,19 @@ def cmd_optimize(args) -> int:
                                                   "cost": best.cost, "stage": best.stage, "message": best.message,
                                                   "costs": best.costs},
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
-               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts}
+               "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts,
+               "budget_overrun": res.overrun, "last_evaluation_seconds": res.last_evaluation_seconds,
+               "dropped": res.dropped}
     if args.json:
         print(json.dumps(summary))
     else:
         sent = f", {summary['messages']} messages to them" if workers > 1 else ""
         print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s){sent}, "
               f"batches of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
+        if res.overrun:
+            print(f"time budget exceeded by {res.overrun:.1f} s: evaluations running at the deadline finished "
+                  f"(the longest took {res.last_evaluation_seconds or 0.0:.1f} s); {res.dropped} asked candidate(s) "
+                  f"not evaluated")
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")
