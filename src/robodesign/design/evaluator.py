@@ -75,8 +75,8 @@ def graded_shortfall(stage: str, shortfall: Optional[float]) -> float:
     if scale is None or shortfall is None or not shortfall > 0:
         return 0.0
     if not math.isfinite(shortfall):
-        return 1.0 - 1e-9
-    return min(float(shortfall) / (float(shortfall) + scale), 1.0 - 1e-9)
+        return 1.0 - 1e-6
+    return min(float(shortfall) / (float(shortfall) + scale), 1.0 - 1e-6)
 
 
 def score_of(feasible: bool, cost: Optional[float], stage_index: int, goals_reached: int,
