@@ -33,7 +33,7 @@ ranges): ``population_size``, ``generations``, ``tournament_size``, ``elite``, `
 ``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``, ``informed``.
 
 Seeding: the initial population and the immigrants are ``space.informed_candidate`` designs (option
-``informed``, default 4: the best of 4 random orders, each with a base placed from the goals' geometry, ranked
+``informed``, default 2: the best of 2 random orders, each with a base placed from the goals' geometry, ranked
 by reach shortfall, then by torque profile — strong joints near the base); ``informed=0`` draws them
 uniformly (``space.random_candidate``), as before.
 
@@ -99,7 +99,7 @@ class GeneticOptimizer(Optimizer):
         base_sigma: float = option(0.1, low=0.0,
                                    help="sigma of the Gaussian base mutation, as a fraction of each range")
         max_idle_generations: int = option(25, low=1, help="stop after this many generations without a new candidate")
-        informed: int = option(4, low=0, help="the initial population and immigrants: the best of this many "
+        informed: int = option(2, low=0, help="the initial population and immigrants: the best of this many "
                                               "random orders by reach (a base from the goals' geometry whose "
                                               "reach bound covers them) and torque profile "
                                               "(space.informed_candidate); 0: uniformly random designs")

@@ -462,7 +462,11 @@ class Study:
             if self.budget.evaluations is not None:
                 size = min(size, self.budget.evaluations - n)
             batch: List[Candidate] = []
+            late = False
             for _ in range(size):
+                if batch and n + len(batch) >= len(stored) and self._late(t0):
+                    late = True  # asking itself ran past the deadline (slow asks): nothing more is sent
+                    break
                 c = opt.ask()
                 if c is None:
                     break
@@ -495,7 +499,7 @@ class Study:
                 history.append(ev)
                 if self.on_evaluation is not None:
                     self.on_evaluation(n + i, ev, opt.best)
-            if self._dropped:
+            if self._dropped or late:
                 break
             if len(batch) < size:
                 stopped = "exhausted"
