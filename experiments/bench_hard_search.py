@@ -11,6 +11,7 @@ the others. No task is filtered by a design (some may be infeasible for every de
 follow task without basePlacement 5 m from the origin (tests/test_free_base.py).
 
     nice python experiments/bench_hard_search.py --tasks 6 --budget 30s [--before /tmp/before] [--workers 1]
+        [--position-only] [--no-far]
 
 Each run is ``robodesign optimize TASK --modules robodesign_arm --optimizer genetic --budget B --seed 0 --json``
 in its own process; the wall time of the whole command is measured too (``--budget`` must hold).
@@ -48,7 +49,8 @@ def _T(R, p) -> list:
     return np.round(T, 12).tolist()
 
 
-def hard_task(seed: int, free_base: bool) -> dict:
+def hard_task(seed: int, free_base: bool, orientation: bool = True) -> dict:
+    """One task (``orientation=False``: position-only goals, x, y, z ±1 mm: the reach and torque part alone)."""
     rng = np.random.default_rng(seed)
     goals = []
     while len(goals) < 3:
@@ -68,6 +70,8 @@ def hard_task(seed: int, free_base: bool) -> dict:
             cubes.append(c)
     pose_tol = {"toleranceProjection": ["x", "y", "z", "Theta_R"],
                 "tolerance": [[-0.001, 0.001], [-0.001, 0.001], [-0.001, 0.001], [0.0, math.radians(0.5)]]}
+    goal_tol = pose_tol if orientation else {"toleranceProjection": ["x", "y", "z"],
+                                             "tolerance": [[-0.001, 0.001], [-0.001, 0.001], [-0.001, 0.001]]}
     base = ({"toleranceProjection": ["x", "y", "z", "Theta_R"],
              "tolerance": [[-1.0, 1.0], [-1.0, 1.0], [-1.0, 1.0], [0.0, math.pi]]} if free_base else pose_tol)
     return {
@@ -80,7 +84,7 @@ def hard_task(seed: int, free_base: bool) -> dict:
         "constraints": [{"type": "joint", "parts": ["q", "tau"]}, {"type": "collisionFree"},
                         {"type": "allGoalsFulfilled"},
                         {"type": "basePlacement", "pose": {"nominal": _T(np.eye(3), np.zeros(3)), **base}}],
-        "goals": [{"ID": str(i), "type": "reach", "goalPose": {"nominal": _T(_random_rotation(rng), g), **pose_tol}}
+        "goals": [{"ID": str(i), "type": "reach", "goalPose": {"nominal": _T(_random_rotation(rng), g), **goal_tol}}
                   for i, g in enumerate(goals)],
     }
 
@@ -111,13 +115,14 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--before", type=Path, default=None)
     ap.add_argument("--no-far", action="store_true")
+    ap.add_argument("--position-only", action="store_true", help="goals without an orientation tolerance")
     a = ap.parse_args()
     from test_free_base import far_drilling
     folder = Path(tempfile.mkdtemp(prefix="bench_hard_"))
     tasks = []
     for s in range(a.tasks):
         p = folder / f"hard_{s}.json"
-        p.write_text(json.dumps(hard_task(s, free_base=s % 2 == 1), indent=1))
+        p.write_text(json.dumps(hard_task(s, free_base=s % 2 == 1, orientation=not a.position_only), indent=1))
         tasks.append(p)
     if not a.no_far:
         tasks.append(far_drilling(folder / "far_drilling.json"))
@@ -128,7 +133,8 @@ def main() -> None:
             r = run(t, a.budget, a.workers, src)
             rows.append((t.stem, name, r))
             print(json.dumps({"task": t.stem, "version": name, **r}), flush=True)
-    print(f"\nbudget {a.budget}, {a.workers} worker(s), genetic, seed 0")
+    print(f"\nbudget {a.budget}, {a.workers} worker(s), genetic, seed 0, "
+          f"{'position-only' if a.position_only else 'full-pose'} goals")
     print("| task | version | solved | best cost | best stage | evaluations | study s | command wall s |")
     print("|---|---|---|---|---|---|---|---|")
     for task, name, r in rows:

@@ -30,12 +30,13 @@ join the current generation (so every evaluation is used for selection).
 
 Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them with their defaults and
 ranges): ``population_size``, ``generations``, ``tournament_size``, ``elite``, ``crossover_prob``,
-``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``, ``informed``.
+``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``, ``informed``,
+``informed_share``.
 
-Seeding: the initial population and the immigrants are ``space.informed_candidate`` designs (option
-``informed``, default 2: the best of 2 random orders, each with a base placed from the goals' geometry, ranked
-by reach shortfall, then by torque profile — strong joints near the base); ``informed=0`` draws them
-uniformly (``space.random_candidate``), as before.
+Seeding: a share (``informed_share``, default 0.5) of the initial population and of the immigrants are
+``space.informed_candidate`` designs (option ``informed``, default 2: the best of 2 random orders, each
+with a base placed from the goals' geometry, ranked by reach shortfall, then by torque profile — strong
+joints near the base); the others, and all with ``informed=0``, are uniform (``space.random_candidate``).
 
 Deterministic for a seed: every random choice comes from ``self.rng``; DEAP's selection operators,
 which draw from Python's ``random`` module, run with a private ``random`` state seeded from the
@@ -103,6 +104,9 @@ class GeneticOptimizer(Optimizer):
                                               "random orders by reach (a base from the goals' geometry whose "
                                               "reach bound covers them) and torque profile "
                                               "(space.informed_candidate); 0: uniformly random designs")
+        informed_share: float = option(0.5, low=0.0, high=1.0,
+                                       help="share of the new designs (initial population, immigrants) that are "
+                                            "informed; the others are uniformly random (diversity)")
 
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
@@ -227,7 +231,7 @@ class GeneticOptimizer(Optimizer):
 
     def _random_candidate(self) -> Candidate:
         """A new design: informed by reach and torque (option ``informed``), else uniformly random."""
-        if self.options.informed:
+        if self.options.informed and self.rng.random() < self.options.informed_share:
             return self.space.informed_candidate(self.rng, orders=self.options.informed)
         return self.space.random_candidate(self.rng)
 
