@@ -95,11 +95,11 @@ def test_missing_base_placement_gives_a_region_around_the_goals(task_file):
 
 @pytest.mark.slow
 def test_far_follow_task_is_solved_with_the_base_far_from_the_origin(task_file, tmp_path):
-    """`robodesign optimize` finds a design (genetic, 60 evaluations) whose solution `robodesign check` judges
+    """`robodesign optimize` finds a design (genetic, 150 evaluations) whose solution `robodesign check` judges
     valid; its base stands metres from the origin. With --fixed-base every candidate stops at reach."""
     sol = tmp_path / "sol.json"
     r = subprocess.run(RD + ["optimize", str(task_file), "--modules", "robodesign_arm", "--optimizer", "genetic",
-                             "--budget", "60evals", "--workers", "1", "--seed", "0", "--json", "--out", str(sol)],
+                             "--budget", "150evals", "--workers", "1", "--seed", "0", "--json", "--out", str(sol)],
                        capture_output=True, text=True, timeout=600)
     assert r.returncode == 0, r.stderr[-2000:]
     out = json.loads(r.stdout)

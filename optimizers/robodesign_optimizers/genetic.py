@@ -36,7 +36,8 @@ ranges): ``population_size``, ``generations``, ``tournament_size``, ``elite``, `
 Seeding: a share (``informed_share``, default 0.5) of the initial population and of the immigrants are
 ``space.informed_candidate`` designs (option ``informed``, default 2: the best of 2 random orders, each
 with a base placed from the goals' geometry, ranked by reach shortfall, then by torque profile — strong
-joints near the base); the others, and all with ``informed=0``, are uniform (``space.random_candidate``).
+joints near the base); the others have a uniformly random order, with a free base placed from the goals'
+geometry (``space.sample_base``); with ``informed=0`` all are uniform (``space.random_candidate``).
 
 Deterministic for a seed: every random choice comes from ``self.rng``; DEAP's selection operators,
 which draw from Python's ``random`` module, run with a private ``random`` state seeded from the
@@ -106,7 +107,7 @@ class GeneticOptimizer(Optimizer):
                                               "(space.informed_candidate); 0: uniformly random designs")
         informed_share: float = option(0.5, low=0.0, high=1.0,
                                        help="share of the new designs (initial population, immigrants) that are "
-                                            "informed; the others are uniformly random (diversity)")
+                                            "informed; the others have a uniformly random order (diversity)")
 
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
@@ -233,6 +234,9 @@ class GeneticOptimizer(Optimizer):
         """A new design: informed by reach and torque (option ``informed``), else uniformly random."""
         if self.options.informed and self.rng.random() < self.options.informed_share:
             return self.space.informed_candidate(self.rng, orders=self.options.informed)
+        if self.options.informed and self.space.base_dims:  # a uniform order, its base from the goals' geometry
+            order = self.space.random_order(self.rng)
+            return Candidate(order, self.space.sample_base(self.rng, order))
         return self.space.random_candidate(self.rng)
 
     @contextlib.contextmanager

@@ -480,8 +480,8 @@ class SearchSpace:
 
     def sample_base(self, rng, order: Sequence[str], tries: int = 64) -> Tuple[float, ...]:
         """Base parameters for ``order`` chosen from the goals' geometry: proposals put the first joint at a
-        random point within the order's reach radius of a random goal (the yaw, and a fixed x/y/z, drawn in
-        the bounds) or draw the parameters uniformly in the bounds; the first proposal that is valid, whose
+        random point 20–75 % of the order's reach radius R away from a random goal (the yaw, and a fixed x/y/z,
+        drawn in the bounds) or draw the parameters uniformly in the bounds; the first proposal that is valid, whose
         base position is clear of the obstacles and whose reach bound covers every goal is returned, else the
         valid proposal with the smallest :meth:`reach_shortfall`. Without free base parameters: ``()``;
         without goals: :meth:`BaseBounds.sample`."""
@@ -501,7 +501,8 @@ class SearchSpace:
                 full = [float(rng.uniform(bb.lower[i], bb.upper[i])) for i in range(4)]
                 g = G[int(rng.integers(len(G))), :3]
                 v = rng.normal(size=3)
-                v *= (rng.random() ** (1 / 3)) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
+                # at 20–75 % of the reach: a stretched arm rarely holds a pose's orientation (or its weight)
+                v *= rng.uniform(0.2, 0.75) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
                 o_n = (inv @ np.append(g + v, 1.0))[:3]  # the first joint in the nominal frame
                 t = o_n - rot_z(full[3]) @ o_local
                 for i in range(3):
