@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 
 from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec, score_of
-from robodesign.formats.module_io import load_module_set
 from robodesign.design.optimize import Budget, SerialExecutor, Study, available_optimizers, load_optimizer
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import BaseBounds, Candidate, SearchSpace
 from robodesign.design.solve import STAGES
+from robodesign.formats.module_io import load_module_set
 
 PLUGINS = ("random", "genetic", "elimination", "heuristic", "optuna")
 LINKS_OUT = ("4", "5", "6", "7", "8", "9", "10", "11", "15")  # every passive module except the adapter 3
@@ -268,9 +268,10 @@ def test_successors_follow_free_connectors():
 def test_one_chaining_rule_for_orders_and_assemblies():
     """The search space and Assembly.from_order apply one rule (assembly.chain_step): extending a valid order by any
     module assembles iff chain_step attaches it (robodesign_arm and the IMPROV set)."""
-    from robodesign.formats.assembly import Assembly, chain_step, free_connectors
-    from robodesign.core.errors import AssemblyError
     from conftest import IMPROV
+
+    from robodesign.core.errors import AssemblyError
+    from robodesign.formats.assembly import Assembly, chain_step, free_connectors
     for ms in (load_module_set("robodesign_arm"), load_module_set(IMPROV)):
         sp = SearchSpace(ms, min_dof=1, max_dof=7, max_links_between=2)
         rng = np.random.default_rng(1)
@@ -398,9 +399,9 @@ def test_base_pose_plugin_on_base_placement():
     --budget 90s --seed 0 --workers 1` (Panda joint limits). The nominal base comes
     first (the same evaluation as the nominal candidate on its own); the best base is at least as fast and
     its solution passes the checker with the base inside the task's tolerance."""
-    from robodesign.judge.checker import check
     from robodesign.core.paths import project_root
     from robodesign.formats.solution import parse_solution
+    from robodesign.judge.checker import check
     task_file = project_root() / "assets" / "tasks" / "robodesign" / "base_placement.json"
     problem = Problem.build(task_file, "robodesign_arm", "cyc")
     ev = Evaluator(EvaluatorSpec(problem, seed=0))
