@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 
 from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec, score_of
-from robodesign.formats.module_io import load_module_set
 from robodesign.design.optimize import Budget, SerialExecutor, Study, available_optimizers, load_optimizer
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import BaseBounds, Candidate, SearchSpace
 from robodesign.design.solve import STAGES
+from robodesign.formats.module_io import load_module_set
 
 PLUGINS = ("random", "genetic", "elimination", "heuristic", "optuna")
 LINKS_OUT = ("4", "5", "6", "7", "8", "9", "10", "11", "15")  # every passive module except the adapter 3
@@ -268,9 +268,10 @@ def test_successors_follow_free_connectors():
 def test_one_chaining_rule_for_orders_and_assemblies():
     """The search space and Assembly.from_order apply one rule (assembly.chain_step): extending a valid order by any
     module assembles iff chain_step attaches it (robodesign_arm and the IMPROV set)."""
-    from robodesign.formats.assembly import Assembly, chain_step, free_connectors
-    from robodesign.core.errors import AssemblyError
     from conftest import IMPROV
+
+    from robodesign.core.errors import AssemblyError
+    from robodesign.formats.assembly import Assembly, chain_step, free_connectors
     for ms in (load_module_set("robodesign_arm"), load_module_set(IMPROV)):
         sp = SearchSpace(ms, min_dof=1, max_dof=7, max_links_between=2)
         rng = np.random.default_rng(1)
@@ -398,9 +399,9 @@ def test_base_pose_plugin_on_base_placement():
     --budget 90s --seed 0 --workers 1` (Panda joint limits). The nominal base comes
     first (the same evaluation as the nominal candidate on its own); the best base is at least as fast and
     its solution passes the checker with the base inside the task's tolerance."""
-    from robodesign.judge.checker import check
     from robodesign.core.paths import project_root
     from robodesign.formats.solution import parse_solution
+    from robodesign.judge.checker import check
     task_file = project_root() / "assets" / "tasks" / "robodesign" / "base_placement.json"
     problem = Problem.build(task_file, "robodesign_arm", "cyc")
     ev = Evaluator(EvaluatorSpec(problem, seed=0))
@@ -418,3 +419,77 @@ def test_base_pose_plugin_on_base_placement():
     assert verdict.valid and verdict.cost == res.best.cost
     assert ev.task.base_placement.valid(sol.base_pose)
     assert np.allclose(sol.base_pose, sp.base_pose(res.best.candidate))
+
+
+# -- the time budget (a fake clock: the study's own accounting, no wall-clock race) -------------------------
+class _Clock:
+    """Stands in for the ``time`` module of robodesign.design.optimize: ``perf_counter`` is a fake clock
+    that only the fake evaluations advance."""
+
+    def __init__(self):
+        self.now = 100.0
+
+    def perf_counter(self):
+        return self.now
+
+
+def _slow_evaluations(clock, seconds):
+    """Evaluations that each take ``seconds`` on the fake clock (infeasible at ik)."""
+    def evaluate(c: Candidate) -> Evaluation:
+        clock.now += seconds
+        si = STAGES.index("ik")
+        return Evaluation(candidate=c, feasible=False, cost=None, score=score_of(False, None, si, 0), stage="ik",
+                          stage_index=si, goals_reached=0, seconds=seconds, seed=0)
+    return evaluate
+
+
+class _MapOnly:
+    """An executor without ``imap`` (a third-party one): only ``map``."""
+
+    def __init__(self, evaluate):
+        self.evaluate = evaluate
+        self.batches = []
+
+    def map(self, candidates):
+        self.batches.append(len(candidates))
+        return [self.evaluate(c) for c in candidates]
+
+
+@pytest.mark.parametrize("executor", ["serial", "map_only"])
+@pytest.mark.parametrize("name", ["genetic", "random"])
+def test_time_budget_stops_asking_at_the_deadline(bench, monkeypatch, name, executor):
+    """--budget 10s with batches of 16 evaluations of 3 s each: before, the study evaluated the whole batch
+    (48 s); now the candidates of a batch are sent one at a time until the deadline, so evaluations start at
+    0, 3, 6 and 9 s and the study ends at 12 s: 2 s over, by the own time of the last evaluation (3 s), with
+    the other 12 asked candidates of the batch not evaluated (and not told)."""
+    import robodesign.design.optimize as optimize_module
+    clock = _Clock()
+    monkeypatch.setattr(optimize_module, "time", clock)
+    evaluate = _slow_evaluations(clock, 3.0)
+    ex = SerialExecutor(evaluate) if executor == "serial" else _MapOnly(evaluate)
+    opt = load_optimizer(name)(bench.problem, seed=0, **OPTIONS[name])
+    told = []
+    res = Study(opt, ex, Budget(seconds=10.0), batch_size=16, on_evaluation=lambda i, e, b: told.append(i)).run()
+    assert len(res.history) == 4 and told == [0, 1, 2, 3] and len(opt.history) == 4
+    assert res.seconds == pytest.approx(12.0) and res.overrun == pytest.approx(2.0)
+    assert res.last_evaluation_seconds == pytest.approx(3.0) and res.stopped == "budget"
+    # random search on a streaming executor is asked only as the stream pulls: nothing asked is left over
+    assert res.dropped == (0 if name == "random" and executor == "serial" else 12)
+    if executor == "map_only":
+        assert ex.batches == [1, 1, 1, 1]
+    # the clock may start earlier (the CLI: before its worker pool started): the start-up is spent from the budget
+    clock.now = 200.0
+    opt = load_optimizer(name)(bench.problem, seed=0, **OPTIONS[name])
+    res = Study(opt, SerialExecutor(evaluate), Budget(seconds=10.0), batch_size=16, clock_start=195.0).run()
+    assert len(res.history) == 2 and res.seconds == pytest.approx(11.0) and res.overrun == pytest.approx(1.0)
+
+
+def test_evaluation_budget_keeps_whole_batches(bench, monkeypatch):
+    """Without a time budget a batch is evaluated whole, in one map call, as before; no overrun is reported."""
+    import robodesign.design.optimize as optimize_module
+    clock = _Clock()
+    monkeypatch.setattr(optimize_module, "time", clock)
+    ex = _MapOnly(_slow_evaluations(clock, 3.0))
+    res = Study(load_optimizer("genetic")(bench.problem, seed=0, population_size=8), ex, Budget(evaluations=10),
+                batch_size=4).run()
+    assert ex.batches == [4, 4, 2] and len(res.history) == 10 and res.overrun is None and res.dropped == 0

@@ -14,14 +14,14 @@ import pickle
 
 import numpy as np
 import pytest
-from conftest import IMPROV, PRIMITIVES, TASKS, ROOT, toy_module_set
+from conftest import IMPROV, PRIMITIVES, ROOT, TASKS, toy_module_set
 
-from robodesign.formats.assembly import Assembly, chain_step, free_connectors, next_compatible
 from robodesign.core.errors import AssemblyError, InputError
-from robodesign.formats.module_io import load_module_set
 from robodesign.design.optimize import create_optimizer
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import Candidate, SearchSpace
+from robodesign.formats.assembly import Assembly, chain_step, free_connectors, next_compatible
+from robodesign.formats.module_io import load_module_set
 
 SETS = {"IMPROV": IMPROV, "primitives": PRIMITIVES, "robodesign_arm": ROOT / "assets" / "modules" / "robodesign_arm"}
 RULES = {

@@ -30,7 +30,14 @@ join the current generation (so every evaluation is used for selection).
 
 Options (``--opt key=value``; ``robodesign optimizers --verbose`` lists them with their defaults and
 ranges): ``population_size``, ``generations``, ``tournament_size``, ``elite``, ``crossover_prob``,
-``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``.
+``mutation_prob``, ``base_mutation_prob``, ``base_sigma``, ``max_idle_generations``, ``informed``,
+``informed_share``.
+
+Seeding: a share (``informed_share``, default 0.5) of the initial population and of the immigrants are
+``space.informed_candidate`` designs (option ``informed``, default 2: the best of 2 random orders, each
+with a base placed from the goals' geometry, ranked by reach shortfall, then by torque profile — strong
+joints near the base); the others have a uniformly random order, with a free base placed from the goals'
+geometry (``space.sample_base``); with ``informed=0`` all are uniform (``space.random_candidate``).
 
 Deterministic for a seed: every random choice comes from ``self.rng``; DEAP's selection operators,
 which draw from Python's ``random`` module, run with a private ``random`` state seeded from the
@@ -94,6 +101,13 @@ class GeneticOptimizer(Optimizer):
         base_sigma: float = option(0.1, low=0.0,
                                    help="sigma of the Gaussian base mutation, as a fraction of each range")
         max_idle_generations: int = option(25, low=1, help="stop after this many generations without a new candidate")
+        informed: int = option(2, low=0, help="the initial population and immigrants: the best of this many "
+                                              "random orders by reach (a base from the goals' geometry whose "
+                                              "reach bound covers them) and torque profile "
+                                              "(space.informed_candidate); 0: uniformly random designs")
+        informed_share: float = option(0.5, low=0.0, high=1.0,
+                                       help="share of the new designs (initial population, immigrants) that are "
+                                            "informed; the others have a uniformly random order (diversity)")
 
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
@@ -164,7 +178,7 @@ class GeneticOptimizer(Optimizer):
         for _ in range(20 * self.options.population_size):
             if len(pop) >= self.options.population_size:
                 break
-            c = self.space.random_candidate(self.rng)
+            c = self._random_candidate()
             if c.key() in seen:
                 continue
             seen.add(c.key())
@@ -210,11 +224,20 @@ class GeneticOptimizer(Optimizer):
 
     def _immigrant(self, taken, tries: int = 200) -> Optional[Individual]:
         for _ in range(tries):
-            c = self.space.random_candidate(self.rng)
+            c = self._random_candidate()
             k = c.key()
             if k not in self.cache and k not in taken:
                 return Individual(c.order, c.base)
         return None
+
+    def _random_candidate(self) -> Candidate:
+        """A new design: informed by reach and torque (option ``informed``), else uniformly random."""
+        if self.options.informed and self.rng.random() < self.options.informed_share:
+            return self.space.informed_candidate(self.rng, orders=self.options.informed)
+        if self.options.informed and self.space.base_dims:  # a uniform order, its base from the goals' geometry
+            order = self.space.random_order(self.rng)
+            return Candidate(order, self.space.sample_base(self.rng, order))
+        return self.space.random_candidate(self.rng)
 
     @contextlib.contextmanager
     def _deap_random(self):

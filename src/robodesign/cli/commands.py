@@ -176,6 +176,7 @@ def cmd_optimize(args) -> int:
         print(f"evaluating in this process: {budget.evaluations} evaluations are fewer than a worker pool's "
               f"start-up pays for ({POOL_MIN_EVALUATIONS}); --workers N uses N processes")
     journal = Journal(args, problem, budget)  # every evaluation committed: Ctrl-C loses nothing (--resume)
+    clock_start = time.perf_counter()  # a time budget counts from here: the worker pool's start-up is spent from it
     executor, close_executor = optimize_executor(spec, workers, args.chunk_size)
     progress = Progress(journal.budget, progress_mode(args))
     walls: List[float] = []  # wall time of each evaluation (a resumed search: since the search began)
@@ -186,7 +187,7 @@ def cmd_optimize(args) -> int:
     res = None
     try:
         res = Study(opt, executor, journal.budget, batch_size=args.batch_size, storage=journal.storage,
-                    on_evaluation=on_evaluation, stop_on_interrupt=True).run()
+                    on_evaluation=on_evaluation, stop_on_interrupt=True, clock_start=clock_start).run()
         if res.stopped == "interrupted":  # the best so far is saved before anything else can be interrupted
             progress.close()
             write_interrupted(args, res, journal)
@@ -213,7 +214,9 @@ def cmd_optimize(args) -> int:
                "solution": str(out) if out else None, "first_feasible_seconds": run.first_feasible_s,
                "stopped_at": run.stopped_at or None, "stage_counts": run.stage_counts,
                "resumed_evaluations": journal.stored,
-               "resume": resume_command(getattr(args, "argv", None)) if res.stopped == "interrupted" else None}
+               "resume": resume_command(getattr(args, "argv", None)) if res.stopped == "interrupted" else None,
+               "budget_overrun": res.overrun, "last_evaluation_seconds": res.last_evaluation_seconds,
+               "dropped": res.dropped}
     diagnosis = diagnose(problem, res.history, res.stopped)  # why nothing valid was found (docs/diagnosis.md)
     summary["diagnosis"] = diagnosis.to_json()
     if args.json:
@@ -222,6 +225,10 @@ def cmd_optimize(args) -> int:
         sent = f", {summary['messages']} messages to them" if workers > 1 else ""
         print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s){sent}, "
               f"batches of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
+        if res.overrun:
+            print(f"time budget exceeded by {res.overrun:.1f} s: evaluations running at the deadline finished "
+                  f"(the longest took {res.last_evaluation_seconds or 0.0:.1f} s); {res.dropped} asked candidate(s) "
+                  f"not evaluated")
         if best is not None and best.feasible:
             bp = problem.base_pose(best.candidate)
             print(f"best robot   {','.join(best.candidate.order)}")

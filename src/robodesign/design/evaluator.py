@@ -6,14 +6,19 @@ per-candidate seed is derived from the study seed and the candidate key, so resu
 evaluation order, executor or process. The cache key covers all of them (:meth:`Evaluator.cache_key`).
 
 Score (smaller is better): a feasible candidate scores the checker's cost of its checked solution
-(one judge). An infeasible one scores ``INFEASIBLE + (stages left)·STAGE_PENALTY − goals reached``,
-so every feasible candidate beats every infeasible one, and among infeasible ones those that got
-further (more stages, more goals) rank better — optimizers still learn from them.
+(one judge). An infeasible one scores ``INFEASIBLE + (stages left)·STAGE_PENALTY − goals reached +
+graded shortfall``, so every feasible candidate beats every infeasible one, and among infeasible ones
+those that got further (more stages, more goals) rank better — optimizers still learn from them. The
+graded shortfall (:func:`graded_shortfall`, in [0, 1)) ranks candidates that failed at the same stage with
+the same goals by how far they missed: metres beyond the reach bound at ``reach``, Nm over the torque
+limit at ``static_torque`` (``Evaluation.shortfall``); it is 0 when the stage measures none, so such
+scores are those of earlier releases.
 """
 from __future__ import annotations
 
 import hashlib
 import json
+import math
 import time
 from dataclasses import asdict, dataclass, field, replace
 from typing import Dict, List, Optional
@@ -26,6 +31,9 @@ from robodesign.formats.task_spec import Task
 
 INFEASIBLE = 1e9
 STAGE_PENALTY = 1e6
+#: the shortfall at which the graded penalty is 1/2, per stage and unit: 0.1 m beyond the reach bound,
+#: 10 Nm over the torque limit
+SHORTFALL_SCALE = {"reach": 0.1, "static_torque": 10.0}
 
 
 @dataclass
@@ -43,6 +51,9 @@ class Evaluation:
     message: str = ""
     solution: Optional[dict] = None  # CoBRA JSON of the checked solution (feasible candidates)
     costs: Dict[str, float] = field(default_factory=dict)  # every built-in cost of the checked solution
+    # how far the failed stage missed (metres beyond the reach bound at "reach", Nm over the torque limit at
+    # "static_torque"); None when it passed or the stage measures none
+    shortfall: Optional[float] = None
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -56,10 +67,25 @@ class Evaluation:
         return Evaluation(candidate=Candidate(tuple(c["order"]), tuple(c["base"])), **d)
 
 
-def score_of(feasible: bool, cost: Optional[float], stage_index: int, goals_reached: int) -> float:
+def graded_shortfall(stage: str, shortfall: Optional[float]) -> float:
+    """The graded penalty of an infeasible candidate, in [0, 1): s / (s + scale) for a shortfall s in the
+    stage's unit (:data:`SHORTFALL_SCALE`), 0 without one. Increasing in s, so a candidate that misses by
+    less ranks better, and below 1, so it never outweighs a goal reached or a stage passed."""
+    scale = SHORTFALL_SCALE.get(stage)
+    if scale is None or shortfall is None or not shortfall > 0:
+        return 0.0
+    if not math.isfinite(shortfall):
+        return 1.0 - 1e-6
+    return min(float(shortfall) / (float(shortfall) + scale), 1.0 - 1e-6)
+
+
+def score_of(feasible: bool, cost: Optional[float], stage_index: int, goals_reached: int,
+             shortfall: Optional[float] = None) -> float:
     if feasible and cost is not None:
         return float(cost)
-    return INFEASIBLE + (len(STAGES) - stage_index) * STAGE_PENALTY - goals_reached
+    stage = STAGES[stage_index] if stage_index < len(STAGES) else "done"
+    return INFEASIBLE + (len(STAGES) - stage_index) * STAGE_PENALTY - goals_reached + \
+        graded_shortfall(stage, shortfall)
 
 
 def candidate_seed(study_seed: int, key: str) -> int:
@@ -132,10 +158,12 @@ class Evaluator:
         feasible = res.feasible
         cost = res.cost if feasible else None
         ev = Evaluation(candidate=candidate, feasible=feasible, cost=cost,
-                        score=score_of(feasible, cost, res.stage_index, res.goals_reached), stage=res.stage,
+                        score=score_of(feasible, cost, res.stage_index, res.goals_reached, res.shortfall),
+                        stage=res.stage,
                         stage_index=res.stage_index, goals_reached=res.goals_reached,
                         seconds=time.perf_counter() - t0, seed=seed, stages=[s.to_json() for s in res.stages],
                         message=res.message[:500],
                         solution=res.solution.to_json() if (feasible and self.spec.keep_solutions) else None,
-                        costs=dict(res.verdict.costs) if res.verdict is not None else {})
+                        costs=dict(res.verdict.costs) if res.verdict is not None else {},
+                        shortfall=None if feasible else res.shortfall)
         return ev

@@ -35,6 +35,8 @@ from typing import (
     Callable,
     ClassVar,
     Dict,
+    Iterable,
+    Iterator,
     List,
     Mapping,
     Optional,
@@ -393,6 +395,12 @@ class SerialExecutor:
     def map(self, candidates: Sequence[Candidate]) -> List[Evaluation]:
         return [self.evaluator(c) for c in candidates]
 
+    def imap(self, candidates: Iterable[Candidate], batch_size: int = 1) -> Iterator[Evaluation]:
+        """The evaluations of ``candidates`` one by one, each candidate pulled only when the previous one is
+        evaluated (so a study with a time budget asks nothing after its deadline)."""
+        for c in candidates:
+            yield self.evaluator(c)
+
     def close(self) -> None:
         pass
 
@@ -403,6 +411,13 @@ class StudyResult:
     history: List[Evaluation]
     seconds: float
     stopped: str  # "budget" | "exhausted" | "interrupted" (Study(stop_on_interrupt=True))
+    #: the study's own accounting of a time budget (None without one): seconds past the budget when it ended
+    #: (0 if it ended before), the own time of the longest evaluation that ended after the deadline (every
+    #: such evaluation was asked before it), and how many asked candidates were not evaluated because the
+    #: deadline had passed before they were sent
+    overrun: Optional[float] = None
+    last_evaluation_seconds: Optional[float] = None
+    dropped: int = 0
 
     @property
     def best_feasible(self) -> Optional[Evaluation]:
@@ -419,7 +434,12 @@ class Study:
     """
 
     def __init__(self, optimizer: Optimizer, executor, budget: Budget, batch_size: int = 1, storage=None,
-                 on_evaluation: Optional[Callable] = None, stop_on_interrupt: bool = False):
+                 on_evaluation: Optional[Callable] = None, stop_on_interrupt: bool = False,
+                 clock_start: Optional[float] = None):
+        #: the ``time.perf_counter()`` from which a time budget counts (None: when :meth:`run` starts); the
+        #: CLI passes the time before it started its worker pool, so that the pool's start-up is spent from
+        #: the budget too
+        self.clock_start = clock_start
         self.optimizer = optimizer
         self.stop_on_interrupt = bool(stop_on_interrupt)
         self.executor = executor
@@ -433,7 +453,7 @@ class Study:
         ``KeyboardInterrupt`` (Ctrl-C; the CLI turns SIGTERM into one) ends it too: the result then holds the
         evaluations told so far (``stopped == "interrupted"``); those stored are replayed by a resume, the
         ones in flight are evaluated again."""
-        t0 = time.perf_counter()
+        t0 = self._start()
         try:
             if getattr(self.optimizer, "independent_asks", False) and hasattr(self.executor, "imap"):
                 return self._run_ahead()
@@ -446,7 +466,7 @@ class Study:
                                stopped="interrupted")
 
     def _run_batches(self) -> StudyResult:
-        t0 = time.perf_counter()
+        t0 = self._start()
         stored = self.storage.load() if self.storage is not None else []
         history: List[Evaluation] = []
         opt = self.optimizer
@@ -460,7 +480,11 @@ class Study:
             if self.budget.evaluations is not None:
                 size = min(size, self.budget.evaluations - n)
             batch: List[Candidate] = []
+            late = False
             for _ in range(size):
+                if batch and n + len(batch) >= len(stored) and self._late(t0):
+                    late = True  # asking itself ran past the deadline (slow asks): nothing more is sent
+                    break
                 c = opt.ask()
                 if c is None:
                     break
@@ -480,26 +504,79 @@ class Study:
                 else:
                     todo.append(i)
             if todo:
-                fresh = self.executor.map([batch[i] for i in todo])
+                fresh = self._evaluate([batch[i] for i in todo], t0)
                 for i, ev in zip(todo, fresh):
                     results[i] = ev
                     if self.storage is not None:
                         self.storage.append(n + i, ev)
+                if len(fresh) < len(todo):  # the deadline passed within the batch: tell what was evaluated
+                    self._dropped += len(todo) - len(fresh)
+                    results = results[:todo[len(fresh)]]
             for i, ev in enumerate(results):
                 opt._observe(ev)
                 history.append(ev)
                 if self.on_evaluation is not None:
                     self.on_evaluation(n + i, ev, opt.best)
+            if self._dropped or late:
+                break
             if len(batch) < size:
                 stopped = "exhausted"
                 break
-        return StudyResult(best=opt.best, history=history, seconds=time.perf_counter() - t0, stopped=stopped)
+        return self._result(opt, history, t0, stopped)
+
+    # -- the time budget ------------------------------------------------------------------------------------
+    # With a time budget the study asks nothing after the deadline, and a batch is streamed to the executor
+    # (``imap``, one candidate per message) so that a candidate not yet sent when the deadline passes is not
+    # evaluated at all: the study ends at the deadline plus the own time of the evaluations already running
+    # (StudyResult.overrun, last_evaluation_seconds). Without ``imap`` the executor gets one candidate at a
+    # time. Evaluation budgets evaluate whole batches, as before.
+    def _late(self, t0: float) -> bool:
+        return self.budget.seconds is not None and time.perf_counter() - t0 >= self.budget.seconds
+
+    def _evaluate(self, candidates: List[Candidate], t0: float) -> List[Evaluation]:
+        """The evaluations of ``candidates`` in order: all of them without a time budget; with one, those sent
+        before the deadline."""
+        if self.budget.seconds is None:
+            return list(self.executor.map(candidates))
+        if not hasattr(self.executor, "imap"):
+            out: List[Evaluation] = []
+            for c in candidates:
+                if self._late(t0):
+                    break
+                out.extend(self._arrived(ev, t0) for ev in self.executor.map([c]))
+            return out
+
+        def until_deadline():
+            for c in candidates:
+                if self._late(t0):
+                    return
+                yield c
+        return [self._arrived(ev, t0) for ev in self.executor.imap(until_deadline(), 1)]
+
+    def _arrived(self, ev: Evaluation, t0: float) -> Evaluation:
+        """Note the own time of an evaluation that arrives after the deadline."""
+        if self._late(t0):
+            self._late_seconds.append(float(ev.seconds))
+        return ev
+
+    def _start(self) -> float:
+        self._dropped = 0
+        self._late_seconds: List[float] = []
+        return time.perf_counter() if self.clock_start is None else float(self.clock_start)
+
+    def _result(self, opt: Optimizer, history: List[Evaluation], t0: float, stopped: str) -> StudyResult:
+        seconds = time.perf_counter() - t0
+        res = StudyResult(best=opt.best, history=history, seconds=seconds, stopped=stopped, dropped=self._dropped)
+        if self.budget.seconds is not None:
+            res.overrun = max(0.0, seconds - self.budget.seconds)
+            res.last_evaluation_seconds = max(self._late_seconds) if self._late_seconds else None
+        return res
 
     def _run_ahead(self) -> StudyResult:
         """The loop for an optimizer with ``independent_asks``: stored evaluations are replayed, then the
         candidates are asked as the executor's stream pulls them (ahead of the tells) and told, stored and
         reported in ask order, as :meth:`run` does."""
-        t0 = time.perf_counter()
+        t0 = self._start()
         stored = self.storage.load() if self.storage is not None else []
         history: List[Evaluation] = []
         opt = self.optimizer
@@ -536,11 +613,13 @@ class Study:
                         return
                     n += 1
                     yield c
-            for ev in self.executor.imap(fresh(), self.batch_size):
+            # a time budget streams one candidate per message: none waits in a chunk past the deadline
+            for ev in self.executor.imap(fresh(), 1 if self.budget.seconds is not None else self.batch_size):
+                self._arrived(ev, t0)
                 if self.storage is not None:
                     self.storage.append(len(history), ev)
                 deliver(ev)
-        return StudyResult(best=opt.best, history=history, seconds=time.perf_counter() - t0, stopped=stopped[0])
+        return self._result(opt, history, t0, stopped[0])
 
 
 def optimize(problem: Problem, plugin: Union[str, Type[Optimizer]], budget: Union[str, Budget], *, seed: int = 0,

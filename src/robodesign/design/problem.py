@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any, Dict, Mapping, Optional, Tuple, Union
@@ -29,6 +30,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.design.search_space import BaseBounds, Candidate, SearchSpace
+from robodesign.design.solve import goal_poses, position_slack
 from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.task_spec import Task
@@ -76,9 +78,10 @@ class Problem:
         cf = cost if isinstance(cost, CostFunction) else parse_cost(cost, path="cost")
         if cf.is_empty:
             raise InputError("empty cost function", path="cost")
+        rules = _rules(rules, module_set)
         if base_bounds is None:
-            base_bounds = _task_base_bounds(task, base_search)
-        space = SearchSpace(module_set, base_bounds=base_bounds, **_rules(rules, module_set))
+            base_bounds = _task_base_bounds(task, base_search, SearchSpace(module_set, **rules))
+        space = SearchSpace(module_set, base_bounds=base_bounds, **rules, **_geometry(task))
         return cls(task=task, module_set=module_set, cost=cf, space=space, task_ref=task_ref,
                    modules_ref=modules_ref)
 
@@ -109,7 +112,9 @@ class Problem:
         if "rules" in changes:
             space_changes.update(_rules(changes.pop("rules"), self.module_set))
         if "base_search" in changes:
-            space_changes["base_bounds"] = _task_base_bounds(self.task, changes.pop("base_search"))
+            space_changes["base_bounds"] = _task_base_bounds(
+                self.task, changes.pop("base_search"),
+                replace(self.space, **{k: v for k, v in space_changes.items() if k in RULES}))
         if "base_bounds" in changes:
             space_changes["base_bounds"] = changes.pop("base_bounds")
         if space_changes:
@@ -146,11 +151,52 @@ class Problem:
         return (_restore, (self.task_ref, self.modules_ref, self.cost, rules, self.base_bounds))
 
 
-def _task_base_bounds(task: Task, base_search: bool) -> BaseBounds:
+def _task_base_bounds(task: Task, base_search: bool, space: Optional[SearchSpace] = None) -> BaseBounds:
     """The base-pose bounds of ``task`` (the one place they are derived): its base-placement tolerance, or
-    with ``base_search=False`` its nominal base pose alone."""
+    with ``base_search=False`` its nominal base pose alone. A task without a basePlacement constraint allows
+    any base pose (as the reference judges it): the bounds are then the region around its goals where a
+    design of ``space`` can stand (:func:`free_base_bounds`)."""
+    if task.base_placement is None and base_search and space is not None:
+        goals = _goal_points(task)
+        if goals:
+            return free_base_bounds(goals, space.max_reach())
     bb = BaseBounds.from_tolerance(task.base_placement)
     return bb if base_search else BaseBounds(nominal=bb.nominal)
+
+
+def free_base_bounds(goals, reach: float) -> BaseBounds:
+    """Bounds for a base that the task leaves free: world x, y, z (offsets from the identity) in the box of
+    the points within ``reach`` + tolerance of every goal (``goals``: (x, y, z, position tolerance) rows;
+    ``reach``: :meth:`SearchSpace.max_reach`, an upper bound of any design's base-to-TCP distance, so no
+    base outside the box reaches every goal), any yaw. When no point is within reach of every goal (no
+    design of the set can do the task), the box of the goals themselves: the reach stage then says how far
+    each design falls short."""
+    G = np.asarray(goals, dtype=float).reshape(-1, 4)
+    r = reach if np.isfinite(reach) else 10.0
+    lo = np.max(G[:, :3] - r - G[:, 3:], axis=0)
+    hi = np.min(G[:, :3] + r + G[:, 3:], axis=0)
+    if np.any(lo > hi):
+        lo, hi = G[:, :3].min(axis=0), G[:, :3].max(axis=0)
+    lo = [float(v) for v in lo] + [-math.pi]
+    hi = [float(v) for v in hi] + [math.pi]
+    return BaseBounds(nominal=np.eye(4), lower=tuple(lo), upper=tuple(hi), tolerance=None)
+
+
+def _goal_points(task: Task) -> Tuple[Tuple[float, float, float, float], ...]:
+    """The world positions of the task's pose goals (every pose of a follow goal) with their position
+    tolerance, as the reach stage tests them."""
+    out = []
+    for g in task.goals:
+        for pose in goal_poses(g):
+            p = np.asarray(pose.nominal, dtype=float)[:3, 3]
+            out.append((float(p[0]), float(p[1]), float(p[2]), float(min(position_slack(pose), 1e3))))
+    return tuple(out)
+
+
+def _geometry(task: Task) -> Dict[str, Any]:
+    """The task geometry a search space samples base poses with: goal positions and static obstacles."""
+    obstacles = tuple(geo for o in task.obstacles if not o.moving for geo in o.collision)
+    return {"goals": _goal_points(task), "obstacles": obstacles}
 
 
 def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:
@@ -222,5 +268,7 @@ def _load_task(ref: str) -> Task:
 def _restore(task_ref: str, modules_ref: str, cost: CostFunction, rules: dict, base_bounds: BaseBounds) -> Problem:
     from robodesign.formats.module_io import load_module_set
     ms = load_module_set(modules_ref)
-    return Problem(task=_load_task(task_ref), module_set=ms, cost=cost,
-                   space=SearchSpace(ms, base_bounds=base_bounds, **rules), task_ref=task_ref, modules_ref=modules_ref)
+    task = _load_task(task_ref)
+    return Problem(task=task, module_set=ms, cost=cost,
+                   space=SearchSpace(ms, base_bounds=base_bounds, **rules, **_geometry(task)), task_ref=task_ref,
+                   modules_ref=modules_ref)

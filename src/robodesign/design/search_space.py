@@ -41,12 +41,16 @@ _CACHE_LIMIT = 1 << 16  # entries of a per-order/per-prefix memo before it is cl
 @dataclass(frozen=True)
 class ModuleInfo:
     """What an optimizer may know about one module: ``kind`` ('base', 'joint', 'link' or 'eef'), ``dof``
-    (actuated joints) and ``mass`` [kg] (sum of its bodies, as in the checker's ``mass`` cost)."""
+    (actuated joints), ``mass`` [kg] (sum of its bodies, as in the checker's ``mass`` cost), ``torque`` [Nm]
+    (the largest torque limit of its actuated joints, 0 without one) and ``span`` [m] (an upper bound of the
+    distance between any two of its connectors, over every joint position: :func:`module_span`)."""
     id: str
     name: str
     kind: str
     dof: int
     mass: float
+    torque: float = 0.0
+    span: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,11 @@ class SearchSpace:
     end_effectors: Optional[Tuple[str, ...]] = None
     exclude: Tuple[str, ...] = ()
     base_bounds: BaseBounds = field(default_factory=BaseBounds)
+    #: the task's goal positions as (x, y, z, position tolerance) in the world (for :meth:`sample_base`,
+    #: :meth:`reach_shortfall`, :meth:`informed_candidate`; empty: no geometric guidance)
+    goals: Tuple[Tuple[float, float, float, float], ...] = ()
+    #: the static obstacles' collision geometry (GeometrySpec); a sampled base position stays out of them
+    obstacles: Tuple = ()
 
     # -- module orders ------------------------------------------------------------------------
     def _allowed(self, mid: str) -> bool:
@@ -328,7 +337,9 @@ class SearchSpace:
         info = cache.get(mid)
         if info is None:
             m = self.module_set[str(mid)]
-            info = cache[mid] = ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass)
+            torque = max((j.limits.torque for j in m.joints if j.actuated), default=0.0)
+            info = cache[mid] = ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass,
+                                           torque=float(torque), span=module_span(m))
         return info
 
     def count_completions(self, prefix: Sequence[str]) -> int:
@@ -387,6 +398,141 @@ class SearchSpace:
         robot = Robot.from_order(self.module_set, tuple(candidate.order), base_pose=self.base_pose(candidate))
         o, R = robot.reach_bound()
         return np.asarray(o, dtype=float), float(R)
+
+    # -- reach, torque and the base pose (geometry-informed search) --------------------------------------
+    def max_reach(self) -> float:
+        """An upper bound [m] of the distance from the base pose to the TCP of every valid order under the
+        rules, at every joint position: the largest sum of :attr:`ModuleInfo.span` along a valid order
+        (dynamic programming over the same states as :meth:`count_orders`). ``inf`` for prismatic joints
+        without finite limits; 0 when the space has no valid order."""
+        memo = self._cache("_memo_longest")
+        if "()" not in memo:
+            best = -math.inf
+            for b in self.base_modules:
+                state, _ = self._root(b)
+                best = max(best, self.module_info(b).span + self._longest(state))
+            memo["()"] = max(0.0, best)
+        return memo["()"]
+
+    def _longest(self, state) -> float:
+        """The largest span sum of the modules that complete a partial order in ``state`` (-inf: none)."""
+        memo = self._cache("_memo_longest")
+        hit = memo.get(state)
+        if hit is not None:
+            return hit
+        best = -math.inf
+        for nxt, st in self._step(state)[2]:
+            span = self.module_info(nxt).span
+            best = max(best, span if st is None else span + self._longest(st))
+        memo[state] = best
+        return best
+
+    def _order_reach(self, order: Tuple[str, ...]) -> Tuple[np.ndarray, float]:
+        """(first-joint position in the frame of the base parameters' origin, reach radius R) of ``order``:
+        the reach stage's bound, from one robot build per order (memoized)."""
+        cache = self._cache("_memo_reach")
+        hit = cache.get(order)
+        if hit is None:
+            from robodesign.model.robot import Robot
+            pose0 = self.base_bounds.pose(tuple(0.0 for _ in self.base_bounds.free))
+            o, R = Robot.from_order(self.module_set, order, base_pose=pose0).reach_bound()
+            o_local = np.linalg.solve(pose0, np.append(np.asarray(o, dtype=float), 1.0))[:3]
+            if len(cache) >= _CACHE_LIMIT:
+                cache.clear()
+            hit = cache[order] = (o_local, float(R))
+        return hit
+
+    def _goal_array(self) -> np.ndarray:
+        return np.asarray(self.goals, dtype=float).reshape(-1, 4)
+
+    def _shortfall(self, order: Tuple[str, ...], params: Sequence[float]) -> float:
+        if not self.goals:
+            return 0.0
+        o_local, R = self._order_reach(order)
+        o = (self.base_bounds.pose(params) @ np.append(o_local, 1.0))[:3]
+        G = self._goal_array()
+        d = np.linalg.norm(G[:, :3] - o, axis=1) - G[:, 3] - R
+        return float(max(0.0, d.max()))
+
+    def reach_shortfall(self, candidate: "Candidate") -> float:
+        """How many metres the farthest goal lies beyond ``candidate``'s reach bound (the reach stage's test:
+        0 when the reach stage passes, > 0 by exactly the amount it fails by; 0 without goals)."""
+        return self._shortfall(tuple(candidate.order), tuple(candidate.base))
+
+    def torque_penalty(self, order: Sequence[str]) -> float:
+        """How far ``order`` is from "strong joints near the base, light ones at the tip": the sum over pairs
+        of joint modules (i before j) of max(0, torque_j − torque_i), in units of the set's largest joint
+        torque limit (0 for a non-increasing torque profile)."""
+        taus = [self.module_info(m).torque for m in order if self.module_info(m).kind == "joint"]
+        top = max(taus, default=0.0)
+        if top <= 0 or not math.isfinite(top):
+            return 0.0
+        return float(sum(max(0.0, b - a) for i, a in enumerate(taus) for b in taus[i + 1:]) / top)
+
+    def _clear(self, params: Sequence[float]) -> bool:
+        """Whether the base position of ``params`` lies outside every primitive obstacle (meshes are left to
+        the pipeline's collision checks)."""
+        if not self.obstacles:
+            return True
+        from robodesign.formats.geometry import contains_point
+        p = self.base_bounds.pose(params)[:3, 3]
+        return not any(g.kind != "mesh" and contains_point(g, p) for g in self.obstacles)
+
+    def sample_base(self, rng, order: Sequence[str], tries: int = 64) -> Tuple[float, ...]:
+        """Base parameters for ``order`` chosen from the goals' geometry: proposals put the first joint at a
+        random point 20–75 % of the order's reach radius R away from a random goal (the yaw, and a fixed x/y/z,
+        drawn in the bounds) or draw the parameters uniformly in the bounds; the first proposal that is valid, whose
+        base position is clear of the obstacles and whose reach bound covers every goal is returned, else the
+        valid proposal with the smallest :meth:`reach_shortfall`. Without free base parameters: ``()``;
+        without goals: :meth:`BaseBounds.sample`."""
+        bb = self.base_bounds
+        free = bb.free
+        if not free:
+            return ()
+        if not self.goals:
+            return bb.sample(rng)
+        order = tuple(str(m) for m in order)
+        o_local, R = self._order_reach(order)
+        G = self._goal_array()
+        inv = np.linalg.inv(bb.nominal)
+        best, best_s = None, math.inf
+        for k in range(tries):
+            if k % 2 == 0:  # geometric: the first joint within R of a goal
+                full = [float(rng.uniform(bb.lower[i], bb.upper[i])) for i in range(4)]
+                g = G[int(rng.integers(len(G))), :3]
+                v = rng.normal(size=3)
+                # at 20–75 % of the reach: a stretched arm rarely holds a pose's orientation (or its weight)
+                v *= rng.uniform(0.2, 0.75) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
+                o_n = (inv @ np.append(g + v, 1.0))[:3]  # the first joint in the nominal frame
+                t = o_n - rot_z(full[3]) @ o_local
+                for i in range(3):
+                    if i in free:
+                        full[i] = float(t[i])
+                params = tuple(full[i] for i in free)
+            else:
+                params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
+            if not bb.valid(params) or not self._clear(params):
+                continue
+            s = self._shortfall(order, params)
+            if s == 0.0:
+                return params
+            if s < best_s:
+                best, best_s = params, s
+        return best if best is not None else bb.sample(rng)
+
+    def informed_candidate(self, rng, orders: int = 8) -> "Candidate":
+        """A candidate that knows reach and torque: ``orders`` random valid orders, each with a base from
+        :meth:`sample_base`; the one whose reach bound covers the goals (smallest :meth:`reach_shortfall`)
+        and, among those, whose joints are strongest near the base (smallest :meth:`torque_penalty`) wins
+        (ties: the first drawn). With ``orders=1`` the order is uniformly random."""
+        best, best_key = None, None
+        for _ in range(max(1, int(orders))):
+            order = self.random_order(rng)
+            base = self.sample_base(rng, order)
+            key = (self._shortfall(order, base), self.torque_penalty(order))
+            if best_key is None or key < best_key:
+                best, best_key = Candidate(order, base), key
+        return best
 
     def validate_order(self, order: Sequence[str]) -> Optional[str]:
         """None if ``order`` is a complete valid design under the rules, else the reason."""
@@ -543,6 +689,47 @@ class SearchSpace:
         return Candidate(tuple(order), tuple(0.0 if self.base_bounds.lower[i] <= 0 <= self.base_bounds.upper[i]
                                              else 0.5 * (self.base_bounds.lower[i] + self.base_bounds.upper[i])
                                              for i in self.base_bounds.free))
+
+
+def module_span(module) -> float:
+    """An upper bound [m] of the distance between any two connectors of ``module`` (a base module: also its
+    body frame's origin), at every position of its joints: along the path of bodies between them, the
+    distances from where the path enters a body (a connector or a joint origin) to where it leaves it, plus
+    the stroke of each prismatic joint on the path (a revolute joint keeps its origin fixed in both bodies,
+    so these segments bound the distance by the triangle inequality). ``inf`` for an unbounded stroke."""
+    joints = [j for j in module.joints]
+    adj: dict = {}
+    for j in joints:
+        in_parent = np.asarray(j.pose_parent, dtype=float)[:3, 3]
+        Tc = np.asarray(j.pose_child, dtype=float)
+        in_child = -Tc[:3, :3].T @ Tc[:3, 3]  # the joint origin in the child body's frame
+        stroke = 0.0
+        if j.type == "prismatic":
+            lo, hi = j.limits.lower, j.limits.upper
+            stroke = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
+        adj.setdefault(j.parent, []).append((j.child, in_parent, in_child, stroke))
+        adj.setdefault(j.child, []).append((j.parent, in_child, in_parent, stroke))
+    points = [(c.body_id, np.asarray(c.pose, dtype=float)[:3, 3]) for c in module.connectors]
+    if module.kind == "base":
+        points += [(b.id, np.zeros(3)) for b in module.bodies]
+    best = 0.0
+    for k, (body, p) in enumerate(points):
+        # depth-first over the body tree: (body, entry point in it, length so far)
+        stack, seen = [(body, p, 0.0)], {body}
+        dist = {body: [(p, 0.0)]}
+        while stack:
+            b, entry, length = stack.pop()
+            for nb, out_here, in_next, stroke in adj.get(b, []):
+                if nb in seen:
+                    continue
+                seen.add(nb)
+                ln = length + float(np.linalg.norm(out_here - entry)) + stroke
+                dist.setdefault(nb, []).append((in_next, ln))
+                stack.append((nb, in_next, ln))
+        for b2, q in points[k + 1:]:
+            for entry, ln in dist.get(b2, []):
+                best = max(best, ln + float(np.linalg.norm(q - entry)))
+    return best
 
 
 def _block(blocked: frozenset, blocks: dict, mid: str):

@@ -81,6 +81,10 @@ class SolveResult:
     solution: Optional[Solution] = None
     verdict: Optional[Verdict] = None
     goals_reached: int = 0  # goals with an IK solution (how far the ik stage got)
+    # how far the failed stage missed, in its own unit: metres beyond the reach bound (reach: the farthest
+    # goal), Nm over the limit (static_torque: the smallest excess among the failing goal's IK solutions);
+    # None when the stage passed or does not measure it
+    shortfall: Optional[float] = None
     num_goals: int = 0
     task: Optional[Task] = field(default=None, repr=False, compare=False)  # what was solved, for `quantities`
     module_set: Optional[ModuleSet] = field(default=None, repr=False, compare=False)
@@ -223,11 +227,17 @@ class _Pipeline:
 
     def reach(self) -> None:
         o, R = self.robot.reach_bound()
+        worst = None  # (metres beyond the reach bound, goal, distance) of the farthest goal
         for g in self.task.goals:
             for pose in goal_poses(g):
                 d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
-                if d > R + _position_slack(pose):
-                    raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
+                miss = d - R - position_slack(pose)
+                if miss > 0 and (worst is None or miss > worst[0]):
+                    worst = (miss, g, d)
+        if worst is not None:
+            miss, g, d = worst
+            self.res.shortfall = miss
+            raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
 
     def ik(self) -> None:
         self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost,
@@ -302,7 +312,8 @@ def goal_poses(g) -> List[ToleratedPose]:
     return []
 
 
-def _position_slack(pose: ToleratedPose) -> float:
+def position_slack(pose: ToleratedPose) -> float:
+    """How far [m] a goal position may lie from the pose's nominal position (its largest position bound)."""
     s = 0.0
     for name, (lo, hi), _ in pose.entries:
         if name in ("r_sph", "r_cyl"):
@@ -381,16 +392,19 @@ class GoalPlanner:
         r = self.robot
         limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
         for gid, sols in self.ik.items():
-            ok = [q for q in sols if np.all(np.abs(r.gravity_torque(q)) <= limit)]
+            taus = [np.abs(r.gravity_torque(q)) for q in sols]
+            ok = [q for q, tau in zip(sols, taus) if np.all(tau <= limit)]
             if not ok:
-                tau = np.abs(r.gravity_torque(sols[0]))
+                tau = taus[0]
                 j = int(np.argmax(tau / limit))
+                self.res.shortfall = min(float(np.max(t - limit)) for t in taus)
                 raise _Fail(f"goal {gid}: holding the pose needs {tau[j]:.1f} Nm at joint {j} (limit {limit[j]:.1f})")
             self.ik[gid] = ok
         for gid, sols in self.follow_ik.items():
             for i, q in enumerate(sols):
                 tau = np.abs(r.gravity_torque(q))
                 if np.any(tau > limit):
+                    self.res.shortfall = float(np.max(tau - limit))
                     j = int(np.argmax(tau / limit))
                     raise _Fail(f"follow goal {gid}, pose {i}: static torque {tau[j]:.1f} Nm > {limit[j]:.1f} at joint {j}")
 
