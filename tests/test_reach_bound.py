@@ -17,7 +17,8 @@ from conftest import IMPROV, PRIMITIVES, toy_module_set
 
 from robodesign.design.diagnosis import diagnose, torque_shortfall
 from robodesign.design.problem import Problem
-from robodesign.design.reach import connector_distance_bound, distance_to_region, module_extent, reach_proof, set_reach
+from robodesign.design.reach import distance_to_region, reach_proof, set_reach
+from robodesign.model.extent import connector_distance_bound, module_extent
 from robodesign.design.search_space import SearchSpace
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task

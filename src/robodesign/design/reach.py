@@ -1,7 +1,7 @@
 """How far the arms of a module set can reach: an admissible bound over every valid module order, and the
 proof that a task's goals lie beyond it.
 
-**The set's reach bound** (:func:`set_reach`). For every module, :func:`module_extent` bounds the distance
+**The set's reach bound** (:func:`set_reach`). For every module, :func:`~robodesign.model.extent.module_extent` bounds the distance
 between the connector it is attached by and the connector the next module attaches to (the TCP for an end
 effector, the base connector for a base), over every joint configuration: a rigid path is its length; a path
 over one revolute joint is exactly ``√(h² + (r_a + r_b)²)`` (h: the two points' distance along the axis, r_a,
@@ -30,99 +30,9 @@ import numpy as np
 
 from robodesign.design.search_space import SearchSpace
 from robodesign.design.solve import goal_poses
-from robodesign.formats.module_spec import Module, ModuleSet
+from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.task_spec import Task
 from robodesign.formats.tolerance import ToleratedPose
-
-
-# -- per module --------------------------------------------------------------------------------------------
-def _body_frames(m: Module) -> Dict[str, np.ndarray]:
-    """Every body's frame in the first body's frame at q = 0 (joints form a tree over the bodies)."""
-    frames = {m.bodies[0].id: np.eye(4)}
-    pending = list(m.joints)
-    while pending:
-        progressed = False
-        for j in list(pending):
-            if j.parent in frames:
-                frames[j.child] = frames[j.parent] @ j.pose_parent @ j.pose_child
-            elif j.child in frames:
-                frames[j.parent] = frames[j.child] @ np.linalg.inv(j.pose_parent @ j.pose_child)
-            else:
-                continue
-            pending.remove(j)
-            progressed = True
-        if not progressed:  # bodies not joined to the first one: they cannot be on a path
-            break
-    return frames
-
-
-def _joint_path(m: Module, a: str, b: str) -> Optional[list]:
-    """The joints on the path from body ``a`` to body ``b`` (breadth-first over the joint tree)."""
-    prev: Dict[str, Tuple[Optional[str], object]] = {a: (None, None)}
-    queue = [a]
-    while queue:
-        u = queue.pop(0)
-        if u == b:
-            break
-        for j in m.joints:
-            for x, y in ((j.parent, j.child), (j.child, j.parent)):
-                if x == u and y not in prev:
-                    prev[y] = (u, j)
-                    queue.append(y)
-    if b not in prev:
-        return None
-    path, u = [], b
-    while prev[u][0] is not None:
-        u, j = prev[u]
-        path.append(j)
-    return path[::-1]
-
-
-def _stroke(j) -> float:
-    lo, hi = j.limits.lower, j.limits.upper
-    return max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
-
-
-def connector_distance_bound(m: Module, con_a: str, con_b: str) -> float:
-    """The largest distance between connectors ``con_a`` and ``con_b`` of module ``m`` over every joint
-    configuration (exact for zero or one revolute joint between them, an upper bound otherwise)."""
-    frames = _body_frames(m)
-    ca, cb = m.connector(con_a), m.connector(con_b)
-    if ca.body_id not in frames or cb.body_id not in frames:
-        return math.inf
-    pa = (frames[ca.body_id] @ ca.pose)[:3, 3]
-    pb = (frames[cb.body_id] @ cb.pose)[:3, 3]
-    path = _joint_path(m, ca.body_id, cb.body_id)
-    if path is None:
-        return math.inf
-    if not path:
-        return float(np.linalg.norm(pb - pa))
-    moving = [j for j in path if j.type != "fixed"]
-    if len(moving) == 1 and moving[0].type == "revolute":
-        j = moving[0]
-        # the joint frame at q = 0, seen from the side of its parent body
-        J = frames[j.parent] @ j.pose_parent
-        Ji = np.linalg.inv(J)
-        qa, qb = Ji[:3, :3] @ pa + Ji[:3, 3], Ji[:3, :3] @ pb + Ji[:3, 3]
-        return float(math.hypot(qa[2] - qb[2], math.hypot(qa[0], qa[1]) + math.hypot(qb[0], qb[1])))
-    # several joints: joint origins (on their axes) keep their distances along the path
-    pts = [pa] + [(frames[j.parent] @ j.pose_parent)[:3, 3] for j in path] + [pb]
-    d = sum(float(np.linalg.norm(pts[i + 1] - pts[i])) for i in range(len(pts) - 1))
-    return d + sum(_stroke(j) for j in path if j.type == "prismatic")
-
-
-def module_extent(m: Module) -> float:
-    """An upper bound of the distance a module spans in a serial chain: base connector → any other connector
-    (a base), any connector → the TCP (an end effector), else the largest distance between any two of its
-    connectors; over every joint configuration."""
-    cons = m.connectors
-    if m.is_base:
-        pairs = [(a.id, b.id) for a in cons if a.type == "base" for b in cons if b.type != "base"]
-    elif m.is_end_effector:
-        pairs = [(a.id, b.id) for a in cons if a.type != "eef" for b in cons if b.type == "eef"]
-    else:
-        pairs = [(a.id, b.id) for i, a in enumerate(cons) for b in cons[i + 1:]]
-    return max((connector_distance_bound(m, a, b) for a, b in pairs), default=0.0)
 
 
 # -- per module set ------------------------------------------------------------------------------------------
@@ -136,34 +46,10 @@ class SetReach:
 
 
 def set_reach(space: SearchSpace) -> SetReach:
-    """The longest arm ``space`` allows: the largest sum of :func:`module_extent` over its valid orders."""
-    ms = space.module_set
-    ext = {m.id: module_extent(m) for m in ms}
-    memo: Dict[tuple, Tuple[float, Tuple[str, ...]]] = {}
-
-    def best(state) -> Tuple[float, Tuple[str, ...]]:
-        hit = memo.get(state)
-        if hit is not None:
-            return hit
-        out: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
-        for nxt, st in space._step(state)[2]:  # (module, state after it or None when it completes the order)
-            if st is None:
-                cand = (ext[nxt], (nxt,))
-            else:
-                d, tail = best(st)
-                cand = (ext[nxt] + d, (nxt,) + tail)
-            if cand[0] > out[0]:
-                out = cand
-        memo[state] = out
-        return out
-
-    top: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
-    for b in space.base_modules:
-        state, _ = space._root(b)
-        d, tail = best(state)
-        if ext[b] + d > top[0]:
-            top = (ext[b] + d, (b,) + tail)
-    return SetReach(bound=float(top[0]), order=top[1], extents=ext)
+    """The longest arm ``space`` allows: the largest sum of :func:`module_extent` over its valid orders
+    (:meth:`SearchSpace.longest_order`, the dynamic programme behind :meth:`SearchSpace.max_reach`)."""
+    bound, order = space.longest_order()
+    return SetReach(bound=bound, order=order, extents={m.id: space.module_info(m.id).span for m in space.module_set})
 
 
 def module_set_reach(ms: ModuleSet, **rules) -> SetReach:

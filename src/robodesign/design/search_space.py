@@ -31,6 +31,7 @@ from robodesign.core.errors import AssemblyError, InputError
 from robodesign.core.spatial import homogeneous, rot_z
 from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
 from robodesign.formats.module_spec import ModuleSet
+from robodesign.model.extent import module_extent
 
 BASE_PARAMS = ("x", "y", "z", "yaw")
 _NO_MODULE = object()  # free connectors of a prefix whose first module is not in the module set
@@ -43,7 +44,7 @@ class ModuleInfo:
     """What an optimizer may know about one module: ``kind`` ('base', 'joint', 'link' or 'eef'), ``dof``
     (actuated joints), ``mass`` [kg] (sum of its bodies, as in the checker's ``mass`` cost), ``torque`` [Nm]
     (the largest torque limit of its actuated joints, 0 without one) and ``span`` [m] (an upper bound of the
-    distance between any two of its connectors, over every joint position: :func:`module_span`)."""
+    distance it spans in a chain, over every joint position: :func:`~robodesign.model.extent.module_extent`)."""
     id: str
     name: str
     kind: str
@@ -339,7 +340,7 @@ class SearchSpace:
             m = self.module_set[str(mid)]
             torque = max((j.limits.torque for j in m.joints if j.actuated), default=0.0)
             info = cache[mid] = ModuleInfo(id=m.id, name=m.name, kind=m.kind, dof=m.dof, mass=m.mass,
-                                           torque=float(torque), span=module_span(m))
+                                           torque=float(torque), span=module_extent(m))
         return info
 
     def count_completions(self, prefix: Sequence[str]) -> int:
@@ -405,25 +406,38 @@ class SearchSpace:
         rules, at every joint position: the largest sum of :attr:`ModuleInfo.span` along a valid order
         (dynamic programming over the same states as :meth:`count_orders`). ``inf`` for prismatic joints
         without finite limits; 0 when the space has no valid order."""
+        return self.longest_order()[0]
+
+    def longest_order(self) -> Tuple[float, Tuple[str, ...]]:
+        """(:meth:`max_reach`, an order whose spans sum to it: the longest arm; ``()`` without a valid order)."""
         memo = self._cache("_memo_longest")
         if "()" not in memo:
-            best = -math.inf
+            best: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
             for b in self.base_modules:
                 state, _ = self._root(b)
-                best = max(best, self.module_info(b).span + self._longest(state))
-            memo["()"] = max(0.0, best)
+                length, tail = self._longest(state)
+                if self.module_info(b).span + length > best[0]:
+                    best = (self.module_info(b).span + length, (b,) + tail)
+            memo["()"] = (max(0.0, best[0]), best[1])
         return memo["()"]
 
-    def _longest(self, state) -> float:
-        """The largest span sum of the modules that complete a partial order in ``state`` (-inf: none)."""
+    def _longest(self, state) -> Tuple[float, Tuple[str, ...]]:
+        """The largest span sum of the modules that complete a partial order in ``state`` (-inf: none), and
+        those modules."""
         memo = self._cache("_memo_longest")
         hit = memo.get(state)
         if hit is not None:
             return hit
-        best = -math.inf
+        best: Tuple[float, Tuple[str, ...]] = (-math.inf, ())
         for nxt, st in self._step(state)[2]:
             span = self.module_info(nxt).span
-            best = max(best, span if st is None else span + self._longest(st))
+            if st is None:
+                cand = (span, (nxt,))
+            else:
+                length, tail = self._longest(st)
+                cand = (span + length, (nxt,) + tail)
+            if cand[0] > best[0]:
+                best = cand
         memo[state] = best
         return best
 
@@ -689,47 +703,6 @@ class SearchSpace:
         return Candidate(tuple(order), tuple(0.0 if self.base_bounds.lower[i] <= 0 <= self.base_bounds.upper[i]
                                              else 0.5 * (self.base_bounds.lower[i] + self.base_bounds.upper[i])
                                              for i in self.base_bounds.free))
-
-
-def module_span(module) -> float:
-    """An upper bound [m] of the distance between any two connectors of ``module`` (a base module: also its
-    body frame's origin), at every position of its joints: along the path of bodies between them, the
-    distances from where the path enters a body (a connector or a joint origin) to where it leaves it, plus
-    the stroke of each prismatic joint on the path (a revolute joint keeps its origin fixed in both bodies,
-    so these segments bound the distance by the triangle inequality). ``inf`` for an unbounded stroke."""
-    joints = [j for j in module.joints]
-    adj: dict = {}
-    for j in joints:
-        in_parent = np.asarray(j.pose_parent, dtype=float)[:3, 3]
-        Tc = np.asarray(j.pose_child, dtype=float)
-        in_child = -Tc[:3, :3].T @ Tc[:3, 3]  # the joint origin in the child body's frame
-        stroke = 0.0
-        if j.type == "prismatic":
-            lo, hi = j.limits.lower, j.limits.upper
-            stroke = max(abs(lo), abs(hi)) if math.isfinite(lo) and math.isfinite(hi) else math.inf
-        adj.setdefault(j.parent, []).append((j.child, in_parent, in_child, stroke))
-        adj.setdefault(j.child, []).append((j.parent, in_child, in_parent, stroke))
-    points = [(c.body_id, np.asarray(c.pose, dtype=float)[:3, 3]) for c in module.connectors]
-    if module.kind == "base":
-        points += [(b.id, np.zeros(3)) for b in module.bodies]
-    best = 0.0
-    for k, (body, p) in enumerate(points):
-        # depth-first over the body tree: (body, entry point in it, length so far)
-        stack, seen = [(body, p, 0.0)], {body}
-        dist = {body: [(p, 0.0)]}
-        while stack:
-            b, entry, length = stack.pop()
-            for nb, out_here, in_next, stroke in adj.get(b, []):
-                if nb in seen:
-                    continue
-                seen.add(nb)
-                ln = length + float(np.linalg.norm(out_here - entry)) + stroke
-                dist.setdefault(nb, []).append((in_next, ln))
-                stack.append((nb, in_next, ln))
-        for b2, q in points[k + 1:]:
-            for entry, ln in dist.get(b2, []):
-                best = max(best, ln + float(np.linalg.norm(q - entry)))
-    return best
 
 
 def _block(blocked: frozenset, blocks: dict, mid: str):
