@@ -170,4 +170,7 @@ def serve(app, host: str, port: int, **settings) -> None:
     config = server_config(app, host, port, **settings)
     config.load()  # uvicorn configures its loggers here: the filters go on after
     install_log_limits()
-    uvicorn.Server(config).run()
+    try:
+        uvicorn.Server(config).run()
+    except KeyboardInterrupt:  # uvicorn re-raises the Ctrl-C it shut down on: a requested stop, exit 0
+        pass
