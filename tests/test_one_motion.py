@@ -140,7 +140,7 @@ def test_random_reference_style_motions_have_a_witness():
                                            float(rng.uniform(0.3, 3)), t_acc, dt)
         v, fail = witness_velocities(t, q, dq, amax, amax * dt / 2)
         assert fail is None
-        assert np.all(StepMotion.through(t, q, v).peak_acceleration <= amax * (1 + 1e-6))
+        assert np.all(StepMotion.through(t, q, v).peak_acceleration <= amax * (1 + 2e-6))
         worst_raw = max(worst_raw, float(np.max(StepMotion.through(t, q, dq).peak_acceleration / amax)))
     assert worst_raw > 1.1  # without the slack these honest files would fail
 
@@ -216,7 +216,7 @@ def test_no_too_fast_motion_fits_in_the_slack():
         return hi
 
     t, q, v = optimal(T_star)
-    assert needed(t, q, v) == pytest.approx(A, rel=1e-6)
+    assert needed(t, q, v) == pytest.approx(A, rel=1e-5)
     t, q, v = optimal(0.9 * T_star)
     floor = A / 0.81  # any motion over 0.9 T* needs A / 0.9²
     rng = np.random.default_rng(3)
@@ -242,5 +242,5 @@ def test_no_too_fast_motion_fits_in_the_slack():
         return needed(t, qq, vv)
     res = minimize(f, x0, method="Nelder-Mead", options={"maxfev": 150, "initial_simplex": None})
     best = min(best, float(res.fun))
-    assert best >= floor * (1 - 1e-6), best  # nothing faster than physics gets through
+    assert best >= floor * (1 - 1e-5), best  # nothing faster than physics gets through
     assert best < 1.3 * floor  # and the search came close to the bound

@@ -29,7 +29,7 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-ACC_RTOL = 1e-9  # relative slack on the acceleration limit (rounding)
+ACC_RTOL = 1e-6  # relative slack on the acceleration (rounding: a motion exactly at the limit has a one-point witness)
 
 
 def least_acceleration(h, dq_, v0, v1) -> np.ndarray:
@@ -142,6 +142,9 @@ def reachable(lo, hi, D, h, A) -> Tuple[np.ndarray, np.ndarray]:
     velocity with its maximum at D/h − Ah/2, the smallest a convex one with its minimum at D/h + Ah/2."""
     m = D / h
     lo_f, hi_f = np.maximum(lo, m - A * h / 2), np.minimum(hi, m + A * h / 2)  # start velocities that work
+    tol = 1e-9 * (A * h + np.abs(m))  # rounding: the two can meet in a single point
+    touch = (lo_f > hi_f) & (lo_f <= hi_f + tol)
+    lo_f, hi_f = np.where(touch, hi_f, lo_f), np.where(touch, lo_f, hi_f)
     empty = lo_f > hi_f
     # braking (accelerating) all the way gives the smallest (largest) final velocity of all: m ∓ Ah/2
     vmin = np.where((lo_f <= m + A * h / 2) & (m + A * h / 2 <= hi_f), m - A * h / 2,
@@ -163,7 +166,7 @@ def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.
     if n < 2 or np.all(least_acceleration(np.diff(t)[:, None], np.diff(q, axis=0), dq[:-1], dq[1:]) <= A):
         return dq.copy(), None  # the file's own velocities work (every robodesign solution): no search
     sl = np.where(dq == 0, 0.0, np.broadcast_to(np.asarray(slack, dtype=float), dq.shape))
-    eps = 1e-12 * (1 + np.abs(dq))
+    eps = 1e-12 * (1 + np.abs(dq)) + 1e-6 * sl  # rounding: a true velocity can sit exactly at the slack's edge
     lo_b, hi_b = dq - sl - eps, dq + sl + eps
     lo, hi = np.empty_like(dq), np.empty_like(dq)
     lo[0], hi[0] = lo_b[0], hi_b[0]
@@ -182,7 +185,14 @@ def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.
     v[-1] = np.clip(dq[-1], lo[-1], hi[-1])
     for k in range(n - 2, -1, -1):
         rlo, rhi = _v1_range(-v[k + 1], -D[k], h[k], A)  # time-reversed: start velocities that reach v[k+1]
+        # v[k+1] at an end of what the step can reach (constant ±A over the step): one start velocity, which
+        # rounding can lose: the constant-acceleration one, 2·Δq/h − v[k+1]
+        single = -(2 * D[k] / h[k] - v[k + 1])
+        rlo, rhi = np.where(np.isnan(rlo), single, rlo), np.where(np.isnan(rhi), single, rhi)
         a, b = np.maximum(-rhi, lo[k]), np.minimum(-rlo, hi[k])
-        v[k] = np.where(a <= b, np.clip(dq[k], a, b), np.clip(dq[k], lo[k], hi[k]))
+        # rounding can make the intersection empty by a hair: then stay consistent with step k (the back range)
+        v[k] = np.where(a <= b, np.clip(dq[k], a, b),
+                        np.where(np.isnan(rlo), np.clip(dq[k], lo[k], hi[k]), np.clip(np.clip(dq[k], lo[k], hi[k]),
+                                                                                    -rhi, -rlo)))
     v[:, fail >= 0] = dq[:, fail >= 0]
     return v, (fail if np.any(fail >= 0) else None)
