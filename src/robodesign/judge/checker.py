@@ -307,6 +307,12 @@ def _between_sample_violations(name, extremes, bound, tq: TrajectoryQuantities, 
     return out
 
 
+def _new_steps(at_samples: List[Violation], between: List[Violation]) -> List[Violation]:
+    """``between`` without the steps that start or end at a sample already in ``at_samples`` (same joint)."""
+    seen = {(v.sample, v.joint) for v in at_samples if v.joint is not None}
+    return [v for v in between if v.joint is None or not ({(v.sample, v.joint), (v.sample + 1, v.joint)} & seen)]
+
+
 def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, settings: CheckSettings) -> List[Violation]:
     """Violations of ``c`` over the samples of ``window`` ((k0, k1) inclusive; None: the whole trajectory)."""
     r = tq.robot
@@ -319,12 +325,13 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
         if "q" in c.parts:
             out += _limit_violations("joint.q", tq.q, r.q_upper, tq, k0, k1, limit, lower=r.q_lower, abs_tol=Q_ATOL)
             if m is not None:
-                out += _between_sample_violations("joint.q", m.position_extremes(), r.q_upper, tq, k0, k1, limit,
-                                                  lower=r.q_lower)
+                out += _new_steps(out, _between_sample_violations("joint.q", m.position_extremes(), r.q_upper, tq,
+                                                                  k0, k1, limit, lower=r.q_lower))
         if "dq" in c.parts:
             out += _limit_violations("joint.dq", tq.dq, r.dq_max, tq, k0, k1, limit)
             if m is not None:
-                out += _between_sample_violations("joint.dq", m.velocity_extremes(), r.dq_max, tq, k0, k1, limit)
+                out += _new_steps(out, _between_sample_violations("joint.dq", m.velocity_extremes(), r.dq_max, tq,
+                                                                  k0, k1, limit))
         if "ddq" in c.parts:
             out += _limit_violations("joint.ddq", tq.ddq, r.ddq_max, tq, k0, k1, limit)
         if "tau" in c.parts:
