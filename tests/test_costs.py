@@ -80,7 +80,7 @@ def test_descriptor_round_trip(text):
 def test_descriptor_writer_rule():
     assert parse_cost("mechEnergy_1,cyc_0.2").descriptor() == "cyc_0.2,mechEnergy"      # sorted, weight 1 dropped
     assert parse_cost("fulfillN_-1").descriptor() == "fulfillN_-1.0"                    # reference float format
-    assert parse_cost("cyc_1.00001").descriptor() == "cyc"                              # rounds to 1 (4 decimals)
+    assert parse_cost("cyc_1.00001").descriptor() == "cyc_1.00001"                      # exact (issue 22, case 4)
     assert parse_cost("cyc_0.123456789").descriptor() == "cyc_0.123456789"              # full precision kept
     assert parse_cost("[(cyc|0.2),(mechEnergy|1)]").paper_notation() == "[(cyc|0.2),(mechEnergy|1)]"
 
@@ -228,3 +228,21 @@ def test_cost_function_arithmetic():
     assert c.descriptor() == "cyc,mechEnergy_0.2"
     with pytest.raises(InputError, match="unknown cost 'nope'"):
         CostFunction((("nope", 1.0),))
+
+
+def test_copycat_weight_does_not_land_on_the_cyc_board():
+    """Issue 22, case 4: cyc_0.99995 used to be written 'cyc' (4-decimal rounding) and was ranked on the cyc
+    board with 0.99995·t. The descriptor now keeps the exact weight, and parses back to the same cost."""
+    c = parse_cost("cyc_0.99995")
+    assert c.descriptor() == "cyc_0.99995" and c.descriptor() != parse_cost("cyc").descriptor()
+    assert parse_cost(c.descriptor()).weight("cyc") == 0.99995
+    for w in (0.99995, 1 + 2 ** -52, 0.1 + 0.2, 1e-7, 123456.789):
+        assert parse_cost(parse_cost(f"cyc_{w!r}").descriptor()).weight("cyc") == w
+
+
+@pytest.mark.parametrize("text", ["cyc_1e308", "cyc,fulfillN_-1e308", "mechEnergy_2e6", "[(cyc|1e7)]"])
+def test_overflowing_weights_are_refused(text):
+    """Issue 22, case 5: weights that overflow a cost to ±inf are bad input, naming the term."""
+    with pytest.raises(InputError, match="larger than 1e\\+06"):
+        parse_cost(text, file="s.json", path=["costFunction"])
+    assert parse_cost("cyc_1e6").weight("cyc") == 1e6  # the bound itself is accepted

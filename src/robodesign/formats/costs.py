@@ -35,10 +35,12 @@ unlike the reference, non-negative, except on rewards (``fulfillN``, ``fulfillP`
 reference's way to reward achieved goals): a cost such as ``cyc_-1`` would rank the slowest robot first.
 Terms with weight 0 are not evaluated (so they never trigger a torque computation).
 
-Writer rule (``CostFunction.descriptor``), as the reference: each term is ``abbr`` if round(w, 4) == 1, else
-``abbr_<round(w, 4)>`` in Python float notation (``cyc_0.2``, ``fulfillN_-1.0``), the strings are sorted and
-joined by ``,``. Exception (ours): a weight that 4 decimals cannot represent is written in full precision,
-so that ``parse_cost(c.descriptor()) == c`` always holds.
+Writer rule (``CostFunction.descriptor``): each term is ``abbr`` if its weight is exactly 1, else
+``abbr_<w>`` with the shortest Python float text that reads back as exactly w (``cyc_0.2``, ``fulfillN_-1.0``,
+``cyc_0.99995``), the strings are sorted and joined by ``,``. The reference rounds weights to 4 decimals
+(``cyc_0.99995`` would be written ``cyc``); robodesign keeps them exact, so ``parse_cost(c.descriptor()) == c``
+always holds and a leaderboard keyed by the descriptor never mixes different weights. Weights larger than
+``MAX_WEIGHT`` = 1e6 in magnitude are refused (bad input): they would overflow a cost to ±inf.
 
 Torques are lazy: :class:`CostContext` accepts ``tau``/``tau_link`` as arrays or zero-argument callables
 and calls them at most once, only when a term needs them.
@@ -190,6 +192,7 @@ class CostTerm:
 _REGISTRY: Dict[str, CostTerm] = {}
 _COMPOUNDS: Dict[str, Tuple[Tuple[str, float], ...]] = {}
 _COMPOUND_DESCRIPTIONS: Dict[str, str] = {}
+MAX_WEIGHT = 1e6  # |weight| above this is refused: cyc_1e308 or fulfillN_-1e308 would overflow to ±inf
 _NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
 _NUMBER_RE = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
 
@@ -198,6 +201,8 @@ def _weight_problem(name: str, w: float) -> Optional[str]:
     """Why ``w`` is not an acceptable weight of term ``name`` (None if it is)."""
     if not math.isfinite(w):
         return f"weight {w} of cost {name!r} must be finite"
+    if abs(w) > MAX_WEIGHT:
+        return f"weight {w:g} of cost {name!r} is larger than {MAX_WEIGHT:g} in magnitude (it would overflow costs)"
     if w < 0 and not _REGISTRY[name].reward:
         rewards = ", ".join(n for n, t in _REGISTRY.items() if t.reward)
         return (f"weight {w:g} of cost {name!r} is negative: costs are minimised, so only rewards ({rewards}) "
@@ -286,9 +291,7 @@ register_compound("Whit2", (("numJ", 0.025), ("mass", 0.1)), "Whit2 = 0.025·num
 # CostFunction
 # ---------------------------------------------------------------------------------------------------------
 def _format_weight(w: float) -> str:
-    r = round(w, 4)
-    if abs(r - w) <= 1e-12 * max(1.0, abs(w)):
-        return str(float(r))
+    """The shortest text that reads back as exactly ``w`` (``0.2``, ``-1.0``, ``0.99995``)."""
     return repr(float(w))
 
 
@@ -324,7 +327,7 @@ class CostFunction:
         """CoBRA ``costFunction`` string (the reference writer rule, see module docstring)."""
         parts = []
         for n, w in self.terms:
-            parts.append(n if round(w, 4) == 1 else f"{n}_{_format_weight(w)}")
+            parts.append(n if w == 1 else f"{n}_{_format_weight(w)}")
         return ",".join(sorted(parts))
 
     def paper_notation(self) -> str:

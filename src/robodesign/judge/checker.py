@@ -4,11 +4,13 @@
 constraint or goal, at which time/sample, the value and the bound) and every cost. The same code
 judges uploads, solver output and optimizer candidates. Semantics (docs/checker.md):
 
-* The samples must describe one motion: q the integral of dq and dq of ddq over every step, within the
-  tolerances of :func:`robodesign.judge.quantities.step_residuals` (the reference does not check this).
-* Per-sample constraints are checked at every sample. Collisions and joint limits are checked *between*
-  samples too: the motion between samples is the linear interpolation of q (and of dq), collisions are
-  certified by :mod:`robodesign.model.sweep`, velocity and acceleration are the step's Δq/h and Δdq/h.
+* ``t`` starts at 0 and no step is longer than the task's time step (the reference's "sampled every
+  timeStepSize", applied to the whole trajectory).
+* The samples describe one motion (:mod:`robodesign.judge.motion`): between two samples each joint follows
+  the least-acceleration motion through its q and velocity, which must stay within the joint's acceleration
+  limit. Positions, velocities and collisions are checked on that motion between the samples too
+  (collisions certified by :mod:`robodesign.model.sweep`), torques at every sample with the file's ddq and
+  with the motion's acceleration just before and after it.
 * ``ddq`` limits are enforced (the reference never checks them).
 * Torques are drivetrain torques τ = RNEA + k²I_m q̈ + f_v q̇ + f_c σ(q̇) under the task's gravity,
   with the wrench of a follow goal applied at the TCP during that goal.
@@ -47,12 +49,15 @@ from robodesign.formats.task_spec import (
     Task,
     TaskConstraint,
 )
+from robodesign.judge.motion import StepMotion
 from robodesign.judge.quantities import TrajectoryQuantities, find_time_index
 from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
 from robodesign.model.sweep import CollisionEvent, SweepChecker
 
 LIMIT_RTOL = 1e-9  # relative slack on velocity/acceleration/torque limits (float round-off)
 Q_ATOL = 1e-9  # absolute slack on position limits [rad or m]
+T0_ATOL = 1e-9  # t[0] must be 0 within this [s]
+STEP_ATOL = 1e-9  # a step may exceed the task's time step by this (the reference's epsilon) [s]
 
 
 @dataclass
@@ -67,8 +72,8 @@ class Violation:
     joint: Optional[int] = None
 
     def to_json(self) -> dict:
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) and k != "value" else v)
-                for k, v in self.__dict__.items() if v is not None}
+        """Strict JSON: a non-finite number becomes the string "inf", "-inf" or "nan"."""
+        return {k: _num(v) if isinstance(v, float) else v for k, v in self.__dict__.items() if v is not None}
 
     def __str__(self) -> str:
         where = []
@@ -107,22 +112,29 @@ def _describe(violations) -> str:
 
 
 def _num(v):
-    if v is None or (isinstance(v, float) and math.isnan(v)):
+    """A number for strict JSON: None stays None, a non-finite float becomes "inf", "-inf" or "nan"."""
+    if v is None:
         return None
-    return float(v)
+    v = float(v)
+    return v if math.isfinite(v) else str(v)
 
 
 @dataclass
 class CheckSettings:
     max_violations_per_constraint: int = 20
     between_samples: bool = True  # certify collision freedom and joint limits between samples
-    one_motion: bool = True  # q must be the integral of dq, dq of ddq (off: accept files as the reference does)
+    one_motion: bool = True  # the samples must describe a motion within the acceleration limits (judge.motion)
     all_costs: bool = True  # compute every built-in cost, not only the solution's
 
 
 def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None) -> Verdict:
     """Judge ``solution`` on ``task``. Bad input (unknown module set, malformed data) raises InputError;
     everything else — including an invalid assembly — is a violation in the verdict."""
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # huge values: inf/nan, reported as such
+        return _check(task, solution, module_set, settings)
+
+
+def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings]) -> Verdict:
     settings = settings or CheckSettings()
     timings: Dict[str, float] = {}
     t0 = time.perf_counter()
@@ -153,8 +165,9 @@ def check(task: Task, solution: Solution, module_set=None, settings: Optional[Ch
     limit = settings.max_violations_per_constraint
     for c in task.constraints:
         violations += _check_constraint(c, tq, None, settings)[: limit]
+    violations += _time_violations(tq, task.dt)
     if settings.one_motion:
-        violations += _one_motion_violations(tq, limit)
+        violations += _motion_violations(tq, limit)
     # goal-level constraints (over each goal's window)
     for g in task.goals:
         if not g.constraints or g.id not in tq.goal_windows:
@@ -189,6 +202,9 @@ def check(task: Task, solution: Solution, module_set=None, settings: Optional[Ch
             except MissingQuantityError:  # a plugin term that needs what a check does not provide
                 continue
     cost = float(cost_fn.evaluate(cctx))
+    if not math.isfinite(cost):
+        violations.append(Violation("cost", f"the cost {cost_fn.descriptor()} evaluates to {cost} (not a finite "
+                                            "number: a weight or a value overflows)", value=cost))
     timings["costs"] = time.perf_counter() - t1
     timings["total"] = time.perf_counter() - t0
     real = [v for v in violations if v.constraint != "goal (not required)"]
@@ -224,40 +240,77 @@ def _limit_violations(name, values, bound, tq: TrajectoryQuantities, k0: int, k1
     return out
 
 
-def _one_motion_violations(tq: TrajectoryQuantities, limit: int) -> List[Violation]:
-    """Steps over which q is not the integral of dq or dq not the integral of ddq (quantities.step_residuals)."""
-    st = tq.steps
+def _motion_violations(tq: TrajectoryQuantities, limit: int) -> List[Violation]:
+    """Joints through whose samples no motion within the acceleration limit passes (judge.motion)."""
+    fail = tq.motion_failures
+    if fail is None:
+        return []
     out = []
-    for name, res, tol, what, of in (("trajectory.q", st.q, st.q_tol, "q", "dq"),
-                                     ("trajectory.dq", st.dq, st.dq_tol, "dq", "ddq")):
-        ks, js = np.nonzero(np.abs(res) > tol)
-        for k, j in list(zip(ks, js))[:limit]:
-            k, j = int(k), int(j)
-            out.append(Violation(name, f"{what} is not the integral of {of} between samples {k} and {k + 1}: "
-                                       f"they differ by {res[k, j]:.6g} (allowed {tol[k, j]:.3g})",
-                                 sample=k, time=float(tq.t[k]), value=float(res[k, j]), bound=float(tol[k, j]),
-                                 joint=j))
-        if len(ks) > limit:
-            out.append(Violation(name, f"... and {len(ks) - limit} more steps"))
+    A = tq.acceleration_bound
+    raw = StepMotion.through(tq.t, tq.q, tq.dq).peak_acceleration
+    for j in np.nonzero(fail >= 0)[0][:limit]:
+        k, j = int(fail[j]), int(j)
+        out.append(Violation("trajectory.motion",
+                             f"no motion within the acceleration {A[j]:.6g} passes through samples {k} and "
+                             f"{k + 1} (with the file's velocities q, dq need {raw[k, j]:.6g} between them, and no "
+                             f"velocities within the slack A·h/2 of dq fit)", sample=k, time=float(tq.t[k]),
+                             value=float(raw[k, j]), bound=float(A[j]), joint=j))
     return out
 
 
-def _between_sample_violations(name, means, bound, tq: TrajectoryQuantities, k0: int, k1: int,
-                               limit: int) -> List[Violation]:
-    """Steps k0 → k0+1 … k1−1 → k1 whose mean velocity or acceleration (linear interpolation) exceeds
-    ``bound``."""
-    vals = means[k0:k1]
-    ks, js = np.nonzero(np.abs(vals) > bound * (1 + LIMIT_RTOL))
+def _time_violations(tq: TrajectoryQuantities, dt: float) -> List[Violation]:
+    """``t`` starts at 0 and no step is longer than the task's time step (the reference's rule)."""
     out = []
+    t = tq.t
+    if abs(t[0]) > T0_ATOL:
+        out.append(Violation("trajectory.t", f"the trajectory must start at t = 0, not {t[0]:.9g}", sample=0,
+                             time=float(t[0]), value=float(t[0]), bound=0.0))
+    if tq.n >= 2:
+        h = np.diff(t)
+        long_ = np.nonzero(h > dt + STEP_ATOL)[0]
+        if len(long_):
+            k = int(long_[0])
+            out.append(Violation("trajectory.t", f"the step from sample {k} to {k + 1} is {h[k]:.9g} s, longer than "
+                                 f"the task's time step {dt:g} s (the solution must be sampled every timeStepSize; "
+                                 f"{len(long_)} such steps)", sample=k, time=float(t[k]), value=float(h[k]),
+                                 bound=float(dt)))
+    return out
+
+
+def _between_sample_violations(name, extremes, bound, tq: TrajectoryQuantities, k0: int, k1: int,
+                               limit: int, lower=None) -> List[Violation]:
+    """Steps k0 → k0+1 … k1−1 → k1 over which the motion leaves the limits: ``extremes`` is (|value| max, time in
+    step) or, with ``lower``, (min, time, max, time), arrays (N−1, dof)."""
+    if lower is None:
+        vals, when = extremes[0][k0:k1], extremes[1][k0:k1]
+        over = vals > bound * (1 + LIMIT_RTOL)
+    else:
+        mn, tmn, mx, tmx = (x[k0:k1] for x in extremes)
+        over = (mn < lower - Q_ATOL) | (mx > bound + Q_ATOL)
+    ks, js = np.nonzero(over)
+    out = []
+    what = name.split(".")[-1]
     for k, j in list(zip(ks, js))[:limit]:
         kk, j = int(k + k0), int(j)
-        v = float(means[kk, j])
-        out.append(Violation(name, f"|{name.split('.')[-1]}| = {abs(v):.6g} between samples {kk} and {kk + 1} "
-                                   f"exceeds the limit {bound[j]:.6g}", sample=kk, time=float(tq.t[kk]), value=v,
-                             bound=float(bound[j]), joint=j))
+        if lower is None:
+            v, tt, b = float(vals[k, j]), float(tq.t[kk] + when[k, j]), float(bound[j])
+            msg = f"|{what}| = {v:.6g} between samples {kk} and {kk + 1} exceeds the limit {b:.6g}"
+        else:
+            low = mn[k, j] < lower[j] - Q_ATOL
+            v = float(mn[k, j] if low else mx[k, j])
+            tt = float(tq.t[kk] + (tmn[k, j] if low else tmx[k, j]))
+            b = float(lower[j] if low else bound[j])
+            msg = f"q = {v:.6g} between samples {kk} and {kk + 1} outside [{lower[j]:.6g}, {bound[j]:.6g}]"
+        out.append(Violation(name, msg + f" (at t={tt:.4f}s)", sample=kk, time=tt, value=v, bound=b, joint=j))
     if len(ks) > limit:
         out.append(Violation(name, f"... and {len(ks) - limit} more steps over the limit"))
     return out
+
+
+def _new_steps(at_samples: List[Violation], between: List[Violation]) -> List[Violation]:
+    """``between`` without the steps that start or end at a sample already in ``at_samples`` (same joint)."""
+    seen = {(v.sample, v.joint) for v in at_samples if v.joint is not None}
+    return [v for v in between if v.joint is None or not ({(v.sample, v.joint), (v.sample + 1, v.joint)} & seen)]
 
 
 def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, settings: CheckSettings) -> List[Violation]:
@@ -268,19 +321,31 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
     limit = settings.max_violations_per_constraint
     if isinstance(c, JointLimitsConstraint):
         out = []
+        m = tq.motion if settings.between_samples and tq.n >= 2 else None
         if "q" in c.parts:
             out += _limit_violations("joint.q", tq.q, r.q_upper, tq, k0, k1, limit, lower=r.q_lower, abs_tol=Q_ATOL)
+            if m is not None:
+                out += _new_steps(out, _between_sample_violations("joint.q", m.position_extremes(), r.q_upper, tq,
+                                                                  k0, k1, limit, lower=r.q_lower))
         if "dq" in c.parts:
             out += _limit_violations("joint.dq", tq.dq, r.dq_max, tq, k0, k1, limit)
-            if settings.between_samples:
-                out += _between_sample_violations("joint.dq", tq.steps.mean_velocity, r.dq_max, tq, k0, k1, limit)
+            if m is not None:
+                out += _new_steps(out, _between_sample_violations("joint.dq", m.velocity_extremes(), r.dq_max, tq,
+                                                                  k0, k1, limit))
         if "ddq" in c.parts:
             out += _limit_violations("joint.ddq", tq.ddq, r.ddq_max, tq, k0, k1, limit)
-            if settings.between_samples:
-                out += _between_sample_violations("joint.ddq", tq.steps.mean_acceleration, r.ddq_max, tq, k0, k1,
-                                                  limit)
         if "tau" in c.parts:
             out += _limit_violations("joint.tau", tq.torques, r.tau_max, tq, k0, k1, limit)
+            if m is not None:
+                seen = {(v.sample, v.joint) for v in out if v.constraint == "joint.tau"}
+                for side, tau in zip(("before", "after"), tq.motion_torques):
+                    vs = [v for v in _limit_violations("joint.tau", tau, r.tau_max, tq, k0, k1, limit)
+                          if v.joint is None or (v.sample, v.joint) not in seen]
+                    for v in vs:
+                        if v.joint is not None:
+                            seen.add((v.sample, v.joint))
+                            v.message += f" (with the motion's acceleration just {side} the sample)"
+                    out += vs
         return out
     if isinstance(c, (CollisionFree, SelfCollisionFree)):
         return _collision_violations(c, tq, k0, k1, settings)
@@ -323,7 +388,12 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
     checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
     if settings.between_samples:
-        events = checker.check(Q, first_only=False)
+        if settings.one_motion and len(Q) >= 2:
+            m = tq.motion
+            events = checker.check(Q, first_only=False, path=m.path_bound()[k0:k1],
+                                   at=lambda k, s: m.at(k + k0, s))
+        else:
+            events = checker.check(Q, first_only=False)
     else:
         events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
     if moving:

@@ -17,11 +17,13 @@ inverse dynamics:
   and link-side torques (:meth:`Robot.drivetrain_torques <robodesign.model.robot.Robot.drivetrain_torques>`)
   under those wrenches.
 
-* :attr:`~TrajectoryQuantities.steps`: per step, whether q is the integral of dq and dq of ddq
-  (:class:`StepResiduals`), and the mean velocity and acceleration between the samples.
+* :attr:`~TrajectoryQuantities.motion`: the motion the samples describe between them
+  (:mod:`robodesign.judge.motion`: least-acceleration arcs through q and the witness velocities), what the
+  checker judges limits and collisions on; :attr:`~TrajectoryQuantities.motion_failures`: per joint the first
+  step through which no motion within the acceleration limit passes;
+* :attr:`~TrajectoryQuantities.steps`: the former one-motion residuals (:class:`StepResiduals`, a diagnostic).
 
-Between samples q is interpolated linearly (:meth:`~TrajectoryQuantities.q_at`), the rule the checker uses
-for collisions, timed follow poses and the limits between samples.
+Timed follow poses read q interpolated linearly between samples (:meth:`~TrajectoryQuantities.q_at`).
 """
 from __future__ import annotations
 
@@ -33,7 +35,8 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign.formats.solution import Solution
-from robodesign.formats.task_spec import At, Follow, Goal, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.formats.task_spec import At, Follow, Goal, JointLimitsConstraint, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.judge.motion import StepMotion, witness_velocities
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
@@ -123,6 +126,75 @@ class TrajectoryQuantities:
     @property
     def n(self) -> int:
         return len(self.t)
+
+    @cached_property
+    def acceleration_bound(self) -> np.ndarray:
+        """(dof,) the acceleration the judged motion may use per joint: the joint's limit when the task limits
+        ddq (a ``joint`` constraint with ddq), else the largest the file reports (max |ddq| and |Δdq|/h)."""
+        limited = self.task is not None and any(isinstance(c, JointLimitsConstraint) and "ddq" in c.parts
+                                                for c in self.task.constraints)
+        if limited:
+            return np.asarray(self.robot.ddq_max, dtype=float)
+        if self.n < 2:
+            return np.max(np.abs(self.ddq), axis=0, initial=0.0)
+        mean_a = np.diff(self.dq, axis=0) / np.diff(self.t)[:, None]
+        return np.max(np.abs(np.vstack([self.ddq, mean_a])), axis=0)
+
+    @cached_property
+    def _witness(self):
+        if self.n < 2:
+            return self.dq.copy(), None
+        A = self.acceleration_bound
+        finite = np.isfinite(A)
+        A = np.where(finite, A, 0.0)
+        h = np.diff(self.t)
+        h_adj = np.maximum(np.concatenate([h[:1], h]), np.concatenate([h, h[-1:]]))  # longer neighbouring step
+        v, fail = witness_velocities(self.t, self.q, self.dq, A, A[None, :] * h_adj[:, None] / 2)
+        v[:, ~finite] = self.dq[:, ~finite]  # no acceleration bound: the file's velocities as they are
+        if fail is not None:
+            fail = np.where(finite, fail, -1)
+            fail = fail if np.any(fail >= 0) else None
+        return v, fail
+
+    @property
+    def velocities(self) -> np.ndarray:
+        """(N, dof) the judged motion's velocity at every sample: the file's dq moved by at most the velocity
+        slack (A·h/2; none where dq = 0) so that a motion within the acceleration limit passes through
+        (:func:`robodesign.judge.motion.witness_velocities`)."""
+        return self._witness[0]
+
+    @property
+    def motion_failures(self) -> Optional[np.ndarray]:
+        """Per joint the first step k (samples k → k+1) through which no motion within the joint's acceleration
+        limit passes (−1: none), or None when every joint has one."""
+        return self._witness[1]
+
+    @cached_property
+    def motion(self) -> StepMotion:
+        """The motion between the samples (:class:`robodesign.judge.motion.StepMotion` through q and
+        :attr:`velocities`)."""
+        return StepMotion.through(self.t, self.q, self.velocities)
+
+    @cached_property
+    def one_sided_accelerations(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(N, dof) the motion's acceleration just before and just after every sample (the first sample's
+        'before' and the last one's 'after' repeat the other side)."""
+        m = self.motion
+        if self.n < 2:
+            return self.ddq.copy(), self.ddq.copy()
+        hb = np.broadcast_to(m.h, m.tau.shape)
+        after = np.where(m.tau > 0, m.a1, m.a2)  # the step's first arc unless it has zero length
+        before = np.where(m.tau < hb, m.a2, m.a1)
+        return np.vstack([after[:1], before]), np.vstack([after, before[-1:]])
+
+    @cached_property
+    def motion_torques(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Drivetrain torques at every sample with the motion's acceleration just before and just after it
+        (torque is affine in q̈ at fixed q, q̇: these two and the file's ddq bound it at the sample)."""
+        W = self.external_wrenches
+        W = W if np.any(W) else None
+        return tuple(self.robot.drivetrain_torques(self.q, self.velocities, a, W)
+                     for a in self.one_sided_accelerations)
 
     @cached_property
     def steps(self) -> StepResiduals:

@@ -1,14 +1,14 @@
 """Certified collision checking of a joint-space motion, *including the motion between samples*.
 
-Between two samples robodesign takes the configuration to move linearly in joint space
-(docs/checker.md). For every collision pair p a bound W_p · |Δq| on how far any point of one
-object can move relative to the other is precomputed from the kinematic tree (lever arms from each
-joint to the farthest point of each downstream geometry; prismatic joints count 1 m/m). Conservative
-advancement then certifies the motion: after an exact distance d at some instant, the pair cannot
-touch until the accumulated bound exceeds d − margin, so most pairs need a distance query only every
-few dozen samples, and a pair that comes close is advanced in sub-sample steps until it either
-clears or touches. The result is exact up to ``tolerance`` metres (default 1e-6): a contact that
-lasts less than that is not reported.
+By default the configuration moves linearly in joint space between two samples; the judge passes its own
+motion (``SweepChecker.check(..., path=, at=)``, docs/checker.md "The motion"). For every collision pair p a
+bound W_p · |Δq| on how far any point of one object can move relative to the other is precomputed from the
+kinematic tree (lever arms from each joint to the farthest point of each downstream geometry; prismatic joints
+count 1 m/m). Conservative advancement then certifies the motion: after an exact distance d at some instant,
+the pair cannot touch until the accumulated bound exceeds d − margin, so most pairs need a distance query only
+every few dozen samples, and a pair that comes close is advanced in sub-sample steps until it either clears or
+touches. The result is exact up to ``tolerance`` metres (default 1e-6): a contact that lasts less than that is
+not reported.
 
 Bodies of revolution tighten the bounds: distances depend only on the space a body occupies, and a
 sphere, cylinder, capsule or cone turning about its own axis of symmetry does not move that space. So
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass
-from typing import Collection, Iterable, List, Optional, Sequence, Set, Tuple
+from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -224,9 +224,15 @@ class SweepChecker:
         self.queries += len(out)
         return out
 
-    def check(self, Q: np.ndarray, first_only: bool = True) -> List[CollisionEvent]:
-        """Collision events along the piecewise-linear motion through the rows of Q.
+    def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
+              at: Optional[Callable[[int, float], np.ndarray]] = None) -> List[CollisionEvent]:
+        """Collision events along a motion through the rows of Q: by default the piecewise-linear one.
 
+        Another motion through the same samples is given by ``at(k, s)`` (q at fraction s ∈ [0, 1] of step k)
+        and ``path`` (n−1, dof): per step and joint a bound on how far the joint moves between any two instants
+        of the step (|ΔQ| for the linear motion; the judge's motion: h·max|q̇|). Conservative advancement then
+        certifies that motion: from an exact distance at an instant the pair stays free while the accumulated
+        path bounds stay below the clearance.
         With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
         and contact episode (the pair is re-armed once it separates again).
         """
@@ -239,7 +245,8 @@ class SweepChecker:
             d = self.distances(Q[0], range(P))
             return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
                     for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
-        dQ = np.abs(np.diff(Q, axis=0))  # (n-1, dof)
+        dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
+                                                                           np.abs(np.diff(Q, axis=0)))
         seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
         cum = np.concatenate([np.zeros((1, P)), np.cumsum(seg, axis=0)])  # (n, P)
         events: List[CollisionEvent] = []
@@ -271,7 +278,8 @@ class SweepChecker:
                     heapq.heappush(heap, (nxt, c))
                     continue
                 # nxt == k: the very next segment moves more than the clearance → advance inside it
-                hit = self._advance(Q[k], Q[k + 1], seg[k, c], c, free)
+                hit = self._advance(Q[k], Q[k + 1], seg[k, c], c, free,
+                                    None if at is None else (lambda s, k=k: at(k, s)))
                 if hit is not None:
                     s, dist2 = hit
                     events.append(CollisionEvent(k, s, *self.pair_names[c], dist2, bool(self.is_env[c])))
@@ -296,15 +304,16 @@ class SweepChecker:
                 return kk
         return None
 
-    def _advance(self, qa, qb, bound, c, free) -> Optional[tuple]:
-        """Conservative advancement of pair c along qa→qb (displacement bound ``bound``)."""
+    def _advance(self, qa, qb, bound, c, free, at=None) -> Optional[tuple]:
+        """Conservative advancement of pair c along qa→qb (displacement bound ``bound``; ``at(s)``: the
+        configuration at fraction s, default the linear interpolation)."""
         s = 0.0
         tol = self.tolerance
         for _ in range(self.max_substeps):
             s += free / bound
             if s >= 1.0:
                 return None
-            q = qa + s * (qb - qa)
+            q = qa + s * (qb - qa) if at is None else at(s)
             dist = self.distances(q, [c])[0]
             free = dist - self.margins[c]
             if free <= tol:

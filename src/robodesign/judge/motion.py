@@ -1,0 +1,198 @@
+"""The one motion a solution file describes, and its limits between samples (docs/checker.md, "The motion").
+
+Between samples k and k+1 (step h) a joint moves along the **least-acceleration motion** through
+(q_k, v_k) and (q_k+1, v_k+1): two constant-acceleration arcs, +a then −a (or −a then +a), switching once
+at ``tau``. With r = Δq − h·(v_k + v_k+1)/2 (the trapezoid residual) and Δv = v_k+1 − v_k::
+
+    a = (2|r| + sqrt(4r² + h²Δv²)) / h²
+
+the smallest peak acceleration of *any* motion through the two samples (so a file whose samples need more
+than a joint's acceleration limit describes no motion within it). When the samples are those of a
+piecewise-constant acceleration (robodesign's solvers: ddq_k over [t_k, t_k+1]), r = 0 and the arcs are that
+motion exactly. Positions are piecewise quadratic, velocities piecewise linear: their extrema per step are
+closed-form (:class:`StepMotion`).
+
+The velocities v_k are the file's dq_k, moved by at most ``slack`` when the file's own velocities need more
+than the limit: files whose dq is ``numpy.gradient`` of q (the reference's way) report velocities off by up
+to A·h/2 (central difference of a motion with |q̈| ≤ A), which makes even an exact sample of a motion at
+the limit look up to 1.5× too fast. :func:`witness_velocities` finds velocities within ``slack`` of the file's
+(exactly the file's where dq = 0: a joint reported at rest is at rest) that a motion within the acceleration
+limit passes through, or the first step where none exists. The judged motion is then a real motion within
+the limit through every q sample at its time: what fits inside the slack is a misreported velocity, never
+a faster motion.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Optional, Tuple
+
+import numpy as np
+
+ACC_RTOL = 1e-6  # relative slack on the acceleration (rounding: a motion exactly at the limit has a one-point witness)
+
+
+def least_acceleration(h, dq_, v0, v1) -> np.ndarray:
+    """Smallest peak |q̈| of a motion from (0, v0) to (dq_, v1) in time h (arrays broadcast)."""
+    r2 = 2 * dq_ - (v0 + v1) * h  # 2r
+    return (np.abs(r2) + np.sqrt(r2 ** 2 + (h * (v1 - v0)) ** 2)) / h ** 2
+
+
+@dataclass(frozen=True)
+class StepMotion:
+    """The two-arc motion of every step and joint (arrays (N−1, dof); h is (N−1, 1))."""
+    t: np.ndarray
+    q: np.ndarray  # (N, dof) samples
+    v: np.ndarray  # (N, dof) velocities at the samples (the file's dq or the witness)
+    h: np.ndarray
+    a1: np.ndarray  # acceleration of the first arc
+    a2: np.ndarray  # of the second arc (= −a1, or a1 when the step is one constant acceleration)
+    tau: np.ndarray  # switch time in [0, h]
+
+    @classmethod
+    def through(cls, t, q, v) -> "StepMotion":
+        t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
+        h = np.diff(t)[:, None]
+        D = np.diff(q, axis=0)
+        v0, v1 = v[:-1], v[1:]
+        dv = v1 - v0
+        r2 = 2 * D - (v0 + v1) * h
+        a = least_acceleration(h, D, v0, v1)
+        sigma = np.where(r2 >= 0, 1.0, -1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tau = np.where(a > 0, (h + sigma * dv / np.where(a > 0, a, 1.0)) / 2, h / 2)
+        tau = np.clip(tau, 0.0, h)
+        # one constant acceleration (robodesign's samples) up to rounding: one arc, no zero-length other arc
+        tau = np.where(tau < 1e-9 * h, 0.0, np.where(tau > (1 - 1e-9) * h, np.broadcast_to(h, tau.shape), tau))
+        return cls(t, q, v, h, sigma * a, -sigma * a, tau)
+
+    @property
+    def peak_acceleration(self) -> np.ndarray:
+        return np.maximum(np.abs(self.a1), np.abs(self.a2))
+
+    @cached_property
+    def v_switch(self) -> np.ndarray:
+        return self.v[:-1] + self.a1 * self.tau
+
+    @cached_property
+    def q_switch(self) -> np.ndarray:
+        return self.q[:-1] + self.v[:-1] * self.tau + self.a1 * self.tau ** 2 / 2
+
+    def at(self, k: int, s: float) -> np.ndarray:
+        """q at fraction ``s`` ∈ [0, 1] of step k."""
+        x = s * self.h[k, 0]
+        tau = self.tau[k]
+        u = np.minimum(x, tau)
+        w = np.maximum(x - tau, 0.0)
+        # first arc up to min(x, tau), then the second arc for the rest
+        return (self.q[k] + self.v[k] * u + self.a1[k] * u ** 2 / 2
+                + (self.v[k] + self.a1[k] * u) * w + self.a2[k] * w ** 2 / 2)
+
+    def velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Per step: (largest |velocity|, time of it within the step)."""
+        c = np.stack([np.abs(self.v[:-1]), np.abs(self.v_switch), np.abs(self.v[1:])])
+        i = np.argmax(c, axis=0)
+        when = np.choose(i, [np.zeros_like(self.tau), self.tau, np.broadcast_to(self.h, self.tau.shape)])
+        return np.max(c, axis=0), when
+
+    def position_extremes(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per step: (min q, time of it, max q, time of it) over the step, closed-form."""
+        q0, v0, a1, a2, tau = self.q[:-1], self.v[:-1], self.a1, self.a2, self.tau
+        qs, vs = self.q_switch, self.v_switch
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s1 = np.where(a1 != 0, -v0 / np.where(a1 != 0, a1, 1.0), -1.0)
+            u2 = np.where(a2 != 0, -vs / np.where(a2 != 0, a2, 1.0), -1.0)
+        in1 = (s1 > 0) & (s1 < tau)
+        in2 = (u2 > 0) & (u2 < self.h - tau)
+        q1 = np.where(in1, q0 + v0 * s1 + a1 * s1 ** 2 / 2, q0)
+        q2 = np.where(in2, qs + vs * u2 + a2 * u2 ** 2 / 2, q0)
+        cand = np.stack([q0, self.q[1:], qs, q1, q2])
+        hb = np.broadcast_to(self.h, tau.shape)
+        times = np.stack([np.zeros_like(tau), hb, tau, np.where(in1, s1, 0.0), np.where(in2, tau + u2, 0.0)])
+        imin, imax = np.argmin(cand, axis=0), np.argmax(cand, axis=0)
+        pick = lambda a, i: np.take_along_axis(a, i[None], axis=0)[0]  # noqa: E731
+        return pick(cand, imin), pick(times, imin), pick(cand, imax), pick(times, imax)
+
+    def path_bound(self) -> np.ndarray:
+        """Per step and joint: a bound on how far the joint moves from any instant of the step to any later one
+        (h · max |velocity|; ≥ |Δq|), what the collision sweep advances with."""
+        return np.maximum(self.h * self.velocity_extremes()[0], np.abs(np.diff(self.q, axis=0)))
+
+
+def _v1_range(v0, D, h, A):
+    """(min, max) final velocity of a motion from (0, v0) to (D, ·) in time h with |q̈| ≤ A; NaN where none."""
+    b = 2 * D / h - v0  # the trapezoid residual changes sign at v1 = b
+    c = (A * h) ** 2
+    d1 = 2 * c - 4 * A * h * v0 + 4 * A * D  # v1 ≥ b: roots v0 − Ah ± sqrt(d1)
+    d2 = 2 * c + 4 * A * h * v0 - 4 * A * D  # v1 ≤ b: roots v0 + Ah ± sqrt(d2)
+    s1, s2 = np.sqrt(np.maximum(d1, 0.0)), np.sqrt(np.maximum(d2, 0.0))
+    tol = 1e-12 * (np.abs(v0) + np.abs(b) + A * h)  # rounding at the ends of the feasible start velocities
+    cross = (b - v0) ** 2 <= c + 2 * tol * A * h
+    above = ~cross & (d1 >= -tol * A * h) & (v0 - A * h - s1 >= b - tol)
+    below = ~cross & ~above & (d2 >= -tol * A * h) & (v0 + A * h + s2 <= b + tol)
+    lo = np.where(cross, v0 + A * h - s2, np.where(above, v0 - A * h - s1, v0 + A * h - s2))
+    hi = np.where(cross, v0 - A * h + s1, np.where(above, v0 - A * h + s1, v0 + A * h + s2))
+    ok = cross | above | below
+    return np.where(ok, lo, np.nan), np.where(ok, hi, np.nan)
+
+
+def reachable(lo, hi, D, h, A) -> Tuple[np.ndarray, np.ndarray]:
+    """Final velocities reachable from any start velocity in [lo, hi] over displacement D in time h with
+    |q̈| ≤ A: an interval (NaN where empty). The largest final velocity is a concave function of the start
+    velocity with its maximum at D/h − Ah/2, the smallest a convex one with its minimum at D/h + Ah/2."""
+    m = D / h
+    lo_f, hi_f = np.maximum(lo, m - A * h / 2), np.minimum(hi, m + A * h / 2)  # start velocities that work
+    tol = 1e-9 * (A * h + np.abs(m))  # rounding: the two can meet in a single point
+    touch = (lo_f > hi_f) & (lo_f <= hi_f + tol)
+    lo_f, hi_f = np.where(touch, hi_f, lo_f), np.where(touch, lo_f, hi_f)
+    empty = lo_f > hi_f
+    # braking (accelerating) all the way gives the smallest (largest) final velocity of all: m ∓ Ah/2
+    vmin = np.where((lo_f <= m + A * h / 2) & (m + A * h / 2 <= hi_f), m - A * h / 2,
+                    _v1_range(np.clip(m + A * h / 2, lo_f, hi_f), D, h, A)[0])
+    vmax = np.where((lo_f <= m - A * h / 2) & (m - A * h / 2 <= hi_f), m + A * h / 2,
+                    _v1_range(np.clip(m - A * h / 2, lo_f, hi_f), D, h, A)[1])
+    return np.where(empty, np.nan, vmin), np.where(empty, np.nan, vmax)
+
+
+def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.ndarray]]:
+    """Velocities v with |v − dq| ≤ slack (v = dq where dq = 0) such that a motion with |q̈| ≤ a_max passes
+    through every (t_k, q_k, v_k), as close to dq as the forward/backward pass finds.
+
+    Returns (v (N, dof), first infeasible step per joint or None): joints without a witness keep dq and have
+    their first step where no velocity within the slack continues the motion (−1: none)."""
+    t, q, dq = (np.asarray(x, dtype=float) for x in (t, q, dq))
+    n, dof = q.shape
+    A = np.asarray(a_max, dtype=float) * (1 + ACC_RTOL) + 1e-12
+    if n < 2 or np.all(least_acceleration(np.diff(t)[:, None], np.diff(q, axis=0), dq[:-1], dq[1:]) <= A):
+        return dq.copy(), None  # the file's own velocities work (every robodesign solution): no search
+    sl = np.where(dq == 0, 0.0, np.broadcast_to(np.asarray(slack, dtype=float), dq.shape))
+    eps = 1e-12 * (1 + np.abs(dq)) + 1e-6 * sl  # rounding: a true velocity can sit exactly at the slack's edge
+    lo_b, hi_b = dq - sl - eps, dq + sl + eps
+    lo, hi = np.empty_like(dq), np.empty_like(dq)
+    lo[0], hi[0] = lo_b[0], hi_b[0]
+    fail = np.full(dof, -1)
+    h = np.diff(t)
+    D = np.diff(q, axis=0)
+    for k in range(n - 1):
+        a, b = reachable(lo[k], hi[k], D[k], h[k], A)
+        a, b = np.maximum(a, lo_b[k + 1]), np.minimum(b, hi_b[k + 1])
+        bad = ~(a <= b) & (fail < 0)
+        fail[bad] = k
+        # a failed joint keeps going from its own interval so later steps stay defined
+        lo[k + 1] = np.where(a <= b, a, lo_b[k + 1])
+        hi[k + 1] = np.where(a <= b, b, hi_b[k + 1])
+    v = np.empty_like(dq)
+    v[-1] = np.clip(dq[-1], lo[-1], hi[-1])
+    for k in range(n - 2, -1, -1):
+        rlo, rhi = _v1_range(-v[k + 1], -D[k], h[k], A)  # time-reversed: start velocities that reach v[k+1]
+        # v[k+1] at an end of what the step can reach (constant ±A over the step): one start velocity, which
+        # rounding can lose: the constant-acceleration one, 2·Δq/h − v[k+1]
+        single = -(2 * D[k] / h[k] - v[k + 1])
+        rlo, rhi = np.where(np.isnan(rlo), single, rlo), np.where(np.isnan(rhi), single, rhi)
+        a, b = np.maximum(-rhi, lo[k]), np.minimum(-rlo, hi[k])
+        # rounding can make the intersection empty by a hair: then stay consistent with step k (the back range)
+        v[k] = np.where(a <= b, np.clip(dq[k], a, b),
+                        np.where(np.isnan(rlo), np.clip(dq[k], lo[k], hi[k]), np.clip(np.clip(dq[k], lo[k], hi[k]),
+                                                                                    -rhi, -rlo)))
+    v[:, fail >= 0] = dq[:, fail >= 0]
+    return v, (fail if np.any(fail >= 0) else None)
