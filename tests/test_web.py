@@ -40,7 +40,19 @@ from robodesign.formats.task_io import parse_task  # noqa: E402
 from robodesign.web import create_app  # noqa: E402
 
 from conftest import toy_module_set  # noqa: E402
-from test_checker import plan, solution, task_json  # noqa: E402
+from test_checker import plan, solution  # noqa: E402
+from test_checker import task_json as _checker_task_json  # noqa: E402
+
+#: the slowest toy solution the tests upload is k = 2 (steps of 2 × 0.01 s): the judge allows no step longer than
+#: the task's time step, so the site's toy task has a 0.02 s one
+WEB_TIME_STEP = 0.02
+
+
+def task_json(**kw) -> dict:
+    """The checker tests' toy task with the site's time step (:data:`WEB_TIME_STEP`)."""
+    d = _checker_task_json(**kw)
+    d["header"]["timeStepSize"] = WEB_TIME_STEP
+    return d
 
 BOARD = "M-toy:cyc:toy/all"
 ADMIN = "admin-token-of-the-tests"  # registering tasks and module sets is an admin action

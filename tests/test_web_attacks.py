@@ -26,7 +26,7 @@ from robodesign.web.cache import ByteLRU  # noqa: E402
 from robodesign.web.service import Limits  # noqa: E402
 from robodesign.web.throttle import RateLimiter  # noqa: E402
 
-from test_checker import task_json  # noqa: E402
+from test_web import task_json  # noqa: E402
 from test_web import (ADMIN, ADMIN_HEADERS, BOARD, listing, postgres_cluster, running_server, seed_dir,  # noqa: E402,F401
                       sol_json, upload)
 
