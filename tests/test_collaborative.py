@@ -326,7 +326,9 @@ def test_cli_optimize_designs_both_robots(tmp_path, capsys):
     task = mt.collab_task_path("shared_conveyor")
     out = tmp_path / "best.json"
     code, o = _main(["optimize", task, "--modules", "robodesign_arm", "--optimizer", "genetic", "--dof", "6",
-                     "--budget", "40evals", "--seed", "0", "--out", out, "--json"], capsys)
+                     "--budget", "40evals", "--seed", "0", "--out", out, "--json", "--opt", "informed=0"], capsys)
+    # informed=0: the uniform genetic search this test was written for (with the informed seeding of free or
+    # far goals, the default since issue 21, seed 0 finds no combinable pair in 40 evaluations)
     s = json.loads(o.out)
     assert code == 0 and s["feasible"], s
     assert all(len(d) >= 1 for d in s["designs"].values())
