@@ -29,6 +29,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import List
 
 import numpy as np
 
@@ -482,7 +483,9 @@ def count_arms(db: dict, max_links_per_gap: int = 1) -> int:
     return total
 
 
-def check(db: dict, verbose: bool = True) -> None:
+def check_modules(db: dict, max_mass: float, folder: Path) -> List[str]:
+    """The structural checks every built-in set passes: schema, unique IDs, module masses in [0.3, ``max_mass``]
+    kg, physical inertias, proper connector rotations, mesh files present in ``folder``. Returns the IDs."""
     try:
         import jsonschema
     except ImportError:  # pragma: no cover
@@ -495,7 +498,7 @@ def check(db: dict, verbose: bool = True) -> None:
     assert len(set(ids)) == len(ids), "duplicate module IDs"
     for m in db["modules"]:
         mass = sum(b["mass"] for b in m["bodies"])
-        assert 0.3 <= mass <= 4.0, f"module {m['header']['ID']}: mass {mass}"
+        assert 0.3 <= mass <= max_mass, f"module {m['header']['ID']}: mass {mass}"
         for b in m["bodies"]:
             eig = np.linalg.eigvalsh(np.asarray(b["inertia"]))
             assert eig.min() > 0 and 2 * eig.max() <= eig.sum() + 1e-12, f"body {b['ID']}: bad inertia"
@@ -504,7 +507,12 @@ def check(db: dict, verbose: bool = True) -> None:
                 assert np.allclose(R @ R.T, np.eye(3)) and np.isclose(np.linalg.det(R), 1.0), c["ID"]
             for g in b["collision"] + b["visual"]:
                 if g["type"] == "mesh":
-                    assert (HERE / g["parameters"]["file"]).is_file(), g["parameters"]["file"]
+                    assert (folder / g["parameters"]["file"]).is_file(), g["parameters"]["file"]
+    return ids
+
+
+def check(db: dict, verbose: bool = True) -> None:
+    ids = check_modules(db, 4.0, HERE)
     rng = np.random.default_rng(0)
     for name, order in EXAMPLES.items():
         dof, joints, tcp_home = walk_serial(db, order)

@@ -241,18 +241,7 @@ def stretched_gravity_torque(db: dict, order: list) -> np.ndarray:
 
 
 def check(db: dict, verbose: bool = True, samples: int = 3000) -> None:
-    import jsonschema
-    schema = json.loads((ROOT / "schemas" / "modules.schema.json").read_text())
-    errs = list(jsonschema.Draft202012Validator(schema).iter_errors(db))
-    assert not errs, "schema: " + "; ".join(f"{list(e.absolute_path)}: {e.message}" for e in errs[:5])
-    ids = [m["header"]["ID"] for m in db["modules"]]
-    assert len(set(ids)) == len(ids), "duplicate module IDs"
-    for m in db["modules"]:
-        mass = sum(b["mass"] for b in m["bodies"])
-        assert 0.3 <= mass <= 9.5, f"module {m['header']['ID']}: mass {mass}"
-        for b in m["bodies"]:
-            eig = np.linalg.eigvalsh(np.asarray(b["inertia"]))
-            assert eig.min() > 0 and 2 * eig.max() <= eig.sum() + 1e-12, f"body {b['ID']}: bad inertia"
+    ids = A.check_modules(db, 9.5, HERE)
     limits = {m["header"]["ID"]: [j["limits"]["peakTorque"] for j in m.get("joints", [])] for m in db["modules"]}
     rng = np.random.default_rng(0)
     for name, order in EXAMPLES.items():
