@@ -14,26 +14,13 @@ from robodesign.design.search_space import SearchSpace
 from robodesign.experiment.suites import Diagnoser, SuiteRecord, markdown, summarize_suites, task_rows, unsolved_rows
 from robodesign.formats.module_io import load_module_set
 
+from test_reach_bound import reach_task_json  # noqa: E402
+
 FIXED = {"x": [-1e-3, 1e-3], "y": [-1e-3, 1e-3], "z": [-1e-3, 1e-3]}
 
 
 def _task_file(path, goals, base=FIXED):
-    cons = [{"type": "joint", "parts": ["q", "tau"]}, {"type": "allGoalsFulfilled"}]
-    if base is not None:
-        cons.append({"type": "basePlacement", "pose": {"nominal": np.eye(4).tolist(),
-                                                       "toleranceProjection": list(base),
-                                                       "tolerance": list(base.values())}})
-    gs = []
-    for i, p in enumerate(goals):
-        T = np.eye(4)
-        T[:3, 3] = p
-        gs.append({"ID": f"g{i}", "type": "reach", "goalPose": {
-            "nominal": T.tolist(), "toleranceProjection": ["x", "y", "z"], "tolerance": [[-1e-3, 1e-3]] * 3}})
-    path.write_text(json.dumps({
-        "header": {"ID": f"test/{path.stem}", "version": "2022", "taskName": path.stem, "author": ["t"],
-                   "affiliation": ["t"], "email": ["t@t"], "tags": [], "date": "2026-11-26", "timeStepSize": 0.01,
-                   "gravity": [0, 0, -9.81]},
-        "obstacles": [], "constraints": cons, "goals": gs}))
+    path.write_text(json.dumps(reach_task_json(goals, base, path.stem, [{"type": "allGoalsFulfilled"}])))
     return path
 
 

@@ -140,10 +140,10 @@ def test_builtin_bound_is_met_by_the_straight_longest_arm(name):
 
 
 # -- the proof -------------------------------------------------------------------------------------------------
-def _task(tmp_path, goals, base_tolerance=None, name="t"):
-    """A task with reach goals at ``goals`` (x, y, z; ±1 mm) and a basePlacement at the origin with
-    ``base_tolerance`` (projection → interval; None: no basePlacement constraint)."""
-    cons = [{"type": "joint", "parts": ["q", "tau"]}]
+def reach_task_json(goals, base_tolerance=None, name="t", constraints=()) -> dict:
+    """A task with reach goals at ``goals`` (x, y, z; ±1 mm), joint q/τ limits plus ``constraints``, and a
+    basePlacement at the origin with ``base_tolerance`` (projection → interval; None: no basePlacement)."""
+    cons = [{"type": "joint", "parts": ["q", "tau"]}, *constraints]
     if base_tolerance is not None:
         cons.append({"type": "basePlacement", "pose": {"nominal": np.eye(4).tolist(),
                                                        "toleranceProjection": list(base_tolerance),
@@ -154,10 +154,14 @@ def _task(tmp_path, goals, base_tolerance=None, name="t"):
         T[:3, 3] = p
         gs.append({"ID": f"g{i}", "type": "reach", "goalPose": {
             "nominal": T.tolist(), "toleranceProjection": ["x", "y", "z"], "tolerance": [[-1e-3, 1e-3]] * 3}})
-    data = {"header": {"ID": f"test/{name}", "version": "2022", "taskName": name, "author": ["t"],
+    return {"header": {"ID": f"test/{name}", "version": "2022", "taskName": name, "author": ["t"],
                        "affiliation": ["t"], "email": ["t@t"], "tags": [], "date": "2026-11-26",
                        "timeStepSize": 0.01, "gravity": [0, 0, -9.81]},
             "obstacles": [], "constraints": cons, "goals": gs}
+
+
+def _task(tmp_path, goals, base_tolerance=None, name="t"):
+    data = reach_task_json(goals, base_tolerance, name)
     f = tmp_path / f"{name}.json"
     f.write_text(json.dumps(data))
     return load_task(f)
