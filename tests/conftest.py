@@ -81,13 +81,16 @@ def toy_set(tmp_path):
 
 def assert_within_limits(robot, tr):
     """Every limit at every sample of a trajectory, torques computed independently per sample with
-    Robot.drivetrain_torques. Returns the largest |τ|/τ_max."""
+    Robot.drivetrain_torques, with the sample's own ddq (the acceleration just after it) and with the previous
+    sample's (just before it: the judge's motion model has both accelerations at a sample, docs/checker.md).
+    Returns the largest |τ|/τ_max."""
     assert np.all(tr.q >= robot.q_lower - 1e-12) and np.all(tr.q <= robot.q_upper + 1e-12)
     assert np.all(np.abs(tr.dq) <= robot.dq_max * (1 + 1e-6))
     assert np.all(np.abs(tr.ddq) <= robot.ddq_max * (1 + 1e-9))
     worst = 0.0
-    for q, dq, ddq in zip(tr.q, tr.dq, tr.ddq):
-        tau = robot.drivetrain_torques(q, dq, ddq)[0]
-        assert np.all(np.abs(tau) <= robot.tau_max * (1 + 1e-9))
-        worst = max(worst, float(np.max(np.abs(tau) / robot.tau_max)))
+    for k, (q, dq) in enumerate(zip(tr.q, tr.dq)):
+        for ddq in (tr.ddq[k], tr.ddq[max(k - 1, 0)]):
+            tau = robot.drivetrain_torques(q, dq, ddq)[0]
+            assert np.all(np.abs(tau) <= robot.tau_max * (1 + 1e-9)), f"sample {k}: tau {tau} over {robot.tau_max}"
+            worst = max(worst, float(np.max(np.abs(tau) / robot.tau_max)))
     return worst

@@ -30,7 +30,9 @@ acceleration over the step, never larger than the profile's largest acceleration
 ``w ∝ ‖v(t)‖`` of unit integral (zero at rest), so ``q[-1]`` is the goal exactly. The reported
 ``info["max_path_error"]`` is the largest distance between the samples and the continuous profile.
 Finally every sample is checked against |dq| ≤ dq_max (to 1e-9 relative), |ddq| ≤ ddq_max and the
-drivetrain torque |τ(q, dq, ddq)| ≤ τ_max (to 1e-12 relative, ``Robot.drivetrain_torques``); if
+drivetrain torque |τ(q, dq, ddq)| ≤ τ_max (to 1e-12 relative, ``Robot.drivetrain_torques``) with both
+accelerations the judge's motion model has at the sample, ddq[k] after it and ddq[k−1] before it
+(:func:`sample_torques`; the checker's ``joint.tau`` rule); if
 anything is exceeded, the profile is slowed down uniformly (t → λ·t: v/λ, a/λ²; λ chosen from the
 violation ratios, at least one more sample) and resampled. Position limits are not enforced here: the
 path is assumed to lie within them (blends stay in the convex hull of the waypoints).
@@ -262,11 +264,24 @@ def limit_ratios(robot, traj: JointTrajectory, torque: bool = True) -> Dict[str,
         lim = np.asarray(robot.tau_max, float)
         m = np.isfinite(lim)
         if m.any():
-            tau = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq)
-            out["tau"] = float(np.max(np.abs(tau[:, m]) / lim[m]))
+            out["tau"] = float(np.max(sample_torques(robot, traj)[:, m] / lim[m]))
         else:
             out["tau"] = 0.0
     return out
+
+
+def sample_torques(robot, traj: JointTrajectory) -> np.ndarray:
+    """(N, dof) the largest |drivetrain torque| at every sample over the accelerations the judge's motion model
+    has there (robodesign.judge.motion): the step's own ddq[k] just after the sample and the previous step's
+    ddq[k−1] just before it (the samples are a piecewise-constant acceleration, so these are the motion's
+    one-sided accelerations; the checker's ``joint.tau`` rule tests both)."""
+    after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq)
+    if len(traj.t) < 2:
+        return np.abs(after)
+    before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]])
+    # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly
+    before = robot.drivetrain_torques(traj.q, traj.dq, before_acc)
+    return np.maximum(np.abs(after), np.abs(before))
 
 
 def trapezoid_time(distance: float, v_max: float, a_max: float) -> float:
@@ -409,8 +424,7 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
         if torque_limits:
             m = np.isfinite(tmax)
             if m.any():
-                tau = robot.drivetrain_torques(tr.q, tr.dq, tr.ddq)
-                rt = float(np.max(np.abs(tau[:, m]) / tmax[m]))
+                rt = float(np.max(sample_torques(robot, tr)[:, m] / tmax[m]))
         if rv <= 1.0 + 1e-9 and ra <= 1.0 + 1e-12 and rt <= 1.0 + 1e-12:
             err = 0.0
             if prof.position is not None:
