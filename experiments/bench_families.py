@@ -43,19 +43,34 @@ from robodesign.experiment.suites import SuiteRecord, cell, stage_counts_text, s
 # variant → (generator family, option sets (the tasks are spread evenly over them), Mayer & Althoff 2024
 # median best cycle time [s], their setting)
 VARIANTS = {
-    "whitman2020_g3o3": ("whitman2020", [{"goals": 3, "obstacles": 3, "base": "xyz_any_rot"}], 8.8,
-                         "Whitman 3 goals / 3 obstacles, free base"),
-    "whitman2020_g5o5": ("whitman2020", [{"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}], 18.9,
-                         "Whitman 5 goals / 5 obstacles, free base"),
-    "liu2020": ("liu2020", [{"machine": "<cobra>/tasks/assets/QUASER_MV205_v3_compressed.stl"}], 12.0,
-                "Liu case 2b (machine tending), QUASER MV205 mesh of the CoBRA data"),
-    "bpo2024": ("bpo2024", [{"structure": "mixed", "difficulty": "mixed"}], 11.4,
-                "edge cases: x, cross, house, oven, random field by task index, 5 easy / 5 medium / 5 hard"),
+    # the published families (issue 21): the generators' default, published variant
+    "whitman2020_g3o3_fixed": ("whitman2020", [{"goals": 3, "obstacles": 3, "base": "fixed"}], 8.8,
+                               "Whitman 3 goals / 3 obstacles, fixed base, full-pose goals (±1 mm, 0.5°)"),
+    "whitman2020_g3o3_free": ("whitman2020", [{"goals": 3, "obstacles": 3, "base": "xyz_any_rot"}], 8.8,
+                              "Whitman 3 goals / 3 obstacles, base free ±1 m, any rotation, full-pose goals"),
+    "whitman2020_g5o5_free": ("whitman2020", [{"goals": 5, "obstacles": 5, "base": "xyz_any_rot"}], 18.9,
+                              "Whitman 5 goals / 5 obstacles, base free ±1 m, any rotation, full-pose goals"),
+    "liu2020_published": ("liu2020", [{"machine": "<cobra>/tasks/assets/QUASER_MV205_v3_compressed.stl"}], 12.0,
+                          "Liu case 2b, QUASER MV205 mesh, full-pose goals in order, base free ±1 m"),
+    "bpo2024_edge": ("bpo2024", [{}], 11.4,
+                     "BPO24 edge cases: 10 archetypes, medium/hard shifts, full-pose goals, base free ±1 m"),
+    # the earlier easy variants (docs/generators.md, --variant easy): the table of 2026-11-25
+    "whitman2020_g3o3": ("whitman2020", [{"variant": "easy", "goals": 3, "obstacles": 3, "base": "xyz_any_rot"}], 8.8,
+                         "easy variant: Whitman 3 goals / 3 obstacles, free base"),
+    "whitman2020_g5o5": ("whitman2020", [{"variant": "easy", "goals": 5, "obstacles": 5, "base": "xyz_any_rot"}], 18.9,
+                         "easy variant: Whitman 5 goals / 5 obstacles, free base"),
+    "liu2020": ("liu2020", [{"variant": "easy", "machine": "<cobra>/tasks/assets/QUASER_MV205_v3_compressed.stl"}],
+                12.0, "easy variant: Liu case 2b (machine tending), QUASER MV205 mesh of the CoBRA data"),
+    "bpo2024": ("bpo2024", [{"variant": "easy", "structure": "mixed", "difficulty": "mixed"}], 11.4,
+                "easy variant: x, cross, house, oven, random field by task index, 5 easy / 5 medium / 5 hard"),
 }
+PUBLISHED = ("whitman2020_g3o3_fixed", "whitman2020_g3o3_free", "whitman2020_g5o5_free", "liu2020_published",
+             "bpo2024_edge")
 COBRA = ROOT.parent / "shared" / "cobra"  # the CoBRA reference data beside the checkout (--cobra)
-SETS = {"builtin": "robodesign_arm", "IMPROV": "<cobra>/modules/IMPROV"}
-FIELDS = ("variant", "family", "set", "task", "index", "valid", "cyc", "stopped_at", "stage_counts", "evaluations",
-          "first_feasible_s", "optimize_s", "exit_optimize", "exit_check", "message", "finished")
+SETS = {"builtin": "robodesign_arm", "heavy": "robodesign_heavy", "IMPROV": "<cobra>/modules/IMPROV"}
+FIELDS = ("variant", "family", "set", "task", "index", "valid", "cyc", "verdict", "stopped_at", "stage_counts",
+          "evaluations", "first_feasible_s", "optimize_s", "budget_overrun", "exit_optimize", "exit_check", "message",
+          "finished")
 
 
 def _rd() -> list:
@@ -105,6 +120,11 @@ def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, bud
         row["evaluations"] = res.get("evaluations", 0)
         row["first_feasible_s"] = res.get("first_feasible_seconds")
         row["stopped_at"] = res.get("stopped_at") or ""
+        diag = res.get("diagnosis") or {}
+        row["verdict"] = "solved" if res.get("feasible") else (diag.get("verdict") or "")
+        row["diagnosis"] = (diag.get("message") or "")[:300]
+        row["reach_bound"] = diag.get("reach_bound")
+        row["budget_overrun"] = res.get("budget_overrun")
         row["stage_counts"] = stage_counts_text(res.get("stage_counts") or {})
         if not res.get("feasible") and res.get("best"):
             row["message"] = f"best candidate failed at {res['best'].get('stage')}: {res['best'].get('message', '')}"[:300]
@@ -121,6 +141,7 @@ def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, bud
         row["valid"] = c.returncode == 0 and bool(v.get("valid"))
         row["cyc"] = v.get("cost") if row["valid"] else None
         if not row["valid"]:
+            row["verdict"] = "not_found"
             row["stopped_at"] = "check (re-check)"
             row["message"] = "; ".join(str(x.get("message", x)) for x in (v.get("violations") or [])[:2])[:300]
     row["finished"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
@@ -141,7 +162,9 @@ def load_rows(path: Path) -> list:
 def records(rows: list) -> list:
     return [SuiteRecord(suite=r["variant"], task=r["task"], optimizer=r["set"], seed=0, solved=bool(r["valid"]),
                         best=r["cyc"], first_feasible_s=r["first_feasible_s"], evaluations=r["evaluations"],
-                        stopped_at=r["stopped_at"], message=r["message"]) for r in rows]
+                        stopped_at=r["stopped_at"], message=r["message"],
+                        verdict=r.get("verdict") or ("solved" if r["valid"] else ""),
+                        diagnosis=r.get("diagnosis") or "", reach_bound=r.get("reach_bound")) for r in rows]
 
 
 def summarize(rows: list) -> list:
@@ -149,7 +172,10 @@ def summarize(rows: list) -> list:
     for s in summarize_suites(records(rows)):
         anchor = VARIANTS[s["suite"]][2]
         ratio = s["best_cost_median"] / anchor if math.isfinite(s["best_cost_median"]) else math.nan
-        out.append({**s, "anchor_s": anchor, "ratio_median_to_anchor": ratio})
+        cyc = sorted(r["cyc"] for r in rows if r["variant"] == s["suite"] and r["set"] == s["optimizer"]
+                     and r["valid"] and r["cyc"] is not None)
+        p90 = cyc[min(len(cyc) - 1, math.ceil(0.9 * len(cyc)) - 1)] if cyc else math.nan
+        out.append({**s, "best_cost_p90": p90, "anchor_s": anchor, "ratio_median_to_anchor": ratio})
     order = {v: i for i, v in enumerate(VARIANTS)}
     return sorted(out, key=lambda s: (order[s["suite"]], s["optimizer"] != "builtin"))
 
@@ -164,10 +190,12 @@ def write_outputs(out: Path, rows: list, meta: dict) -> list:
             w.writerow(r)
     tmp.replace(out / "runs.csv")
     (out / "summary.json").write_text(json.dumps({"meta": meta, "summary": summary}, indent=1, default=str))
-    cols = ("suite", "optimizer", "tasks", "solved_pct", "best_cost_median", "best_cost_min", "best_cost_max",
-            "anchor_s", "ratio_median_to_anchor", "first_feasible_s_median", "unsolved_stopped_at")
-    head = ("family", "module set", "tasks", "checked valid", "median best cyc [s]", "min", "max", "anchor [s]",
-            "median / anchor", "first feasible [s] (median)", "failures: stage that stopped every candidate")
+    cols = ("suite", "optimizer", "tasks", "solved", "out_of_reach", "not_found", "solved_pct_reachable",
+            "best_cost_median", "best_cost_p90", "best_cost_min", "best_cost_max", "anchor_s", "ratio_median_to_anchor",
+            "first_feasible_s_median", "unsolved_stopped_at")
+    head = ("family", "module set", "tasks", "solved (checked valid)", "provably out of reach", "not found",
+            "solved / not proven", "median best cyc [s]", "p90", "min", "max", "anchor [s]", "median / anchor",
+            "first valid design [s] (median)", "not found: furthest stage")
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(cell(c, s[c]) for c in cols) + " |" for s in summary]
     (out / "summary.md").write_text("\n".join(lines) + "\n")
@@ -184,8 +212,11 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="tasks at a time (default 2; the machine is shared)")
     ap.add_argument("--workers", type=int, default=1,
                     help="robodesign optimize --workers per task (default 1: --jobs tasks already fill the cores)")
-    ap.add_argument("--variants", default=",".join(VARIANTS), help=f"comma-separated, of {', '.join(VARIANTS)}")
-    ap.add_argument("--sets", default=",".join(SETS), help="comma-separated module sets: builtin, IMPROV")
+    ap.add_argument("--variants", default=",".join(PUBLISHED),
+                    help=f"comma-separated, of {', '.join(VARIANTS)} (default: the published families)")
+    ap.add_argument("--sets", default="heavy",
+                    help="comma-separated module sets: builtin (robodesign_arm), heavy (robodesign_heavy), IMPROV "
+                         "(default heavy)")
     ap.add_argument("--out", default=str(ROOT / "experiments" / "results" / "families"))
     ap.add_argument("--cobra", default=str(COBRA), help="the CoBRA reference data (IMPROV modules, machine "
                                                          "meshes; default: ../shared/cobra beside the checkout)")

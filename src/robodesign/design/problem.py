@@ -34,6 +34,7 @@ from robodesign.design.solve import goal_poses, position_slack
 from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.task_spec import Task
+from robodesign.solvers.ik import fixes_full_pose
 
 #: the search-space rules a problem may set (fields of :class:`SearchSpace` besides the module set and bounds)
 RULES = ("min_dof", "max_dof", "max_links_between", "max_modules", "bases", "end_effectors", "exclude")
@@ -196,7 +197,8 @@ def _goal_points(task: Task) -> Tuple[Tuple[float, float, float, float], ...]:
 def _geometry(task: Task) -> Dict[str, Any]:
     """The task geometry a search space samples base poses with: goal positions and static obstacles."""
     obstacles = tuple(geo for o in task.obstacles if not o.moving for geo in o.collision)
-    return {"goals": _goal_points(task), "obstacles": obstacles}
+    full = any(fixes_full_pose(p) for g in task.goals for p in goal_poses(g))
+    return {"goals": _goal_points(task), "obstacles": obstacles, "goal_rank": 6 if full else 0}
 
 
 def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:

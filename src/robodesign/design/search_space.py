@@ -145,6 +145,9 @@ class SearchSpace:
     goals: Tuple[Tuple[float, float, float, float], ...] = ()
     #: the static obstacles' collision geometry (GeometrySpec); a sampled base position stays out of them
     obstacles: Tuple = ()
+    #: the pose directions a goal fixes that a design's tool must move in (6 when a goal fixes position and
+    #: orientation, solvers.ik.fixes_full_pose; 0: none) — :meth:`rank_deficit`, :meth:`informed_candidate`
+    goal_rank: int = 0
 
     # -- module orders ------------------------------------------------------------------------
     def _allowed(self, mid: str) -> bool:
@@ -444,17 +447,31 @@ class SearchSpace:
     def _order_reach(self, order: Tuple[str, ...]) -> Tuple[np.ndarray, float]:
         """(first-joint position in the frame of the base parameters' origin, reach radius R) of ``order``:
         the reach stage's bound, from one robot build per order (memoized)."""
+        return self._order_geometry(order)[:2]
+
+    def _order_geometry(self, order: Tuple[str, ...]) -> Tuple[np.ndarray, float, int]:
+        """:meth:`_order_reach` and the order's :meth:`~robodesign.model.robot.Robot.generic_rank` (computed
+        only when the goals need it, :attr:`goal_rank`; else 6), from one robot build per order (memoized)."""
         cache = self._cache("_memo_reach")
         hit = cache.get(order)
         if hit is None:
             from robodesign.model.robot import Robot
             pose0 = self.base_bounds.pose(tuple(0.0 for _ in self.base_bounds.free))
-            o, R = Robot.from_order(self.module_set, order, base_pose=pose0).reach_bound()
+            robot = Robot.from_order(self.module_set, order, base_pose=pose0)
+            o, R = robot.reach_bound()
             o_local = np.linalg.solve(pose0, np.append(np.asarray(o, dtype=float), 1.0))[:3]
+            rank = robot.generic_rank() if self.goal_rank else 6
             if len(cache) >= _CACHE_LIMIT:
                 cache.clear()
-            hit = cache[order] = (o_local, float(R))
+            hit = cache[order] = (o_local, float(R), int(rank))
         return hit
+
+    def rank_deficit(self, order: Sequence[str]) -> int:
+        """How many pose directions the goals fix that ``order``'s tool cannot move in (``goal_rank`` minus the
+        order's generic Jacobian rank, at least 0): such a design fails the IK stage at once (design.solve)."""
+        if not self.goal_rank:
+            return 0
+        return max(0, int(self.goal_rank) - self._order_geometry(tuple(str(m) for m in order))[2])
 
     def _goal_array(self) -> np.ndarray:
         return np.asarray(self.goals, dtype=float).reshape(-1, 4)
@@ -535,15 +552,16 @@ class SearchSpace:
         return best if best is not None else bb.sample(rng)
 
     def informed_candidate(self, rng, orders: int = 8) -> "Candidate":
-        """A candidate that knows reach and torque: ``orders`` random valid orders, each with a base from
-        :meth:`sample_base`; the one whose reach bound covers the goals (smallest :meth:`reach_shortfall`)
+        """A candidate that knows reach, dexterity and torque: ``orders`` random valid orders, each with a base
+        from :meth:`sample_base`; among those whose tool can move in every direction the goals fix (smallest
+        :meth:`rank_deficit`), the one whose reach bound covers the goals (smallest :meth:`reach_shortfall`)
         and, among those, whose joints are strongest near the base (smallest :meth:`torque_penalty`) wins
         (ties: the first drawn). With ``orders=1`` the order is uniformly random."""
         best, best_key = None, None
         for _ in range(max(1, int(orders))):
             order = self.random_order(rng)
             base = self.sample_base(rng, order)
-            key = (self._shortfall(order, base), self.torque_penalty(order))
+            key = (self.rank_deficit(order), self._shortfall(order, base), self.torque_penalty(order))
             if best_key is None or key < best_key:
                 best, best_key = Candidate(order, base), key
         return best

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Dict, List, Optional, Sequence
 
@@ -270,11 +270,44 @@ class _Pipeline:
     def check(self) -> None:
         res = self.res
         v = check(self.task, res.solution, self.module_set)
+        if not v.valid and _only_collisions(v) and not self.settings.optimize_trajectory:
+            v = self._repair_collisions(v)
         res.verdict = v
         res.solution = res.solution.with_(cost=v.cost)
         if not v.valid:
             raise _Fail("; ".join(str(x) for x in v.violations[:3]))
         _achieve_missed_goals(res, self.planner, self.task, self.module_set, self.solution, self.cost, self.settings)
+
+
+    def _repair_collisions(self, verdict):
+        """The judge sweeps the continuous motion for collisions; the planner checked states ``resolution``
+        apart on straight segments, and the time scaling's blends cut the corners between them. When a
+        collision between samples is all that is wrong, the moves are timed again along the checked
+        segments exactly (``blend_radius = 0``: every waypoint a stop), then planned again with a 4× finer
+        check step; the first motion the judge accepts is kept (else the first verdict stands)."""
+        attempts = [(None, 0.0), (self.settings.resolution / 4, 0.0)]
+        for resolution, blend in attempts:
+            try:
+                if resolution is not None:
+                    self.planner.settings = replace(self.settings, resolution=resolution)
+                    self.planner.choose_and_plan()
+                self.planner.blend_radius = blend
+                self.motion, self.g2t = self.planner.time_parameterize()
+            except (_Fail, RobodesignError):
+                return verdict
+            finally:
+                self.planner.settings = self.settings
+            self.res.solution = self.solution()
+            v = check(self.task, self.res.solution, self.module_set)
+            if v.valid or not _only_collisions(v):
+                return v
+        return verdict
+
+
+def _only_collisions(verdict) -> bool:
+    """Whether every violation of an invalid verdict is a collision (robot–obstacle or self)."""
+    return bool(verdict.violations) and all(x.constraint in ("collisionFree", "selfCollisionFree")
+                                            for x in verdict.violations)
 
 
 def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
@@ -333,6 +366,7 @@ class GoalPlanner:
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
         self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
         self.start = None if start is None else np.asarray(start, dtype=float)  # given start configuration
+        self.blend_radius = 0.05  # rad: the time scaling's corner blends (0: stop at every waypoint)
         terms = dict(parse_cost(cost).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
         # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
@@ -347,7 +381,15 @@ class GoalPlanner:
 
     # -- IK ------------------------------------------------------------------------------------
     def solve_ik(self) -> None:
-        from robodesign.solvers.ik import provably_unreachable, solve_ik
+        from robodesign.solvers.ik import fixes_full_pose, provably_unreachable, solve_ik
+        # an arm that cannot move its tool in all six directions (solvers.ik.fixes_full_pose) does not look for
+        # a goal that fixes position and orientation: its restarts would all fail (docs/diagnosis.md)
+        full = next((g for g in self.order if any(fixes_full_pose(p) for p in goal_poses(g))), None)
+        if full is not None and self.robot.generic_rank() < 6:
+            self.res.goals_reached = 0
+            raise _Fail(f"no IK solution for goal {full.id}: it fixes position and orientation, but the arm's tool "
+                        f"moves in only {self.robot.generic_rank()} independent directions at any configuration "
+                        "(its Jacobian's rank; parallel or coaxial joint axes)")
         # a goal that provably no configuration reaches (solvers.ik.ChainBounds) fails the stage whatever
         # comes before it. The last IK goal before it then only needs to show whether it is reachable: its
         # first solution decides that exactly as when ik_solutions are wanted (the attempts up to the first
@@ -596,7 +638,8 @@ class GoalPlanner:
             robot = self.robot if g is None or g.id not in slow else _SlowedRobot(self.robot, slow[g.id])
             if kind == "move":
                 if path is not None:
-                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing)
+                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing,
+                                            blend_radius=self.blend_radius)
                     if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
                         seg = self._optimize_move(seg, cost)
                     traj = self._append_after_wait(traj, seg, g, colliders)

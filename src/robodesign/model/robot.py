@@ -71,6 +71,7 @@ class Robot:
         self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._reach = None
+        self._generic_rank: Optional[int] = None
         self._batch_chain: Optional["_BatchKinematics"] = None
         self.obstacles: List[Obstacle] = []
         self._obstacle_ids: List[int] = []
@@ -388,6 +389,29 @@ class Robot:
         """6×dof frame Jacobian (linear rows first), world-aligned at the frame origin by default."""
         f = self.tcp_frame if frame is None else frame
         return pin.computeFrameJacobian(self.model, self.data, self._q(q), f, reference)
+
+    def generic_rank(self, samples: int = 4, rtol: float = 1e-8) -> int:
+        """How many independent directions (of the 6 of a pose) the TCP can move in at a generic configuration:
+        the largest rank of the TCP Jacobian over ``samples`` configurations drawn (seeded) within the joint
+        limits, the angular rows scaled by the reach radius so both halves have units of length. A structural
+        rank below 6 (parallel or coaxial axes where a wrist needs three independent ones, fewer than six
+        joints, ...) holds at every configuration except a set of measure zero: such an arm reaches only a
+        lower-dimensional set of poses. Cached (independent of the base pose)."""
+        if self._generic_rank is None:
+            rng = np.random.default_rng(0)
+            lo = np.maximum(np.asarray(self.q_lower, float), -math.pi)
+            hi = np.minimum(np.asarray(self.q_upper, float), math.pi)
+            scale = max(self.reach_bound()[1], 1e-3)
+            best = 0
+            for _ in range(max(1, samples)):
+                J = np.array(self.jacobian(rng.uniform(lo, hi)), dtype=float)
+                J[3:] *= scale
+                s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
+                best = max(best, int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0)
+                if best >= min(J.shape):
+                    break
+            self._generic_rank = best
+        return self._generic_rank
 
     def reach_bound(self) -> Tuple[np.ndarray, float]:
         """(world point o, radius R): every reachable TCP position lies within R of o.

@@ -695,6 +695,27 @@ def provably_unreachable(robot, goal: ToleratedPose) -> str:
     return chain_bounds(robot).unreachable(goal_model(goal))
 
 
+#: a goal "fixes the full pose" when its position is bounded within this half-width [m] in x, y and z (or this
+#: radius) and its orientation within this angle [rad] (Theta_R, or N_x, N_y and N_z in one frame)
+FULL_POSE_POSITION = 0.01
+FULL_POSE_ANGLE = math.radians(2.0)
+
+
+def fixes_full_pose(goal: ToleratedPose) -> bool:
+    """Whether ``goal`` bounds all six pose directions tightly (:data:`FULL_POSE_POSITION`,
+    :data:`FULL_POSE_ANGLE`; the published Whitman2020, BPO24 and Liu2020 goals: ±1 mm, 0.5°). An arm whose
+    :meth:`~robodesign.model.robot.Robot.generic_rank` is below 6 reaches only a lower-dimensional set of poses,
+    which passes through such a small tolerance set only by coincidence: the IK stage does not search for it."""
+    gm = goal_model(goal)
+    box = 2 * FULL_POSE_POSITION
+    pos = gm.sphere_hi <= FULL_POSE_POSITION or any(
+        all(k in b and b[k][1] - b[k][0] <= box for k in "xyz") for b in gm.boxes.values())
+    ang = 2 * FULL_POSE_ANGLE
+    ori = gm.theta_hi <= FULL_POSE_ANGLE or any(
+        len(b) == 3 and all(hi - lo <= ang for lo, hi in b.values()) for b in gm.rot_boxes.values())
+    return bool(pos and ori)
+
+
 def goal_model(goal: ToleratedPose) -> GoalModel:
     """The compiled :class:`GoalModel` of a goal (cached per goal object)."""
     gm = _GOAL_CACHE.get(goal)
