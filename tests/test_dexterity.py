@@ -160,3 +160,40 @@ def test_a_collision_between_samples_is_repaired_by_timing_along_the_checked_seg
     monkeypatch.setattr(solve_module, "check", forged("joint.tau"))
     res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
     assert not res.feasible and res.stage == "check" and len(calls) == 1
+
+
+def test_a_goal_whose_chosen_configuration_cannot_be_reached_gets_another(monkeypatch):
+    """The planner cannot reach the IK solution the sequencing chose for 'place' (forged: as when free space
+    falls apart into pieces); the plan stage tries the goal's other IK solutions, nearest first, and the motion
+    goes to the first one it connects to. The judge accepts the result; the solution reaches 'place' in a
+    configuration other than the blocked one."""
+    from robodesign.core.defaults import DEFAULT_ORDER
+    from robodesign.core.paths import builtin_tasks_dir
+    from robodesign.solvers import planning
+
+    task = load_task(builtin_tasks_dir() / "robodesign" / "pick_and_place.json")
+    ms = load_module_set("robodesign_arm")
+    honest = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
+    assert honest.feasible, honest.message
+    tr = honest.solution.trajectory
+    blocked = tr.q[int(np.argmin(np.abs(tr.t - tr.goal2time["place"])))].copy()
+    real = planning.plan_path
+    tried = []
+
+    def plan_path(robot, q_start, q_goal, **kw):
+        tried.append(np.array(q_goal))
+        if np.allclose(q_goal, blocked, atol=1e-12):
+            return planning.PlanResult(np.zeros((0, robot.dof)), False, {"reason": "no_solution"})
+        return real(robot, q_start, q_goal, **kw)
+
+    monkeypatch.setattr(planning, "plan_path", plan_path)
+    res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
+    assert res.feasible and res.verdict.valid, res.message
+    tr2 = res.solution.trajectory
+    q_place = tr2.q[int(np.argmin(np.abs(tr2.t - tr2.goal2time["place"])))]
+    assert not np.allclose(q_place, blocked, atol=1e-6)
+    assert task.goal("place").pose.valid(res.quantities.tcp_poses[int(np.argmin(np.abs(tr2.t - tr2.goal2time["place"])))])
+    assert any(np.allclose(q, blocked, atol=1e-12) for q in tried)  # the chosen one was tried first
+    # without alternatives the stage fails
+    res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0, plan_alternatives=0))
+    assert not res.feasible and res.stage == "plan"

@@ -232,3 +232,24 @@ def test_torques_hold_with_the_accelerations_the_judge_sees_before_each_sample(m
     tq = TrajectoryQuantities(r, tr.t, tr.q, tr.dq, tr.ddq)
     for tau in tq.motion_torques:  # the checker's own "before" and "after" torques
         assert np.max(np.abs(tau) / r.tau_max) <= 1 + 1e-9
+
+
+def test_a_torque_limit_that_slowing_cannot_meet_ends_early(arm, monkeypatch):
+    """Gravity alone is within the limit at every sample, gravity plus Coulomb friction while moving is not:
+    no slow-down helps. The sample check gives up once slow-downs stop reducing the torque ratio (after two
+    doublings of the duration) or the motion would be 100 times slower than its profile, instead of resampling
+    60 times (here: to 10⁷ samples when a joint's friction exceeded its limit)."""
+    import robodesign.solvers.timing as timing
+    r = Robot.from_order(load_module_set(COBRA / "IMPROV"), ARM)
+    path = PATH[[0, 3]]
+    s = np.linspace(0, 1, 400)[:, None]
+    Q = path[0] + s * (path[1] - path[0])
+    g = np.max(np.abs(r.drivetrain_torques(Q, np.zeros_like(Q), np.zeros_like(Q))), axis=0)
+    r.friction_coulomb = np.maximum(r.friction_coulomb, 0.05 * g + 0.5)
+    r.tau_max = g + 0.6 * r.friction_coulomb  # holds every pose of the path at rest, but not while moving
+    calls = []
+    real = timing._sample
+    monkeypatch.setattr(timing, "_sample", lambda *a: calls.append(1) or real(*a))
+    with pytest.raises(TimingError, match="slowing down does not bring the torque|slowed down more than 100 times"):
+        time_parameterize(r, path, method="ruckig")
+    assert len(calls) < 30  # the old check ran all 60 slow-downs

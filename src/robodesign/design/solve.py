@@ -54,6 +54,9 @@ class SolveSettings:
     # (docs/benchmarks.md, "Choosing among IK solutions")
     ik_solutions: int = 48
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
+    # when no path reaches a goal's chosen IK solution, its other solutions (nearest first) tried, each with
+    # a quarter of plan_time
+    plan_alternatives: int = 3
     seed: int = 0
     check: bool = True
     stop_after: Optional[str] = None  # stop after this stage (screening, e.g. "ik"); no solution is produced
@@ -466,7 +469,6 @@ class GoalPlanner:
         """Choose one IK solution per pose goal (dynamic programming over the goal sequence, minimising
         the sum of time-optimal bounds of all moves, including returns to the start), then plan
         collision-free paths between the stops."""
-        from robodesign.solvers.planning import plan_path
         choice: Dict[str, np.ndarray] = {}
         nodes = self._sequence_nodes()
         if nodes:
@@ -518,14 +520,15 @@ class GoalPlanner:
         # plan every move
         self.paths = []
         q = q0
-        for kind, arg, g in actions:
+        for i in range(len(self.actions)):
+            kind, arg, g = self.actions[i]  # an earlier move may have replaced a goal's configuration
             if kind == "move":
                 if np.allclose(arg, q, atol=1e-12):
                     self.paths.append(None)
                     continue
-                r = plan_path(self.robot, q, arg, planner=self.settings.planner, time_limit=self.settings.plan_time,
-                              seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution,
-                              static_torque=True)  # as the static_torque stage: timing cannot repair it
+                r = self._plan(q, arg, self.settings.plan_time)
+                if not r:
+                    r, arg = self._plan_to_another_solution(q, arg, g, r)
                 if not r:
                     raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
                                 f"({r.stats.get('reason')})")
@@ -541,6 +544,35 @@ class GoalPlanner:
                 q = arg[-1]
             else:
                 self.paths.append(None)
+
+    def _plan(self, q, target, time_limit: float):
+        from robodesign.solvers.planning import plan_path
+        return plan_path(self.robot, q, target, planner=self.settings.planner, time_limit=time_limit,
+                         seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution,
+                         static_torque=True)  # as the static_torque stage: timing cannot repair it
+
+    def _plan_to_another_solution(self, q, target, g, failed):
+        """When no path reaches the chosen IK solution of an at/reach goal (free space, with the poses the
+        joints can hold, often falls apart into pieces: the goal's other solutions lie in other pieces), try
+        the goal's other IK solutions, nearest first (the sequencing's transition cost from ``q``), up to
+        ``settings.plan_alternatives``, each with a quarter of the planning effort. The first that connects replaces
+        the chosen one in every later action. Returns (plan result, target)."""
+        if g is None or not isinstance(g, (At, Reach)) or self.choice.get(g.id) is not target:
+            return failed, target
+        others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
+        if not others:
+            return failed, target
+        C = np.vstack(others)
+        order = np.argsort(self._cost(np.asarray(q, dtype=float)[None, :], C)[0], kind="stable")
+        for k in order[: self.settings.plan_alternatives]:
+            alt = others[int(k)]
+            r = self._plan(q, alt, self.settings.plan_time / 4)
+            if r:
+                self.choice[g.id] = alt
+                self.actions = [(kd, alt if (kd == "move" and a is target) else a, gg)
+                                for kd, a, gg in self.actions]
+                return r, alt
+        return failed, target
 
     def _sequence_nodes(self) -> list:
         """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach

@@ -405,6 +405,16 @@ def _sample(prof: _Profile, n: int, h: float) -> Tuple[JointTrajectory, float]:
     return JointTrajectory(h * np.arange(n + 2), Q, V, A), lam
 
 
+#: :func:`_fit_limits` gives up when STALL_WINDOW slow-downs in a row took less than STALL_GAIN (relative) off the
+#: torque ratio
+STALL_WINDOW = 5
+STALL_GAIN = 0.01
+STALL_DOUBLINGS = 2
+#: nor slows a motion down more than this factor (a motion 100× slower than its time-optimal profile is no
+#: candidate for a cycle time; unbounded, a joint whose friction exceeds its limit made 10⁷-sample motions)
+MAX_STRETCH = 100.0
+
+
 def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> JointTrajectory:
     if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
         tr = JointTrajectory.at_rest(prof.q_goal)
@@ -414,6 +424,8 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
     amax = np.asarray(robot.ddq_max, float)
     tmax = np.asarray(robot.tau_max, float)
     n = max(1, int(math.ceil(prof.duration / h - 1e-9)))
+    torque_history: List[float] = []
+    doublings = 0
     for it in range(max_iter):
         tr, lam = _sample(prof, n, h)
         m = np.isfinite(vmax)
@@ -439,8 +451,25 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
             m = np.isfinite(tmax)
             if np.any(np.abs(g[:, m]) > tmax[m]):
                 raise TimingError("the path passes configurations where gravity alone exceeds the torque limit")
+        if torque_limits and rt > 1.0:
+            torque_history.append(rt)
+            # slowing down shrinks the inertial and velocity terms; what stays is gravity and Coulomb friction
+            # while moving. When STALL_WINDOW slow-downs took less than STALL_GAIN off the torque ratio, the
+            # duration is doubled (at most STALL_DOUBLINGS times); a ratio still over the limit after that is
+            # gravity and friction alone: give up instead of stretching the motion sixty times
+            if len(torque_history) > STALL_WINDOW and rt > torque_history[-1 - STALL_WINDOW] * (1 - STALL_GAIN):
+                if doublings >= STALL_DOUBLINGS:
+                    raise TimingError(f"slowing down does not bring the torque within the limit (|τ|/τ_max = "
+                                      f"{rt:.4f} after {it} slow-downs, stretch {lam:.3f}: gravity and friction)")
+                doublings += 1
+                torque_history.clear()
+                n *= 2
+                continue
         grow = max(1.0, rv, math.sqrt(max(ra, 0.0)), math.sqrt(max(rt, 0.0)) if rt > 1 else 1.0) * (1.0 + 1e-4)
         n = max(n + 1, int(math.ceil(n * grow - 1e-9)))
+        if n * h > MAX_STRETCH * max(prof.duration, h):
+            raise TimingError(f"the limits need the motion slowed down more than {MAX_STRETCH:g} times "
+                              f"(|dq|/limit {rv:.3g}, |ddq|/limit {ra:.3g}, |τ|/limit {rt:.3g})")
     raise TimingError(f"could not satisfy the limits after {max_iter} slow-downs (stretch {lam:.3f})")
 
 
