@@ -164,8 +164,8 @@ def test_a_collision_between_samples_is_repaired_by_timing_along_the_checked_seg
 
 def test_a_goal_whose_chosen_configuration_cannot_be_reached_gets_another(monkeypatch):
     """The planner cannot reach the IK solution the sequencing chose for 'place' (forged: as when free space
-    falls apart into pieces); the plan stage tries the goal's other IK solutions, nearest first, and the motion
-    goes to the first one it connects to. The judge accepts the result; the solution reaches 'place' in a
+    falls apart into pieces); the plan stage plans once more to any of the goal's IK solutions (the nearest
+    others as further goal states), and the motion goes to the one the path reaches. The judge accepts the result; the solution reaches 'place' in a
     configuration other than the blocked one."""
     from robodesign.core.defaults import DEFAULT_ORDER
     from robodesign.core.paths import builtin_tasks_dir
@@ -180,11 +180,16 @@ def test_a_goal_whose_chosen_configuration_cannot_be_reached_gets_another(monkey
     real = planning.plan_path
     tried = []
 
-    def plan_path(robot, q_start, q_goal, **kw):
+    def plan_path(robot, q_start, q_goal, other_goals=(), **kw):
+        """The real planner, with the blocked configuration taken out of the goals."""
         tried.append(np.array(q_goal))
-        if np.allclose(q_goal, blocked, atol=1e-12):
+        if not np.allclose(q_goal, blocked, atol=1e-12):
+            return real(robot, q_start, q_goal, other_goals=other_goals, **kw)
+        if not len(other_goals):
             return planning.PlanResult(np.zeros((0, robot.dof)), False, {"reason": "no_solution"})
-        return real(robot, q_start, q_goal, **kw)
+        r = real(robot, q_start, other_goals[0], other_goals=other_goals[1:], **kw)
+        r.stats["goal"] = r.stats.get("goal", 0) + 1  # index among (blocked, *other_goals)
+        return r
 
     monkeypatch.setattr(planning, "plan_path", plan_path)
     res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))

@@ -196,3 +196,22 @@ def test_the_work_budget_stops_a_planner_that_cannot_succeed(robot, monkeypatch)
     res = plan_path(robot, QA, QB, time_limit=0.25, seed=0)
     assert not res.success and res.stats["reason"] == "no_solution"
     assert 500 <= res.stats["checks"] <= 500 + 2 + 2000   # 0.25 s x 2000 checks/s, plus the straight-line checks
+
+
+def test_any_of_several_goal_configurations(robot):
+    """``other_goals``: the planner's goal tree grows from every valid goal configuration at once and the path
+    ends exactly at the one it reached; a goal in collision is skipped (here the requested one: the midpoint,
+    inside the box), and with no valid goal the request fails as 'invalid_goal'."""
+    mid = 0.5 * (QA + QB)
+    res = plan_path(robot, QA, mid, time_limit=5.0, seed=1, other_goals=[mid + 1e-3, QB])
+    assert res.success and res.stats["goal"] == 2 and np.array_equal(res.path[-1], QB)
+    assert np.array_equal(res.path[0], QA) and dense_ok(robot, res.path, 0.005)
+    # the requested goal, when reachable in a straight line, is taken directly
+    q1 = QA + np.array([0.05, 0, 0, 0, 0, 0])
+    res = plan_path(robot, QA, q1, other_goals=[QB])
+    assert res.success and res.stats["straight_line"] and res.stats["goal"] == 0 and np.array_equal(res.path[-1], q1)
+    # no valid goal at all
+    res = plan_path(robot, QA, mid, other_goals=[mid + 1e-3])
+    assert not res.success and res.stats["reason"] == "invalid_goal"
+    with pytest.raises(InputError):
+        plan_path(robot, QA, QB, other_goals=[QB[:3]])

@@ -54,9 +54,9 @@ class SolveSettings:
     # (docs/benchmarks.md, "Choosing among IK solutions")
     ik_solutions: int = 48
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
-    # when no path reaches a goal's chosen IK solution, its other solutions (nearest first) tried, each with
-    # a quarter of plan_time
-    plan_alternatives: int = 3
+    # when no path reaches a goal's chosen IK solution, one more query (half of plan_time) to it or any of this
+    # many of the goal's other IK solutions (nearest first)
+    plan_alternatives: int = 8
     seed: int = 0
     check: bool = True
     stop_after: Optional[str] = None  # stop after this stage (screening, e.g. "ik"); no solution is produced
@@ -545,34 +545,39 @@ class GoalPlanner:
             else:
                 self.paths.append(None)
 
-    def _plan(self, q, target, time_limit: float):
+    def _plan(self, q, target, time_limit: float, other_goals=()):
         from robodesign.solvers.planning import plan_path
         return plan_path(self.robot, q, target, planner=self.settings.planner, time_limit=time_limit,
                          seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution,
-                         static_torque=True)  # as the static_torque stage: timing cannot repair it
+                         static_torque=True,  # as the static_torque stage: timing cannot repair it
+                         other_goals=other_goals)
 
     def _plan_to_another_solution(self, q, target, g, failed):
         """When no path reaches the chosen IK solution of an at/reach goal (free space, with the poses the
-        joints can hold, often falls apart into pieces: the goal's other solutions lie in other pieces), try
-        the goal's other IK solutions, nearest first (the sequencing's transition cost from ``q``), up to
-        ``settings.plan_alternatives``, each with a quarter of the planning effort. The first that connects replaces
-        the chosen one in every later action. Returns (plan result, target)."""
-        if g is None or not isinstance(g, (At, Reach)) or self.choice.get(g.id) is not target:
+        joints can hold, often falls apart into pieces: the goal's other solutions lie in other pieces), plan
+        once more, with half the planning effort, to any of the goal's IK solutions: the chosen one and up to
+        ``settings.plan_alternatives`` others, nearest first (the sequencing's transition cost from ``q``), all
+        goal states of one query. The one the path reaches replaces the chosen one in every later action.
+        Returns (plan result, target)."""
+        if (g is None or not isinstance(g, (At, Reach)) or self.choice.get(g.id) is not target
+                or self.settings.plan_alternatives <= 0):
             return failed, target
         others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
         if not others:
             return failed, target
         C = np.vstack(others)
         order = np.argsort(self._cost(np.asarray(q, dtype=float)[None, :], C)[0], kind="stable")
-        for k in order[: self.settings.plan_alternatives]:
-            alt = others[int(k)]
-            r = self._plan(q, alt, self.settings.plan_time / 4)
-            if r:
-                self.choice[g.id] = alt
-                self.actions = [(kd, alt if (kd == "move" and a is target) else a, gg)
-                                for kd, a, gg in self.actions]
-                return r, alt
-        return failed, target
+        alts = [others[int(k)] for k in order[: self.settings.plan_alternatives]]
+        r = self._plan(q, target, self.settings.plan_time / 2, other_goals=alts)
+        if not r:
+            return failed, target
+        k = int(r.stats.get("goal", 0))
+        if k == 0:
+            return r, target
+        alt = alts[k - 1]
+        self.choice[g.id] = alt
+        self.actions = [(kd, alt if (kd == "move" and a is target) else a, gg) for kd, a, gg in self.actions]
+        return r, alt
 
     def _sequence_nodes(self) -> list:
         """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach

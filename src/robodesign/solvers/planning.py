@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -273,8 +273,13 @@ def _partial_shortcuts(valid, P: np.ndarray, resolution: float, counter: List[in
 # ---------------------------------------------------------------------------------------------------------
 def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: float = 1.0, seed: int = 0,
               resolution: float = 0.01, simplify: bool = True, optimize: bool = False,
-              static_torque: bool = False) -> PlanResult:
+              static_torque: bool = False, other_goals: Sequence = ()) -> PlanResult:
     """A collision-free joint path from ``q_start`` to ``q_goal`` (both kept exactly).
+
+    ``other_goals``: further configurations any of which will do as well (a goal's other IK solutions): the
+    planner grows its goal tree from all the valid ones at once, and the path ends exactly at the one it
+    connected to; ``stats["goal"]`` says which (0: ``q_goal``, k: ``other_goals[k − 1]``; the straight line is
+    tried to ``q_goal`` only).
 
     ``planner``: one of :func:`available_planners` (case-insensitive). ``time_limit`` (s) bounds the
     OMPL solve as a work limit of ``time_limit`` × :data:`CHECKS_PER_SECOND` validity checks (the same path on
@@ -322,19 +327,34 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     counter[0] += 1
     if not valid(qs):
         return done(None, "invalid_start")
+    goals = [qg]
+    for q in other_goals:
+        q = np.asarray(q, dtype=float).reshape(-1)
+        if q.shape != (n,) or not np.all(np.isfinite(q)):
+            raise InputError(f"other_goals must be {n} finite joint values each, got {q.tolist()}")
+        goals.append(q)
+    stats["goal"] = 0
     counter[0] += 1
     if not valid(qg):
+        if len(goals) == 1:
+            return done(None, "invalid_goal")
+        goals[0] = None  # not a goal state; the others still are
+    ok_goals = [k for k, q in enumerate(goals) if q is not None and (k == 0 or valid(q))]
+    if not ok_goals:
         return done(None, "invalid_goal")
     direct = np.array([qs, qg])
-    if _segment_ok(valid, qs, qg, resolution, counter):
+    if goals[0] is not None and _segment_ok(valid, qs, qg, resolution, counter):
         stats["straight_line"] = True
         stats["raw_waypoints"] = 2
         return done(direct, "straight_line")      # also for q_start == q_goal: always [start, goal]
 
-    raw = _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats)
+    G = np.vstack([goals[k] for k in ok_goals])
+    raw = _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize, counter, stats)
     if raw is None:
         return done(None, "no_solution")
-    raw[0], raw[-1] = qs, qg
+    reached = ok_goals[int(np.argmin(np.max(np.abs(G - raw[-1]), axis=1)))]
+    stats["goal"] = reached
+    raw[0], raw[-1] = qs, goals[reached]
     candidates = [raw]
     if simplify:
         ts = time.perf_counter()
@@ -355,16 +375,18 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     return done(None, "final_check_failed")
 
 
-def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimize, counter, stats):
+def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize, counter, stats):
+    """OMPL's path from ``qs`` to any row of ``G`` (one or more goal configurations), or None."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
 
     n = robot.dof
+    G = np.atleast_2d(np.asarray(G, dtype=float))
     lo = np.asarray(robot.q_lower, dtype=float).copy()
     hi = np.asarray(robot.q_upper, dtype=float).copy()
-    lo = np.where(np.isfinite(lo), lo, np.minimum(-math.pi, np.minimum(qs, qg)))
-    hi = np.where(np.isfinite(hi), hi, np.maximum(math.pi, np.maximum(qs, qg)))
+    lo = np.where(np.isfinite(lo), lo, np.minimum(-math.pi, np.minimum(qs, G.min(axis=0))))
+    hi = np.where(np.isfinite(hi), hi, np.maximum(math.pi, np.maximum(qs, G.max(axis=0))))
     hi = np.where(hi > lo, hi, lo + 1e-9)
 
     level = ou.getLogLevel()
@@ -395,11 +417,24 @@ def _plan_ompl(robot, valid, qs, qg, name, time_limit, seed, resolution, optimiz
         ss.setStateValidityChecker(is_valid)
         si = ss.getSpaceInformation()
         si.setStateValidityCheckingResolution(min(1.0, resolution / space.getMaximumExtent()))
-        start, goal = space.allocState(), space.allocState()
+        start = space.allocState()
         for i in range(n):
             start[i] = float(qs[i])
-            goal[i] = float(qg[i])
-        ss.setStartAndGoalStates(start, goal, _GOAL_TOL)
+        if len(G) == 1:
+            goal = space.allocState()
+            for i in range(n):
+                goal[i] = float(G[0, i])
+            ss.setStartAndGoalStates(start, goal, _GOAL_TOL)
+        else:
+            goal = ob.GoalStates(si)
+            for row in G:
+                st = space.allocState()
+                for i in range(n):
+                    st[i] = float(row[i])
+                goal.addState(st)
+            goal.setThreshold(_GOAL_TOL)
+            ss.setStartState(start)
+            ss.setGoal(goal)
         obj = ob.PathLengthOptimizationObjective(si)
         if not optimize:
             obj.setCostThreshold(obj.infiniteCost())
