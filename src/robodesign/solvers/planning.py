@@ -16,6 +16,10 @@ Decisions:
   steps are then ≤ ``resolution`` in every joint (conservative by up to √dof). :func:`check_path` steps
   by the largest joint difference directly (``ceil(max|Δq| / resolution)`` sub-steps per segment).
 * **Straight line first**: if the direct segment passes the dense check, no planner is called.
+* **Several goals** (``other_goals``): any of a goal's IK solutions will do; OMPL gets every valid one as a goal
+  state of one query (``GoalStates``: RRT-Connect grows its goal tree from all of them), and the path ends
+  exactly at the one it reached (``stats["goal"]``). The solve pipeline asks this only after the chosen
+  solution could not be reached (free space with the poses the joints can hold often falls apart into pieces).
 * **Each state is evaluated once per call**: the validity verdicts are remembered by the configuration's
   exact bytes, so the shortcuts and the final dense check do not re-query states the planner's checks already
   decided (``stats["distinct_states"]`` counts the evaluated ones, ``lookups`` every verdict asked for).
