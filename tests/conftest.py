@@ -19,6 +19,20 @@ def pytest_sessionstart(session):
     if ik_kernel.available() and not ik_kernel.compiled():
         ik_kernel.compile_into_cache()
 
+def pytest_collection_modifyitems(config, items):
+    """Order for ``pytest -n 2`` (README's test command; pytest-xdist with ``--dist loadfile`` from pyproject's
+    addopts: each file runs whole on one worker, so its module-scoped fixtures are built once, and the files go
+    to the workers in the order of the collection). In each worker, the files with the most tests marked
+    ``slow`` come first, so the two workers start with the long files and neither is left alone with one
+    at the end; a file's tests keep their order. A run without ``-n`` is left as collected."""
+    if not hasattr(config, "workerinput"):  # not an xdist worker
+        return
+    slow = {}
+    for item in items:
+        slow[item.path] = slow.get(item.path, 0) + (item.get_closest_marker("slow") is not None)
+    items.sort(key=lambda item: -slow[item.path])  # stable: the files keep their order, their tests too
+
+
 ROOT = Path(__file__).resolve().parents[1]
 COBRA = ROOT.parent / "shared" / "cobra"
 # assets/tasks/make_tasks.py (the built-in tasks' script) is importable as `make_tasks` in every test

@@ -16,6 +16,8 @@ import pytest
 from conftest import IMPROV, TASKS
 from test_experiment import SMALL, rows, stored_count, write
 
+# pytest -n 2 (README) runs this file whole on one worker (--dist loadfile): its `ray stop --force` stops every
+# Ray process of the machine, so no other test of the suite uses Ray
 pytestmark = pytest.mark.slow
 BIN = Path(sys.executable).parent
 RAY = shutil.which("ray", path=str(BIN)) or shutil.which("ray")
