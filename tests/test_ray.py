@@ -16,9 +16,10 @@ import pytest
 from conftest import IMPROV, TASKS
 from test_experiment import SMALL, rows, stored_count, write
 
-# pytest -n 2 (README) runs this file whole on one worker (--dist loadfile): its `ray stop --force` stops every
-# Ray process of the machine, so no other test of the suite uses Ray
-pytestmark = pytest.mark.slow
+# README's test command runs this file after the parallel part (`-m serial`), alone: its `ray stop --force` stops
+# every Ray process of the machine (no other test uses Ray), and Ray's start-up limits (30 s for a node, the actors'
+# start) were missed at a load of 10 beside another pytest worker
+pytestmark = [pytest.mark.slow, pytest.mark.serial]
 BIN = Path(sys.executable).parent
 RAY = shutil.which("ray", path=str(BIN)) or shutil.which("ray")
 ENV = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_AUTH_MODE="disabled", PYTHONUNBUFFERED="1")
