@@ -12,6 +12,8 @@ judges uploads, solver output and optimizer candidates. Semantics (docs/checker.
   (collisions certified by :mod:`robodesign.model.sweep`), torques at every sample with the file's ddq and
   with the motion's acceleration just before and after it.
 * ``ddq`` limits are enforced (the reference never checks them).
+* Costs read the judged motion: its velocities and its acceleration at each sample (and the torques with them),
+  not the file's dq/ddq (:attr:`TrajectoryQuantities.motion_accelerations`).
 * Torques are drivetrain torques τ = RNEA + k²I_m q̈ + f_v q̇ + f_c σ(q̇) under the task's gravity,
   with the wrench of a follow goal applied at the TCP during that goal.
 * Goal-level constraints hold over the goal's own window (pause/follow: [t_g − duration, t_g];
@@ -192,8 +194,14 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
         violations += _check_order(c, tr.goal2time)
     t1 = time.perf_counter()
     n_ok = sum(goal_ok.values())
-    cctx = CostContext(t=tr.t, q=tr.q, dq=tr.dq, ddq=tr.ddq, tau=lambda: tq.torques, tau_link=lambda: tq.link_torques,
-                       mass=robot.mass, num_joints=robot.dof, goals_achieved=n_ok, num_goals=len(task.goals))
+    if settings.one_motion and tr.n >= 2:  # costs on the judged motion, not on the file's dq/ddq (docs/checker.md)
+        cctx = CostContext(t=tr.t, q=tr.q, dq=tq.velocities, ddq=tq.motion_accelerations,
+                           tau=lambda: tq.motion_drivetrain_torques, tau_link=lambda: tq.motion_link_torques,
+                           mass=robot.mass, num_joints=robot.dof, goals_achieved=n_ok, num_goals=len(task.goals))
+    else:
+        cctx = CostContext(t=tr.t, q=tr.q, dq=tr.dq, ddq=tr.ddq, tau=lambda: tq.torques,
+                           tau_link=lambda: tq.link_torques, mass=robot.mass, num_joints=robot.dof,
+                           goals_achieved=n_ok, num_goals=len(task.goals))
     costs: Dict[str, float] = {}
     if settings.all_costs:
         for name in known_costs():
