@@ -12,7 +12,10 @@ f_c·σ(q̇) is smooth on each piece. Per piece and joint:
 * then τ(t) ≤ min(τ(t₀) + d_hi·(t − t₀), τ(t₁) − d_lo·(t₁ − t)) and τ(t) ≥ max(τ(t₀) + d_lo·(t − t₀),
   τ(t₁) − d_hi·(t₁ − t)) for every t of the piece: an upper and a lower bound of τ over the piece.
 
-A piece is **certified** when both bounds lie within ±peakTorque·(1 + LIMIT_RTOL). Otherwise τ is evaluated at
+First the steps are grouped (CHUNK_STEPS = 16), and one rate enclosure over each group's box (the motion's q and
+q̇ extremes over its steps, all its accelerations) bounds every piece in it: far from the limit that certifies
+them all at once. A piece is **certified** when both bounds lie within ±peakTorque·(1 + LIMIT_RTOL); the pieces
+a group leaves open get their own, tighter enclosure. Otherwise τ is evaluated at
 its midpoint: above the limit there, it is a violation (joint, time, value); else the piece is split in two
 and the halves are bounded again, down to pieces of h/2^MAX_DEPTH. The bounds' excess shrinks with the piece
 (linearly, quadratically near an interior extremum), so a motion whose torque stays inside the limit is
@@ -31,6 +34,7 @@ from robodesign.judge.interval_rnea import IntervalDynamics
 from robodesign.model.robot import COULOMB_SMOOTHING
 
 MAX_DEPTH = 12  # pieces are split down to h / 4096
+CHUNK_STEPS = 16  # steps per group of the first, coarse rate bound
 ROUND_RTOL = 1e-12  # the pieces' q and q̇ intervals are widened by this (relative) against rounding
 
 
@@ -46,7 +50,7 @@ class ArcTorqueViolation:
 @dataclass
 class ArcTorqueReport:
     violations: List[ArcTorqueViolation]
-    pieces: int  # pieces bounded (the initial ones and every split)
+    pieces: int  # pieces bounded one by one (those the chunks' bound left open, and every split)
     evaluations: int  # exact torque evaluations (piece ends and midpoints)
     depth: int  # deepest split used
 
@@ -82,6 +86,50 @@ def _bounds(ta, tb, d_lo, d_hi, delta):
     return ub, lb
 
 
+def _rate_bounds(dyn, robot, Q, V, acc_lo, acc_hi, wr):
+    """[d_lo, d_hi] (P, dof) enclosing dτ/dt of the drivetrain torque along any arc with q in Q, q̇ in V and a
+    constant q̈ in [acc_lo, acc_hi]: the link-side rate (interval RNEA) plus the friction term's
+    (f_v + f_c·σ'(q̇))·q̈, σ'(x) = k / (1 + (kx)²)^1.5 (largest at the q̇ nearest 0); k²I_m·q̈ is constant."""
+    am, ar = (acc_lo + acc_hi) / 2, (acc_hi - acc_lo) / 2
+    T = dyn.link_torques(Q, V, (am, ar), wr if np.any(wr) else None)
+    fv, fc = np.asarray(robot.friction_viscous, dtype=float), np.asarray(robot.friction_coulomb, dtype=float)
+    vlo, vhi = V[0] - V[1], V[0] + V[1]
+    near = np.clip(0.0, vlo, vhi)
+    far = np.where(np.abs(vlo) > np.abs(vhi), vlo, vhi)
+    dsig = lambda x: COULOMB_SMOOTHING / (1.0 + (COULOMB_SMOOTHING * x) ** 2) ** 1.5  # noqa: E731
+    f_lo, f_hi = fv + np.minimum(fc * dsig(near), fc * dsig(far)), fv + np.maximum(fc * dsig(near), fc * dsig(far))
+    prods = np.stack([f_lo * acc_lo, f_lo * acc_hi, f_hi * acc_lo, f_hi * acc_hi])
+    return T.dm - T.dr + prods.min(axis=0), T.dm + T.dr + prods.max(axis=0)
+
+
+def _chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim):
+    """(pieces, dof) True where the piece is certified by its chunk's rate bound: the steps are grouped by
+    CHUNK_STEPS, one interval RNEA pass over each group's box (q and q̇ extremes of the motion over its steps, all
+    its accelerations) bounds the rate of every piece in it. Groups whose wrench changes are not prefiltered."""
+    first = int(steps[0])
+    ch_of_step = (steps - first) // CHUNK_STEPS
+    starts = np.nonzero(np.r_[True, np.diff(ch_of_step) != 0])[0]
+    mn, _, mx, _ = motion.position_extremes()
+    v_all = np.stack([motion.v[:-1], motion.v_switch, motion.v[1:]])
+    red = lambda f, x: f.reduceat(x[steps], starts, axis=0)  # noqa: E731
+    q_lo, q_hi = red(np.minimum, mn), red(np.maximum, mx)
+    v_lo, v_hi = red(np.minimum, v_all.min(axis=0)), red(np.maximum, v_all.max(axis=0))
+    a_lo = red(np.minimum, np.minimum(motion.a1, motion.a2))
+    a_hi = red(np.maximum, np.maximum(motion.a1, motion.a2))
+    ends = np.r_[starts[1:], len(steps)]
+    wr = np.zeros((len(starts), 6))
+    same = np.ones(len(starts), dtype=bool)
+    for c, (i0, i1) in enumerate(zip(starts, ends)):
+        rows = W[steps[i0]:steps[i1 - 1] + 2]
+        same[c] = bool(np.all(rows == rows[0]))
+        wr[c] = rows[0]
+    Q, V = _interval(q_lo, q_hi), _interval(v_lo, v_hi)
+    d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, np.where(same[:, None], wr, 0.0))
+    c = np.searchsorted(ch_of_step[starts], (k_arr - first) // CHUNK_STEPS)  # the piece's group
+    ub, lb = _bounds(ta, tb, d_lo[c], d_hi[c], (s1 - s0)[:, None])
+    return (ub <= lim) & (lb >= -lim) & same[c][:, None]
+
+
 def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, limit: np.ndarray,
                         skip: Optional[np.ndarray] = None, sample_torques=None) -> ArcTorqueReport:
     """Certify |τ_j(t)| ≤ ``limit``_j over every step in ``steps`` of ``motion`` (a StepMotion), or find where it
@@ -96,7 +144,6 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
     if len(steps) == 0:
         return ArcTorqueReport([], 0, 0, 0)
     dyn = IntervalDynamics(robot)
-    fv, fc = np.asarray(robot.friction_viscous, dtype=float), np.asarray(robot.friction_coulomb, dtype=float)
     W = np.asarray(wrenches, dtype=float)
     # initial pieces: each step cut at its joints' switch instants where the acceleration changes (sorted,
     # duplicates and empty pieces dropped)
@@ -158,6 +205,8 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
             record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], True)
     bad = np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr]) if found else np.zeros_like(open_)
     open_ &= ~bad
+    if np.any(open_):
+        open_ &= ~_chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim)
     depth = 0
     while True:
         live = np.any(open_, axis=1)
@@ -176,15 +225,7 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         qv = np.where(inside, qa + va * sv / 2, qa)  # q at the vertex: qa + va·sv + acc·sv²/2 = qa + va·sv/2
         Q = _interval(np.minimum(np.minimum(qa, qb), qv), np.maximum(np.maximum(qa, qb), qv))
         V = _interval(np.minimum(va, vb), np.maximum(va, vb))
-        T = dyn.link_torques(Q, V, acc, wr if np.any(wr) else None)
-        # friction rate: (f_v + f_c·σ'(q̇))·q̈, σ'(x) = k / (1 + (kx)²)^1.5, largest at the q̇ nearest 0
-        vlo, vhi = V[0] - V[1], V[0] + V[1]
-        near = np.clip(0.0, vlo, vhi)
-        far = np.where(np.abs(vlo) > np.abs(vhi), vlo, vhi)
-        dsig = lambda x: COULOMB_SMOOTHING / (1.0 + (COULOMB_SMOOTHING * x) ** 2) ** 1.5  # noqa: E731
-        f_lo, f_hi = fv + np.minimum(fc * dsig(near), fc * dsig(far)), fv + np.maximum(fc * dsig(near), fc * dsig(far))
-        fr_lo, fr_hi = np.minimum(f_lo * acc, f_hi * acc), np.maximum(f_lo * acc, f_hi * acc)
-        d_lo, d_hi = T.dm - T.dr + fr_lo, T.dm + T.dr + fr_hi  # (k²I_m·q̈ is constant on a piece)
+        d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, acc, acc, wr)
         ub, lb = _bounds(ta, tb, d_lo, d_hi, delta[:, None])
         certified = (ub <= lim) & (lb >= -lim)
         open_ &= ~certified
