@@ -1,6 +1,6 @@
 """Benchmark: what the judge's motion model costs (issue 22: torques between samples, the witness search).
 
-    nice -n 10 .venv/bin/python experiments/bench_judge_motion.py [--repeat 7]
+    nice -n 10 .venv/bin/python experiments/bench_judge_motion.py [--repeat 15]
 
 The 350-sample PTP_3 solution of `robodesign solve` (IMPROV arm 1,21,4,22,5,23,12, seed 0) and the same file with
 dq/ddq refilled by numpy.gradient (the reference's way, which needs the witness search), each checked
@@ -46,7 +46,7 @@ def median_time(fn, repeat):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--repeat", type=int, default=15)
     args = ap.parse_args()
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores)")
     task = load_task(SHARED / "tasks" / "simple" / "PTP_3.json")
@@ -59,12 +59,16 @@ def main():
     arc = checker._arc_torque_violations
     for name, s in (("solver's file", sol), ("gradient-filled copy", grad)):
         checker.check(task, s, ms)  # warm-up
-        t_all, v = median_time(lambda: checker.check(task, s, ms), args.repeat)
-        checker._arc_torque_violations = lambda *a: []
-        try:
-            t_no, _ = median_time(lambda: checker.check(task, s, ms), args.repeat)
-        finally:
-            checker._arc_torque_violations = arc
+        with_, without = [], []
+        for _ in range(args.repeat):  # interleaved, so that the machine's load drifts into both alike
+            t, v = median_time(lambda: checker.check(task, s, ms), 1)
+            with_.append(t)
+            checker._arc_torque_violations = lambda *a: []
+            try:
+                without.append(median_time(lambda: checker.check(task, s, ms), 1)[0])
+            finally:
+                checker._arc_torque_violations = arc
+        t_all, t_no = float(np.median(with_)), float(np.median(without))
         tq = TrajectoryQuantities.from_solution(robot, s, task)
         t_arc, rep = median_time(lambda: certify_arc_torques(robot, tq.motion, tq.external_wrenches,
                                                              np.arange(tq.n - 1), robot.tau_max * (1 + 1e-9),
