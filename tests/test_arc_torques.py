@@ -218,3 +218,16 @@ def test_solver_trajectories_with_active_torque_limits_are_certified(method, pai
     rep = certify_arc_torques(r, tq.motion, tq.external_wrenches, np.arange(tq.n - 1), r.tau_max * (1 + 1e-9),
                               sample_torques=tq.motion_torques)
     assert rep.violations == []
+
+
+def test_non_finite_torque_is_reported_without_splitting(robots):
+    """A huge position (1e308: the torque is nan) is a violation of its steps at once, not 2^12 splits."""
+    r = robots[0]
+    t = 0.01 * np.arange(4)
+    q = np.zeros((4, r.dof))
+    q[2, 0] = 1e308
+    with np.errstate(all="ignore"):
+        m = StepMotion.through(t, q, np.zeros_like(q))
+        rep = certify_arc_torques(r, m, np.zeros((4, 6)), np.arange(3), r.tau_max)
+    assert {v.step for v in rep.violations} == {1, 2} and not any(v.certified_over for v in rep.violations)
+    assert all(not np.isfinite(v.value) for v in rep.violations) and rep.depth == 0

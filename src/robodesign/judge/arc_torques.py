@@ -199,10 +199,11 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         if key not in found or (over and not found[key].certified_over):
             found[key] = ArcTorqueViolation(int(k), int(j), float(t), float(value), over)
 
-    # piece ends above the limit (switch instants, and samples with the piece's acceleration)
+    # piece ends above the limit (switch instants, and samples with the piece's acceleration); a non-finite
+    # torque (a huge or non-finite input) is not certified and not split
     for tv, s in ((ta, s0), (tb, s1)):
-        for p, j in zip(*np.nonzero(open_ & (np.abs(tv) > lim))):
-            record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], True)
+        for p, j in zip(*np.nonzero(open_ & ((np.abs(tv) > lim) | ~np.isfinite(tv)))):
+            record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
     bad = np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr]) if found else np.zeros_like(open_)
     open_ &= ~bad
     if np.any(open_):
@@ -229,6 +230,9 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         ub, lb = _bounds(ta, tb, d_lo, d_hi, delta[:, None])
         certified = (ub <= lim) & (lb >= -lim)
         open_ &= ~certified
+        for p, j in zip(*np.nonzero(open_ & ~(np.isfinite(ub) & np.isfinite(lb)))):  # no bound to split on
+            record(k_arr[p], j, motion.t[k_arr[p]] + (s0[p] + s1[p]) / 2, np.inf, False)
+            open_[p, j] = False
         if not np.any(open_):
             break
         live = np.any(open_, axis=1)

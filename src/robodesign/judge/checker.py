@@ -333,7 +333,9 @@ def _arc_torque_violations(tq: TrajectoryQuantities, k0: int, k1: int, limit: in
     for a in rep.violations[:limit]:
         b = float(r.tau_max[a.joint])
         where = f"between samples {a.step} and {a.step + 1} (at t={a.time:.4f}s)"
-        if a.certified_over:
+        if not math.isfinite(a.value):
+            msg = f"|tau| {where} is not a finite number on the judged motion ({a.value})"
+        elif a.certified_over:
             msg = f"|tau| = {abs(a.value):.6g} {where} exceeds the limit {b:.6g} on the judged motion"
         else:
             msg = (f"|tau| {where} could not be certified within the limit {b:.6g} (bound {abs(a.value):.6g} "
