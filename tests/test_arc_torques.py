@@ -231,3 +231,24 @@ def test_non_finite_torque_is_reported_without_splitting(robots):
         rep = certify_arc_torques(r, m, np.zeros((4, 6)), np.arange(3), r.tau_max)
     assert {v.step for v in rep.violations} == {1, 2} and not any(v.certified_over for v in rep.violations)
     assert all(not np.isfinite(v.value) for v in rep.violations) and rep.depth == 0
+
+
+def test_refinement_work_is_bounded(ptp3, monkeypatch):
+    """Near a peak the pieces are split until they decide (a limit 1e-7 above the peak: certified after a few
+    levels); the number of pieces bounded one by one is capped (PIECES_PER_STEP): past it, what is undecided is
+    reported as not certified, never accepted."""
+    import robodesign.judge.arc_torques as at
+    task, ms, sol = ptp3
+    s, peak, _ = _swing(task, ms, sol, 0.3)
+    robot = checker.solution_robot(task, s, ms)
+    tr = s.trajectory
+    tq = TrajectoryQuantities(robot, tr.t, tr.q, tr.dq, tr.ddq)
+    lim = np.full(robot.dof, 1e9)
+    lim[1] = peak * (1 + 1e-7)
+    steps = np.arange(tq.n - 1)
+    rep = certify_arc_torques(robot, tq.motion, np.zeros((tq.n, 6)), steps, lim)
+    assert rep.violations == [] and 1 <= rep.depth < at.MAX_DEPTH and rep.pieces <= at.PIECES_PER_STEP * len(steps)
+    monkeypatch.setattr(at, "PIECES_PER_STEP", 0)
+    rep = certify_arc_torques(robot, tq.motion, np.zeros((tq.n, 6)), steps, lim)
+    assert [(v.step, v.joint, v.certified_over) for v in rep.violations] == [(10, 1, False)]
+    assert abs(rep.violations[0].value) > lim[1]  # the bound that could not be brought under the limit

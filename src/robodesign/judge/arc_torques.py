@@ -19,9 +19,12 @@ a group leaves open get their own, tighter enclosure. Otherwise τ is evaluated 
 its midpoint: above the limit there, it is a violation (joint, time, value); else the piece is split in two
 and the halves are bounded again, down to pieces of h/2^MAX_DEPTH. The bounds' excess shrinks with the piece
 (linearly, quadratically near an interior extremum), so a motion whose torque stays inside the limit is
-certified after a few splits where it comes close. A piece still undecided at the deepest split (its torque
-within about (h/2^MAX_DEPTH)²·|τ̈| of the limit without a point found above it) is reported as a violation
-that could not be certified: the judge never accepts a torque limit it has not proven.
+certified after a few splits where it comes close (a peak touching the limit needs about two pieces per
+level). A piece still undecided at the deepest split (its torque within about (h/2^MAX_DEPTH)²·|τ̈| of the limit
+without a point found above it), or when the pieces bounded one by one would exceed PIECES_PER_STEP per step
+on average (a file made to keep every step a hair below the limit would otherwise cost 2^MAX_DEPTH pieces per
+step), is reported as a violation that could not be certified: the judge never accepts a torque limit it has
+not proven, and a file cannot make it work without bound.
 """
 from __future__ import annotations
 
@@ -35,6 +38,7 @@ from robodesign.model.robot import COULOMB_SMOOTHING
 
 MAX_DEPTH = 12  # pieces are split down to h / 4096
 CHUNK_STEPS = 16  # steps per group of the first, coarse rate bound
+PIECES_PER_STEP = 64  # bound on the pieces bounded one by one, on average per step (the work a file can cause)
 ROUND_RTOL = 1e-12  # the pieces' q and q̇ intervals are widened by this (relative) against rounding
 
 
@@ -209,6 +213,7 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
     if np.any(open_):
         open_ &= ~_chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim)
     depth = 0
+    budget = PIECES_PER_STEP * len(steps)
     while True:
         live = np.any(open_, axis=1)
         if not np.any(live):
@@ -246,7 +251,7 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         if found:
             bad = np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr])
             open_ &= ~bad
-        if depth >= MAX_DEPTH:
+        if depth >= MAX_DEPTH or pieces_total + 2 * int(np.count_nonzero(np.any(open_, axis=1))) > budget:
             for p, j in zip(*np.nonzero(open_)):
                 b = ub[p, j] if ub[p, j] > lim[j] else lb[p, j]
                 record(k_arr[p], j, motion.t[k_arr[p]] + sm[p], b, False)

@@ -338,8 +338,8 @@ def _arc_torque_violations(tq: TrajectoryQuantities, k0: int, k1: int, limit: in
         elif a.certified_over:
             msg = f"|tau| = {abs(a.value):.6g} {where} exceeds the limit {b:.6g} on the judged motion"
         else:
-            msg = (f"|tau| {where} could not be certified within the limit {b:.6g} (bound {abs(a.value):.6g} "
-                   f"after splitting the step into pieces of h/2^{MAX_DEPTH})")
+            msg = (f"|tau| {where} could not be certified within the limit {b:.6g} (bound {abs(a.value):.6g} on the "
+                   f"smallest piece bounded, at most h/2^{MAX_DEPTH})")
         out.append(Violation("joint.tau", msg, sample=a.step, time=a.time, value=a.value, bound=b, joint=a.joint))
     if len(rep.violations) > limit:
         out.append(Violation("joint.tau", f"... and {len(rep.violations) - limit} more steps over the limit"))
