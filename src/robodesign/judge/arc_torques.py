@@ -12,10 +12,13 @@ f_c·σ(q̇) is smooth on each piece. Per piece and joint:
 * then τ(t) ≤ min(τ(t₀) + d_hi·(t − t₀), τ(t₁) − d_lo·(t₁ − t)) and τ(t) ≥ max(τ(t₀) + d_lo·(t − t₀),
   τ(t₁) − d_hi·(t₁ − t)) for every t of the piece: an upper and a lower bound of τ over the piece.
 
-First the steps are grouped (CHUNK_STEPS = 16), and one rate enclosure over each group's box (the motion's q and
-q̇ extremes over its steps, all its accelerations) bounds every piece in it: far from the limit that certifies
-them all at once. A piece is **certified** when both bounds lie within ±peakTorque·(1 + LIMIT_RTOL); the pieces
-a group leaves open get their own, tighter enclosure. Otherwise τ is evaluated at
+First whole steps: they are grouped (CHUNK_STEPS = 16), one rate enclosure over each group's box (the motion's
+q and q̇ extremes over its steps, all its accelerations) bounds every piece in it, and a mass-matrix enclosure
+bounds the jumps of τ where a joint's acceleration switches inside a step; from τ just after and just before
+the step's samples (already computed for the checks at the samples) that certifies the steps far from the
+limit without evaluating anything. The steps left are cut into pieces with exact end values and their own,
+tighter enclosures. A piece is **certified** when both bounds lie within ±peakTorque·(1 + LIMIT_RTOL).
+Otherwise τ is evaluated at
 its midpoint: above the limit there, it is a violation (joint, time, value); else the piece is split in two
 and the halves are bounded again, down to pieces of h/2^MAX_DEPTH. The bounds' excess shrinks with the piece
 (linearly, quadratically near an interior extremum), so a motion whose torque stays inside the limit is
@@ -106,10 +109,13 @@ def _rate_bounds(dyn, robot, Q, V, acc_lo, acc_hi, wr):
     return T.dm - T.dr + prods.min(axis=0), T.dm + T.dr + prods.max(axis=0)
 
 
-def _chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim):
-    """(pieces, dof) True where the piece is certified by its chunk's rate bound: the steps are grouped by
-    CHUNK_STEPS, one interval RNEA pass over each group's box (q and q̇ extremes of the motion over its steps, all
-    its accelerations) bounds the rate of every piece in it. Groups whose wrench changes are not prefiltered."""
+def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
+    """(len(steps), dof) True where the whole step is certified at once. The steps are grouped by CHUNK_STEPS;
+    one interval RNEA pass over each group's box (q and q̇ extremes of the motion over its steps, all its
+    accelerations) bounds τ̇ on every piece in it, and another bounds the mass matrix there, so the jumps of τ
+    where a joint's acceleration switches inside a step: |Δτ_j| ≤ Σ_i (|M_ji| + k²I_m·δ_ij)·|a2_i − a1_i|, J_j
+    in all. From τ just after sample k (ta) and just before k + 1 (tb), τ over the step is within the
+    mean-value bounds of the pieces moved by J. Groups whose wrench changes are not prefiltered."""
     first = int(steps[0])
     ch_of_step = (steps - first) // CHUNK_STEPS
     starts = np.nonzero(np.r_[True, np.diff(ch_of_step) != 0])[0]
@@ -129,8 +135,17 @@ def _chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim):
         wr[c] = rows[0]
     Q, V = _interval(q_lo, q_hi), _interval(v_lo, v_hi)
     d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, np.where(same[:, None], wr, 0.0))
-    c = np.searchsorted(ch_of_step[starts], (k_arr - first) // CHUNK_STEPS)  # the piece's group
-    ub, lb = _bounds(ta, tb, d_lo[c], d_hi[c], (s1 - s0)[:, None])
+    c = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(steps)]))  # each step's group
+    h = motion.h[steps]
+    tau = motion.tau[steps]
+    dA = np.where((tau > 0) & (tau < h) & (motion.a1[steps] != motion.a2[steps]),
+                  np.abs(motion.a2[steps] - motion.a1[steps]), 0.0)
+    J = np.zeros_like(dA)
+    if np.any(dA):
+        Mb = dyn.mass_matrix_bound(Q)
+        J = np.einsum("sji,si->sj", Mb[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
+    ub = _bounds(ta + J, tb + J, d_lo[c], d_hi[c], h)[0]
+    lb = _bounds(ta - J, tb - J, d_lo[c], d_hi[c], h)[1]
     return (ub <= lim) & (lb >= -lim) & same[c][:, None]
 
 
@@ -149,21 +164,15 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         return ArcTorqueReport([], 0, 0, 0)
     dyn = IntervalDynamics(robot)
     W = np.asarray(wrenches, dtype=float)
-    # initial pieces: each step cut at its joints' switch instants where the acceleration changes (sorted,
-    # duplicates and empty pieces dropped)
-    h = motion.h[steps, 0]
-    tau = motion.tau[steps]
-    inner = np.where((tau > 0) & (tau < h[:, None]) & (motion.a1[steps] != motion.a2[steps]), tau, np.nan)
-    cuts = np.sort(np.column_stack([np.zeros_like(h), inner, h]), axis=1)  # nan last
-    a, b = cuts[:, :-1], cuts[:, 1:]
-    ok = (b > a)  # False for nan and repeated cuts
-    si, ci = np.nonzero(ok)
-    k_arr, s0, s1 = steps[si], a[si, ci], b[si, ci]
-    open_ = np.ones((len(k_arr), dof), dtype=bool)  # (piece, joint) still to decide
-    if skip is not None:
-        open_ &= ~skip[k_arr]
+    lim = np.asarray(limit, dtype=float)
     evaluations = 0
     pieces_total = 0
+    found: dict = {}
+
+    def record(k, j, t, value, over):
+        key = (int(k), int(j))
+        if key not in found or (over and not found[key].certified_over):
+            found[key] = ArcTorqueViolation(int(k), int(j), float(t), float(value), over)
 
     def arc2_of(k, a, b):  # the joints on their second arc over the piece [a, b] of step k
         return ((a + b) / 2)[:, None] >= motion.tau[k]
@@ -180,40 +189,60 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         has = np.any(wr != 0, axis=1)
         return robot.drivetrain_torques(q, v, acc, wr if np.any(has) else None)
 
-    arc2 = arc2_of(k_arr, s0, s1)
-    wr = wrench_of(k_arr)
-
-    def end_torque(s, at_sample, sample, side):
-        """τ at the piece ends s: the samples' own one-sided torques where the end is a sample under the same
-        wrench (the motion passes through the sample exactly), else evaluated."""
-        out = np.empty((len(k_arr), dof))
+    def end_torque(k, s, arc2, wr, at_sample, sample, side):
+        """τ at piece ends s of steps k: the samples' own one-sided torques where the end is a sample under the
+        same wrench (the motion passes through the sample exactly), else evaluated."""
+        out = np.empty((len(k), dof))
         reuse = at_sample & np.all(W[sample] == wr, axis=1) if sample_torques is not None else np.zeros(len(s), bool)
         if np.any(reuse):
             out[reuse] = sample_torques[side][sample[reuse]]
         if not np.all(reuse):
-            out[~reuse] = torque(k_arr[~reuse], s[~reuse], arc2[~reuse], wr[~reuse])
+            out[~reuse] = torque(k[~reuse], s[~reuse], arc2[~reuse], wr[~reuse])
         return out
-    ta = end_torque(s0, s0 == 0, k_arr, 1)  # just after sample k
-    tb = end_torque(s1, s1 == motion.h[k_arr, 0], k_arr + 1, 0)  # just before sample k + 1
-    lim = np.asarray(limit, dtype=float)
-    found: dict = {}
 
-    def record(k, j, t, value, over):
-        key = (int(k), int(j))
-        if key not in found or (over and not found[key].certified_over):
-            found[key] = ArcTorqueViolation(int(k), int(j), float(t), float(value), over)
-
-    # piece ends above the limit (switch instants, and samples with the piece's acceleration); a non-finite
-    # torque (a huge or non-finite input) is not certified and not split
+    # whole steps first: τ just after sample k and just before k + 1, the groups' bounds
+    h_all = motion.h[steps, 0]
+    zero = np.zeros(len(steps))
+    w_st = wrench_of(steps)
+    ta_st = end_torque(steps, zero, arc2_of(steps, zero, zero), w_st, np.ones(len(steps), bool), steps, 1)
+    before = motion.tau[steps] < h_all[:, None]  # the acceleration just before sample k + 1: the second arc's
+    tb_st = end_torque(steps, h_all, before, w_st, np.ones(len(steps), bool), steps + 1, 0)
+    step_open = np.ones((len(steps), dof), dtype=bool)
+    if skip is not None:
+        step_open &= ~skip[steps]
+    for tv, s in ((ta_st, zero), (tb_st, h_all)):  # a non-finite torque (huge input) is reported, not split
+        for p, j in zip(*np.nonzero(step_open & ((np.abs(tv) > lim) | ~np.isfinite(tv)))):
+            record(steps[p], j, motion.t[steps[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
+            step_open[p, j] = False
+    if np.any(step_open):
+        step_open &= ~_step_prefilter(dyn, robot, motion, W, steps, ta_st, tb_st, lim)
+    steps = steps[np.any(step_open, axis=1)]
+    step_open = step_open[np.any(step_open, axis=1)]
+    if len(steps) == 0:
+        return ArcTorqueReport(sorted(found.values(), key=lambda v: (v.step, v.joint)), 0, evaluations, 0)
+    # the steps left: cut at their joints' switch instants where the acceleration changes (sorted, duplicates
+    # and empty pieces dropped)
+    h = motion.h[steps, 0]
+    tau = motion.tau[steps]
+    inner = np.where((tau > 0) & (tau < h[:, None]) & (motion.a1[steps] != motion.a2[steps]), tau, np.nan)
+    cuts = np.sort(np.column_stack([np.zeros_like(h), inner, h]), axis=1)  # nan last
+    a, b = cuts[:, :-1], cuts[:, 1:]
+    ok = (b > a)  # False for nan and repeated cuts
+    si, ci = np.nonzero(ok)
+    k_arr, s0, s1 = steps[si], a[si, ci], b[si, ci]
+    open_ = step_open[si].copy()  # (piece, joint) still to decide
+    arc2 = arc2_of(k_arr, s0, s1)
+    wr = wrench_of(k_arr)
+    ta = end_torque(k_arr, s0, arc2, wr, s0 == 0, k_arr, 1)  # just after sample k
+    tb = end_torque(k_arr, s1, arc2, wr, s1 == motion.h[k_arr, 0], k_arr + 1, 0)  # just before sample k + 1
+    # piece ends above the limit (switch instants, and samples with the piece's acceleration)
     for tv, s in ((ta, s0), (tb, s1)):
         for p, j in zip(*np.nonzero(open_ & ((np.abs(tv) > lim) | ~np.isfinite(tv)))):
             record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
-    bad = np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr]) if found else np.zeros_like(open_)
-    open_ &= ~bad
-    if np.any(open_):
-        open_ &= ~_chunk_prefilter(dyn, robot, motion, W, steps, k_arr, s0, s1, ta, tb, lim)
+    if found:
+        open_ &= ~np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr])
     depth = 0
-    budget = PIECES_PER_STEP * len(steps)
+    budget = PIECES_PER_STEP * len(steps)  # the steps left
     while True:
         live = np.any(open_, axis=1)
         if not np.any(live):

@@ -169,8 +169,17 @@ class IntervalDynamics:
         self.tcp_joint = int(fr.parentJoint)
         self.tcp_offset = np.array(fr.placement.translation)
 
+    def mass_matrix_bound(self, Q: Tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        """(P, dof, dof) bounds of |M(q)[j, i]| (link side, no armature) over the boxes ``Q``: column i is RNEA
+        with q̈ = e_i, no velocity, no gravity, in interval arithmetic."""
+        P, n = Q[0].shape
+        Qm, Qr = np.repeat(Q[0], n, axis=0), np.repeat(Q[1], n, axis=0)
+        zero = np.zeros_like(Qm)
+        T = self.link_torques((Qm, Qr), (zero, zero), np.tile(np.eye(n), (P, 1)), gravity=False)
+        return (np.abs(T.m) + T.r).reshape(P, n, n).transpose(0, 2, 1)
+
     def link_torques(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray], a,
-                     wrench: Optional[np.ndarray] = None) -> DI:
+                     wrench: Optional[np.ndarray] = None, gravity: bool = True) -> DI:
         """Enclosure (P, dof) of RNEA(q, q̇, a) and of its rate along the arc, for P pieces with q in the
         intervals ``Q`` = (mid, radius), q̇ in ``V`` = (mid, radius) (all (P, dof)), q̈ = ``a`` (P, dof), constant
         along each arc (an array, or (mid, radius): any constant acceleration in that interval), and ``wrench``
@@ -188,7 +197,7 @@ class IntervalDynamics:
         ang: List[DI] = [zero3] * (n + 1)
         acc: List[DI] = [zero3] * (n + 1)
         alpha: List[DI] = [zero3] * (n + 1)
-        acc[0] = DI.const(-self.gravity, (P, 3))
+        acc[0] = DI.const(-self.gravity if gravity else np.zeros(3), (P, 3))
         trig = [None] * (n + 1)
         f_lin: List[DI] = [zero3] * (n + 1)
         f_ang: List[DI] = [zero3] * (n + 1)
