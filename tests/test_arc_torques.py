@@ -252,3 +252,23 @@ def test_refinement_work_is_bounded(ptp3, monkeypatch):
     rep = certify_arc_torques(robot, tq.motion, np.zeros((tq.n, 6)), steps, lim)
     assert [(v.step, v.joint, v.certified_over) for v in rep.violations] == [(10, 1, False)]
     assert abs(rep.violations[0].value) > lim[1]  # the bound that could not be brought under the limit
+
+
+def test_mass_matrix_bound_holds_over_the_box(robots):
+    """IntervalDynamics.mass_matrix_bound (what bounds the torque's jumps where an acceleration switches) holds
+    |M(q)| (link side: pinocchio's CRBA minus the armature) at 30 points of each random box."""
+    import pinocchio as pin
+    rng = np.random.default_rng(9)
+    for r in robots:
+        dyn = IntervalDynamics(r)
+        P, n = 10, r.dof
+        lo = rng.uniform(-2, 2, (P, n))
+        hi = lo + rng.uniform(0, 0.3, (P, n))
+        B = dyn.mass_matrix_bound(((lo + hi) / 2, (hi - lo) / 2))
+        for p in range(P):
+            for _ in range(30):
+                q = rng.uniform(lo[p], hi[p])
+                M = pin.crba(r.model, r.data, q)
+                M = np.triu(M) + np.triu(M, 1).T - np.diag(r.model.armature)
+                assert np.all(np.abs(M) <= B[p] + 1e-9)
+        assert np.all(B <= 1e3)  # and is a bound, not infinity
