@@ -57,14 +57,15 @@ class ArcTorqueViolation:
 @dataclass
 class ArcTorqueReport:
     violations: List[ArcTorqueViolation]
-    pieces: int  # pieces bounded one by one (those the chunks' bound left open, and every split)
+    pieces: int  # pieces bounded one by one (of the steps the groups' bound left open, and every split)
     evaluations: int  # exact torque evaluations (piece ends and midpoints)
     depth: int  # deepest split used
 
 
 def _piece_state(m, k, s, acc_arc2):
     """q, q̇ (P, dof) of the motion at local time s (P,) of step k (P,); acc_arc2 (P, dof) bool: the joint is on
-    its second arc (only matters at the switch instant itself, where both formulas agree)."""
+    its second arc over the piece (the two arcs' formulas agree at the switch instant, and a piece never straddles
+    a switch where the acceleration changes)."""
     tau = m.tau[k]
     s_ = s[:, None]
     u = np.where(acc_arc2, tau, s_)
