@@ -104,3 +104,33 @@ def test_check_json_is_strict_on_non_finite_values(ptp3, tmp_path, capsys):
     assert data["costs"]["qDist"] == "inf"  # Σ|Δq| overflows
     qv = [x for x in data["violations"] if x["constraint"] == "joint.q"]
     assert qv[0]["sample"] == 5 and qv[0]["joint"] == 0 and qv[0]["value"] == 1e308
+
+
+def test_under_reported_accelerations_do_not_lower_the_cost(ptp3):
+    """Costs read the judged motion, not the file's ddq: a file that keeps q, dq of robodesign's PTP_3 solution
+    but reports ddq = 0, ddq/2, or per sample the ddq (of 0, ±ddq/2, ddq, 2·ddq) that makes |τ·dq| smallest,
+    got lower effort, mechEnergy and Liu2 before (measured: effort 300.92 against 302.12 with ddq = 0) while
+    staying VALID. Now every cost equals the honest file's (the motion is the same)."""
+    from robodesign.model.cell import solution_robot
+    task, ms, sol = ptp3
+    tr = sol.trajectory
+    honest = check(task, sol, ms)
+    assert honest.valid
+    robot = solution_robot(task, sol, ms)
+    lams = [0.0, -0.5, 0.5, 1.0, 2.0]
+    power = np.array([np.abs(np.einsum("ij,ij->i", robot.drivetrain_torques(tr.q, tr.dq, lam * tr.ddq), tr.dq))
+                      for lam in lams])
+    cheapest = np.array(lams)[np.argmin(power, axis=0)][:, None] * tr.ddq
+    # the cheapest ddq's file torques give a lower mechEnergy than the honest ones (what a cheat gains)
+    file_energy = float(np.sum(power.min(axis=0)[:-1] * np.diff(tr.t)))
+    assert file_energy < 0.99 * honest.costs["mechEnergy"]
+    for name, ddq in (("zero", 0 * tr.ddq), ("half", 0.5 * tr.ddq), ("cheapest", cheapest)):
+        cheat = sol.with_(trajectory=SolutionTrajectory(tr.t, tr.q, tr.dq, ddq, dict(tr.goal2time)))
+        v = check(task, cheat, ms)
+        assert v.valid, (name, [str(x) for x in v.violations])
+        for term in ("mechEnergy", "linkMechEnergy", "effort", "Liu2"):
+            assert v.costs[term] == pytest.approx(honest.costs[term], rel=1e-9), (name, term)
+    # the honest file's costs are those of its own samples (ddq_k is the motion's acceleration after sample k)
+    assert honest.costs["effort"] == pytest.approx(302.1198, abs=1e-3)
+    assert honest.costs["Liu2"] == pytest.approx(honest.costs["mechEnergy"] + 0.2 * tr.t[-1], rel=1e-12)
+

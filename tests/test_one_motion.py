@@ -246,3 +246,56 @@ def test_no_too_fast_motion_fits_in_the_slack():
     best = min(best, float(res.fun))
     assert best >= floor * (1 - 1e-5), best  # nothing faster than physics gets through
     assert best < 1.3 * floor  # and the search came close to the bound
+
+
+def test_scalar_witness_passes_equal_the_array_form(ptp3, monkeypatch):
+    """The witness search runs its step recurrence on Python floats, one joint at a time (judge.motion
+    _passes_scalar), not as numpy calls on dof-element arrays per step (_passes_numpy, about 25× slower on the
+    gradient-filled PTP_3 file; docs/benchmarks.md). Same witnesses to 1e-12 and the same failing steps on:
+    the gradient-filled honest solution (needs the slack), random reference-style motions, a teleport and the
+    same files under too small acceleration bounds (cheats that fail). Finite input never takes the array form."""
+    import robodesign.judge.motion as jm
+    _, _, sol = ptp3
+    tr = sol.trajectory
+    rng = np.random.default_rng(11)
+    files = [(tr.t, tr.q, np.gradient(tr.q, tr.t, axis=0), np.abs(tr.ddq).max(axis=0))]
+    for _ in range(6):
+        t, q, dq, _, amax, _ = mstraj_like(rng.uniform(-2, 2, (3, 4)), float(rng.uniform(0.3, 3)),
+                                           float(rng.uniform(0.01, 0.5)), 0.01)
+        files.append((t, q, dq, amax))
+    q = tr.q.copy()
+    q[100:150, 0] += 0.05  # a teleport
+    files.append((tr.t, q, np.gradient(q, tr.t, axis=0), np.abs(tr.ddq).max(axis=0)))
+    calls = []
+    array_form = jm._passes_numpy
+    monkeypatch.setattr(jm, "_passes_numpy", lambda *a: calls.append(1) or array_form(*a))
+    n_fail = n_slack = 0
+    for t, q, dq, amax in files:
+        for scale in (1.0, 0.9, 0.6):
+            A = amax * scale
+            h = np.diff(t)
+            h_adj = np.maximum(np.concatenate([h[:1], h]), np.concatenate([h, h[-1:]]))
+            slack = A[None, :] * h_adj[:, None] / 2
+            v, fail = jm.witness_velocities(t, q, dq, A, slack)
+            assert not calls  # finite input: the scalar form
+            # the array form on the same prepared input (as witness_velocities prepares it)
+            sl = np.where(dq == 0, 0.0, slack)
+            eps = 1e-12 * (1 + np.abs(dq)) + 1e-6 * sl
+            Aj = A * (1 + jm.ACC_RTOL) + 1e-12
+            raw = jm.least_acceleration(h[:, None], np.diff(q, axis=0), dq[:-1], dq[1:])
+            if np.all(raw <= Aj):
+                continue  # no search
+            v_ref, fail_ref = array_form(dq, dq - sl - eps, dq + sl + eps, np.diff(q, axis=0), h, Aj)
+            v_ref[:, fail_ref >= 0] = dq[:, fail_ref >= 0]
+            np.testing.assert_allclose(v, v_ref, rtol=0, atol=1e-12)
+            np.testing.assert_array_equal(fail if fail is not None else np.full(q.shape[1], -1), fail_ref)
+            n_fail += fail is not None
+            n_slack += fail is None and bool(np.any(v != dq))
+    assert n_fail >= 5 and n_slack >= 5  # both kinds were compared
+    # a non-finite velocity takes the array form (floats would raise where numpy gives nan)
+    t, q, dq, amax = files[0]
+    dq = dq.copy()
+    dq[3, 1] = np.inf
+    with np.errstate(invalid="ignore"):
+        jm.witness_velocities(t, q, dq, amax, amax * 0.005)
+    assert calls

@@ -10,8 +10,11 @@ judges uploads, solver output and optimizer candidates. Semantics (docs/checker.
   the least-acceleration motion through its q and velocity, which must stay within the joint's acceleration
   limit. Positions, velocities and collisions are checked on that motion between the samples too
   (collisions certified by :mod:`robodesign.model.sweep`), torques at every sample with the file's ddq and
-  with the motion's acceleration just before and after it.
+  with the motion's acceleration just before and after it, and certified between the samples
+  (:mod:`robodesign.judge.arc_torques`).
 * ``ddq`` limits are enforced (the reference never checks them).
+* Costs read the judged motion: its velocities and its acceleration at each sample (and the torques with them),
+  not the file's dq/ddq (:attr:`TrajectoryQuantities.motion_accelerations`).
 * Torques are drivetrain torques τ = RNEA + k²I_m q̈ + f_v q̇ + f_c σ(q̇) under the task's gravity,
   with the wrench of a follow goal applied at the TCP during that goal.
 * Goal-level constraints hold over the goal's own window (pause/follow: [t_g − duration, t_g];
@@ -49,6 +52,7 @@ from robodesign.formats.task_spec import (
     Task,
     TaskConstraint,
 )
+from robodesign.judge.arc_torques import MAX_DEPTH, arc_torque_steps, certify_arc_torques
 from robodesign.judge.motion import StepMotion
 from robodesign.judge.quantities import TrajectoryQuantities, find_time_index
 from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
@@ -192,8 +196,14 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
         violations += _check_order(c, tr.goal2time)
     t1 = time.perf_counter()
     n_ok = sum(goal_ok.values())
-    cctx = CostContext(t=tr.t, q=tr.q, dq=tr.dq, ddq=tr.ddq, tau=lambda: tq.torques, tau_link=lambda: tq.link_torques,
-                       mass=robot.mass, num_joints=robot.dof, goals_achieved=n_ok, num_goals=len(task.goals))
+    if settings.one_motion and tr.n >= 2:  # costs on the judged motion, not on the file's dq/ddq (docs/checker.md)
+        cctx = CostContext(t=tr.t, q=tr.q, dq=tq.velocities, ddq=tq.motion_accelerations,
+                           tau=lambda: tq.motion_drivetrain_torques, tau_link=lambda: tq.motion_link_torques,
+                           mass=robot.mass, num_joints=robot.dof, goals_achieved=n_ok, num_goals=len(task.goals))
+    else:
+        cctx = CostContext(t=tr.t, q=tr.q, dq=tr.dq, ddq=tr.ddq, tau=lambda: tq.torques,
+                           tau_link=lambda: tq.link_torques, mass=robot.mass, num_joints=robot.dof,
+                           goals_achieved=n_ok, num_goals=len(task.goals))
     costs: Dict[str, float] = {}
     if settings.all_costs:
         for name in known_costs():
@@ -307,6 +317,35 @@ def _between_sample_violations(name, extremes, bound, tq: TrajectoryQuantities, 
     return out
 
 
+def _arc_torque_violations(tq: TrajectoryQuantities, k0: int, k1: int, limit: int,
+                           at_samples: List[Violation]) -> List[Violation]:
+    """Torques on the judged motion between samples k0 … k1 (judge.arc_torques), except on steps whose samples
+    already violate the torque limit for the same joint."""
+    r = tq.robot
+    steps = arc_torque_steps(tq.n, k0, k1)
+    skip = np.zeros((max(tq.n - 1, 0), r.dof), dtype=bool)
+    for v in at_samples:
+        if v.constraint == "joint.tau" and v.joint is not None and v.sample is not None:
+            skip[max(v.sample - 1, 0):v.sample + 1, v.joint] = True
+    rep = certify_arc_torques(r, tq.motion, tq.external_wrenches, steps, r.tau_max * (1 + LIMIT_RTOL), skip=skip,
+                              sample_torques=tq.motion_torques)
+    out = []
+    for a in rep.violations[:limit]:
+        b = float(r.tau_max[a.joint])
+        where = f"between samples {a.step} and {a.step + 1} (at t={a.time:.4f}s)"
+        if not math.isfinite(a.value):
+            msg = f"|tau| {where} is not a finite number on the judged motion ({a.value})"
+        elif a.certified_over:
+            msg = f"|tau| = {abs(a.value):.6g} {where} exceeds the limit {b:.6g} on the judged motion"
+        else:
+            msg = (f"|tau| {where} could not be certified within the limit {b:.6g} (bound {abs(a.value):.6g} on the "
+                   f"smallest piece bounded, at most h/2^{MAX_DEPTH})")
+        out.append(Violation("joint.tau", msg, sample=a.step, time=a.time, value=a.value, bound=b, joint=a.joint))
+    if len(rep.violations) > limit:
+        out.append(Violation("joint.tau", f"... and {len(rep.violations) - limit} more steps over the limit"))
+    return out
+
+
 def _new_steps(at_samples: List[Violation], between: List[Violation]) -> List[Violation]:
     """``between`` without the steps that start or end at a sample already in ``at_samples`` (same joint)."""
     seen = {(v.sample, v.joint) for v in at_samples if v.joint is not None}
@@ -346,6 +385,7 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
                             seen.add((v.sample, v.joint))
                             v.message += f" (with the motion's acceleration just {side} the sample)"
                     out += vs
+                out += _arc_torque_violations(tq, k0, k1, limit, out)
         return out
     if isinstance(c, (CollisionFree, SelfCollisionFree)):
         return _collision_violations(c, tq, k0, k1, settings)

@@ -23,6 +23,7 @@ a faster motion.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Optional, Tuple
@@ -159,7 +160,13 @@ def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.
     through every (t_k, q_k, v_k), as close to dq as the forward/backward pass finds.
 
     Returns (v (N, dof), first infeasible step per joint or None): joints without a witness keep dq and have
-    their first step where no velocity within the slack continues the motion (−1: none)."""
+    their first step where no velocity within the slack continues the motion (−1: none).
+
+    The passes are a recurrence over the steps (each step's interval depends on the one before), joints are
+    independent: :func:`_passes_scalar` runs them on Python floats, one joint at a time (about 10× faster than
+    numpy calls on arrays of ``dof`` elements, and the same IEEE operations in the same order, so the same
+    numbers); :func:`_passes_numpy` is the array form of the same arithmetic, which runs where a value is not
+    finite or a step not positive (the scalar form would raise where numpy yields inf or nan)."""
     t, q, dq = (np.asarray(x, dtype=float) for x in (t, q, dq))
     n, dof = q.shape
     A = np.asarray(a_max, dtype=float) * (1 + ACC_RTOL) + 1e-12
@@ -168,11 +175,23 @@ def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.
     sl = np.where(dq == 0, 0.0, np.broadcast_to(np.asarray(slack, dtype=float), dq.shape))
     eps = 1e-12 * (1 + np.abs(dq)) + 1e-6 * sl  # rounding: a true velocity can sit exactly at the slack's edge
     lo_b, hi_b = dq - sl - eps, dq + sl + eps
+    h = np.diff(t)
+    D = np.diff(q, axis=0)
+    A = np.broadcast_to(A, (dof,)).copy()
+    scalar = (np.all(h > 0) and all(np.all(np.isfinite(x)) and np.all(np.abs(x) < 1e100)
+                                    for x in (t, q, dq, A, lo_b, hi_b)))
+    v, fail = (_passes_scalar if scalar else _passes_numpy)(dq, lo_b, hi_b, D, h, A)
+    v[:, fail >= 0] = dq[:, fail >= 0]
+    return v, (fail if np.any(fail >= 0) else None)
+
+
+def _passes_numpy(dq, lo_b, hi_b, D, h, A):
+    """The forward pass (reachable velocity intervals) and the backward pass (witness closest to dq), all joints
+    at once: (v, first failing step per joint or −1)."""
+    n, dof = dq.shape
     lo, hi = np.empty_like(dq), np.empty_like(dq)
     lo[0], hi[0] = lo_b[0], hi_b[0]
     fail = np.full(dof, -1)
-    h = np.diff(t)
-    D = np.diff(q, axis=0)
     for k in range(n - 1):
         a, b = reachable(lo[k], hi[k], D[k], h[k], A)
         a, b = np.maximum(a, lo_b[k + 1]), np.minimum(b, hi_b[k + 1])
@@ -194,5 +213,90 @@ def witness_velocities(t, q, dq, a_max, slack) -> Tuple[np.ndarray, Optional[np.
         v[k] = np.where(a <= b, np.clip(dq[k], a, b),
                         np.where(np.isnan(rlo), np.clip(dq[k], lo[k], hi[k]), np.clip(np.clip(dq[k], lo[k], hi[k]),
                                                                                     -rhi, -rlo)))
-    v[:, fail >= 0] = dq[:, fail >= 0]
-    return v, (fail if np.any(fail >= 0) else None)
+    return v, fail
+
+
+_NAN = float("nan")
+
+
+def _v1_range_f(v0, D, h, A):
+    """:func:`_v1_range` of one joint and step on Python floats (the same operations in the same order)."""
+    b = 2 * D / h - v0
+    Ah = A * h
+    c = Ah * Ah
+    d1 = 2 * c - 4 * A * h * v0 + 4 * A * D
+    d2 = 2 * c + 4 * A * h * v0 - 4 * A * D
+    s1, s2 = math.sqrt(d1 if d1 > 0.0 else 0.0), math.sqrt(d2 if d2 > 0.0 else 0.0)
+    tol = 1e-12 * (abs(v0) + abs(b) + A * h)
+    if (b - v0) * (b - v0) <= c + 2 * tol * A * h:
+        return v0 + A * h - s2, v0 - A * h + s1
+    if d1 >= -tol * A * h and v0 - A * h - s1 >= b - tol:
+        return v0 - A * h - s1, v0 - A * h + s1
+    if d2 >= -tol * A * h and v0 + A * h + s2 <= b + tol:
+        return v0 + A * h - s2, v0 + A * h + s2
+    return _NAN, _NAN
+
+
+def _reachable_f(lo, hi, D, h, A):
+    """:func:`reachable` of one joint and step on Python floats."""
+    m = D / h
+    lo_f = lo if lo >= m - A * h / 2 else m - A * h / 2
+    hi_f = hi if hi <= m + A * h / 2 else m + A * h / 2
+    tol = 1e-9 * (A * h + abs(m))
+    if lo_f > hi_f and lo_f <= hi_f + tol:
+        lo_f, hi_f = hi_f, lo_f
+    if lo_f > hi_f:
+        return _NAN, _NAN
+    up, down = m + A * h / 2, m - A * h / 2
+    if lo_f <= up and up <= hi_f:
+        vmin = m - A * h / 2
+    else:
+        vmin = _v1_range_f(min(max(up, lo_f), hi_f), D, h, A)[0]
+    if lo_f <= down and down <= hi_f:
+        vmax = m + A * h / 2
+    else:
+        vmax = _v1_range_f(min(max(down, lo_f), hi_f), D, h, A)[1]
+    return vmin, vmax
+
+
+def _passes_scalar(dq, lo_b, hi_b, D, h, A):
+    """:func:`_passes_numpy` one joint at a time on Python floats (finite inputs, positive steps)."""
+    n, dof = dq.shape
+    v = np.empty_like(dq)
+    fail = np.full(dof, -1)
+    hs = h.tolist()
+    for j in range(dof):
+        Aj = float(A[j])
+        dqj, lbj, hbj, Dj = dq[:, j].tolist(), lo_b[:, j].tolist(), hi_b[:, j].tolist(), D[:, j].tolist()
+        lo, hi = [0.0] * n, [0.0] * n
+        lo[0], hi[0] = lbj[0], hbj[0]
+        for k in range(n - 1):
+            a, b = _reachable_f(lo[k], hi[k], Dj[k], hs[k], Aj)
+            # np.maximum/np.minimum propagate nan: a nan bound stays nan (and a <= b is then False)
+            a = a if a != a or a >= lbj[k + 1] else lbj[k + 1]
+            b = b if b != b or b <= hbj[k + 1] else hbj[k + 1]
+            if a <= b:
+                lo[k + 1], hi[k + 1] = a, b
+            else:
+                if fail[j] < 0:
+                    fail[j] = k
+                lo[k + 1], hi[k + 1] = lbj[k + 1], hbj[k + 1]
+        vj = [0.0] * n
+        vj[-1] = min(max(dqj[-1], lo[-1]), hi[-1])
+        for k in range(n - 2, -1, -1):
+            rlo, rhi = _v1_range_f(-vj[k + 1], -Dj[k], hs[k], Aj)
+            single = -(2 * Dj[k] / hs[k] - vj[k + 1])
+            if rlo != rlo:
+                rlo = single
+            if rhi != rhi:
+                rhi = single
+            a = -rhi if -rhi >= lo[k] else lo[k]
+            b = -rlo if -rlo <= hi[k] else hi[k]
+            if a <= b:
+                vj[k] = min(max(dqj[k], a), b)
+            elif rlo != rlo:  # as in the array form (never, once single replaced a nan)
+                vj[k] = min(max(dqj[k], lo[k]), hi[k])
+            else:
+                vj[k] = min(max(min(max(dqj[k], lo[k]), hi[k]), -rhi), -rlo)
+        v[:, j] = vj
+    return v, fail

@@ -20,7 +20,9 @@ inverse dynamics:
 * :attr:`~TrajectoryQuantities.motion`: the motion the samples describe between them
   (:mod:`robodesign.judge.motion`: least-acceleration arcs through q and the witness velocities), what the
   checker judges limits and collisions on; :attr:`~TrajectoryQuantities.motion_failures`: per joint the first
-  step through which no motion within the acceleration limit passes;
+  step through which no motion within the acceleration limit passes; :attr:`~TrajectoryQuantities.motion_accelerations`
+  and the torques on the motion (:attr:`~TrajectoryQuantities.motion_drivetrain_torques`, ``motion_link_torques``),
+  what the costs read;
 * :attr:`~TrajectoryQuantities.steps`: the former one-motion residuals (:class:`StepResiduals`, a diagnostic).
 
 Timed follow poses read q interpolated linearly between samples (:meth:`~TrajectoryQuantities.q_at`).
@@ -195,6 +197,31 @@ class TrajectoryQuantities:
         W = W if np.any(W) else None
         return tuple(self.robot.drivetrain_torques(self.q, self.velocities, a, W)
                      for a in self.one_sided_accelerations)
+
+    @cached_property
+    def motion_accelerations(self) -> np.ndarray:
+        """(N, dof) the judged motion's acceleration *at* every sample, what the costs read: the acceleration
+        just after the sample (over the step it starts; robodesign's solvers write exactly this as ddq), at the
+        last sample 0 where the motion ends at rest (it stays there) and the one just before it elsewhere. Not
+        the file's ddq: a file cannot lower an acceleration-dependent cost by under-reporting ddq."""
+        before, after = self.one_sided_accelerations
+        a = after.copy()
+        if self.n >= 2:
+            a[-1] = np.where(self.velocities[-1] == 0, 0.0, before[-1])
+        return a
+
+    @cached_property
+    def motion_link_torques(self) -> np.ndarray:
+        """(N, dof) link-side torques on the judged motion (q, :attr:`velocities`, :attr:`motion_accelerations`)
+        under :attr:`external_wrenches`: what linkMechEnergy reads."""
+        W = self.external_wrenches
+        return self.robot.link_torques(self.q, self.velocities, self.motion_accelerations, W if np.any(W) else None)
+
+    @cached_property
+    def motion_drivetrain_torques(self) -> np.ndarray:
+        """(N, dof) drivetrain torques on the judged motion: what mechEnergy and effort read."""
+        return self.robot.drivetrain_torques(self.q, self.velocities, self.motion_accelerations,
+                                             link_torques=self.motion_link_torques)
 
     @cached_property
     def steps(self) -> StepResiduals:
