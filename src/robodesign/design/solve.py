@@ -18,6 +18,7 @@ that moves (``solvers/schedule.py``, certified between samples with the checker'
 """
 from __future__ import annotations
 
+import difflib
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -26,7 +27,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import AssemblyError, InfeasibleError, InputError
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.costs import cost_term, parse_cost
 from robodesign.formats.module_spec import ModuleSet
@@ -36,6 +37,7 @@ from robodesign.formats.tolerance import ToleratedPose
 from robodesign.judge.checker import Verdict, check
 from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model.cell import build_robot, solution_robot
+from robodesign.solvers.planning import planner_name
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait, moving_obstacles, static_cell
 
 STAGES = ("assembly", "base", "reach", "ik", "static_torque", "plan", "timing", "trajopt", "check")
@@ -65,6 +67,32 @@ class SolveSettings:
     # the joint speed (a quarter of the acceleration) of the previous try; the try that achieves most
     # goals is kept (a goal-level endEffector v_max is the usual reason a goal is missed)
     goal_retries: int = 5
+
+
+TIMING_METHODS = ("toppra", "ruckig")
+
+
+def check_settings(settings: SolveSettings, file: Optional[str] = None, path: Sequence = ()) -> None:
+    """Bad input in ``settings`` (an unknown planner or timing method, a plan time that is not a positive
+    number, an unknown ``stop_after`` stage) as an :class:`InputError` before anything is evaluated, instead
+    of every candidate failing at the stage that uses it. The error names the command-line option
+    (``--planner``) or, with ``file``, the file and the JSON path ``path + [field]``."""
+    def fail(name: str, message: str) -> None:
+        if file is None:
+            raise InputError(f"--{name.replace('_', '-')}: {message}")
+        raise InputError(message, file=file, path=[*path, name])
+    try:
+        planner_name(settings.planner)
+    except InputError as e:
+        fail("planner", e.reason)
+    if settings.timing not in TIMING_METHODS:
+        close = difflib.get_close_matches(str(settings.timing), TIMING_METHODS, n=1)
+        fail("timing", f"unknown timing method {settings.timing!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+             + f"; available: {', '.join(TIMING_METHODS)}")
+    if not (isinstance(settings.plan_time, (int, float)) and settings.plan_time > 0 and math.isfinite(settings.plan_time)):
+        fail("plan_time", f"must be a positive number of seconds, got {settings.plan_time!r}")
+    if settings.stop_after is not None and settings.stop_after not in STAGES:
+        fail("stop_after", f"unknown stage {settings.stop_after!r}; stages: {', '.join(STAGES)}")
 
 
 @dataclass
@@ -155,10 +183,18 @@ class _Stage:
         if et is None:
             self.result.stages.append(StageRecord(self.name, True, dt))
             return False
-        if issubclass(et, _Fail) or issubclass(et, (RobodesignError,)):
+        if _infeasible(self.name, ev):
             self.result.stages.append(StageRecord(self.name, False, dt, str(ev)))
             return True  # swallowed: the caller checks result.stage
-        return False
+        return False  # bad input (InputError, exit 2) and bugs keep their kind
+
+
+def _infeasible(stage: str, e: BaseException) -> bool:
+    """Whether ``e``, raised in ``stage``, means the robot cannot do the task (a failing stage): a stage's
+    own failure, an :class:`InfeasibleError` of a solver, or a module order that does not assemble (the
+    ``assembly`` stage only: a candidate order is a design, not a file). Every other error is bad input or a
+    bug and leaves :func:`solve` as it is."""
+    return isinstance(e, (_Fail, InfeasibleError)) or (stage == "assembly" and isinstance(e, AssemblyError))
 
 
 class _Fail(Exception):
@@ -207,7 +243,7 @@ def warm_up() -> None:
 
 
 class _Pipeline:
-    """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
+    """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or an InfeasibleError)
     to stop the pipeline with its reason."""
 
     def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders=(), start=None):
@@ -296,7 +332,7 @@ class _Pipeline:
                     self.planner.choose_and_plan()
                 self.planner.blend_radius = blend
                 self.motion, self.g2t = self.planner.time_parameterize()
-            except (_Fail, RobodesignError):
+            except (_Fail, InfeasibleError):
                 return verdict
             finally:
                 self.planner.settings = self.settings
@@ -327,7 +363,7 @@ def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, mod
             slow[gid] = slow.get(gid, 1.0) * 0.5
         try:
             motion, g2t = plan.time_parameterize(cost if settings.optimize_trajectory else None, slow=slow)
-        except RobodesignError:
+        except InfeasibleError:
             return
         sol = solution_of(motion, g2t)
         v = check(task, sol, module_set)
@@ -718,7 +754,7 @@ class GoalPlanner:
             raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
 
     def _optimize_move(self, seg, cost: str):
-        from robodesign.solvers.trajopt import optimize_trajectory
+        from robodesign.solvers.trajopt import TrajoptError, optimize_trajectory
         oc = _trajopt_cost(cost)
         if "cyc" not in oc:
             # energy only: slower is always cheaper (viscous losses), so the optimum is an endless move;
@@ -727,7 +763,7 @@ class GoalPlanner:
         try:
             out = optimize_trajectory(self.robot, seg, cost=oc, n_nodes=self.settings.trajopt_nodes,
                                       dt_out=self.task.dt)
-        except Exception:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
+        except TrajoptError:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
             return seg
         return out if np.allclose(out.q[-1], seg.q[-1], atol=1e-9) and np.all(out.dq[-1] == 0) else seg
 

@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 from robodesign.core.errors import InputError, format_json_path
 from robodesign.design.optimize import Budget
 from robodesign.design.problem import Problem
-from robodesign.design.solve import SolveSettings
+from robodesign.design.solve import SolveSettings, check_settings
 
 DEFAULT_BUDGET = "50evals"
 EXECUTORS = ("serial", "process", "ray")
@@ -816,6 +816,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             check_optimizer(o.name, o.options, problems[0].problem, display, ["optimizers", i])
 
     solve = SolveSettings(**cfg.solve.model_dump())
+    check_settings(solve, file=display, path=["solve"])
     name = cfg.name or default_name or Path(display).stem
     return ResolvedExperiment(config=cfg, name=name, file=display, base_dir=base_dir, problems=problems,
                               optimizers=opts, seeds=list(cfg.seeds), solve=solve, executor=cfg.executor)

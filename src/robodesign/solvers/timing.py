@@ -92,13 +92,13 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import InfeasibleError
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
 
 
-class TimingError(RobodesignError):
+class TimingError(InfeasibleError):
     """No time parameterization was found (e.g. the path is statically infeasible for the torques)."""
 
 

@@ -61,12 +61,12 @@ from typing import Dict, Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import InfeasibleError
 from robodesign.solvers.casadi_dynamics import casadi_drivetrain_torque, casadi_fk
 from robodesign.solvers.timing import JointTrajectory, resample_velocity_profile, time_optimal_bound
 
 
-class TrajoptError(RobodesignError):
+class TrajoptError(InfeasibleError):
     """ipopt did not find a feasible trajectory."""
 
 
