@@ -32,7 +32,7 @@ from robodesign.formats.assembly import Assembly
 from robodesign.formats.costs import cost_term, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.solution import Solution, SolutionTrajectory
-from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.formats.task_spec import Goal, Task
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.judge.checker import Verdict, check
 from robodesign.judge.quantities import TrajectoryQuantities
@@ -376,12 +376,9 @@ def _stop(res: SolveResult, settings: SolveSettings) -> bool:
     return settings.stop_after is not None and bool(res.stages) and res.stages[-1].name == settings.stop_after
 
 
-def goal_poses(g) -> List[ToleratedPose]:
-    if isinstance(g, (At, Reach)):
-        return [g.pose]
-    if isinstance(g, Follow):
-        return list(g.poses)
-    return []
+def goal_poses(g: Goal) -> List[ToleratedPose]:
+    """The tolerated poses the TCP must reach for goal ``g`` (:attr:`Goal.target_poses`)."""
+    return list(g.target_poses)
 
 
 def position_slack(pose: ToleratedPose) -> float:
@@ -438,14 +435,14 @@ class GoalPlanner:
                        if any(provably_unreachable(self.robot, p) for p in goal_poses(g))), None)
         probe = None
         if doomed is not None:
-            before = [i for i in range(doomed) if isinstance(self.order[i], (At, Reach, Follow))]
-            if before and isinstance(self.order[before[-1]], (At, Reach)):
+            before = [i for i in range(doomed) if self.order[i].solver_kind in ("pose", "poses")]
+            if before and self.order[before[-1]].solver_kind == "pose":
                 probe = before[-1]
         reached = 0
         for i, g in enumerate(self.order):
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 n_sol = 1 if i == probe else self.settings.ik_solutions
-                r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
+                r = solve_ik(self.robot, g.target_poses[0], self.rng, max_restarts=self.settings.ik_restarts,
                              n_solutions=n_sol)
                 sols, reason = r.solutions, str(r.stats.get("reason"))
                 if not sols:
@@ -453,10 +450,10 @@ class GoalPlanner:
                     raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
                 self.ik[g.id] = sols
                 reached += 1
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 sols = []
                 seed = None
-                for i, pose in enumerate(g.poses):
+                for i, pose in enumerate(g.target_poses):
                     r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
                     if not r:
                         self.res.goals_reached = reached
@@ -513,14 +510,14 @@ class GoalPlanner:
             choice = {gid: self.ik[gid][i] for gid, i in idx.items()}
         self.choice = choice
         # the start configuration
-        first_pose = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
+        first_pose = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
         if self.start is not None:
             if self.robot.in_collision(self.start):
                 raise _Fail("the start configuration is in collision")
             q0 = self.start
         elif first_pose is None:
             q0 = self._free_configuration()
-        elif isinstance(first_pose, Follow):
+        elif first_pose.solver_kind == "poses":
             q0 = self.follow_ik[first_pose.id][0]
         else:
             q0 = choice[first_pose.id]
@@ -530,23 +527,23 @@ class GoalPlanner:
         q = q0
         at_config: Dict[str, np.ndarray] = {}
         for g in self.order:
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 actions.append(("move", choice[g.id], g))
                 q = choice[g.id]
-            elif isinstance(g, Pause):
+            elif g.solver_kind == "hold":
                 actions.append(("hold", g.duration, g))
-            elif isinstance(g, ReturnTo):
+            elif g.solver_kind == "return":
                 target = q0 if g.return_to is None else at_config.get(g.return_to)
                 if target is None:
                     raise _Fail(f"returnTo goal {g.id}: goal {g.return_to!r} has no configuration before it")
                 actions.append(("move", target, g))
                 q = target
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 pts = self.follow_ik[g.id]
                 actions.append(("move", pts[0], None))
                 actions.append(("follow", pts, g))
                 q = pts[-1]
-            elif isinstance(g, Leave):
+            elif g.solver_kind == "leave":
                 q_out = self._leave_configuration(q, g)
                 actions.append(("move", q_out, None))
                 actions.append(("hold", g.duration, g))
@@ -595,7 +592,7 @@ class GoalPlanner:
         ``settings.plan_alternatives`` others, nearest first (the sequencing's transition cost from ``q``), all
         goal states of one query. The one the path reaches replaces the chosen one in every later action.
         Returns (plan result, target)."""
-        if (g is None or not isinstance(g, (At, Reach)) or self.choice.get(g.id) is not target
+        if (g is None or g.solver_kind != "pose" or self.choice.get(g.id) is not target
                 or self.settings.plan_alternatives <= 0):
             return failed, target
         others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
@@ -619,22 +616,22 @@ class GoalPlanner:
         """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach
         goal than the first is left out of the objective (its target is chosen by its own neighbours)."""
         from robodesign.solvers.sequencing import Fixed, Free, Jump, Tied
-        first = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
+        first = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
         if first is None:
             return []
         nodes = [] if self.start is None else [Fixed(self.start)]
         for g in self.order:
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 nodes.append(Free(g.id, np.asarray(self.ik[g.id])))
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 pts = self.follow_ik[g.id]
                 nodes += [Fixed(pts[0]), Jump(pts[-1])]
-            elif isinstance(g, ReturnTo) and nodes:
+            elif g.solver_kind == "return" and nodes:
                 if g.return_to is None and self.start is not None:
                     nodes.append(Tied())
                 elif g.return_to is None:
-                    nodes.append(Tied() if isinstance(first, (At, Reach)) else Fixed(self.follow_ik[first.id][0]))
-                elif g.return_to == first.id and isinstance(first, (At, Reach)) and self.start is None:
+                    nodes.append(Tied() if first.solver_kind == "pose" else Fixed(self.follow_ik[first.id][0]))
+                elif g.return_to == first.id and first.solver_kind == "pose" and self.start is None:
                     nodes.append(Tied())
                 elif g.return_to in self.follow_ik:
                     nodes.append(Fixed(self.follow_ik[g.return_to][-1]))
@@ -648,7 +645,7 @@ class GoalPlanner:
             q = self.robot.random_configuration(self.rng)
         raise _Fail("no collision-free start configuration found")
 
-    def _leave_configuration(self, q: np.ndarray, g: Leave) -> np.ndarray:
+    def _leave_configuration(self, q: np.ndarray, g: Goal) -> np.ndarray:
         """A nearby configuration whose TCP is outside the space to leave: the TCP moves in a straight line
         (2 cm steps through the damped Jacobian pseudo-inverse) until it and a point 2 cm further on are
         outside, collision-free. Directions tried: away from the space's centre and along ±x, ±y, ±z; the
@@ -723,7 +720,7 @@ class GoalPlanner:
                 if arg > 0:
                     traj = traj.hold(arg, dt)
                 g2t[g.id] = float(traj.t[-1])
-                if isinstance(g, Leave):
+                if g.solver_kind == "leave":
                     g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
             elif kind == "follow":
                 if g.t is None:
