@@ -23,13 +23,13 @@ import math
 import time
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
 from robodesign.core.errors import AssemblyError, InfeasibleError, InputError
 from robodesign.formats.assembly import Assembly
-from robodesign.formats.costs import cost_term, parse_cost
+from robodesign.formats.costs import CostFunction, cost_term, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.solution import Solution, SolutionTrajectory
 from robodesign.formats.task_spec import Goal, Task
@@ -202,10 +202,12 @@ class _Fail(Exception):
 
 
 def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
-          cost: str = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = (),
+          cost: Union[CostFunction, str] = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = (),
           start: Optional[np.ndarray] = None) -> SolveResult:
     """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
-    robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError.
+    robot: the failing stage and its reason are in the result. ``cost``: a CostFunction (e.g. ``Problem.cost``),
+    or a descriptor, parsed here once (a malformed one raises InputError); the same object reaches the
+    sequencing, trajectory optimization and the solution file.
 
     IK and planning see the static cell; the task's moving obstacles and the extra timed ``colliders``
     (e.g. another robot's motion, :class:`robodesign.solvers.schedule.OtherRobot`) are avoided in time:
@@ -213,7 +215,7 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
     configuration the motion starts from (default: that of the first pose goal); a ``returnTo`` the start
     returns there."""
     settings = settings or SolveSettings()
-    parse_cost(cost)  # bad input, not an infeasible robot
+    cost = cost if isinstance(cost, CostFunction) else parse_cost(cost)  # bad input, not an infeasible robot
     res = SolveResult(num_goals=len(task.goals), task=task, module_set=module_set)
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
     run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders, start)
@@ -299,7 +301,7 @@ class _Pipeline:
         """The solution of the timed motion (default: the last stage's)."""
         asm, ms = self.asm, self.module_set
         m, g2t = (self.motion, self.g2t) if motion is None else (motion, g2t)
-        return Solution(task_id=self.task.id, cost_function=self.cost, module_set=ms.name,
+        return Solution(task_id=self.task.id, cost_function=str(self.cost), module_set=ms.name,
                         module_order=tuple(asm.module_ids), base_pose=self.base_pose,
                         trajectory=SolutionTrajectory(m.t, m.q, m.dq, m.ddq, g2t),
                         module_connection=None if asm.is_serial() else asm.connections,
@@ -350,7 +352,7 @@ def _only_collisions(verdict) -> bool:
 
 
 def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
-                          cost: str, settings: SolveSettings) -> None:
+                          cost: CostFunction, settings: SolveSettings) -> None:
     """A valid solution that misses goals (possible only without allGoalsFulfilled): re-time the motions of
     the missed goals slower (``settings.goal_retries`` times, halving the speed each time) and keep the
     valid solution that achieves most goals (then the cheaper one)."""
@@ -397,13 +399,14 @@ class GoalPlanner:
     (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
     actions and paths of the goal sequence, and turns them into a motion."""
 
-    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc",
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult,
+                 cost: Optional[CostFunction] = None,
                  colliders: Sequence = (), start: Optional[np.ndarray] = None):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
         self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
         self.start = None if start is None else np.asarray(start, dtype=float)  # given start configuration
         self.blend_radius = 0.05  # rad: the time scaling's corner blends (0: stop at every waypoint)
-        terms = dict(parse_cost(cost).terms)
+        terms = dict((cost if cost is not None else CostFunction((("cyc", 1.0),))).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
         # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
         # the latter for every term that integrates torques (mechEnergy, linkMechEnergy, effort)
@@ -671,7 +674,7 @@ class GoalPlanner:
         return best[1]
 
     # -- timing ----------------------------------------------------------------------------------
-    def time_parameterize(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None):
+    def time_parameterize(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None):
         """:meth:`timed_motion` avoiding what moves: each move waits at rest until it is free; if some wait
         cannot help (the robot would be hit while it waits), the whole motion is instead delayed at its
         start until it runs free of everything that moves."""
@@ -692,7 +695,7 @@ class GoalPlanner:
             return (JointTrajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
                     {k: v + n * dt for k, v in g2t.items()})
 
-    def timed_motion(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None,
+    def timed_motion(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None,
                      colliders: Sequence = ()):
         """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
         optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
@@ -750,15 +753,15 @@ class GoalPlanner:
         if why:
             raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
 
-    def _optimize_move(self, seg, cost: str):
+    def _optimize_move(self, seg, cost: CostFunction):
         from robodesign.solvers.trajopt import TrajoptError, optimize_trajectory
-        oc = _trajopt_cost(cost)
-        if "cyc" not in oc:
+        weights = cost.trajopt_weights() or {"cyc": 1.0}
+        if "cyc" not in weights:
             # energy only: slower is always cheaper (viscous losses), so the optimum is an endless move;
             # a tiny time weight (1 % of the energy weight) makes the duration finite
-            oc += ",cyc_0.01"
+            weights["cyc"] = 0.01
         try:
-            out = optimize_trajectory(self.robot, seg, cost=oc, n_nodes=self.settings.trajopt_nodes,
+            out = optimize_trajectory(self.robot, seg, cost=weights, n_nodes=self.settings.trajopt_nodes,
                                       dt_out=self.task.dt)
         except TrajoptError:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
             return seg
@@ -776,13 +779,6 @@ class _SlowedRobot:
 
     def __getattr__(self, name):
         return getattr(self._robot, name)
-
-
-def _trajopt_cost(cost: str) -> str:
-    terms = {n: w for n, w in parse_cost(cost).terms if cost_term(n).trajopt}
-    if not terms:
-        return "cyc"
-    return ",".join(f"{n}_{w}" for n, w in terms.items())
 
 
 def _ceil_to(x: float, dt: float) -> float:
