@@ -141,3 +141,26 @@ def test_check_settings_accepts_every_available_planner_in_any_case():
         check_settings(SolveSettings(planner=name.upper()))
         assert planner_name(name.upper()) == name
     assert np.isfinite(SolveSettings().plan_time)
+
+
+def test_a_plugin_that_cannot_be_imported_is_bad_input_but_a_bug_in_it_is_not(monkeypatch, tmp_path):
+    """A config naming an installed optimizer whose module cannot be imported names the file and field (exit 2);
+    any other exception while loading it is a bug and keeps its kind (exit 3), instead of becoming bad input."""
+    from robodesign.design import optimize
+    from robodesign.design.problem import Problem
+    from robodesign.experiment.config import check_optimizer
+    problem = Problem.build(PTP3, IMPROV, "cyc")
+
+    def missing(name):
+        raise ModuleNotFoundError("No module named 'gone'")
+    monkeypatch.setattr(optimize, "load_optimizer", missing)
+    with pytest.raises(InputError) as e:
+        check_optimizer("random", {}, problem, "cfg.yaml", ["optimizers", 0])
+    assert str(e.value) == ("cfg.yaml: optimizers[0].name: optimizer 'random' is registered but cannot be loaded: "
+                            "ModuleNotFoundError: No module named 'gone'")
+
+    def broken(name):
+        raise ZeroDivisionError("a bug in the plugin")
+    monkeypatch.setattr(optimize, "load_optimizer", broken)
+    with pytest.raises(ZeroDivisionError):
+        check_optimizer("random", {}, problem, "cfg.yaml", ["optimizers", 0])

@@ -833,7 +833,7 @@ def check_optimizer(name: str, options: dict, problem: Problem, display: str, pa
         cls = load_optimizer(name)
     except InputError as e:
         raise InputError(e.reason, file=display, path=path + ["name"]) from None
-    except Exception as e:  # a registered plugin that fails to import
+    except (ImportError, AttributeError, SyntaxError) as e:  # a registered plugin that cannot be imported
         raise InputError(f"optimizer {name!r} is registered but cannot be loaded: {type(e).__name__}: {e}",
                          file=display, path=path + ["name"]) from None
     try:
