@@ -10,12 +10,13 @@ MAX_FUNCTION_LINES = 120
 
 #: file (relative to src/robodesign) → (its lines today, why it is still that big)
 BIG_FILES = {
+    "design/solve.py": (802, "the staged pipeline and its GoalPlanner (to split: settings, pipeline, goal planner)"),
     "experiment/config.py": (853, "the config file's pydantic models and their resolution into problems; to split"),
     "formats/tolerance.py": (987, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                   "rotation maths to core/spatial)"),
     "formats/urdf.py": (816, "URDF import and export of module sets and robots"),
-    "solvers/ik.py": (964, "the IK loop with its own projection terms (issue 23 §2: they move to ToleratedPose)"),
-    "solvers/timing.py": (903, "trajectory type, limits and bounds, TOPP-RA and ruckig (issue 23 §5 lists the split)"),
+    "solvers/ik.py": (985, "the IK loop with its own projection terms (issue 23 §2: they move to ToleratedPose)"),
+    "solvers/timing.py": (932, "trajectory type, limits and bounds, TOPP-RA and ruckig (issue 23 §5 lists the split)"),
 }
 #: "file:function" → (its lines today, why)
 BIG_FUNCTIONS = {
