@@ -10,7 +10,7 @@ MAX_FUNCTION_LINES = 120
 
 #: file (relative to src/robodesign) → (its lines today, why it is still that big)
 BIG_FILES = {
-    "design/solve.py": (802, "the staged pipeline and its GoalPlanner (to split: settings, pipeline, goal planner)"),
+    "design/solve.py": (807, "the staged pipeline and its GoalPlanner (to split: settings, pipeline, goal planner)"),
     "experiment/config.py": (853, "the config file's pydantic models and their resolution into problems; to split"),
     "formats/tolerance.py": (987, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                   "rotation maths to core/spatial)"),
