@@ -225,7 +225,7 @@ def test_docs_example_is_the_tested_plugin():
     assert example.strip() == textwrap.dedent(HILL_CLIMBER).strip()
 
 
-# -- the plugin API before Problem (deprecated, kept for one release) ----------------------------------------------
+# -- the plugin API before Problem (removed after its deprecation release) ------------------------------------------
 LEGACY = '''
 from robodesign.design.optimize import Optimizer
 
@@ -237,59 +237,49 @@ class LegacyRandom(Optimizer):
     def __init__(self, space, seed=0, tries=50, **options):
         super().__init__(space, seed, **options)
         self.tries = int(tries)
-        self.cost_option = options.get("cost")
-        self.seen = set()
 
     def ask(self):
-        for _ in range(self.tries):
-            c = self.space.random_candidate(self.rng)
-            if c.key() not in self.seen:
-                self.seen.add(c.key())
-                return c
-        return None
+        return self.space.random_candidate(self.rng)
 '''
 
 
-def test_plugins_written_against_the_old_api_still_run(tmp_path):
-    """Optimizer(space, seed, **options) plugins get the search space (and, as the CLI used to give them, the study's
-    cost as option ``cost``) with a DeprecationWarning; undeclared options reach them unchanged."""
+def test_plugins_written_against_the_old_api_are_refused_with_how_to_port(tmp_path):
+    """Optimizer(space, seed, **options) plugins ran with a DeprecationWarning for one release; now they are bad
+    input (exit 2) that says how to port them, and the base class refuses a SearchSpace."""
     import pytest
-    from robodesign.design.evaluator import Evaluator, EvaluatorSpec
-    from robodesign.design.optimize import Budget, SerialExecutor, Study, create_optimizer
+    from robodesign.core.errors import InputError
+    from robodesign.design.optimize import Optimizer, create_optimizer
     from robodesign.design.problem import Problem
     ns: dict = {}
     exec(LEGACY, ns)
-    rules = dict(min_dof=3, max_dof=3, bases=["1"], end_effectors=["12"], exclude=["4", "5", "6", "7", "8", "9", "10",
-                                                                                   "11", "15"])
-    problem = Problem.build(_task(tmp_path / "task.json"), "robodesign_arm", "Whit2", rules=rules)
-    with pytest.warns(DeprecationWarning, match="deprecated plugin API"):
-        opt = create_optimizer(ns["LegacyRandom"], problem, seed=0, options={"tries": "7"})
-    assert opt.tries == 7 and opt.cost_option == "Whit2" and opt.problem is problem and opt.space is problem.space
-    assert opt.cost is problem.cost
-    res = Study(opt, SerialExecutor(Evaluator(EvaluatorSpec(problem))), Budget(evaluations=4)).run()
-    assert len(res.history) == 4 and all(problem.space.validate(e.candidate) is None for e in res.history)
-    # constructing one directly with a SearchSpace still works, with a warning
-    with pytest.warns(DeprecationWarning, match="deprecated"):
-        old = ns["LegacyRandom"](problem.space, seed=0)
-    assert old.problem is None and old.cost is None and old.ask() is not None
+    problem = Problem.build(_task(tmp_path / "task.json"), "robodesign_arm", "Whit2")
+    with pytest.raises(InputError) as e:
+        create_optimizer(ns["LegacyRandom"], problem, seed=0, options={"tries": "7"})
+    assert str(e.value).startswith("optimizer 'legacy' is written against the plugin API before Problem "
+                                   "(__init__(self, space, ...)), which this release no longer runs: take a Problem")
+
+    class Bare(Optimizer):
+        def ask(self):
+            return None
+    with pytest.raises(TypeError, match="takes a robodesign.design.problem.Problem, got SearchSpace"):
+        Bare(problem.space)
+    assert Bare(problem).cost is problem.cost
 
 
-def test_an_old_plugin_that_sets_its_own_cost_attribute_still_runs(tmp_path):
-    """The old first-party pattern ``self.cost = str(cost)`` (from the injected cost option) keeps working."""
+def test_a_plugin_without_options_takes_none(tmp_path):
+    """Undeclared options reached self.options with a DeprecationWarning for one release; now they are refused."""
     import pytest
-    from robodesign.design.optimize import Optimizer, create_optimizer
+    from robodesign.design.optimize import Optimizer, OptionError, create_optimizer
     from robodesign.design.problem import Problem
 
-    class OldBound(Optimizer):
-        def __init__(self, space, seed=0, cost=None, **options):
-            super().__init__(space, seed, **options)
-            self.cost = str(cost) if cost not in (None, "none") else None
+    class NoOptions(Optimizer):
+        name = "bare"
 
         def ask(self):
             return self.space.random_candidate(self.rng)
 
     problem = Problem.build(_task(tmp_path / "task.json"), "robodesign_arm", "Whit2")
-    with pytest.warns(DeprecationWarning):
-        opt = create_optimizer(OldBound, problem)
-    assert opt.cost == "Whit2"
-    assert opt.space.cost_lower_bound((), opt.cost) == problem.space.cost_lower_bound((), problem.cost)
+    assert create_optimizer(NoOptions, problem).options == {}
+    with pytest.raises(OptionError) as e:
+        create_optimizer(NoOptions, problem, options={"tries": "3"})
+    assert str(e.value) == "optimizer 'bare' takes no options (it declares no Options), got 'tries'" and e.value.option == "tries"

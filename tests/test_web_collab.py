@@ -423,7 +423,7 @@ def test_collaborative_size_caps_count_every_robot(make_site, solved):
 
 def test_collaborative_uploads_share_the_workers_the_rate_limit_and_the_error_rules(make_site, solved, monkeypatch):
     import os
-    import robodesign.web.service as service
+    import robodesign.web.judging as judging
     sol = solved["AA"]
     end = sol["robots"][0]["trajectory"]["t"][-1]
     # judged in a separate checker process at a lower priority (robodesign serve's default)
@@ -440,7 +440,7 @@ def test_collaborative_uploads_share_the_workers_the_rate_limit_and_the_error_ru
     # an internal error of the judge is a 500, never a verdict, and nothing is stored
     def broken(*a, **k):
         raise RuntimeError("a bug in the judge")
-    monkeypatch.setattr(service, "check_collab", broken)
+    monkeypatch.setattr(judging, "check_collab", broken)
     c = make_site()
     r = post(c, sol, author="Bug")
     assert r.status_code == 500 and "internal error (RuntimeError)" in r.json()["detail"]

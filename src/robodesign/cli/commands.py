@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import math
 import time
 from typing import List
 
@@ -55,16 +54,12 @@ def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False
 def cmd_solve(args) -> int:
     from robodesign.cli.args import parse_order, print_input_warnings
     from robodesign.cli.collab import load_collab_task_file, solve_command
-    from robodesign.design.solve import SolveSettings, solve
+    from robodesign.design.solve import SolveSettings, check_settings, solve
     from robodesign.formats.assembly import Assembly
     from robodesign.formats.module_io import load_module_set
     from robodesign.formats.task_io import load_task
-    from robodesign.solvers.planning import available_planners
     mode = trajectory_mode(args.cost, args.trajectory, args.optimize_trajectory)
-    if args.planner.lower() not in [p.lower() for p in available_planners()]:
-        raise InputError(f"--planner: unknown planner {args.planner!r} (available: {', '.join(available_planners())})")
-    if args.plan_time <= 0:
-        raise InputError("--plan-time must be positive")
+    check_settings(SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing))
     ctask = load_collab_task_file(args.task)
     if ctask is not None:  # several robots in one cell: docs/collaborative.md
         return solve_command(args, ctask, mode)
@@ -154,6 +149,8 @@ def cmd_optimizers(args) -> int:
 def cmd_optimize(args) -> int:
     from robodesign.cli.args import parse_options, print_input_warnings
     from robodesign.cli.collab import load_collab_task_file, optimize_command
+    from robodesign.design.solve import SolveSettings, check_settings
+    check_settings(SolveSettings(planner=args.planner, plan_time=args.plan_time))  # before any evaluation
     ctask = load_collab_task_file(args.task)
     if ctask is not None:  # several robots in one cell: docs/collaborative.md
         return optimize_command(args, ctask)
@@ -166,8 +163,6 @@ def cmd_optimize(args) -> int:
     problem = Problem.build(args.task, args.modules, parse_cost(args.cost, path="--cost"), rules=rules,
                             base_search=not args.fixed_base)
     print_input_warnings(problem.task)
-    if not (args.plan_time > 0 and math.isfinite(args.plan_time)):
-        raise InputError("--plan-time must be a positive number of seconds")
     spec = EvaluatorSpec(problem, evaluation_settings(planner=args.planner, optimize_trajectory=args.optimize_trajectory,
                                                       plan_time=args.plan_time), seed=args.seed)
     opt = create_optimizer(args.optimizer, problem, seed=args.seed, options=parse_options(args.opt))

@@ -50,6 +50,12 @@ class AssemblyError(InputError):
     """A module order or connection graph that cannot be assembled."""
 
 
+class InfeasibleError(RobodesignError):
+    """The design cannot do what is asked (a path no timing satisfies, ipopt finds no trajectory, no pose
+    inside a tolerance is found): the solve pipeline reports it as the failing stage. Never bad input and
+    never a bug, so it is neither an :class:`InputError` nor caught as a plain ``Exception``."""
+
+
 def describe_value(v) -> str:
     """Short, JSON-ish rendering of a value for error messages."""
     import json

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
+from typing import Any, Optional
 
 from robodesign.core.errors import InputError, describe_value
 from robodesign.core.jsonio import load_json
@@ -18,9 +18,28 @@ def _validator(name: str):
     return cls(schema)
 
 
-def validate(instance: Any, schema_name: str, file: str) -> None:
-    """Raise :class:`InputError` for the most specific schema violation, if any."""
-    v = _validator(schema_name)
+def load_schema(name: str) -> dict:
+    """The JSON Schema ``schemas/<name>.schema.json`` (a fresh copy, free to extend)."""
+    return load_json(schemas_dir() / f"{name}.schema.json")
+
+
+@lru_cache(maxsize=32)
+def _validator_of(text: str):
+    import json
+
+    import jsonschema
+    schema = json.loads(text)
+    return jsonschema.validators.validator_for(schema)(schema)
+
+
+def validate(instance: Any, schema_name: str, file: str, schema: Optional[dict] = None) -> None:
+    """Raise :class:`InputError` for the most specific schema violation, if any. ``schema``: validate against
+    this schema (e.g. ``schema_name``'s extended by plugins) instead of the file's."""
+    if schema is None:
+        v = _validator(schema_name)
+    else:
+        import json
+        v = _validator_of(json.dumps(schema, sort_keys=True))
     errors = sorted(v.iter_errors(instance), key=lambda e: (-len(e.absolute_path), str(e.message)))
     if not errors:
         return

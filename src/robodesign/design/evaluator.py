@@ -154,7 +154,7 @@ class Evaluator:
         problem = self.problem
         settings = replace(self.spec.settings, seed=seed)
         res = solve(problem.task, problem.module_set, list(candidate.order), problem.base_pose(candidate),
-                    cost=problem.cost_descriptor, settings=settings)
+                    cost=problem.cost, settings=settings)
         feasible = res.feasible
         cost = res.cost if feasible else None
         ev = Evaluation(candidate=candidate, feasible=feasible, cost=cost,

@@ -8,8 +8,8 @@ the class under the entry-point group ``robodesign.optimizers``. The optimizer s
 :class:`~robodesign.design.problem.Problem` (``self.problem``: task, module set, cost ``self.cost``, search
 space ``self.space``), its validated ``self.options`` and its own seeded ``self.rng``; the
 :class:`Study` owns the loop, the budget, the evaluator, the executor and the storage.
-:func:`create_optimizer` builds a plugin by name (it also runs plugins written against the deprecated
-``Optimizer(space, seed, **options)`` API, with a DeprecationWarning).
+:func:`create_optimizer` builds a plugin by name (a plugin written against the removed
+``Optimizer(space, seed, **options)`` API is refused with a message saying how to port it).
 
 Determinism: the study asks ``batch_size`` candidates, evaluates them (in parallel or not), and
 tells the results *in ask order*; evaluations are pure functions of the candidate. The same seed
@@ -26,7 +26,6 @@ import inspect
 import math
 import re
 import time
-import warnings
 from abc import ABC, abstractmethod
 from dataclasses import MISSING, dataclass, field, fields, is_dataclass
 from importlib import metadata
@@ -85,17 +84,13 @@ class Optimizer(ABC):
     independent_asks: ClassVar[bool] = False
 
     def __init__(self, problem: Problem, seed: int = 0, **options):
-        if isinstance(problem, SearchSpace):  # the plugin API before Problem (one release)
-            warnings.warn(f"optimizer {type(self).__name__}: Optimizer(space, seed, **options) is deprecated; "
-                          "it receives a robodesign.design.problem.Problem (docs/plugins.md)", DeprecationWarning,
-                          stacklevel=2)
-            self.problem: Optional[Problem] = None
-            self.space = problem
-        else:
-            self.problem = problem
-            self.space = problem.space
-        #: the cost function the study evaluates (None only for a plugin built the deprecated way)
-        self.cost: Optional[CostFunction] = self.problem.cost if self.problem is not None else None
+        if not isinstance(problem, Problem):
+            raise TypeError(f"optimizer {type(self).__name__}: Optimizer(...) takes a "
+                            f"robodesign.design.problem.Problem, got {type(problem).__name__} (docs/plugins.md)")
+        self.problem: Problem = problem
+        self.space = problem.space
+        #: the cost function the study evaluates
+        self.cost: CostFunction = problem.cost
         self.seed = int(seed)
         self.rng = np.random.default_rng(self.seed)
         self.options = parse_options(type(self), options)
@@ -196,16 +191,14 @@ def option_specs(cls: Type[Optimizer]) -> List[OptionSpec]:
 
 def parse_options(cls: Type[Optimizer], values: Mapping[str, Any]):
     """Validate and convert ``values`` (strings from the CLI, YAML scalars, ...) against ``cls.Options``.
-    Returns an ``Options`` instance, or the dict unchanged for a plugin that declares no ``Options`` and
-    reads ``self.options`` itself (deprecated; a DeprecationWarning says so)."""
+    Returns an ``Options`` instance, or an empty dict for a plugin that declares no ``Options`` (it takes
+    no options: any given is an :class:`OptionError`)."""
     plugin = getattr(cls, "name", "") or cls.__name__
     opts = getattr(cls, "Options", None)
     if opts is None:
-        if values:
-            warnings.warn(f"optimizer {plugin!r} does not declare its options (Options); undeclared options "
-                          "are deprecated and will be rejected in the next release", DeprecationWarning,
-                          stacklevel=3)
-        return dict(values)
+        for k in values:
+            raise OptionError(f"optimizer {plugin!r} takes no options (it declares no Options), got {k!r}", str(k))
+        return {}
     specs = {s.name: s for s in option_specs(cls)}
     valid = ", ".join(s.describe(help=False) for s in specs.values()) or "none"
 
@@ -298,28 +291,18 @@ def _type_name(tp) -> str:
 def create_optimizer(plugin: Union[str, Type[Optimizer]], problem: Problem, seed: int = 0,
                      options: Optional[Mapping[str, Any]] = None) -> Optimizer:
     """The optimizer ``plugin`` (an installed name or a class) for ``problem``; bad options and plugin
-    errors about them are one :class:`~robodesign.core.errors.InputError`.
-
-    A plugin written against the API before :class:`Problem` (``__init__(self, space, seed, **options)``)
-    still works for one release, with a DeprecationWarning: it gets the search space and, as the CLI did,
-    the study's cost descriptor as option ``cost``."""
+    errors about them are one :class:`~robodesign.core.errors.InputError`. A plugin written against the
+    removed API before :class:`Problem` (``__init__(self, space, seed, **options)``) is an InputError that
+    says how to port it (docs/plugins.md)."""
     cls = load_optimizer(plugin) if isinstance(plugin, str) else plugin
     name = getattr(cls, "name", "") or cls.__name__
     options = dict(options or {})
+    if _takes_space(cls):
+        raise InputError(f"optimizer {name!r} is written against the plugin API before Problem "
+                         "(__init__(self, space, ...)), which this release no longer runs: take a Problem, "
+                         "__init__(self, problem, seed=0, **options), declare Options and read self.cost "
+                         "(docs/plugins.md)")
     try:
-        if _takes_space(cls):
-            warnings.warn(f"optimizer {name!r}: __init__(self, space, ...) is the deprecated plugin API; take a "
-                          "Problem: __init__(self, problem, seed=0, **options) (docs/plugins.md)",
-                          DeprecationWarning, stacklevel=2)
-            if _accepts(cls, "cost"):
-                options.setdefault("cost", problem.cost_descriptor)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", DeprecationWarning)  # warned once, above
-                opt = cls(problem.space, seed=seed, **options)
-            opt.problem = problem
-            if opt.cost is None:  # unless the plugin set its own (from the cost option, say)
-                opt.cost = problem.cost
-            return opt
         return cls(problem, seed=seed, **options)
     except OptionError:
         raise
@@ -331,11 +314,6 @@ def create_optimizer(plugin: Union[str, Type[Optimizer]], problem: Problem, seed
 def _takes_space(cls) -> bool:
     params = list(inspect.signature(cls.__init__).parameters.values())[1:]
     return bool(params) and params[0].name == "space"
-
-
-def _accepts(cls, keyword: str) -> bool:
-    params = inspect.signature(cls.__init__).parameters.values()
-    return any(p.name == keyword or p.kind is inspect.Parameter.VAR_KEYWORD for p in params)
 
 
 def available_optimizers() -> Dict[str, metadata.EntryPoint]:

@@ -18,24 +18,26 @@ that moves (``solvers/schedule.py``, certified between samples with the checker'
 """
 from __future__ import annotations
 
+import difflib
 import math
 import time
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import AssemblyError, InfeasibleError, InputError
 from robodesign.formats.assembly import Assembly
-from robodesign.formats.costs import cost_term, parse_cost
+from robodesign.formats.costs import CostFunction, cost_term, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.solution import Solution, SolutionTrajectory
-from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.formats.task_spec import Goal, Task
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.judge.checker import Verdict, check
 from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model.cell import build_robot, solution_robot
+from robodesign.solvers.planning import planner_name
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait, moving_obstacles, static_cell
 
 STAGES = ("assembly", "base", "reach", "ik", "static_torque", "plan", "timing", "trajopt", "check")
@@ -65,6 +67,32 @@ class SolveSettings:
     # the joint speed (a quarter of the acceleration) of the previous try; the try that achieves most
     # goals is kept (a goal-level endEffector v_max is the usual reason a goal is missed)
     goal_retries: int = 5
+
+
+TIMING_METHODS = ("toppra", "ruckig")
+
+
+def check_settings(settings: SolveSettings, file: Optional[str] = None, path: Sequence = ()) -> None:
+    """Bad input in ``settings`` (an unknown planner or timing method, a plan time that is not a positive
+    number, an unknown ``stop_after`` stage) as an :class:`InputError` before anything is evaluated, instead
+    of every candidate failing at the stage that uses it. The error names the command-line option
+    (``--planner``) or, with ``file``, the file and the JSON path ``path + [field]``."""
+    def fail(name: str, message: str) -> None:
+        if file is None:
+            raise InputError(f"--{name.replace('_', '-')}: {message}")
+        raise InputError(message, file=file, path=[*path, name])
+    try:
+        planner_name(settings.planner)
+    except InputError as e:
+        fail("planner", e.reason)
+    if settings.timing not in TIMING_METHODS:
+        close = difflib.get_close_matches(str(settings.timing), TIMING_METHODS, n=1)
+        fail("timing", f"unknown timing method {settings.timing!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+             + f"; available: {', '.join(TIMING_METHODS)}")
+    if not (isinstance(settings.plan_time, (int, float)) and settings.plan_time > 0 and math.isfinite(settings.plan_time)):
+        fail("plan_time", f"must be a positive number of seconds, got {settings.plan_time!r}")
+    if settings.stop_after is not None and settings.stop_after not in STAGES:
+        fail("stop_after", f"unknown stage {settings.stop_after!r}; stages: {', '.join(STAGES)}")
 
 
 @dataclass
@@ -155,10 +183,18 @@ class _Stage:
         if et is None:
             self.result.stages.append(StageRecord(self.name, True, dt))
             return False
-        if issubclass(et, _Fail) or issubclass(et, (RobodesignError,)):
+        if _infeasible(self.name, ev):
             self.result.stages.append(StageRecord(self.name, False, dt, str(ev)))
             return True  # swallowed: the caller checks result.stage
-        return False
+        return False  # bad input (InputError, exit 2) and bugs keep their kind
+
+
+def _infeasible(stage: str, e: BaseException) -> bool:
+    """Whether ``e``, raised in ``stage``, means the robot cannot do the task (a failing stage): a stage's
+    own failure, an :class:`InfeasibleError` of a solver, or a module order that does not assemble (the
+    ``assembly`` stage only: a candidate order is a design, not a file). Every other error is bad input or a
+    bug and leaves :func:`solve` as it is."""
+    return isinstance(e, (_Fail, InfeasibleError)) or (stage == "assembly" and isinstance(e, AssemblyError))
 
 
 class _Fail(Exception):
@@ -166,10 +202,12 @@ class _Fail(Exception):
 
 
 def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optional[np.ndarray] = None,
-          cost: str = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = (),
+          cost: Union[CostFunction, str] = "cyc", settings: Optional[SolveSettings] = None, colliders: Sequence = (),
           start: Optional[np.ndarray] = None) -> SolveResult:
     """Produce (and check) a solution of ``task`` with the given robot. Never raises for an infeasible
-    robot: the failing stage and its reason are in the result. A malformed ``cost`` raises InputError.
+    robot: the failing stage and its reason are in the result. ``cost``: a CostFunction (e.g. ``Problem.cost``),
+    or a descriptor, parsed here once (a malformed one raises InputError); the same object reaches the
+    sequencing, trajectory optimization and the solution file.
 
     IK and planning see the static cell; the task's moving obstacles and the extra timed ``colliders``
     (e.g. another robot's motion, :class:`robodesign.solvers.schedule.OtherRobot`) are avoided in time:
@@ -177,7 +215,7 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
     configuration the motion starts from (default: that of the first pose goal); a ``returnTo`` the start
     returns there."""
     settings = settings or SolveSettings()
-    parse_cost(cost)  # bad input, not an infeasible robot
+    cost = cost if isinstance(cost, CostFunction) else parse_cost(cost)  # bad input, not an infeasible robot
     res = SolveResult(num_goals=len(task.goals), task=task, module_set=module_set)
     base_pose = task.nominal_base_pose if base_pose is None else np.asarray(base_pose, dtype=float)
     run = _Pipeline(task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders, start)
@@ -207,7 +245,7 @@ def warm_up() -> None:
 
 
 class _Pipeline:
-    """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or a RobodesignError)
+    """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or an InfeasibleError)
     to stop the pipeline with its reason."""
 
     def __init__(self, task, module_set, order_or_assembly, base_pose, cost, settings, res, colliders=(), start=None):
@@ -263,7 +301,7 @@ class _Pipeline:
         """The solution of the timed motion (default: the last stage's)."""
         asm, ms = self.asm, self.module_set
         m, g2t = (self.motion, self.g2t) if motion is None else (motion, g2t)
-        return Solution(task_id=self.task.id, cost_function=self.cost, module_set=ms.name,
+        return Solution(task_id=self.task.id, cost_function=str(self.cost), module_set=ms.name,
                         module_order=tuple(asm.module_ids), base_pose=self.base_pose,
                         trajectory=SolutionTrajectory(m.t, m.q, m.dq, m.ddq, g2t),
                         module_connection=None if asm.is_serial() else asm.connections,
@@ -296,7 +334,7 @@ class _Pipeline:
                     self.planner.choose_and_plan()
                 self.planner.blend_radius = blend
                 self.motion, self.g2t = self.planner.time_parameterize()
-            except (_Fail, RobodesignError):
+            except (_Fail, InfeasibleError):
                 return verdict
             finally:
                 self.planner.settings = self.settings
@@ -314,7 +352,7 @@ def _only_collisions(verdict) -> bool:
 
 
 def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, module_set: ModuleSet, solution_of,
-                          cost: str, settings: SolveSettings) -> None:
+                          cost: CostFunction, settings: SolveSettings) -> None:
     """A valid solution that misses goals (possible only without allGoalsFulfilled): re-time the motions of
     the missed goals slower (``settings.goal_retries`` times, halving the speed each time) and keep the
     valid solution that achieves most goals (then the cheaper one)."""
@@ -327,7 +365,7 @@ def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, mod
             slow[gid] = slow.get(gid, 1.0) * 0.5
         try:
             motion, g2t = plan.time_parameterize(cost if settings.optimize_trajectory else None, slow=slow)
-        except RobodesignError:
+        except InfeasibleError:
             return
         sol = solution_of(motion, g2t)
         v = check(task, sol, module_set)
@@ -340,12 +378,9 @@ def _stop(res: SolveResult, settings: SolveSettings) -> bool:
     return settings.stop_after is not None and bool(res.stages) and res.stages[-1].name == settings.stop_after
 
 
-def goal_poses(g) -> List[ToleratedPose]:
-    if isinstance(g, (At, Reach)):
-        return [g.pose]
-    if isinstance(g, Follow):
-        return list(g.poses)
-    return []
+def goal_poses(g: Goal) -> List[ToleratedPose]:
+    """The tolerated poses the TCP must reach for goal ``g`` (:attr:`Goal.target_poses`)."""
+    return list(g.target_poses)
 
 
 def position_slack(pose: ToleratedPose) -> float:
@@ -364,13 +399,14 @@ class GoalPlanner:
     (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
     actions and paths of the goal sequence, and turns them into a motion."""
 
-    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult, cost: str = "cyc",
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult,
+                 cost: Optional[CostFunction] = None,
                  colliders: Sequence = (), start: Optional[np.ndarray] = None):
         self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
         self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
         self.start = None if start is None else np.asarray(start, dtype=float)  # given start configuration
         self.blend_radius = 0.05  # rad: the time scaling's corner blends (0: stop at every waypoint)
-        terms = dict(parse_cost(cost).terms)
+        terms = dict((cost if cost is not None else CostFunction((("cyc", 1.0),))).terms)
         # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
         # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
         # the latter for every term that integrates torques (mechEnergy, linkMechEnergy, effort)
@@ -402,14 +438,14 @@ class GoalPlanner:
                        if any(provably_unreachable(self.robot, p) for p in goal_poses(g))), None)
         probe = None
         if doomed is not None:
-            before = [i for i in range(doomed) if isinstance(self.order[i], (At, Reach, Follow))]
-            if before and isinstance(self.order[before[-1]], (At, Reach)):
+            before = [i for i in range(doomed) if self.order[i].solver_kind in ("pose", "poses")]
+            if before and self.order[before[-1]].solver_kind == "pose":
                 probe = before[-1]
         reached = 0
         for i, g in enumerate(self.order):
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 n_sol = 1 if i == probe else self.settings.ik_solutions
-                r = solve_ik(self.robot, g.pose, self.rng, max_restarts=self.settings.ik_restarts,
+                r = solve_ik(self.robot, g.target_poses[0], self.rng, max_restarts=self.settings.ik_restarts,
                              n_solutions=n_sol)
                 sols, reason = r.solutions, str(r.stats.get("reason"))
                 if not sols:
@@ -417,10 +453,10 @@ class GoalPlanner:
                     raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
                 self.ik[g.id] = sols
                 reached += 1
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 sols = []
                 seed = None
-                for i, pose in enumerate(g.poses):
+                for i, pose in enumerate(g.target_poses):
                     r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
                     if not r:
                         self.res.goals_reached = reached
@@ -477,14 +513,14 @@ class GoalPlanner:
             choice = {gid: self.ik[gid][i] for gid, i in idx.items()}
         self.choice = choice
         # the start configuration
-        first_pose = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
+        first_pose = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
         if self.start is not None:
             if self.robot.in_collision(self.start):
                 raise _Fail("the start configuration is in collision")
             q0 = self.start
         elif first_pose is None:
             q0 = self._free_configuration()
-        elif isinstance(first_pose, Follow):
+        elif first_pose.solver_kind == "poses":
             q0 = self.follow_ik[first_pose.id][0]
         else:
             q0 = choice[first_pose.id]
@@ -494,23 +530,23 @@ class GoalPlanner:
         q = q0
         at_config: Dict[str, np.ndarray] = {}
         for g in self.order:
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 actions.append(("move", choice[g.id], g))
                 q = choice[g.id]
-            elif isinstance(g, Pause):
+            elif g.solver_kind == "hold":
                 actions.append(("hold", g.duration, g))
-            elif isinstance(g, ReturnTo):
+            elif g.solver_kind == "return":
                 target = q0 if g.return_to is None else at_config.get(g.return_to)
                 if target is None:
                     raise _Fail(f"returnTo goal {g.id}: goal {g.return_to!r} has no configuration before it")
                 actions.append(("move", target, g))
                 q = target
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 pts = self.follow_ik[g.id]
                 actions.append(("move", pts[0], None))
                 actions.append(("follow", pts, g))
                 q = pts[-1]
-            elif isinstance(g, Leave):
+            elif g.solver_kind == "leave":
                 q_out = self._leave_configuration(q, g)
                 actions.append(("move", q_out, None))
                 actions.append(("hold", g.duration, g))
@@ -559,7 +595,7 @@ class GoalPlanner:
         ``settings.plan_alternatives`` others, nearest first (the sequencing's transition cost from ``q``), all
         goal states of one query. The one the path reaches replaces the chosen one in every later action.
         Returns (plan result, target)."""
-        if (g is None or not isinstance(g, (At, Reach)) or self.choice.get(g.id) is not target
+        if (g is None or g.solver_kind != "pose" or self.choice.get(g.id) is not target
                 or self.settings.plan_alternatives <= 0):
             return failed, target
         others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
@@ -583,22 +619,22 @@ class GoalPlanner:
         """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach
         goal than the first is left out of the objective (its target is chosen by its own neighbours)."""
         from robodesign.solvers.sequencing import Fixed, Free, Jump, Tied
-        first = next((g for g in self.order if isinstance(g, (At, Reach, Follow))), None)
+        first = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
         if first is None:
             return []
         nodes = [] if self.start is None else [Fixed(self.start)]
         for g in self.order:
-            if isinstance(g, (At, Reach)):
+            if g.solver_kind == "pose":
                 nodes.append(Free(g.id, np.asarray(self.ik[g.id])))
-            elif isinstance(g, Follow):
+            elif g.solver_kind == "poses":
                 pts = self.follow_ik[g.id]
                 nodes += [Fixed(pts[0]), Jump(pts[-1])]
-            elif isinstance(g, ReturnTo) and nodes:
+            elif g.solver_kind == "return" and nodes:
                 if g.return_to is None and self.start is not None:
                     nodes.append(Tied())
                 elif g.return_to is None:
-                    nodes.append(Tied() if isinstance(first, (At, Reach)) else Fixed(self.follow_ik[first.id][0]))
-                elif g.return_to == first.id and isinstance(first, (At, Reach)) and self.start is None:
+                    nodes.append(Tied() if first.solver_kind == "pose" else Fixed(self.follow_ik[first.id][0]))
+                elif g.return_to == first.id and first.solver_kind == "pose" and self.start is None:
                     nodes.append(Tied())
                 elif g.return_to in self.follow_ik:
                     nodes.append(Fixed(self.follow_ik[g.return_to][-1]))
@@ -612,7 +648,7 @@ class GoalPlanner:
             q = self.robot.random_configuration(self.rng)
         raise _Fail("no collision-free start configuration found")
 
-    def _leave_configuration(self, q: np.ndarray, g: Leave) -> np.ndarray:
+    def _leave_configuration(self, q: np.ndarray, g: Goal) -> np.ndarray:
         """A nearby configuration whose TCP is outside the space to leave: the TCP moves in a straight line
         (2 cm steps through the damped Jacobian pseudo-inverse) until it and a point 2 cm further on are
         outside, collision-free. Directions tried: away from the space's centre and along ±x, ±y, ±z; the
@@ -638,7 +674,7 @@ class GoalPlanner:
         return best[1]
 
     # -- timing ----------------------------------------------------------------------------------
-    def time_parameterize(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None):
+    def time_parameterize(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None):
         """:meth:`timed_motion` avoiding what moves: each move waits at rest until it is free; if some wait
         cannot help (the robot would be hit while it waits), the whole motion is instead delayed at its
         start until it runs free of everything that moves."""
@@ -659,7 +695,7 @@ class GoalPlanner:
             return (JointTrajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
                     {k: v + n * dt for k, v in g2t.items()})
 
-    def timed_motion(self, cost: Optional[str] = None, slow: Optional[Dict[str, float]] = None,
+    def timed_motion(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None,
                      colliders: Sequence = ()):
         """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
         optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
@@ -687,7 +723,7 @@ class GoalPlanner:
                 if arg > 0:
                     traj = traj.hold(arg, dt)
                 g2t[g.id] = float(traj.t[-1])
-                if isinstance(g, Leave):
+                if g.solver_kind == "leave":
                     g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
             elif kind == "follow":
                 if g.t is None:
@@ -717,17 +753,17 @@ class GoalPlanner:
         if why:
             raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
 
-    def _optimize_move(self, seg, cost: str):
-        from robodesign.solvers.trajopt import optimize_trajectory
-        oc = _trajopt_cost(cost)
-        if "cyc" not in oc:
+    def _optimize_move(self, seg, cost: CostFunction):
+        from robodesign.solvers.trajopt import TrajoptError, optimize_trajectory
+        weights = cost.trajopt_weights() or {"cyc": 1.0}
+        if "cyc" not in weights:
             # energy only: slower is always cheaper (viscous losses), so the optimum is an endless move;
             # a tiny time weight (1 % of the energy weight) makes the duration finite
-            oc += ",cyc_0.01"
+            weights["cyc"] = 0.01
         try:
-            out = optimize_trajectory(self.robot, seg, cost=oc, n_nodes=self.settings.trajopt_nodes,
+            out = optimize_trajectory(self.robot, seg, cost=weights, n_nodes=self.settings.trajopt_nodes,
                                       dt_out=self.task.dt)
-        except Exception:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
+        except TrajoptError:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
             return seg
         return out if np.allclose(out.q[-1], seg.q[-1], atol=1e-9) and np.all(out.dq[-1] == 0) else seg
 
@@ -743,13 +779,6 @@ class _SlowedRobot:
 
     def __getattr__(self, name):
         return getattr(self._robot, name)
-
-
-def _trajopt_cost(cost: str) -> str:
-    terms = {n: w for n, w in parse_cost(cost).terms if cost_term(n).trajopt}
-    if not terms:
-        return "cyc"
-    return ",".join(f"{n}_{w}" for n, w in terms.items())
 
 
 def _ceil_to(x: float, dt: float) -> float:

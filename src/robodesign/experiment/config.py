@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 from robodesign.core.errors import InputError, format_json_path
 from robodesign.design.optimize import Budget
 from robodesign.design.problem import Problem
-from robodesign.design.solve import SolveSettings
+from robodesign.design.solve import SolveSettings, check_settings
 
 DEFAULT_BUDGET = "50evals"
 EXECUTORS = ("serial", "process", "ray")
@@ -816,6 +816,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             check_optimizer(o.name, o.options, problems[0].problem, display, ["optimizers", i])
 
     solve = SolveSettings(**cfg.solve.model_dump())
+    check_settings(solve, file=display, path=["solve"])
     name = cfg.name or default_name or Path(display).stem
     return ResolvedExperiment(config=cfg, name=name, file=display, base_dir=base_dir, problems=problems,
                               optimizers=opts, seeds=list(cfg.seeds), solve=solve, executor=cfg.executor)
@@ -832,7 +833,7 @@ def check_optimizer(name: str, options: dict, problem: Problem, display: str, pa
         cls = load_optimizer(name)
     except InputError as e:
         raise InputError(e.reason, file=display, path=path + ["name"]) from None
-    except Exception as e:  # a registered plugin that fails to import
+    except (ImportError, AttributeError, SyntaxError) as e:  # a registered plugin that cannot be imported
         raise InputError(f"optimizer {name!r} is registered but cannot be loaded: {type(e).__name__}: {e}",
                          file=display, path=path + ["name"]) from None
     try:

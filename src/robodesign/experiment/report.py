@@ -24,6 +24,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
+from robodesign.core.errors import InputError
 from robodesign.experiment.storage import ExperimentDB
 
 SUMMARY_COLUMNS = ("task", "optimizer", "seeds", "evaluations", "best_cost_median", "best_cost_min",
@@ -183,13 +184,13 @@ def cost_axis_label(cost: Optional[str]) -> str:
     from robodesign.formats.costs import cost_term, parse_cost
     try:
         terms = parse_cost(cost).terms
-    except Exception:  # noqa: BLE001 - an old results folder may name a cost this version does not know
+    except InputError:  # an old results folder may name a cost this version does not know
         return f"best {cost} so far"
 
     def unit(name: str) -> str:
         try:
             m = re.search(r"\[([^\]]+)\]\s*$", cost_term(name).description)
-        except Exception:  # noqa: BLE001
+        except InputError:  # a term this version does not know
             return ""
         return m.group(1) if m else ""
     if len(terms) == 1 and terms[0][1] == 1:
@@ -459,8 +460,9 @@ def write_index(out: Path, meta: dict, summary: List[dict], plots: Dict[str, str
                      "<th>cost (stored)</th><th>agrees</th></tr>")
         for vd in verdicts:
             ok = vd.get("valid")
+            said = "VALID" if ok else "INVALID" if ok is not None else f"ERROR ({vd.get('error', 'not checked')})"
             parts.append(f"<tr><td><a href='{e(vd['path'])}'>{e(vd['path'])}</a>{view_link(vd['path'])}</td>"
-                         f"<td class='{'ok' if ok else 'bad'}'>{'VALID' if ok else 'INVALID'}</td>"
+                         f"<td class='{'ok' if ok else 'bad'}'>{e(said)}</td>"
                          f"<td>{_f(vd.get('cost'))}</td><td>{_f(vd.get('cost_stored'))}</td>"
                          f"<td class='{'ok' if vd.get('agrees') else 'bad'}'>{'yes' if vd.get('agrees') else 'NO'}</td>"
                          f"</tr>")

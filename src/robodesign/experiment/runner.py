@@ -309,8 +309,9 @@ def write_best(out: Path, db: ExperimentDB, run: RunSpec) -> Optional[dict]:
         verdict = check(problem.task, load_solution(sol_path), problem.module_set)
         v = verdict.to_json()
     except Exception as e:  # noqa: BLE001 - record, never crash the experiment on the re-check
-        v = {"valid": False, "violations": [{"constraint": "error", "message": f"{type(e).__name__}: {e}"}],
-             "cost": None}
+        # an error is not a verdict: "valid" stays None (neither VALID nor INVALID), the error is named
+        kind = "bad input" if isinstance(e, InputError) else "internal error"
+        v = {"valid": None, "error": f"{kind}: {type(e).__name__}: {e}", "cost": None}
     stored = best["cost"]
     v = {"file": sol_path.name, "run": run.run_id, "evaluation": best["idx"], "candidate": best["candidate_key"],
          "cost_stored": stored, "check_seconds": round(time.perf_counter() - t0, 4), "checked_at": _now(),

@@ -283,6 +283,7 @@ register_cost("fulfillP", _fulfill_p, "fraction of achieved goals", non_negative
 # the terms solvers/trajopt.py models with CasADi (cycle time, drivetrain energy, effort)
 for _name in ("cyc", "mechEnergy", "effort"):
     _REGISTRY[_name] = dataclasses.replace(_REGISTRY[_name], trajopt=True)
+_BUILTIN_TERMS = frozenset(_REGISTRY)
 register_compound("Liu2", (("mechEnergy", 1.0), ("cyc", 0.2)), "Liu2 = mechEnergy + 0.2·cyc")
 register_compound("Whit2", (("numJ", 0.025), ("mass", 0.1)), "Whit2 = 0.025·numJ + 0.1·mass")
 
@@ -371,6 +372,25 @@ class CostFunction:
         return CostFunction(tuple((n, w * k) for n, w in self.terms))
 
     __rmul__ = __mul__
+
+    def trajopt_weights(self) -> Dict[str, float]:
+        """term → weight of the terms trajectory optimization models (``CostTerm.trajopt``)."""
+        return {n: w for n, w in self.terms if _REGISTRY[n].trajopt}
+
+    def __reduce__(self):
+        """A cost pickles with the definitions of its terms that are not built in, so a worker process that
+        never ran the code registering them (a plugin imported by the driver, a term registered at run
+        time) knows them: unpickling registers each missing term. A term's ``fn`` must then be picklable
+        (a module-level function)."""
+        defs = tuple(_REGISTRY[n] for n, _ in self.terms if n in _REGISTRY and n not in _BUILTIN_TERMS)
+        return (_restore_cost, (self.terms, self.name, defs))
+
+
+def _restore_cost(terms, name, defs) -> "CostFunction":
+    for term in defs:
+        if term.name not in _REGISTRY and term.name not in _COMPOUNDS:
+            _REGISTRY[term.name] = term
+    return CostFunction(terms, name=name)
 
 
 def _unknown_cost_message(name: str) -> str:

@@ -37,9 +37,6 @@ class GeometrySpec:
     scale: Tuple[float, float, float] = (1.0, 1.0, 1.0)
     ref: Optional[str] = None  # mesh: the path as written in the file (for writing back)
 
-    def with_pose(self, pose: np.ndarray) -> "GeometrySpec":
-        return GeometrySpec(self.kind, pose, self.size, self.file, self.scale, self.ref)
-
     def to_json(self) -> dict:
         from robodesign.core.spatial import pose_to_list
         if self.kind == "box":

@@ -22,9 +22,10 @@ from robodesign.core.errors import InputError, describe_value
 from robodesign.core.input_warnings import InputWarnings
 from robodesign.core.jsonio import check_finite, load_json
 from robodesign.core.paths import builtin_tasks_dir
-from robodesign.core.schema import validate
+from robodesign.core.schema import load_schema, validate
 from robodesign.core.spatial import parse_pose
 from robodesign.formats.geometry import canonical_geometry_json, parse_geometries
+from robodesign.formats.goal_types import GoalContext, find_goal_type, goal_type, plugin_goal_types, register_goal_type
 from robodesign.formats.task_spec import (
     GLOBAL_ONLY,
     AllGoalsFulfilled,
@@ -90,8 +91,22 @@ def validate_task_json(data, fname: str, warnings: Optional[InputWarnings] = Non
     if not isinstance(data, dict):
         raise InputError("a task file must hold a JSON object", file=fname)
     data = _canonical_task(data, fname, InputWarnings() if warnings is None else warnings)
-    validate(data, "task", fname)
+    validate(data, "task", fname, schema=_task_schema())
     return data
+
+
+def _task_schema() -> Optional[dict]:
+    """task.schema.json extended by the registered plugin goal types (None without any: the file's)."""
+    plugins = plugin_goal_types()
+    if not plugins:
+        return None
+    schema = load_schema("task")
+    goal = schema["$defs"]["goal"]
+    goal["properties"]["type"]["enum"] += [gt.name for gt in plugins]
+    for gt in plugins:
+        goal["allOf"].append({"if": {"properties": {"type": {"enum": [gt.name]}}, "required": ["type"]},
+                              "then": gt.schema or {}})
+    return schema
 
 
 # ---------------------------------------------------------------------------------------------
@@ -102,8 +117,6 @@ _HEADER_LISTS = ("tags", "author", "email", "affiliation")
 _OBSTACLE_KEYS = ("ID", "name", "collision", "visual", "pose", "acknowledgement", "trajectory")
 _GOAL_KEYS = ("ID", "type", "constraints", "goalPose", "returnToGoal", "epsilon", "duration", "trajectory",
               "externalForce", "externalTorque", "forceTorqueReferenceFrame", "occupiedSpace", "region")
-_GOAL_TYPES = {"at": "at", "reach": "reach", "returnto": "returnTo", "pause": "pause", "follow": "follow",
-               "leave": "leave"}
 _LENIENT_CONSTRAINT_KEYS = {"basePlacement": ("type", "pose"),
                             "endEffector": ("type", "pose", "v_min", "v_max", "o_min", "o_max")}
 
@@ -164,21 +177,21 @@ def _canonical_obstacle(o, f, path, w):
 def _canonical_goal(g, f, path, w):
     if not isinstance(g, dict):
         return g
-    names = {k.lower(): k for k in _GOAL_KEYS}
+    gt = find_goal_type(g["type"]) if isinstance(g.get("type"), str) else None
+    names = {k.lower(): k for k in _GOAL_KEYS + (gt.keys if gt is not None else ())}
     out = {}
     for k, v in g.items():
         canon = names.get(str(k).lower())  # the reference matches goal keys case-insensitively
         if canon is None:
-            w.ignored_key(f, path, k, _GOAL_KEYS)
+            w.ignored_key(f, path, k, tuple(names.values()))
             continue
         if canon in out:
             raise InputError(f"{k!r} is given twice (keys are matched case-insensitively)", file=f, path=path + [k])
         if v is None and canon in ("returnToGoal", "constraints", "epsilon"):
             continue  # null = absent
         out[canon] = v
-    t = out.get("type")
-    if isinstance(t, str) and t.lower() in _GOAL_TYPES:
-        out["type"] = _GOAL_TYPES[t.lower()]
+    if gt is not None:
+        out["type"] = gt.name
     if "goalPose" in out:
         out["goalPose"] = ToleratedPose.canonical_json(out["goalPose"], f, path + ["goalPose"], w)
     if isinstance(out.get("trajectory"), dict):
@@ -424,77 +437,90 @@ def _parse_goal(g, fname, path, resolver, root) -> Goal:
     if not isinstance(g, dict):
         raise InputError("expected a goal object", file=fname, path=path)
     ci = _ci(g)
-    t = str(g.get("type", "")).lower()
     gid = str(g.get("ID", ci.get("id", (None, None))[1]))
     if gid == "None":
         raise InputError("goal needs an 'ID'", file=fname, path=path)
+    gt = goal_type(str(g.get("type", "")), file=fname, path=path + ["type"])
     cons = tuple(_parse_constraint(c, fname, path + ["constraints", k], resolver, False)
                  for k, c in enumerate(g.get("constraints", [])))
+    return gt.parse(g, GoalContext(gid, cons, fname, list(path), resolver, root, g))
 
-    def key(name):
-        return ci.get(name.lower(), (name, None))
 
-    if t in ("at", "reach"):
-        k, v = key("goalPose")
+def _pose_goal(cls):
+    def parse(g, ctx: GoalContext) -> Goal:
+        k, v = ctx.key("goalPose")
         if v is None:
-            raise InputError(f"a {t} goal needs 'goalPose'", file=fname, path=path)
-        pose = _tolerated(v, fname, path + [k], resolver)
-        return At(gid, cons, pose) if t == "at" else Reach(gid, cons, pose)
-    if t == "returnto":
-        k, v = key("returnToGoal")
-        return ReturnTo(gid, cons, None if v is None else str(v))
-    if t == "pause":
-        k, v = key("duration")
-        if v is None:
-            raise InputError("a pause goal needs 'duration'", file=fname, path=path)
-        d = check_finite(v, fname, path + [k])
-        if d < 0:
-            raise InputError(f"must be >= 0, got {d}", file=fname, path=path + [k])
-        return Pause(gid, cons, d)
-    if t == "follow":
-        k, traj = key("trajectory")
-        if not isinstance(traj, dict) or "pose" not in traj:
-            raise InputError("a follow goal needs 'trajectory': {pose: [...], t?: [...]}", file=fname, path=path)
-        poses = tuple(_tolerated(p, fname, path + [k, "pose", i], resolver) for i, p in enumerate(traj["pose"]))
-        if not poses:
-            raise InputError("trajectory has no poses", file=fname, path=path + [k, "pose"])
-        tt = None
-        if "t" in traj and traj["t"] is not None:
-            tv = traj["t"]
-            if isinstance(tv, (int, float)) and not isinstance(tv, bool):
-                tt = np.arange(len(poses)) * check_finite(tv, fname, path + [k, "t"])
-            else:
-                tt = np.array([check_finite(x, fname, path + [k, "t", i]) for i, x in enumerate(tv)])
-            if len(tt) != len(poses):
-                raise InputError(f"{len(tt)} times for {len(poses)} poses", file=fname, path=path + [k, "t"])
-            if np.any(np.diff(tt) <= 0):
-                raise InputError("times must be strictly increasing", file=fname, path=path + [k, "t"])
-        fr = key("forceTorqueReferenceFrame")[1]
-        if fr not in (None, "world"):
-            raise InputError("only 'world' is supported", file=fname, path=path + ["forceTorqueReferenceFrame"])
-        force = _vec3(key("externalForce"), fname, path)
-        torque = _vec3(key("externalTorque"), fname, path)
-        return Follow(gid, cons, poses, tt, force, torque)
-    if t == "leave":
-        region, occupied = None, ()
-        ko, v = key("occupiedSpace")
-        if v is not None:
-            occupied = parse_geometries(v, root, fname, path + [ko], required_files=True)
-        kr, v = key("region")
-        if isinstance(v, dict) and "nominal" in v:
-            region = _tolerated(v, fname, path + [kr], resolver)
-        elif v is not None:
-            occupied += parse_geometries(v, root, fname, path + [kr], required_files=True)
-        if region is None and not occupied:
-            raise InputError("a leave goal needs 'occupiedSpace' (geometries the TCP must leave) or 'region' "
-                             "(a tolerated pose)", file=fname, path=path)
-        kd, d = key("duration")
-        dur = check_finite(d if d is not None else 0.0, fname, path + [kd])
-        if dur < 0:
-            raise InputError(f"must be >= 0, got {dur}", file=fname, path=path + [kd])
-        return Leave(gid, cons, region, dur, occupied)
-    raise InputError(f"unknown goal type {describe_value(g.get('type'))} (at, reach, returnTo, pause, follow, leave)",
-                     file=fname, path=path + ["type"])
+            raise ctx.fail(f"a {cls.type_name} goal needs 'goalPose'")
+        return cls(ctx.id, ctx.constraints, _tolerated(v, ctx.file, ctx.path + [k], ctx.resolver))
+    return parse
+
+
+def _parse_return_to(g, ctx: GoalContext) -> Goal:
+    k, v = ctx.key("returnToGoal")
+    return ReturnTo(ctx.id, ctx.constraints, None if v is None else str(v))
+
+
+def _parse_pause(g, ctx: GoalContext) -> Goal:
+    k, v = ctx.key("duration")
+    if v is None:
+        raise ctx.fail("a pause goal needs 'duration'")
+    d = check_finite(v, ctx.file, ctx.path + [k])
+    if d < 0:
+        raise ctx.fail(f"must be >= 0, got {d}", k)
+    return Pause(ctx.id, ctx.constraints, d)
+
+
+def _parse_follow(g, ctx: GoalContext) -> Goal:
+    fname, path = ctx.file, ctx.path
+    k, traj = ctx.key("trajectory")
+    if not isinstance(traj, dict) or "pose" not in traj:
+        raise ctx.fail("a follow goal needs 'trajectory': {pose: [...], t?: [...]}")
+    poses = tuple(_tolerated(p, fname, path + [k, "pose", i], ctx.resolver) for i, p in enumerate(traj["pose"]))
+    if not poses:
+        raise ctx.fail("trajectory has no poses", k, "pose")
+    tt = None
+    if "t" in traj and traj["t"] is not None:
+        tv = traj["t"]
+        if isinstance(tv, (int, float)) and not isinstance(tv, bool):
+            tt = np.arange(len(poses)) * check_finite(tv, fname, path + [k, "t"])
+        else:
+            tt = np.array([check_finite(x, fname, path + [k, "t", i]) for i, x in enumerate(tv)])
+        if len(tt) != len(poses):
+            raise ctx.fail(f"{len(tt)} times for {len(poses)} poses", k, "t")
+        if np.any(np.diff(tt) <= 0):
+            raise ctx.fail("times must be strictly increasing", k, "t")
+    fr = ctx.key("forceTorqueReferenceFrame")[1]
+    if fr not in (None, "world"):
+        raise ctx.fail("only 'world' is supported", "forceTorqueReferenceFrame")
+    force = _vec3(ctx.key("externalForce"), fname, path)
+    torque = _vec3(ctx.key("externalTorque"), fname, path)
+    return Follow(ctx.id, ctx.constraints, poses, tt, force, torque)
+
+
+def _parse_leave(g, ctx: GoalContext) -> Goal:
+    fname, path = ctx.file, ctx.path
+    region, occupied = None, ()
+    ko, v = ctx.key("occupiedSpace")
+    if v is not None:
+        occupied = parse_geometries(v, ctx.root, fname, path + [ko], required_files=True)
+    kr, v = ctx.key("region")
+    if isinstance(v, dict) and "nominal" in v:
+        region = _tolerated(v, fname, path + [kr], ctx.resolver)
+    elif v is not None:
+        occupied += parse_geometries(v, ctx.root, fname, path + [kr], required_files=True)
+    if region is None and not occupied:
+        raise ctx.fail("a leave goal needs 'occupiedSpace' (geometries the TCP must leave) or 'region' "
+                       "(a tolerated pose)")
+    kd, d = ctx.key("duration")
+    dur = check_finite(d if d is not None else 0.0, fname, path + [kd])
+    if dur < 0:
+        raise ctx.fail(f"must be >= 0, got {dur}", kd)
+    return Leave(ctx.id, ctx.constraints, region, dur, occupied)
+
+
+for _cls, _parse in ((At, _pose_goal(At)), (Reach, _pose_goal(Reach)), (ReturnTo, _parse_return_to),
+                     (Pause, _parse_pause), (Follow, _parse_follow), (Leave, _parse_leave)):
+    register_goal_type(_cls, _parse, builtin=True)
 
 
 def _vec3(kv, fname, path):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, FrozenSet, Optional, Tuple
+from typing import ClassVar, Dict, FrozenSet, Optional, Tuple
 
 import numpy as np
 
@@ -130,34 +130,73 @@ def default_constraints() -> Tuple[TaskConstraint, ...]:
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Goal:
+    """A goal of a task. Each goal type is a subclass naming its CoBRA ``type_name`` and the solver handler
+    it needs (``solver_kind``); its parser is registered under that name in
+    :mod:`robodesign.formats.goal_types` (a plugin goal type registers there too, docs/architecture.md)."""
     id: str
     constraints: Tuple[TaskConstraint, ...] = ()
 
+    #: the CoBRA goal type (the JSON ``type``)
+    type_name: ClassVar[str] = ""
+    #: the solve pipeline's handler (design/solve.py) and what it reads of the goal: "pose" (IK of
+    #: ``target_poses[0]``, move there and stop), "poses" (visit the IK solutions of ``target_poses``, timed by
+    #: ``t`` or untimed if None), "hold" (stay still for ``duration``), "return" (move back to the
+    #: configuration of goal ``return_to``, None = the start), "leave" (retreat until not ``contains(T)``,
+    #: away from ``center``, and stay out for ``duration``)
+    solver_kind: ClassVar[str] = ""
+
     @property
     def type(self) -> str:
-        return _GOAL_TYPE_NAMES[type(self)]
+        return type(self).type_name
+
+    @property
+    def target_poses(self) -> Tuple[ToleratedPose, ...]:
+        """The tolerated poses the TCP must reach (none for goals defined by time or by a space to leave)."""
+        return ()
+
+    @property
+    def anchor(self) -> Optional[ToleratedPose]:
+        """The tolerated pose where the goal is shown (plots, labels): its first target pose by default."""
+        poses = self.target_poses
+        return poses[0] if poses else None
 
 
 @dataclass(frozen=True, eq=False)
 class At(Goal):
     pose: ToleratedPose = None
+    type_name: ClassVar[str] = "at"
+    solver_kind: ClassVar[str] = "pose"
+
+    @property
+    def target_poses(self) -> Tuple[ToleratedPose, ...]:
+        return (self.pose,) if self.pose is not None else ()
 
 
 @dataclass(frozen=True, eq=False)
 class Reach(Goal):
     pose: ToleratedPose = None
     velocity_tolerance: float = 1e-3  # every component of the TCP twist at t_g
+    type_name: ClassVar[str] = "reach"
+    solver_kind: ClassVar[str] = "pose"
+
+    @property
+    def target_poses(self) -> Tuple[ToleratedPose, ...]:
+        return (self.pose,) if self.pose is not None else ()
 
 
 @dataclass(frozen=True, eq=False)
 class ReturnTo(Goal):
     return_to: Optional[str] = None  # goal ID; None = the start (t = 0)
     epsilon: float = 1e-4
+    type_name: ClassVar[str] = "returnTo"
+    solver_kind: ClassVar[str] = "return"
 
 
 @dataclass(frozen=True, eq=False)
 class Pause(Goal):
     duration: float = 0.0
+    type_name: ClassVar[str] = "pause"
+    solver_kind: ClassVar[str] = "hold"
 
 
 @dataclass(frozen=True, eq=False)
@@ -166,6 +205,12 @@ class Follow(Goal):
     t: Optional[np.ndarray] = None  # timed trajectory (relative times), None = untimed
     external_force: np.ndarray = field(default_factory=lambda: np.zeros(3))  # world frame, at the TCP
     external_torque: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    type_name: ClassVar[str] = "follow"
+    solver_kind: ClassVar[str] = "poses"
+
+    @property
+    def target_poses(self) -> Tuple[ToleratedPose, ...]:
+        return tuple(self.poses)
 
 
 @dataclass(frozen=True, eq=False)
@@ -179,6 +224,12 @@ class Leave(Goal):
     region: Optional[ToleratedPose] = None
     duration: float = 0.0
     occupied_space: Tuple[GeometrySpec, ...] = ()
+    type_name: ClassVar[str] = "leave"
+    solver_kind: ClassVar[str] = "leave"
+
+    @property
+    def anchor(self) -> Optional[ToleratedPose]:
+        return self.region
 
     def contains(self, T: np.ndarray) -> bool:
         """Whether the TCP pose T (4x4, world) is inside the space to leave."""
@@ -195,8 +246,7 @@ class Leave(Goal):
         return np.mean(pts, axis=0)
 
 
-_GOAL_TYPE_NAMES = {At: "at", Reach: "reach", ReturnTo: "returnTo", Pause: "pause", Follow: "follow",
-                    Leave: "leave"}
+BUILTIN_GOAL_TYPES = (At, Reach, ReturnTo, Pause, Follow, Leave)
 
 
 @dataclass(frozen=True, eq=False)

@@ -74,7 +74,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from robodesign.core.errors import InputError, PathPart, RobodesignError, describe_value
+from robodesign.core.errors import InfeasibleError, InputError, PathPart, describe_value
 from robodesign.core.spatial import homogeneous, inv, log3, parse_pose, pose_to_list, rot_x, rot_y, rot_z
 
 FrameResolver = Callable[[str], np.ndarray]
@@ -129,7 +129,7 @@ _JSON_KEYS = ("nominal", "nominalParent", "toleranceProjection", "tolerance", "t
 _JSON_ALIASES = {"frame": "toleranceFrame"}
 
 
-class ToleranceSamplingError(RobodesignError):
+class ToleranceSamplingError(InfeasibleError):
     """No pose inside the tolerance was found (constraints in different frames may contradict)."""
 
 

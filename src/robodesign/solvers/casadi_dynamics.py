@@ -49,10 +49,6 @@ def _axis(jm) -> Tuple[str, np.ndarray]:
     raise NotImplementedError(f"joint type {name} is not supported by casadi_dynamics (1-DoF R*/P* joints only)")
 
 
-def _skew(v):
-    return ca.vertcat(ca.horzcat(0, -v[2], v[1]), ca.horzcat(v[2], 0, -v[0]), ca.horzcat(-v[1], v[0], 0))
-
-
 def _rot(axis: np.ndarray, q):
     """Rotation matrix about a constant unit axis (Rodrigues), SX."""
     c, s = ca.cos(q), ca.sin(q)

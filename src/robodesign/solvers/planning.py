@@ -49,6 +49,7 @@ Decisions:
 """
 from __future__ import annotations
 
+import difflib
 import math
 import time
 from dataclasses import dataclass, field
@@ -58,7 +59,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 
-__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "PLANNERS", "CHECKS_PER_SECOND"]
+__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
 #: validity checks per second of ``time_limit``: what one quiet core does on IMPROV and built-in arms
 #: (5–7k per CPU second measured with other jobs on the machine); the planner's work limit
@@ -97,6 +98,18 @@ def available_planners() -> List[str]:
     except ImportError:  # pragma: no cover - OMPL is a hard dependency of planning
         return []
     return [k for k, v in PLANNERS.items() if hasattr(og, v)]
+
+
+def planner_name(planner: str) -> str:
+    """The canonical (lower-case) name of ``planner``, one of :func:`available_planners`; an unknown name is
+    an :class:`InputError` suggesting the closest known one."""
+    name = str(planner).lower()
+    avail = available_planners()
+    if name not in avail:
+        close = difflib.get_close_matches(name, avail, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise InputError(f"unknown planner {planner!r}{hint}; available: {', '.join(avail)}")
+    return name
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -296,10 +309,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     ("straight_line" | "planned" | "invalid_start" | "invalid_goal" | "no_solution" | "final_check_failed").
     """
     t0 = time.perf_counter()
-    name = str(planner).lower()
-    avail = available_planners()
-    if name not in avail:
-        raise InputError(f"unknown planner {planner!r}; available: {', '.join(avail)}")
+    name = planner_name(planner)
     if not (resolution > 0 and math.isfinite(resolution)):
         raise InputError(f"resolution must be a positive number, got {resolution!r}")
     if not (time_limit > 0 and math.isfinite(time_limit)):

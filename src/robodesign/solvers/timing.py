@@ -92,13 +92,13 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import InfeasibleError
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
 
 
-class TimingError(RobodesignError):
+class TimingError(InfeasibleError):
     """No time parameterization was found (e.g. the path is statically infeasible for the torques)."""
 
 
@@ -129,10 +129,6 @@ class JointTrajectory:
             raise ValueError("trajectory times must be strictly increasing")
 
     # -- basic properties ---------------------------------------------------------------------
-    @property
-    def n_samples(self) -> int:
-        return len(self.t)
-
     def __len__(self) -> int:
         return len(self.t)
 
@@ -237,10 +233,6 @@ class JointTrajectory:
         """Drivetrain torques at every sample (RNEA + armature + friction)."""
         return robot.drivetrain_torques(self.q, self.dq, self.ddq)
 
-    def to_dict(self) -> dict:
-        """JSON-ready ``t, q, dq, ddq`` lists (the CoBRA solution ``trajectory`` fields, without goal2time)."""
-        return {"t": self.t.tolist(), "q": self.q.tolist(), "dq": self.dq.tolist(), "ddq": self.ddq.tolist()}
-
 
 # ==============================================================================================
 # limits, bounds, checks
@@ -248,26 +240,6 @@ class JointTrajectory:
 def _finite(x, fallback: float = UNBOUNDED_LIMIT) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     return np.where(np.isfinite(x) & (x > 0), x, fallback)
-
-
-def limit_ratios(robot, traj: JointTrajectory, torque: bool = True) -> Dict[str, float]:
-    """Largest |value|/limit over all samples for dq, ddq and τ (infinite limits ignored), and the
-    largest position-limit excess ``q`` (rad or m; 0 when inside)."""
-    out = {}
-    lo, hi = np.asarray(robot.q_lower, float), np.asarray(robot.q_upper, float)
-    out["q"] = float(max(0.0, np.max(lo - traj.q), np.max(traj.q - hi)))
-    for key, arr, lim in (("dq", traj.dq, robot.dq_max), ("ddq", traj.ddq, robot.ddq_max)):
-        lim = np.asarray(lim, float)
-        m = np.isfinite(lim)
-        out[key] = float(np.max(np.abs(arr[:, m]) / lim[m])) if m.any() else 0.0
-    if torque:
-        lim = np.asarray(robot.tau_max, float)
-        m = np.isfinite(lim)
-        if m.any():
-            out["tau"] = float(np.max(sample_torques(robot, traj)[:, m] / lim[m]))
-        else:
-            out["tau"] = 0.0
-    return out
 
 
 def sample_torques(robot, traj: JointTrajectory) -> np.ndarray:

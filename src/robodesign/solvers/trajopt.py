@@ -61,27 +61,26 @@ from typing import Dict, Optional, Sequence
 import casadi as ca
 import numpy as np
 
-from robodesign.core.errors import RobodesignError
+from robodesign.core.errors import InfeasibleError
+from robodesign.formats.costs import CostFunction, cost_terms
+from robodesign.formats.costs import parse_cost as parse_cobra_cost
 from robodesign.solvers.casadi_dynamics import casadi_drivetrain_torque, casadi_fk
 from robodesign.solvers.timing import JointTrajectory, resample_velocity_profile, time_optimal_bound
 
 
-class TrajoptError(RobodesignError):
+class TrajoptError(InfeasibleError):
     """ipopt did not find a feasible trajectory."""
 
 
 def parse_cost(cost) -> Dict[str, float]:
-    """JointTrajectory-optimization weights {term: weight} from a CoBRA cost (either notation, compounds such as
-    ``Liu2`` expand) or a dict; only the trajectory-dependent terms ``cyc``, ``mechEnergy``, ``effort``
-    are supported."""
+    """JointTrajectory-optimization weights {term: weight} from a :class:`CostFunction`, a CoBRA cost (either
+    notation, compounds such as ``Liu2`` expand) or a dict; only the trajectory-dependent terms ``cyc``,
+    ``mechEnergy``, ``effort`` are supported."""
     if isinstance(cost, dict):
         out = {str(k): float(v) for k, v in cost.items()}
     else:
-        from robodesign.formats.costs import parse_cost as parse_cobra_cost
-        out = {}
-        for name, w in parse_cobra_cost(str(cost)).terms:
-            out[name] = out.get(name, 0.0) + float(w)
-    from robodesign.formats.costs import cost_terms
+        cf = cost if isinstance(cost, CostFunction) else parse_cobra_cost(str(cost))
+        out = {name: float(w) for name, w in cf.terms}
     known = [n for n, term in cost_terms().items() if term.trajopt]
     bad = [k for k in out if k not in known]
     if bad:

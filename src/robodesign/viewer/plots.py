@@ -95,7 +95,6 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     None for the solution's ``moduleSet``. With ``out_dir`` the images are also written there as
     ``<stem>_<name>.png``.
     """
-    from robodesign.formats.task_spec import Follow
     from robodesign.judge.quantities import TrajectoryQuantities
     from robodesign.model.cell import resolve_module_set
     from robodesign.model.robot import Robot
@@ -126,13 +125,10 @@ def trajectory_plots(task, solution, module_set, out_dir: Optional[Union[str, Pa
     P = tq.tcp_poses[:, :3, 3]
     goals = []
     if task is not None:
-        from robodesign.formats.task_spec import At, Leave, Reach
         for g in task.goals:
-            pose = getattr(g, "pose", None) if isinstance(g, (At, Reach)) else (g.region if isinstance(g, Leave) else None)
+            pose = g.anchor
             if pose is not None:
                 goals.append((g.id, pose.nominal[:3, 3]))
-            elif isinstance(g, Follow) and g.poses:
-                goals.append((g.id, g.poses[0].nominal[:3, 3]))
     merged: list = []  # goals at the same place get one label ("1, 3")
     for gid, pos in goals:
         for m in merged:

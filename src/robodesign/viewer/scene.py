@@ -31,11 +31,13 @@ the previously selected one, the last sample, and every goal instant (``goal2tim
 from __future__ import annotations
 
 import math
-from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+from dataclasses import dataclass
+from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from robodesign.formats.geometry import GeometrySpec
+from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.viewer.meshes import MAX_TRIANGLES, mesh_entry
 
@@ -464,70 +466,112 @@ def _geometry_corners(g: dict, meshes: dict) -> List[np.ndarray]:
     return [np.array([a[0], b[1], c[2]]) for a in (lo, hi) for b in (lo, hi) for c in (lo, hi)]
 
 
+@dataclass
+class GoalView:
+    """What a goal's view function adds to: the scene's nodes, the points the camera frames, the TCP path
+    (``paths["tcp"]``), the mesh table, and ``rec``, the goal's record in the side panel (``tolerance``,
+    ``position``, ``details``)."""
+    rec: dict
+    nodes: List[dict]
+    focus: List[np.ndarray]
+    paths: Dict[str, list]
+    meshes: "_MeshTable"
+
+    def node(self, g, geometries: list, pose: np.ndarray, kind: Optional[str] = None, **extra) -> None:
+        self.nodes.append({"id": f"goal/{g.id}", "name": f"goal {g.id} ({kind or g.type})", "group": "goal",
+                           "label": f"{g.id}", **extra, "pose": _pose(pose), "geometries": geometries})
+
+
+#: goal class → its view function (looked up along the class's MRO: a subclass is shown as its base)
+GOAL_VIEWS: Dict[type, Callable[[object, GoalView], None]] = {}
+
+
+def register_goal_view(cls: type, view: Callable[[object, GoalView], None]) -> None:
+    """Show goals of class ``cls`` (and its subclasses without a view of their own) with ``view``."""
+    GOAL_VIEWS[cls] = view
+
+
 def _goal(g, g2t: Dict[str, float], times: List[float], nodes: List[dict], focus: List[np.ndarray],
           paths: Dict[str, list], meshes: "_MeshTable") -> dict:
-    from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
     tg = g2t.get(g.id)
     rec = {"id": g.id, "type": g.type, "time": None if tg is None else float(tg), "frame": None,
            "tolerance": [], "position": None, "details": ""}
     if tg is not None and times:
         rec["frame"] = int(np.argmin(np.abs(np.asarray(times) - float(tg))))
-    label = f"{g.id}"
-    if isinstance(g, (At, Reach)) and g.pose is not None:
-        tp = g.pose
-        geoms = [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["goal"])
-        nodes.append({"id": f"goal/{g.id}", "name": f"goal {g.id} ({g.type})", "group": "goal", "label": label,
-                      "pose": _pose(tp.nominal), "geometries": geoms})
-        rec["tolerance"] = tolerance_text(tp)
-        rec["position"] = tp.nominal[:3, 3].tolist()
-        focus.append(tp.nominal[:3, 3])
-        if isinstance(g, Reach):
-            rec["details"] = f"TCP twist ≤ {g.velocity_tolerance:g}"
-    elif isinstance(g, Leave):
-        tp = g.region
-        at = tp.nominal if tp is not None else np.eye(4)   # node pose; the space's geometries are world poses
-        geoms = [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["leave"]) if tp is not None else []
-        for spec in g.occupied_space:
-            r = geometry_record(spec, meshes, "tolerance", COLORS["leave"], 0.2, pose=np.linalg.inv(at) @ spec.pose)
-            if r is not None:
-                geoms.append(r)
-        nodes.append({"id": f"goal/{g.id}", "name": f"goal {g.id} (leave)", "group": "goal", "label": label,
-                      "pose": _pose(at), "geometries": geoms})
-        rec["tolerance"] = tolerance_text(tp) if tp is not None else []
-        rec["position"] = g.center.tolist()
-        rec["details"] = f"stay outside for {g.duration:g} s" + (
-            f" ({len(g.occupied_space)} geometr{'y' if len(g.occupied_space) == 1 else 'ies'} to leave)"
-            if g.occupied_space else "")
-        focus.append(g.center)
-    elif isinstance(g, Follow) and g.poses:
-        pts = [p.nominal[:3, 3].tolist() for p in g.poses]
-        geoms = [{"type": "line", "points": pts, "pose": _pose(np.eye(4)), "role": "marker",
-                  "color": COLORS["follow"], "opacity": 1.0}]
-        step = max(1, int(math.ceil(len(g.poses) / 20)))
-        shown = list(range(0, len(g.poses), step))
-        if shown[-1] != len(g.poses) - 1:
-            shown.append(len(g.poses) - 1)
-        for i in shown:
-            tp = g.poses[i]
-            geoms.append(_triad(GOAL_TRIAD * 0.6, tp.nominal))
-            for tg_ in tolerance_geometries(tp, COLORS["follow"], opacity=0.12):
-                tg_["pose"] = _pose(tp.nominal @ np.asarray(tg_["pose"]))
-                geoms.append(tg_)
-        nodes.append({"id": f"goal/{g.id}", "name": f"goal {g.id} (follow)", "group": "goal", "label": label,
-                      "label_at": pts[0], "pose": _pose(np.eye(4)), "geometries": geoms})
-        rec["tolerance"] = tolerance_text(g.poses[0]) + ([f"… {len(g.poses)} poses"] if len(g.poses) > 1 else [])
-        rec["position"] = pts[0]
-        rec["details"] = f"{len(g.poses)} poses" + (", timed" if g.t is not None else "")
-        if np.any(g.external_force) or np.any(g.external_torque):
-            rec["details"] += f", wrench f={np.round(g.external_force, 3).tolist()} τ={np.round(g.external_torque, 3).tolist()}"
-        focus.extend(np.asarray(pts))
-    elif isinstance(g, ReturnTo):
-        if g.return_to:
-            rec["details"] = f"return to the configuration of goal {g.return_to}"
-        else:
-            rec["details"] = "return to the start configuration"
-            if paths.get("tcp"):
-                rec["position"] = paths["tcp"][0]
-    elif isinstance(g, Pause):
-        rec["details"] = f"pause {g.duration:g} s"
+    view = next((GOAL_VIEWS[c] for c in type(g).__mro__ if c in GOAL_VIEWS), None)
+    if view is not None:
+        view(g, GoalView(rec, nodes, focus, paths, meshes))
     return rec
+
+
+def _view_pose_goal(g, v: GoalView) -> None:
+    tp = g.target_poses[0] if g.target_poses else None
+    if tp is None:
+        return
+    v.node(g, [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["goal"]), tp.nominal)
+    v.rec["tolerance"] = tolerance_text(tp)
+    v.rec["position"] = tp.nominal[:3, 3].tolist()
+    v.focus.append(tp.nominal[:3, 3])
+    if getattr(g, "velocity_tolerance", None) is not None:
+        v.rec["details"] = f"TCP twist ≤ {g.velocity_tolerance:g}"
+
+
+def _view_leave(g, v: GoalView) -> None:
+    tp = g.region
+    at = tp.nominal if tp is not None else np.eye(4)   # node pose; the space's geometries are world poses
+    geoms = [_triad(GOAL_TRIAD)] + tolerance_geometries(tp, COLORS["leave"]) if tp is not None else []
+    for spec in g.occupied_space:
+        r = geometry_record(spec, v.meshes, "tolerance", COLORS["leave"], 0.2, pose=np.linalg.inv(at) @ spec.pose)
+        if r is not None:
+            geoms.append(r)
+    v.node(g, geoms, at, kind="leave")
+    v.rec["tolerance"] = tolerance_text(tp) if tp is not None else []
+    v.rec["position"] = g.center.tolist()
+    v.rec["details"] = f"stay outside for {g.duration:g} s" + (
+        f" ({len(g.occupied_space)} geometr{'y' if len(g.occupied_space) == 1 else 'ies'} to leave)"
+        if g.occupied_space else "")
+    v.focus.append(g.center)
+
+
+def _view_follow(g, v: GoalView) -> None:
+    if not g.poses:
+        return
+    pts = [p.nominal[:3, 3].tolist() for p in g.poses]
+    geoms = [{"type": "line", "points": pts, "pose": _pose(np.eye(4)), "role": "marker",
+              "color": COLORS["follow"], "opacity": 1.0}]
+    step = max(1, int(math.ceil(len(g.poses) / 20)))
+    shown = list(range(0, len(g.poses), step))
+    if shown[-1] != len(g.poses) - 1:
+        shown.append(len(g.poses) - 1)
+    for i in shown:
+        tp = g.poses[i]
+        geoms.append(_triad(GOAL_TRIAD * 0.6, tp.nominal))
+        for tg_ in tolerance_geometries(tp, COLORS["follow"], opacity=0.12):
+            tg_["pose"] = _pose(tp.nominal @ np.asarray(tg_["pose"]))
+            geoms.append(tg_)
+    v.node(g, geoms, np.eye(4), kind="follow", label_at=pts[0])
+    rec = v.rec
+    rec["tolerance"] = tolerance_text(g.poses[0]) + ([f"… {len(g.poses)} poses"] if len(g.poses) > 1 else [])
+    rec["position"] = pts[0]
+    rec["details"] = f"{len(g.poses)} poses" + (", timed" if g.t is not None else "")
+    if np.any(g.external_force) or np.any(g.external_torque):
+        rec["details"] += f", wrench f={np.round(g.external_force, 3).tolist()} τ={np.round(g.external_torque, 3).tolist()}"
+    v.focus.extend(np.asarray(pts))
+
+
+def _view_return_to(g, v: GoalView) -> None:
+    if g.return_to:
+        v.rec["details"] = f"return to the configuration of goal {g.return_to}"
+    else:
+        v.rec["details"] = "return to the start configuration"
+        if v.paths.get("tcp"):
+            v.rec["position"] = v.paths["tcp"][0]
+
+
+def _view_pause(g, v: GoalView) -> None:
+    v.rec["details"] = f"pause {g.duration:g} s"
+
+
+for _cls, _view in ((At, _view_pose_goal), (Reach, _view_pose_goal), (Leave, _view_leave), (Follow, _view_follow),
+                    (ReturnTo, _view_return_to), (Pause, _view_pause)):
+    register_goal_view(_cls, _view)
