@@ -34,7 +34,9 @@ Decisions:
   :data:`CHECKS_PER_SECOND` per second (the rate of one quiet core), and OMPL's solve stops when the budget
   is spent (the validity checker ends the solve's termination condition once the count is reached). A busy
   machine therefore takes longer but plans the same path, and a query that succeeds on a quiet machine
-  succeeds under load too. A wall-clock cap of :data:`WALL_FACTOR`·time_limit + 50 ms stays as a safety net
+  succeeds under load too. A wall-clock cap of max(:data:`WALL_FACTOR`·time_limit, :data:`WALL_MIN`) + 50 ms
+  stays as a safety net (the floor keeps short queries, such as the plan stage's half-effort fallback,
+  deterministic on a machine loaded many times over)
   (the validity checker then reports every state invalid, which also stops planners that ignore the
   condition, such as FMT/BFMT sampling a fixed number of states). The straight-line check and post-
   processing come on top (the shortcuts are bounded by their count).
@@ -66,6 +68,7 @@ __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "plann
 CHECKS_PER_SECOND = 8000
 #: the wall-clock safety net, as a multiple of ``time_limit`` (reached only on a machine ~10x slower)
 WALL_FACTOR = 10.0
+WALL_MIN = 10.0  # s: the wall-clock cap's floor
 
 # name → OMPL class name (only the classes present in the installed OMPL are offered)
 PLANNERS: Dict[str, str] = {
@@ -456,9 +459,10 @@ def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize
         ss.setPlanner(getattr(og, PLANNERS[name])(si))
         ss.setup()
         budget[0] = counter[0] + max(1, int(float(time_limit) * CHECKS_PER_SECOND))
-        hard_deadline[0] = time.perf_counter() + WALL_FACTOR * float(time_limit) + 0.05
+        wall = max(WALL_FACTOR * float(time_limit), WALL_MIN)
+        hard_deadline[0] = time.perf_counter() + wall + 0.05
         # a C++ condition (a Python one would be called from PRM's roadmap thread and deadlock on the GIL)
-        stop.append(ob.timedPlannerTerminationCondition(WALL_FACTOR * float(time_limit)))
+        stop.append(ob.timedPlannerTerminationCondition(wall))
         ss.solve(stop[0])
         stats["plan_time"] = ss.getLastPlanComputationTime()
         if not ss.haveExactSolutionPath():
