@@ -321,27 +321,27 @@ class _Pipeline:
 
 
     def _repair_collisions(self, verdict):
-        """The judge sweeps the continuous motion for collisions; the planner checked states ``resolution``
-        apart on straight segments, and the time scaling's blends cut the corners between them. When a
-        collision between samples is all that is wrong, the moves are timed again along the checked
-        segments exactly (``blend_radius = 0``: every waypoint a stop), then planned again with a 4× finer
-        check step; the first motion the judge accepts is kept (else the first verdict stands)."""
-        attempts = [(None, 0.0), (self.settings.resolution / 4, 0.0)]
-        for resolution, blend in attempts:
+        """The judge sweeps the continuous motion; the planner checked states ``resolution`` apart and the blends
+        cut corners. When collisions between samples are all that is wrong, the moves are timed again with a stop
+        at every waypoint (along the checked segments), then planned again with a 4× finer check step; the first
+        motion the judge accepts is kept, else the first verdict stands with the motion it judged."""
+        kept = (self.res.solution, self.motion, self.g2t)
+        for resolution in (None, self.settings.resolution / 4):
             try:
                 if resolution is not None:
                     self.planner.settings = replace(self.settings, resolution=resolution)
                     self.planner.choose_and_plan()
-                self.planner.blend_radius = blend
+                self.planner.blend_radius = 0.0
                 self.motion, self.g2t = self.planner.time_parameterize()
             except (_Fail, InfeasibleError):
-                return verdict
+                break
             finally:
                 self.planner.settings = self.settings
             self.res.solution = self.solution()
             v = check(self.task, self.res.solution, self.module_set)
             if v.valid or not _only_collisions(v):
                 return v
+        self.res.solution, self.motion, self.g2t = kept
         return verdict
 
 
