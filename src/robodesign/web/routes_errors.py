@@ -26,30 +26,18 @@ PAGE_CSP = ("default-src 'self'; img-src 'self' data:; style-src 'self'; script-
 def add_error_handlers(app: FastAPI) -> None:
     """Bad input 400 (TooLarge 413), Conflict 409, NotFound 404, Forbidden 403, a viewer that failed 503, a
     full queue 429 (with Retry-After), anything else 500; and the headers middleware."""
-    @app.exception_handler(TooLarge)
-    async def _too_large(request, exc):
-        return error_response(request, 413, str(exc))
+    def answer(status: int):
+        async def handler(request, exc):
+            return error_response(request, status, str(exc))
+        return handler
 
-    @app.exception_handler(InputError)
-    async def _bad_input(request, exc):
-        return error_response(request, 400, str(exc))
+    for kind, status in ((TooLarge, 413), (InputError, 400), (Conflict, 409), (NotFound, 404), (Forbidden, 403)):
+        app.add_exception_handler(kind, answer(status))
 
     @app.exception_handler(RequestValidationError)
     async def _bad_params(request, exc):
         where = "; ".join(f"{'.'.join(str(x) for x in e.get('loc', ()))}: {e.get('msg')}" for e in exc.errors())
         return error_response(request, 400, f"bad request ({where})")
-
-    @app.exception_handler(Conflict)
-    async def _conflict(request, exc):
-        return error_response(request, 409, str(exc))
-
-    @app.exception_handler(NotFound)
-    async def _not_found(request, exc):
-        return error_response(request, 404, str(exc))
-
-    @app.exception_handler(Forbidden)
-    async def _forbidden(request, exc):
-        return error_response(request, 403, str(exc))
 
     @app.exception_handler(ViewerFailed)
     async def _viewer_failed(request, exc):
