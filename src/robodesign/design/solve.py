@@ -593,17 +593,18 @@ class GoalPlanner:
         joints can hold, often falls apart into pieces: the goal's other solutions lie in other pieces), plan
         once more, with half the planning effort, to any of the goal's IK solutions: the chosen one and up to
         ``settings.plan_alternatives`` others, nearest first (the sequencing's transition cost from ``q``), all
-        goal states of one query. The one the path reaches replaces the chosen one in every later action.
+        goal states of one query, each also with one joint turned a whole turn (the long way round an obstacle).
+        The one the path reaches replaces the chosen one in every later action.
         Returns (plan result, target)."""
         if (g is None or g.solver_kind != "pose" or self.choice.get(g.id) is not target
                 or self.settings.plan_alternatives <= 0):
             return failed, target
         others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
-        if not others:
-            return failed, target
-        C = np.vstack(others)
-        order = np.argsort(self._cost(np.asarray(q, dtype=float)[None, :], C)[0], kind="stable")
+        order = (np.argsort(self._cost(np.asarray(q, dtype=float)[None, :], np.vstack(others))[0], kind="stable")
+                 if others else [])
         alts = [others[int(k)] for k in order[: self.settings.plan_alternatives]]
+        # and the same poses with one joint turned a whole turn (Robot.turn_variants): the long way round
+        alts += [v for c in [target] + alts for v in self.robot.turn_variants(c)]
         r = self._plan(q, target, self.settings.plan_time / 2, other_goals=alts)
         if not r:
             return failed, target

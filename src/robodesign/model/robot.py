@@ -565,6 +565,49 @@ class Robot:
         return {"lower": self.q_lower.tolist(), "upper": self.q_upper.tolist(), "velocity": self.dq_max.tolist(),
                 "acceleration": self.ddq_max.tolist(), "torque": self.tau_max.tolist()}
 
+    def nearest_equivalent(self, q, near=None) -> np.ndarray:
+        """The configuration of the same robot pose as ``q`` whose revolute joints are turned by whole turns
+        (2π·k, within the joint limits) to lie nearest ``near`` (default: 0 clipped into the limits).
+
+        Joints whose limits span more than a turn reach every pose in several sheets that differ by 2π, and a
+        path between two sheets of a joint that folds the arm onto itself must pass through the fold: free
+        space falls apart into pieces that hold the same poses. Keeping every IK solution in the sheet nearest
+        one reference keeps them in one piece (docs/diagnosis.md, "Whole turns")."""
+        q = np.array(q, dtype=float)
+        rev = self._revolute_mask()
+        if not rev.any():
+            return q
+        lo, hi = self.q_lower, self.q_upper
+        ref = np.clip(0.0, lo, hi) if near is None else np.asarray(near, dtype=float)
+        two_pi = 2.0 * math.pi
+        k = np.round((ref - q) / two_pi)
+        cand = q + two_pi * k
+        # the shift nearest the reference may leave the limits: step one turn back towards q
+        cand = np.where(cand > hi + 1e-12, cand - two_pi, cand)
+        cand = np.where(cand < lo - 1e-12, cand + two_pi, cand)
+        ok = rev & (cand >= lo - 1e-12) & (cand <= hi + 1e-12)
+        return np.where(ok, cand, q)
+
+    def turn_variants(self, q) -> List[np.ndarray]:
+        """The configurations of the same pose as ``q`` with one revolute joint turned by ±2π (those within the
+        joint limits): the other sheets a path may need, e.g. a base joint that must turn the long way round
+        an obstacle."""
+        q = np.asarray(q, dtype=float)
+        out = []
+        for j in np.flatnonzero(self._revolute_mask()):
+            for s in (2.0 * math.pi, -2.0 * math.pi):
+                v = q.copy()
+                v[j] += s
+                if self.q_lower[j] - 1e-12 <= v[j] <= self.q_upper[j] + 1e-12:
+                    out.append(v)
+        return out
+
+    def _revolute_mask(self) -> np.ndarray:
+        m = getattr(self, "_rev_mask", None)
+        if m is None:
+            m = self._rev_mask = np.array([ji.type == "revolute" for ji in self.joint_infos], dtype=bool)
+        return m
+
     def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
         lo = np.where(np.isfinite(self.q_lower), self.q_lower, -math.pi)
         hi = np.where(np.isfinite(self.q_upper), self.q_upper, math.pi)

@@ -805,7 +805,7 @@ _trace: Optional[list] = None   # development hook: a list receives (converged, 
 def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
              max_iter: int = 40, check_collision: bool = True, n_solutions: int = 1,
              time_limit: Optional[float] = None, distinct_tol: float = DISTINCT_TOL,
-             reach_bounds: bool = True) -> IKResult:
+             reach_bounds: bool = True, canonical: bool = True) -> IKResult:
     """Joint configurations whose TCP pose lies inside the tolerated ``goal``.
 
     ``rng``: a ``np.random.Generator`` or a seed (the result is deterministic for a given seed unless
@@ -816,7 +816,10 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     With ``reach_bounds`` (default) a goal that :class:`ChainBounds` proves out of reach fails at once
     (no restart; reason "out_of_reach" or "out_of_orientation_reach"); False runs the restarts anyway.
     Up to ``n_solutions`` solutions are collected that are pairwise more than ``distinct_tol`` apart
-    (Euclidean joint distance). ``time_limit`` (s) stops the search after the current attempt.
+    (Euclidean joint distance). With ``canonical`` (default) each solution's revolute joints are turned by
+    whole turns to the sheet nearest ``q_seed`` (else nearest 0; :meth:`Robot.nearest_equivalent`), so the
+    solutions of one goal and of consecutive goals lie in one piece of free space.
+    ``time_limit`` (s) stops the search after the current attempt.
     ``stats``: attempts, iterations, converged, rejected_limits, rejected_collision, rejected_duplicate,
     time, reason ("found" | "max_restarts" | "time_limit" | "out_of_reach" | "out_of_orientation_reach").
     """
@@ -938,6 +941,10 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         if check_collision and in_collision(q):
             stats["rejected_collision"] += 1
             return "collision"
+        if canonical:  # whole turns towards the seed (or 0): one sheet of the joint space (Robot.nearest_equivalent)
+            q2 = robot.nearest_equivalent(q, q_seed)
+            if not np.array_equal(q2, q) and valid(robot.fk(q2)):
+                q = q2
         if any(float(np.linalg.norm(q - s)) <= distinct_tol for s in sols):
             stats["rejected_duplicate"] += 1
             return "duplicate"
