@@ -1,5 +1,6 @@
 """Planning among moving obstacles: waiting for a moving part, certified with the checker's semantics."""
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -141,3 +142,50 @@ def test_builtin_wait_for_shuttle_is_solved_only_by_waiting(ms):
     frozen = replace(task, obstacles=(task.obstacles[0], replace(shuttle, motion_t=None, motion_poses=None)))
     old = solve(frozen, ms, ORDER)
     assert not old.feasible and old.stage in ("ik", "plan"), (old.stage, old.message)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# the judge sweeps moving obstacles over the judged motion, not over the chord between samples
+# ---------------------------------------------------------------------------------------------------------
+def test_moving_obstacles_are_swept_over_the_judged_motion_not_the_chord(ms, tmp_path):
+    """Two equal samples: the chord is a point clear of the box, but the motion between them (``at``: the base
+    joint swings out by δ and back; ``path``: its speed bound πδ per unit of s) passes through it. The moving-obstacle sweep
+    finds the contact only when it is given that motion, at a fraction s whose configuration is checked
+    independently (the box is in its t = 0 place until T_CLEAR)."""
+    from robodesign.formats.assembly import Assembly
+    from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices
+
+    task = load_task(crossing_task(tmp_path))
+    robot = build_robot(task, ms, Assembly.from_order(ms, ORDER), task.nominal_base_pose)
+    moving = moving_obstacle_indices(robot, task)
+    assert len(moving) == 1
+    rng = np.random.default_rng(5)
+    for _ in range(5000):  # a configuration clear of the box whose base-joint swing by δ meets the box
+        q = robot.random_configuration(rng)
+        if robot.in_collision(q):
+            continue
+        hits = [d for d in np.linspace(0.05, 1.0, 20)
+                if robot.collides_with_obstacles(q + d * np.eye(robot.dof)[0]) and not robot.in_self_collision(
+                    q + d * np.eye(robot.dof)[0])]
+        if hits:
+            delta = hits[0]
+            break
+    else:
+        pytest.fail("no test configuration found")
+    e0 = np.eye(robot.dof)[0]
+
+    def at(k, s):
+        return q + delta * math.sin(math.pi * s) * e0   # out to δ at s = 1/2 and back
+
+    path = (math.pi * delta * e0)[None, :]  # the joint's speed bound per unit s, as the judge's path_bound
+    t = np.array([0.0, 0.4])  # both before T_CLEAR: the box stays in place
+    Q = np.array([q, q])
+    assert moving_obstacle_events(robot, task, moving, t, Q) == []  # the chord (a point) is clear
+    evs = moving_obstacle_events(robot, task, moving, t, Q, path=path, at=at)
+    assert evs and all(e.sample == 0 and 0.0 < e.s < 1.0 and e.second.startswith("obstacle:box") for e in evs)
+    # independent: the configuration at the reported fraction touches the box (within the certification's
+    # resolution: the first contact lies at or just before it), the start does not
+    assert robot.collides_with_obstacles(at(0, 0.5))
+    assert not robot.collides_with_obstacles(q)
+    s_first = next(s for s in np.linspace(0, 0.5, 501) if robot.collides_with_obstacles(at(0, s)))
+    assert min(e.s for e in evs) <= s_first + 1e-3

@@ -427,18 +427,18 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     # pairs with moving obstacles are checked piecewise (cell.moving_obstacle_events), all others here
     static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
     checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
+    path = at = None  # the judged motion between samples (None: the chord)
+    if settings.between_samples and settings.one_motion and len(Q) >= 2:
+        m = tq.motion
+        path, at = m.path_bound()[k0:k1], (lambda k, s: m.at(k + k0, s))
     if settings.between_samples:
-        if settings.one_motion and len(Q) >= 2:
-            m = tq.motion
-            events = checker.check(Q, first_only=False, path=m.path_bound()[k0:k1],
-                                   at=lambda k, s: m.at(k + k0, s))
-        else:
-            events = checker.check(Q, first_only=False)
+        events = checker.check(Q, first_only=False, path=path, at=at)
     else:
         events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
     if moving:
         events = sorted(events + moving_obstacle_events(r, tq.task, moving, tq.t[k0:k1 + 1], Q,
-                                                        between_samples=settings.between_samples),
+                                                        between_samples=settings.between_samples,
+                                                        path=path, at=at),
                         key=lambda e: (e.sample, e.s))
     limit = settings.max_violations_per_constraint
     out = []

@@ -6,7 +6,7 @@ plotted robot are the same object.
 """
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Callable, Dict, List, Optional, Sequence, Union
 
 import numpy as np
 
@@ -77,7 +77,8 @@ def moving_obstacle_indices(robot: Robot, task: Task) -> List[int]:
 
 def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: np.ndarray, Q: np.ndarray, *,
                            first_only: bool = False, between_samples: bool = True,
-                           checker: Optional[SweepChecker] = None) -> List[CollisionEvent]:
+                           checker: Optional[SweepChecker] = None, path: Optional[np.ndarray] = None,
+                           at: Optional[Callable[[int, float], np.ndarray]] = None) -> List[CollisionEvent]:
     """Collisions of the motion through the rows of ``Q`` at the times ``t`` with the moving obstacles
     ``moving`` (indices into ``robot.obstacles``, e.g. :func:`moving_obstacle_indices`); event samples index
     the rows of ``Q``.
@@ -87,6 +88,8 @@ def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: n
     unchanged obstacle poses are certified together by conservative advancement (``between_samples``; else
     only the samples are checked). One event per pair and contact episode, or only the first event with
     ``first_only``. ``checker``: a SweepChecker over exactly these robot–obstacle pairs, to reuse it.
+    ``path``/``at``: the motion between the samples when it is not the chord (the judge's motion model; as
+    :meth:`SweepChecker.check`, indexed by the rows of ``Q``).
     """
     specs = {ob.id: ob for ob in task.obstacles if ob.moving}
     movers = [(i, specs[obstacle_spec_id(robot.obstacles[i])], np.array(robot.obstacles[i].pose, dtype=float))
@@ -114,7 +117,8 @@ def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: n
                 continue
             end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
             Qr = Q[a:end + 1]
-            evs = chk.check(Qr, first_only=first_only)
+            evs = chk.check(Qr, first_only=first_only, path=None if path is None else path[a:end],
+                            at=None if at is None else (lambda k, s, a=a: at(k + a, s)))
             for e in evs:
                 e = CollisionEvent(e.sample + a, e.s, e.first, e.second, e.distance, e.environment)
                 if first_only:

@@ -229,8 +229,9 @@ class SweepChecker:
         """Collision events along a motion through the rows of Q: by default the piecewise-linear one.
 
         Another motion through the same samples is given by ``at(k, s)`` (q at fraction s ∈ [0, 1] of step k)
-        and ``path`` (n−1, dof): per step and joint a bound on how far the joint moves between any two instants
-        of the step (|ΔQ| for the linear motion; the judge's motion: h·max|q̇|). Conservative advancement then
+        and ``path`` (n−1, dof): per step and joint a bound on the joint's speed per unit of s, so that it moves
+        at most ``path·|s' − s|`` between any two fractions s, s' of the step (|ΔQ| for the linear motion; the
+        judge's motion: h·max|q̇|). Conservative advancement then
         certifies that motion: from an exact distance at an instant the pair stays free while the accumulated
         path bounds stay below the clearance.
         With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
