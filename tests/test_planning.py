@@ -215,3 +215,53 @@ def test_any_of_several_goal_configurations(robot):
     assert not res.success and res.stats["reason"] == "invalid_goal"
     with pytest.raises(InputError):
         plan_path(robot, QA, QB, other_goals=[QB[:3]])
+
+
+def test_planned_states_leave_room_for_friction_away_from_the_rests():
+    """A state the robot moves through needs |g(q)| + f_c ≤ τ_max: Coulomb friction adds f_c however slowly it
+    moves, so a path through poses held with less headroom cannot be timed (the timing gives up: "slowing down
+    does not bring the torque within the limit"). The shoulder swung through its largest gravity torque with the
+    elbow set so that the peak is 85 Nm (limit 87, friction 5), the way friction adds to it: the straight line
+    holds still everywhere but cannot be timed; the planner (whose test does not ask the direction) goes around, its states beyond REST_RADIUS from start and goal keep the
+    headroom (independent dense check), and the path can be timed."""
+    from robodesign.solvers.planning import REST_RADIUS
+    from robodesign.solvers.timing import TimingError, time_parameterize
+    r = Robot.from_order(load_module_set("robodesign_arm"), HEAVY_ORDER)
+    tau, fc = np.asarray(r.tau_max), np.asarray(r.friction_coulomb)
+    assert tau[1] == 87.0 and fc[1] == 5.0
+
+    def q(sh, el):
+        return np.array([0.0, sh, el, 0.0, 0.0, 0.0, 0.0])
+
+    shoulders = np.linspace(0.0, 1.5, 301)
+
+    def peak(el):
+        g = [abs(r.gravity_torque(q(s, el))[1]) for s in shoulders]
+        return max(g), shoulders[int(np.argmax(g))]
+
+    lo, hi = 2.1, 2.2  # peak 87.8 and 80.5 Nm (by the scan above): bisect to 85 Nm
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if peak(mid)[0] > 85.0 else (lo, mid)
+    el = 0.5 * (lo + hi)
+    g_peak, s_peak = peak(el)
+    assert g_peak == pytest.approx(85.0, abs=0.01)
+    A, B = q(s_peak - 0.6, el), q(s_peak + 0.6, el)
+    if r.gravity_torque(q(s_peak, el))[1] < 0:  # move the way friction adds to the holding torque: τ = g + f_c·σ(q̇)
+        A, B = B, A
+    headroom = lambda x: np.all(np.abs(r.gravity_torque(x)) + fc <= tau)
+    assert headroom(A) and headroom(B)
+    assert check_path(r, np.array([A, B]), 0.01, static_torque=True) == (True, -1)  # held standing still
+    with pytest.raises(TimingError, match="slowing down does not bring the torque"):
+        time_parameterize(r, np.array([A, B]), dt=0.01)
+
+    res = plan_path(r, A, B, time_limit=5.0, seed=0, static_torque=True)
+    assert res.success and not res.stats["straight_line"], res.stats
+    for a, b in zip(res.path[:-1], res.path[1:]):
+        n = max(1, math.ceil(np.max(np.abs(b - a)) / 0.005))
+        for k in range(n + 1):
+            x = a + (b - a) * (k / n)
+            if min(np.max(np.abs(x - A)), np.max(np.abs(x - B))) > REST_RADIUS + 0.01:
+                assert headroom(x), x
+    traj = time_parameterize(r, res.path, dt=0.01)
+    np.testing.assert_allclose(traj.q[-1], B, atol=1e-9)

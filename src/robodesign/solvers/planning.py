@@ -8,7 +8,8 @@ Decisions:
 * **Validity** of a configuration: within the joint limits and ``not robot.in_collision(q)`` (self +
   obstacles, with the robot's safety margin); with ``static_torque=True`` (what :func:`robodesign.design.solve.solve`
   asks for) also held against gravity within the torque limits, |g(q)| ≤ τ_max: a path through a pose
-  the joints cannot hold standing still cannot be timed by slowing down. The OMPL planner, the shortcuts
+  the joints cannot hold standing still cannot be timed by slowing down; farther than ``REST_RADIUS`` from
+  the start and the goals also |g(q)| + f_c ≤ τ_max (Coulomb friction while moving). The OMPL planner, the shortcuts
   and the final dense check all use this one test.
 * **Resolution** is an absolute joint step (rad, or m for prismatic joints): no two consecutive checked
   states differ by more than ``resolution`` in any joint. OMPL's discrete motion validator steps by the
@@ -69,6 +70,9 @@ CHECKS_PER_SECOND = 8000
 #: the wall-clock safety net, as a multiple of ``time_limit`` (reached only on a machine ~10x slower)
 WALL_FACTOR = 10.0
 WALL_MIN = 10.0  # s: the wall-clock cap's floor
+#: rad (largest joint difference): around the configurations where a planned motion stands still (start, goals)
+#: the friction headroom of the static-torque test is not asked (the robot starts and stops there)
+REST_RADIUS = 0.05
 
 # name → OMPL class name (only the classes present in the installed OMPL are offered)
 PLANNERS: Dict[str, str] = {
@@ -118,21 +122,30 @@ def planner_name(planner: str) -> str:
 # ---------------------------------------------------------------------------------------------------------
 # Dense checking
 # ---------------------------------------------------------------------------------------------------------
-def _config_validator(robot, static_torque: bool = False):
+def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
     """Joint limits and collisions; with ``static_torque`` also that the joints hold the configuration
     against gravity within their torque limits (|g(q)| ≤ τ_max), so that a path never needs more torque
-    standing still than the joints have: time scaling cannot repair such a path by slowing down."""
+    standing still than the joints have: time scaling cannot repair such a path by slowing down. With
+    ``rest`` (the configurations where the motion stands still: its start and goals) a state farther than
+    :data:`REST_RADIUS` from all of them must also leave room for Coulomb friction, |g(q)| + f_c ≤ τ_max:
+    the robot moves through it, and however slowly it moves, friction adds f_c."""
     lo = np.asarray(robot.q_lower, dtype=float) - _LIMIT_SLACK
     hi = np.asarray(robot.q_upper, dtype=float) + _LIMIT_SLACK
     in_collision = robot.in_collision
     tau_max = np.asarray(robot.tau_max, dtype=float)
     gravity = robot.gravity_torque if static_torque and np.isfinite(tau_max).any() else None
+    moving_max = tau_max - np.asarray(getattr(robot, "friction_coulomb", np.zeros_like(tau_max)), dtype=float)
+    R = np.vstack([np.asarray(q, dtype=float) for q in rest]) if len(rest) and gravity is not None else None
 
     def valid(q: np.ndarray) -> bool:
         if (q < lo).any() or (q > hi).any():
             return False
-        if gravity is not None and (np.abs(gravity(q)) > tau_max).any():
-            return False
+        if gravity is not None:
+            g = np.abs(gravity(q))
+            if (g > tau_max).any():
+                return False
+            if R is not None and (g > moving_max).any() and np.min(np.max(np.abs(R - q), axis=1)) > REST_RADIUS:
+                return False
         return not in_collision(q)
     return valid
 
@@ -324,7 +337,8 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         if q.shape != (n,) or not np.all(np.isfinite(q)):
             raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
     counter = [0]
-    valid = _memoized(_config_validator(robot, static_torque))
+    rest = [qs, qg, *[np.asarray(q, dtype=float).reshape(-1) for q in other_goals]] if static_torque else []
+    valid = _memoized(_config_validator(robot, static_torque, rest))
     stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
                                 "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
                                 "length": 0.0, "reason": ""}
