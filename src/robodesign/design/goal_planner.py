@@ -1,0 +1,452 @@
+"""The per-robot stages of the solve pipeline (ik → static_torque → plan → timing): :class:`GoalPlanner` holds
+a goal's IK solutions, chooses one per goal, plans the moves between them and times the motion
+(``design/solve.py`` runs the stages and judges the result)."""
+from __future__ import annotations
+
+import math
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from robodesign.design.stages import SolveResult, SolveSettings
+from robodesign.formats.costs import CostFunction, cost_term
+from robodesign.formats.task_spec import Goal, Task
+from robodesign.formats.tolerance import ToleratedPose
+from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
+
+
+class StageFailure(Exception):
+    """A stage found the design infeasible; the message says why."""
+
+
+_Fail = StageFailure
+
+
+def goal_poses(g: Goal) -> List[ToleratedPose]:
+    """The tolerated poses the TCP must reach for goal ``g`` (:attr:`Goal.target_poses`)."""
+    return list(g.target_poses)
+
+
+def position_slack(pose: ToleratedPose) -> float:
+    """How far [m] a goal position may lie from the pose's nominal position (its largest position bound)."""
+    s = 0.0
+    for name, (lo, hi), _ in pose.entries:
+        if name in ("r_sph", "r_cyl"):
+            s = max(s, hi)
+        elif name in ("x", "y", "z"):
+            s = max(s, max(abs(lo), abs(hi)))
+    return s if math.isfinite(s) else 1e9
+
+
+class GoalPlanner:
+    """The ik → static_torque → plan → timing stages for one robot: holds the per-goal IK solutions
+    (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
+    actions and paths of the goal sequence, and turns them into a motion."""
+
+    def __init__(self, task: Task, robot, settings: SolveSettings, rng, res: SolveResult,
+                 cost: Optional[CostFunction] = None,
+                 colliders: Sequence = (), start: Optional[np.ndarray] = None):
+        self.task, self.robot, self.settings, self.rng, self.res = task, robot, settings, rng, res
+        self.colliders = list(colliders)  # timed colliders: moving obstacles, other robots
+        self.start = None if start is None else np.asarray(start, dtype=float)  # given start configuration
+        self.blend_radius = 0.05  # rad: the time scaling's corner blends (0: stop at every waypoint)
+        terms = dict((cost if cost is not None else CostFunction((("cyc", 1.0),))).terms)
+        # weights of the transition cost used to choose among IK solutions: time (time-optimal bound) and
+        # energy (the Coulomb-friction work Σ f_c·|Δq|, a lower bound of the drivetrain energy of a move),
+        # the latter for every term that integrates torques (mechEnergy, linkMechEnergy, effort)
+        self.w_time = terms.get("cyc", 0.0)
+        self.w_energy = sum(w for n, w in terms.items() if cost_term(n).needs_torques)
+        if self.w_time == 0.0 and self.w_energy == 0.0:
+            self.w_time = 1.0
+        self.order = [task.goal(gid) for gid in task.goal_order]
+        self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
+        self.follow_ik: Dict[str, List[np.ndarray]] = {}
+
+    # -- IK ------------------------------------------------------------------------------------
+    def solve_ik(self) -> None:
+        from robodesign.solvers.ik import fixes_full_pose, provably_unreachable, solve_ik
+        # an arm that cannot move its tool in all six directions (solvers.ik.fixes_full_pose) does not look for
+        # a goal that fixes position and orientation: its restarts would all fail (docs/diagnosis.md)
+        full = next((g for g in self.order if any(fixes_full_pose(p) for p in goal_poses(g))), None)
+        if full is not None and self.robot.generic_rank() < 6:
+            self.res.goals_reached = 0
+            raise _Fail(f"no IK solution for goal {full.id}: it fixes position and orientation, but the arm's tool "
+                        f"moves in only {self.robot.generic_rank()} independent directions at any configuration "
+                        "(its Jacobian's rank; parallel or coaxial joint axes)")
+        # a goal that provably no configuration reaches (solvers.ik.ChainBounds) fails the stage whatever
+        # comes before it. The last IK goal before it then only needs to show whether it is reachable: its
+        # first solution decides that exactly as when ik_solutions are wanted (the attempts up to the first
+        # accepted one are the same), and nothing after it draws from the random generator any more (the
+        # earlier goals keep collecting: collecting draws perturbations that later goals' starts depend on)
+        doomed = next((i for i, g in enumerate(self.order)
+                       if any(provably_unreachable(self.robot, p) for p in goal_poses(g))), None)
+        probe = None
+        if doomed is not None:
+            before = [i for i in range(doomed) if self.order[i].solver_kind in ("pose", "poses")]
+            if before and self.order[before[-1]].solver_kind == "pose":
+                probe = before[-1]
+        reached = 0
+        for i, g in enumerate(self.order):
+            if g.solver_kind == "pose":
+                n_sol = 1 if i == probe else self.settings.ik_solutions
+                r = solve_ik(self.robot, g.target_poses[0], self.rng, max_restarts=self.settings.ik_restarts,
+                             n_solutions=n_sol)
+                sols, reason = r.solutions, str(r.stats.get("reason"))
+                if not sols:
+                    self.res.goals_reached = reached
+                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
+                self.ik[g.id] = sols
+                reached += 1
+            elif g.solver_kind == "poses":
+                sols = []
+                seed = None
+                for i, pose in enumerate(g.target_poses):
+                    r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
+                    if not r:
+                        self.res.goals_reached = reached
+                        raise _Fail(f"no IK solution for pose {i} of follow goal {g.id}")
+                    seed = r.q
+                    sols.append(r.q)
+                self.follow_ik[g.id] = sols
+                reached += 1
+            else:
+                reached += 1
+        self.res.goals_reached = reached
+
+    def filter_static_torque(self) -> None:
+        r = self.robot
+        limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
+        for gid, sols in self.ik.items():
+            taus = [np.abs(r.gravity_torque(q)) for q in sols]
+            ok = [q for q, tau in zip(sols, taus) if np.all(tau <= limit)]
+            if not ok:
+                tau = taus[0]
+                j = int(np.argmax(tau / limit))
+                self.res.shortfall = min(float(np.max(t - limit)) for t in taus)
+                raise _Fail(f"goal {gid}: holding the pose needs {tau[j]:.1f} Nm at joint {j} (limit {limit[j]:.1f})")
+            self.ik[gid] = ok
+        for gid, sols in self.follow_ik.items():
+            for i, q in enumerate(sols):
+                tau = np.abs(r.gravity_torque(q))
+                if np.any(tau > limit):
+                    self.res.shortfall = float(np.max(tau - limit))
+                    j = int(np.argmax(tau / limit))
+                    raise _Fail(f"follow goal {gid}, pose {i}: static torque {tau[j]:.1f} Nm > {limit[j]:.1f} at joint {j}")
+
+    # -- sequencing ------------------------------------------------------------------------------
+    def _cost(self, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """Transition costs between every configuration of ``A`` (rows) and of ``B`` (columns)."""
+        from robodesign.solvers.timing import time_optimal_bounds
+        D = np.abs(B[None, :, :] - A[:, None, :])
+        c = np.zeros(D.shape[:2])
+        if self.w_time:
+            c += self.w_time * time_optimal_bounds(self.robot, D)
+        if self.w_energy:
+            c += self.w_energy * np.sum((self.robot.friction_coulomb + 1e-3) * D, axis=-1)
+        return c
+
+    def choose_and_plan(self) -> None:
+        """Choose one IK solution per pose goal (dynamic programming over the goal sequence, minimising
+        the sum of time-optimal bounds of all moves, including returns to the start), then plan
+        collision-free paths between the stops."""
+        choice: Dict[str, np.ndarray] = {}
+        nodes = self._sequence_nodes()
+        if nodes:
+            from robodesign.solvers.sequencing import choose
+            idx, _ = choose(nodes, self._cost)
+            choice = {gid: self.ik[gid][i] for gid, i in idx.items()}
+        self.choice = choice
+        # the start configuration
+        first_pose = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
+        if self.start is not None:
+            if self.robot.in_collision(self.start):
+                raise _Fail("the start configuration is in collision")
+            q0 = self.start
+        elif first_pose is None:
+            q0 = self._free_configuration()
+        elif first_pose.solver_kind == "poses":
+            q0 = self.follow_ik[first_pose.id][0]
+        else:
+            q0 = choice[first_pose.id]
+        self.q0 = q0
+        # build the list of actions: ("move", q_target, goal or None) | ("hold", duration, goal) | ...
+        actions = []
+        q = q0
+        at_config: Dict[str, np.ndarray] = {}
+        for g in self.order:
+            if g.solver_kind == "pose":
+                actions.append(("move", choice[g.id], g))
+                q = choice[g.id]
+            elif g.solver_kind == "hold":
+                actions.append(("hold", g.duration, g))
+            elif g.solver_kind == "return":
+                target = q0 if g.return_to is None else at_config.get(g.return_to)
+                if target is None:
+                    raise _Fail(f"returnTo goal {g.id}: goal {g.return_to!r} has no configuration before it")
+                actions.append(("move", target, g))
+                q = target
+            elif g.solver_kind == "poses":
+                pts = self.follow_ik[g.id]
+                actions.append(("move", pts[0], None))
+                actions.append(("follow", pts, g))
+                q = pts[-1]
+            elif g.solver_kind == "leave":
+                q_out = self._leave_configuration(q, g)
+                actions.append(("move", q_out, None))
+                actions.append(("hold", g.duration, g))
+                q = q_out
+            at_config[g.id] = q
+        self.actions = actions
+        # plan every move
+        self.paths = []
+        q = q0
+        for i in range(len(self.actions)):
+            kind, arg, g = self.actions[i]  # an earlier move may have replaced a goal's configuration
+            if kind == "move":
+                if np.allclose(arg, q, atol=1e-12):
+                    self.paths.append(None)
+                    continue
+                r = self._plan(q, arg, self.settings.plan_time)
+                if not r:
+                    r, arg = self._plan_to_another_solution(q, arg, g, r)
+                if not r:
+                    raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
+                                f"({r.stats.get('reason')})")
+                self.paths.append(r.path)
+                q = arg
+            elif kind == "follow":
+                from robodesign.solvers.planning import check_path
+                P = np.vstack(arg)
+                ok, bad = check_path(self.robot, P, self.settings.resolution)
+                if not ok:
+                    raise _Fail(f"follow goal {g.id}: the motion between poses {bad} and {bad + 1} collides")
+                self.paths.append(P)
+                q = arg[-1]
+            else:
+                self.paths.append(None)
+
+    def _plan(self, q, target, time_limit: float, other_goals=()):
+        from robodesign.solvers.planning import plan_path
+        return plan_path(self.robot, q, target, planner=self.settings.planner, time_limit=time_limit,
+                         seed=int(self.rng.integers(2 ** 31)), resolution=self.settings.resolution,
+                         static_torque=True,  # as the static_torque stage: timing cannot repair it
+                         other_goals=other_goals)
+
+    def _plan_to_another_solution(self, q, target, g, failed):
+        """When no path reaches the chosen IK solution of an at/reach goal (free space, with the poses the
+        joints can hold, often falls apart into pieces: the goal's other solutions lie in other pieces), plan
+        once more, with half the planning effort, to any of the goal's IK solutions: the chosen one and up to
+        ``settings.plan_alternatives`` others, nearest first (the sequencing's transition cost from ``q``), all
+        goal states of one query, each also with one joint turned a whole turn (the long way round an obstacle).
+        The one the path reaches replaces the chosen one in every later action.
+        Returns (plan result, target)."""
+        if (g is None or g.solver_kind != "pose" or self.choice.get(g.id) is not target
+                or self.settings.plan_alternatives <= 0):
+            return failed, target
+        others = [c for c in self.ik.get(g.id, []) if not np.array_equal(c, target)]
+        order = (np.argsort(self._cost(np.asarray(q, dtype=float)[None, :], np.vstack(others))[0], kind="stable")
+                 if others else [])
+        alts = [others[int(k)] for k in order[: self.settings.plan_alternatives]]
+        # and the same poses with one joint turned a whole turn (Robot.turn_variants): the long way round
+        alts += [v for c in [target] + alts for v in self.robot.turn_variants(c)]
+        r = self._plan(q, target, self.settings.plan_time / 2, other_goals=alts)
+        if not r:
+            return failed, target
+        k = int(r.stats.get("goal", 0))
+        if k == 0:
+            return r, target
+        alt = alts[k - 1]
+        self.choice[g.id] = alt
+        self.actions = [(kd, alt if (kd == "move" and a is target) else a, gg) for kd, a, gg in self.actions]
+        return r, alt
+
+    def _sequence_nodes(self) -> list:
+        """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach
+        goal than the first is left out of the objective (its target is chosen by its own neighbours)."""
+        from robodesign.solvers.sequencing import Fixed, Free, Jump, Tied
+        first = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
+        if first is None:
+            return []
+        nodes = [] if self.start is None else [Fixed(self.start)]
+        for g in self.order:
+            if g.solver_kind == "pose":
+                nodes.append(Free(g.id, np.asarray(self.ik[g.id])))
+            elif g.solver_kind == "poses":
+                pts = self.follow_ik[g.id]
+                nodes += [Fixed(pts[0]), Jump(pts[-1])]
+            elif g.solver_kind == "return" and nodes:
+                if g.return_to is None and self.start is not None:
+                    nodes.append(Tied())
+                elif g.return_to is None:
+                    nodes.append(Tied() if first.solver_kind == "pose" else Fixed(self.follow_ik[first.id][0]))
+                elif g.return_to == first.id and first.solver_kind == "pose" and self.start is None:
+                    nodes.append(Tied())
+                elif g.return_to in self.follow_ik:
+                    nodes.append(Fixed(self.follow_ik[g.return_to][-1]))
+        return nodes
+
+    def _free_configuration(self) -> np.ndarray:
+        q = np.clip(np.zeros(self.robot.dof), self.robot.q_lower, self.robot.q_upper)
+        for _ in range(200):
+            if not self.robot.in_collision(q):
+                return q
+            q = self.robot.random_configuration(self.rng)
+        raise _Fail("no collision-free start configuration found")
+
+    def _leave_configuration(self, q: np.ndarray, g: Goal) -> np.ndarray:
+        """A nearby configuration whose TCP is outside the space to leave: the TCP moves in a straight line
+        (2 cm steps through the damped Jacobian pseudo-inverse) until it and a point 2 cm further on are
+        outside, collision-free. Directions tried: away from the space's centre and along ±x, ±y, ±z; the
+        shortest retreat wins."""
+        r = self.robot
+        away = r.fk(q)[:3, 3] - g.center
+        dirs = [away / np.linalg.norm(away)] if np.linalg.norm(away) > 1e-6 else []
+        dirs += [s * e for e in np.eye(3) for s in (1.0, -1.0)]
+        best = None
+        for u in dirs:
+            qc = q.copy()
+            for n in range(150 if best is None else best[0]):
+                T = r.fk(qc)
+                if not g.contains(T) and not g.contains(_translate(T, 0.02 * u)) and not r.in_collision(qc):
+                    best = (n, qc)
+                    break
+                J = r.jacobian(qc)[:3]
+                dq = J.T @ np.linalg.solve(J @ J.T + 1e-4 * np.eye(3), 0.02 * u)  # damped near singularities
+                dq *= min(1.0, 0.05 / max(float(np.abs(dq).max()), 1e-12))     # ≤ 0.05 rad per step
+                qc = np.clip(qc + dq, r.q_lower, r.q_upper)
+        if best is None:
+            raise _Fail(f"leave goal {g.id}: could not move the TCP out of the space to leave")
+        return best[1]
+
+    # -- timing ----------------------------------------------------------------------------------
+    def time_parameterize(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None):
+        """:meth:`timed_motion` avoiding what moves: each move waits at rest until it is free; if some wait
+        cannot help (the robot would be hit while it waits), the whole motion is instead delayed at its
+        start until it runs free of everything that moves."""
+        try:
+            return self.timed_motion(cost, slow, self.colliders)
+        except _Fail as per_move:
+            if not self.colliders:
+                raise
+            traj, g2t = self.timed_motion(cost, slow, ())
+            dt = self.task.dt
+            try:
+                n = find_wait(self.colliders, 0.0, traj.q[0], traj.t, traj.q, dt)
+            except ScheduleError:
+                raise per_move from None
+            if n == 0:
+                return traj, g2t
+            from robodesign.solvers.timing import JointTrajectory
+            return (JointTrajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
+                    {k: v + n * dt for k, v in g2t.items()})
+
+    def timed_motion(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None,
+                     colliders: Sequence = ()):
+        """The whole motion, sampled at the task's time step, and the goal times. With ``cost`` (trajectory
+        optimization enabled) every rest-to-rest move is re-timed by CasADi/ipopt for that cost; a move
+        whose optimization fails keeps its time-optimal TOPP-RA timing. ``slow`` maps goal IDs to a speed
+        factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²). Before each
+        move the robot waits at rest until the move misses every timed collider of ``colliders``."""
+        from robodesign.solvers.timing import JointTrajectory, time_parameterize
+        dt = self.task.dt
+        traj = JointTrajectory.at_rest(self.q0)
+        g2t: Dict[str, float] = {}
+        slow = slow or {}
+        for (kind, arg, g), path in zip(self.actions, self.paths):
+            robot = self.robot if g is None or g.id not in slow else _SlowedRobot(self.robot, slow[g.id])
+            if kind == "move":
+                if path is not None:
+                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing,
+                                            blend_radius=self.blend_radius)
+                    if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
+                        seg = self._optimize_move(seg, cost)
+                    traj = self._append_after_wait(traj, seg, g, colliders)
+                if g is not None:
+                    g2t[g.id] = float(traj.t[-1])
+            elif kind == "hold":
+                self._check_hold(traj, arg, g, colliders)
+                if arg > 0:
+                    traj = traj.hold(arg, dt)
+                g2t[g.id] = float(traj.t[-1])
+                if g.solver_kind == "leave":
+                    g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
+            elif kind == "follow":
+                if g.t is None:
+                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
+                                            stop_at=list(range(len(path))))
+                else:
+                    seg = _timed_follow(path, g.t, dt)
+                traj = self._append_after_wait(traj, seg, g, colliders)
+                g2t[g.id] = float(traj.t[-1])
+        return traj, g2t
+
+    def _append_after_wait(self, traj, seg, g, colliders):
+        """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to
+        miss every timed collider (moving obstacles, other robots)."""
+        if not colliders:
+            return traj.concatenate(seg)
+        try:
+            n = find_wait(colliders, float(traj.t[-1]), traj.q[-1], seg.t, seg.q, self.task.dt)
+        except ScheduleError as e:
+            raise _Fail(f"the move to {'goal ' + g.id if g else 'the next waypoint'}: {e}") from None
+        if n:
+            traj = traj.hold(n * self.task.dt, self.task.dt)
+        return traj.concatenate(seg)
+
+    def _check_hold(self, traj, duration: float, g, colliders) -> None:
+        why = check_hold(colliders, float(traj.t[-1]), traj.q[-1], duration, self.task.dt)
+        if why:
+            raise _Fail(f"goal {g.id}: a moving part hits the robot while it holds still {why}")
+
+    def _optimize_move(self, seg, cost: CostFunction):
+        from robodesign.solvers.trajopt import TrajoptError, optimize_trajectory
+        weights = cost.trajopt_weights() or {"cyc": 1.0}
+        if "cyc" not in weights:
+            # energy only: slower is always cheaper (viscous losses), so the optimum is an endless move;
+            # a tiny time weight (1 % of the energy weight) makes the duration finite
+            weights["cyc"] = 0.01
+        try:
+            out = optimize_trajectory(self.robot, seg, cost=weights, n_nodes=self.settings.trajopt_nodes,
+                                      dt_out=self.task.dt)
+        except TrajoptError:  # ipopt failure: keep the TOPP-RA move (valid, time-optimal)
+            return seg
+        return out if np.allclose(out.q[-1], seg.q[-1], atol=1e-9) and np.all(out.dq[-1] == 0) else seg
+
+
+class _SlowedRobot:
+    """The robot with its joint speed limits scaled by ``s`` and its acceleration limits by ``s²`` (for
+    timing only: a motion timed with it is the robot's own motion, slower)."""
+
+    def __init__(self, robot, s: float):
+        self._robot = robot
+        self.dq_max = np.asarray(robot.dq_max, dtype=float) * s
+        self.ddq_max = np.asarray(robot.ddq_max, dtype=float) * s * s
+
+    def __getattr__(self, name):
+        return getattr(self._robot, name)
+
+
+def _ceil_to(x: float, dt: float) -> float:
+    return math.ceil(x / dt - 1e-9) * dt
+
+
+def _translate(T: np.ndarray, d: np.ndarray) -> np.ndarray:
+    T2 = T.copy()
+    T2[:3, 3] += d
+    return T2
+
+
+def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
+    """Quintic rest-to-rest moves between consecutive follow poses with exactly the given timing."""
+    from robodesign.solvers.timing import JointTrajectory
+    out = JointTrajectory.at_rest(path[0])
+    for a, b, T in zip(path, path[1:], np.diff(t_rel)):
+        n = max(1, int(round(T / dt)))
+        s = np.linspace(0, 1, n + 1)[:, None]
+        d = b - a
+        q = a + d * (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)
+        dq = d * (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / T
+        ddq = d * (60 * s - 180 * s ** 2 + 120 * s ** 3) / T ** 2
+        ddq[-1] = 0.0
+        out = out.concatenate(JointTrajectory(np.arange(n + 1) * dt, q, dq, ddq))
+    return out
