@@ -136,6 +136,10 @@ class _Pipeline:
         bp = self.task.base_placement
         if bp is not None and not bp.valid(self.base_pose):
             raise _Fail("base pose outside the base-placement tolerance")
+        hit = self.robot.base_collisions()  # the part before the first joint: in contact at every configuration
+        if hit:
+            raise _Fail(f"the robot's base ({hit[0][0]}) collides with {hit[0][1].removeprefix('obstacle:')} "
+                        "whatever the joints do")
 
     def reach(self) -> None:
         o, R = self.robot.reach_bound()

@@ -552,6 +552,21 @@ class Robot:
             out.append((objs[cp.first].name, objs[cp.second].name))
         return out
 
+    def base_collisions(self) -> List[Tuple[str, str]]:
+        """The robot–obstacle pairs in contact whatever the joints do: the robot's geometry fixed to the world
+        (the bodies before the first joint) against the obstacles, within the safety margin. A design with one
+        collides at every configuration."""
+        if not self._obstacle_ids:
+            return []
+        objs = self.geom_model.geometryObjects
+        self._update_geometry(np.zeros(self.dof))
+        out = []
+        for k in range(self._n_self_pairs, len(self.geom_model.collisionPairs)):
+            cp = self.geom_model.collisionPairs[k]
+            if objs[cp.first].parentJoint == 0 and pin.computeCollision(self.geom_model, self.geom_data, k):
+                out.append((objs[cp.first].name, objs[cp.second].name))
+        return out
+
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
         pin.computeDistances(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
