@@ -1,6 +1,6 @@
 """Same robot, better base: how much cycle time does the base pose alone save for the best module orders?
 
-    .venv/bin/python experiments/base_pose_refine.py [--results experiments/results/base_pose] [--designs 5]
+    .venv/bin/python experiments/base_pose_refine.py [--results docs/results/base_pose] [--designs 5]
                                                      [--budget 80] [--seed 0]
 
 Reads a finished ``configs/base_pose.yaml`` run, takes the ``--designs`` best distinct module orders that
@@ -33,6 +33,7 @@ from robodesign.design.problem import Problem
 from robodesign.design.search_space import BASE_PARAMS, Candidate
 
 HERE = Path(__file__).resolve().parent
+RESULTS = HERE.parent / "docs" / "results"  # the measured records behind docs/benchmarks.md
 
 
 def _f(x):
@@ -50,7 +51,7 @@ def best_orders(db: Path, run_task: str, k: int):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--results", default=str(HERE / "results" / "base_pose"))
+    ap.add_argument("--results", default=str(RESULTS / "base_pose"))
     ap.add_argument("--designs", type=int, default=5)
     ap.add_argument("--budget", type=int, default=80)
     ap.add_argument("--seed", type=int, default=0)

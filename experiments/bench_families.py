@@ -217,7 +217,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sets", default="heavy",
                     help="comma-separated module sets: builtin (robodesign_arm), heavy (robodesign_heavy), IMPROV "
                          "(default heavy)")
-    ap.add_argument("--out", default=str(ROOT / "experiments" / "results" / "families"))
+    ap.add_argument("--out", default=str(ROOT / "docs" / "results" / "families"))
     ap.add_argument("--cobra", default=str(COBRA), help="the CoBRA reference data (IMPROV modules, machine "
                                                          "meshes; default: ../shared/cobra beside the checkout)")
     ap.add_argument("--stop-at", help="UTC time HH:MM: start no new task after it (the ones running finish)")

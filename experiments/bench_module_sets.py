@@ -2,7 +2,7 @@
 
     nice .venv/bin/python experiments/bench_module_sets.py [--tasks 6] [--budget 30s] [--seed 0]
                                                           [--sets robodesign_arm,robodesign_heavy]
-                                                          [--out experiments/results/module_sets]
+                                                          [--out docs/results/module_sets]
 
 Part 1 prints each built-in set's reach bound (robodesign.design.reach.set_reach, default search rules) and
 the time to compute it. Part 2 writes ``--tasks`` fixed-base tasks shaped like the published Whitman2020
@@ -71,7 +71,7 @@ def main() -> int:
     ap.add_argument("--budget", default="30s")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--sets", default="robodesign_arm,robodesign_heavy")
-    ap.add_argument("--out", type=Path, default=ROOT / "experiments" / "results" / "module_sets")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "results" / "module_sets")
     ap.add_argument("--part", choices=("search", "reference", "all"), default="all")
     args = ap.parse_args()
     sets = args.sets.split(",")

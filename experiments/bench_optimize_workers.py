@@ -36,6 +36,7 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+RESULTS = HERE.parent / "docs" / "results"  # the measured records behind docs/benchmarks.md
 SHARED = HERE.parents[1] / "shared" / "cobra"
 TASK = SHARED / "tasks" / "simple" / "PTP_3.json"
 IMPROV = SHARED / "modules" / "IMPROV"
@@ -141,7 +142,7 @@ def main():
     ap.add_argument("--skip-rate", action="store_true")
     ap.add_argument("--skip-target", action="store_true")
     ap.add_argument("--one", help=argparse.SUPPRESS)
-    ap.add_argument("--out", default=str(HERE / "results" / "optimize_workers.json"))
+    ap.add_argument("--out", default=str(RESULTS / "optimize_workers.json"))
     a = ap.parse_args()
     if a.one:
         print(json.dumps(search(**json.loads(a.one))))

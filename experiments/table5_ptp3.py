@@ -8,7 +8,7 @@ and acceleration limits) is reported too.
 
     .venv/bin/python experiments/table5_ptp3.py [--orders "1,21,4,22,5,23,12;..."] [--seeds 3]
 
-Writes experiments/results/table5_ptp3.{json,md}.
+Writes docs/results/table5_ptp3.{json,md}.
 """
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ from robodesign.formats.task_io import load_task
 from robodesign.formats.urdf import import_urdf
 
 HERE = Path(__file__).resolve().parent
+RESULTS = HERE.parent / "docs" / "results"  # the measured records behind docs/benchmarks.md
 SHARED = HERE.parents[1] / "shared" / "cobra"
 PAPER = {"cyc": 5.47, "mechEnergy": 100.4, "Whit2": 1.62, "Liu2": 101.5}
 PAPER_BEST_CYC = 4.77
@@ -84,8 +85,8 @@ def main():
                 if "bound" in row else ""
             print(f"{cost:10s} {name:6s} {','.join(order):28s} {v.cost:9.4g}  valid={v.valid}  {dt:.1f} s{extra}")
     out = {"rows": rows, "paper": PAPER, "paper_best_cyc": PAPER_BEST_CYC}
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "table5_ptp3.json").write_text(json.dumps(out, indent=1))
+    (RESULTS).mkdir(exist_ok=True)
+    (RESULTS / "table5_ptp3.json").write_text(json.dumps(out, indent=1))
     lines = ["| cost | paper (IMPROV-like) | robodesign best IMPROV arm | value | vs paper | Panda |",
              "|---|---|---|---|---|---|"]
     for cost in args.costs.split(","):
@@ -98,7 +99,7 @@ def main():
             lines.append(f"| {cost} | {PAPER[cost]} | {','.join(b['order'])} | {b['value']:.4g}{bound} | "
                          f"{100 * (1 - b['value'] / PAPER[cost]):+.1f} % better | {p:.4g} |")
     md = "\n".join(lines)
-    (HERE / "results" / "table5_ptp3.md").write_text(md + "\n")
+    (RESULTS / "table5_ptp3.md").write_text(md + "\n")
     print(md)
 
 
