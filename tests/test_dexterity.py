@@ -230,3 +230,45 @@ def test_a_base_inside_an_obstacle_stops_at_the_base_stage():
     beside = build_robot(task, ms, Assembly.from_order(ms, list(DEFAULT_ORDER)), task.nominal_base_pose)
     assert beside.base_collisions() == []
     assert solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0)).stage != "base"
+
+
+def test_a_slight_torque_excess_of_the_judge_is_repaired_by_timing_slower(monkeypatch):
+    """The time scaling checks torques at the samples; the judge certifies the motion between them and may find a
+    little more (a Whitman2020 5/5 run: 150.117 Nm against 150). When torque excesses of at most 5 % are all the
+    judge finds, the check stage times every goal's motion again at 0.97 of the joint speeds, and keeps the first
+    motion the judge accepts. The first verdict is forged (the real judge accepts the motion); the second is the
+    real judge's. An excess of 20 % is the verdict at once."""
+    from robodesign.core.defaults import DEFAULT_ORDER
+    from robodesign.core.paths import builtin_tasks_dir
+    from robodesign.design import solve as solve_module
+    from robodesign.judge.checker import Verdict, Violation
+
+    task = load_task(builtin_tasks_dir() / "robodesign" / "pick_and_place.json")
+    ms = load_module_set("robodesign_arm")
+    real = solve_module.check
+    calls = []
+
+    def forged(value):
+        def fake_check(t, sol, m):
+            calls.append(sol)
+            if len(calls) == 1:
+                v = real(t, sol, m)
+                return Verdict(False, [Violation("joint.tau", "forged", sample=10, value=value, bound=87.0, joint=1),
+                                       Violation("joint.tau", "... and 3 more steps over the limit")],
+                               v.costs, v.cost, v.cost_function, v.goals)
+            return real(t, sol, m)
+        return fake_check
+
+    monkeypatch.setattr(solve_module, "check", forged(87.1))
+    res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
+    assert res.feasible and res.verdict.valid and len(calls) == 2
+    first, second = calls
+    assert second.trajectory.t[-1] > first.trajectory.t[-1]  # slower
+    for gid in ("pick", "place"):  # the same goal configurations, reached later
+        k1 = int(np.argmin(np.abs(first.trajectory.t - first.trajectory.goal2time[gid])))
+        k2 = int(np.argmin(np.abs(second.trajectory.t - second.trajectory.goal2time[gid])))
+        np.testing.assert_allclose(second.trajectory.q[k2], first.trajectory.q[k1], atol=1e-9)
+    calls.clear()
+    monkeypatch.setattr(solve_module, "check", forged(87.0 * 1.2))
+    res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
+    assert not res.feasible and res.stage == "check" and len(calls) == 1

@@ -188,6 +188,8 @@ class _Pipeline:
         v = check(self.task, res.solution, self.module_set)
         if not v.valid and _only_collisions(v) and not self.settings.optimize_trajectory:
             v = self._repair_collisions(v)
+        if not v.valid and _only_slight_torque(v) and not self.settings.optimize_trajectory:
+            v = self._repair_torques(v)
         res.verdict = v
         res.solution = res.solution.with_(cost=v.cost)
         if not v.valid:
@@ -218,6 +220,38 @@ class _Pipeline:
                 return v
         self.res.solution, self.motion, self.g2t = kept
         return verdict
+
+
+    def _repair_torques(self, verdict):
+        """The time scaling checks torques at the samples with the file's accelerations; the judge certifies the
+        continuous motion between them, which may need a little more (|τ| over the limit by up to
+        :data:`TORQUE_REPAIR_RATIO`). Then every goal's motion is timed again with the joint speeds scaled by
+        0.97, then 0.9 (accelerations by the square); the first motion the judge accepts is kept, else the first
+        verdict stands with the motion it judged."""
+        kept = (self.res.solution, self.motion, self.g2t)
+        for s in (0.97, 0.9):
+            try:
+                self.motion, self.g2t = self.planner.time_parameterize(slow={g.id: s for g in self.task.goals})
+            except (_Fail, InfeasibleError):
+                break
+            self.res.solution = self.solution()
+            v = check(self.task, self.res.solution, self.module_set)
+            if v.valid:
+                return v
+        self.res.solution, self.motion, self.g2t = kept
+        return verdict
+
+
+#: the judge's torque violations that the check stage repairs by timing the motion slower (|τ|/limit at most this)
+TORQUE_REPAIR_RATIO = 1.05
+
+
+def _only_slight_torque(verdict) -> bool:
+    """Whether every violation of an invalid verdict is a torque limit exceeded by at most TORQUE_REPAIR_RATIO."""
+    vs = verdict.violations
+    measured = [x for x in vs if x.value is not None and x.bound is not None]  # the others: "... and n more"
+    return bool(measured) and all(x.constraint == "joint.tau" for x in vs) and all(
+        x.bound > 0 and abs(x.value) <= TORQUE_REPAIR_RATIO * x.bound for x in measured)
 
 
 def _only_collisions(verdict) -> bool:
