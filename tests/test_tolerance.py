@@ -359,3 +359,35 @@ def test_to_json_round_trip_with_infinity_and_frames():
     assert back.projections == tp.projections and back.intervals == tp.intervals and back.frames == tp.frames
     assert back.nominal == pytest.approx(tp.nominal)
     assert json.loads(json.dumps(tp.to_json()["toleranceFrame"])) == obj["toleranceFrame"]
+
+
+def test_the_fast_values_of_plain_tolerances_equal_the_general_ones():
+    """A tolerance of x, y, z and Theta_R only (the published goals) computes just those values; they are bit for
+    bit the values of the general path (translation_values / rotation_values of Δ in the entry's frame), in the
+    nominal frame and in the world frame, and the verdicts agree on poses at and around the bounds."""
+    from robodesign.formats.tolerance import rotation_values, translation_values
+
+    rng = np.random.default_rng(11)
+    nominal = homogeneous(rot_z(0.7) @ rot_x(-0.4), [0.5, -0.2, 0.9])
+    specs = [
+        {"toleranceProjection": ["x", "y", "z", "Theta_R"],
+         "tolerance": [[-0.001, 0.001], [-0.001, 0.001], [-0.001, 0.001], [0, 0.008726646259971648]]},
+        {"toleranceProjection": ["x", "z", "Theta_R"], "tolerance": [[-0.01, 0.02], [0, 0.05], [0, 0.1]],
+         "toleranceFrame": ["world", "nominal", "world"]},
+        {"toleranceProjection": ["z", "N_z", "Theta_R"], "tolerance": [[-0.01, 0.01], [-0.3, 0.3], [0, 0.5]]},  # general
+    ]
+    for spec in specs:
+        tp = ToleratedPose.from_json({"nominal": nominal.tolist(), **spec})
+        for k in range(300):
+            scale = [1e-4, 1e-3, 1e-2, 0.3][k % 4]
+            T = nominal @ homogeneous(rot_z(rng.normal() * scale) @ rot_y(rng.normal() * scale),
+                                      rng.normal(size=3) * scale)
+            got = tp.values(T)
+            D = tp.delta(T)
+            for (name, frame), v in got.items():
+                Q = tp._Q[frame]
+                want = {**translation_values(Q @ D[:3, 3]),
+                        **rotation_values(Q @ D[:3, :3] @ Q.T)}[name][0]
+                assert v == want, (spec, name, frame)
+            if "N_z" not in spec["toleranceProjection"]:  # the verdict from the general values, by hand
+                assert tp.valid(T) == all(lo - 1e-12 <= got[(n, f)] <= hi + 1e-12 for n, (lo, hi), f in tp.entries)

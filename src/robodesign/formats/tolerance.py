@@ -583,6 +583,14 @@ class ToleratedPose:
                                  "no pose can satisfy them", file=file, path=base + ["tolerance", i])
         self.constraints: List[ProjectionConstraint] = list(constraints.values())
         self._active = [c for c in self.constraints if not c.covers_allowed_range()]
+        # per frame: the coordinate systems its constraints need, and whether only x, y, z and Theta_R are
+        # asked (the published goals): those are computed alone, without the other values of their systems
+        self._need: Dict[str, set] = {}
+        names: Dict[str, set] = {}
+        for c in self.constraints:
+            self._need.setdefault(c.frame, set()).add(c.info.system)
+            names.setdefault(c.frame, set()).add(c.projection)
+        self._plain = {f: n <= {"x", "y", "z", "Theta_R"} for f, n in names.items()}
 
     # -- construction from / to JSON ----------------------------------------------------------------------
     @staticmethod
@@ -679,13 +687,18 @@ class ToleratedPose:
     def _frame_values(self, T: np.ndarray) -> Dict[str, Dict[str, Tuple[float, bool]]]:
         D = self.delta(T)
         p, R = D[:3, 3], D[:3, :3]
-        need: Dict[str, set] = {}
-        for c in self.constraints:
-            need.setdefault(c.frame, set()).add(c.info.system)
         out = {}
-        for f, systems in need.items():
+        for f, systems in self._need.items():
             Q = self._Q[f]
             vals: Dict[str, Tuple[float, bool]] = {}
+            if self._plain[f]:  # the same values as below, only those asked
+                if "cart" in systems:
+                    x, y, z = (float(v) for v in (p if f == "nominal" else Q @ p))
+                    vals.update({"x": (x, False), "y": (y, False), "z": (z, False)})
+                if "axis" in systems:  # Theta_R is frame-independent (a similarity keeps the angle)
+                    vals["Theta_R"] = (rotation_angle_precise(R if f == "nominal" else Q @ R @ Q.T), False)
+                out[f] = vals
+                continue
             if systems & {"cart", "cyl", "sph"}:
                 vals.update(translation_values(Q @ p))
             rs = systems & {"rpy", "euler", "axis", "quat"}
