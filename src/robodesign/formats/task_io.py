@@ -297,8 +297,9 @@ def parse_task(data, file: Path) -> Task:
                 if gid not in gseen:
                     raise InputError(f"unknown goal ID {gid!r}", file=fname, path=["constraints", i, "order", k])
     for i, g in enumerate(goals):
-        if isinstance(g, ReturnTo) and g.return_to is not None and g.return_to not in gseen:
-            raise InputError(f"unknown goal ID {g.return_to!r}", file=fname, path=["goals", i, "returnToGoal"])
+        for key, gid in g.referenced_goals:
+            if gid not in gseen:
+                raise InputError(f"unknown goal ID {gid!r}", file=fname, path=["goals", i, key])
     return Task(header=header, obstacles=tuple(obstacles), goals=tuple(goals), constraints=constraints,
                 frames=frames, root=root, source=str(file), warnings=warnings.messages)
 
