@@ -173,6 +173,10 @@ class Goal:
 
     #: the CoBRA goal type (the JSON ``type``)
     type_name: ClassVar[str] = ""
+    #: a plugin goal type's own JSON keys and JSON Schema, read by ``register_goal_type`` (with the class's
+    #: ``from_json(data, ctx)`` classmethod as its parser) when it is given the class alone
+    json_keys: ClassVar[Tuple[str, ...]] = ()
+    json_schema: ClassVar[Optional[dict]] = None
     #: the solve pipeline's handler (design/solve.py) and what it reads of the goal: "pose" (IK of
     #: ``target_poses[0]``, move there and stop), "poses" (visit the IK solutions of ``target_poses``, timed by
     #: ``t`` or untimed if None), "hold" (stay still for ``duration``), "return" (move back to the
