@@ -32,7 +32,7 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from robodesign.core.errors import AssemblyError
-from robodesign.formats.costs import CostContext, MissingQuantityError, known_costs, parse_cost
+from robodesign.formats.costs import CostContext, CostFunction, MissingQuantityError, named_costs, parse_cost
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import (
     AllGoalsFulfilled,
@@ -121,19 +121,27 @@ class CheckSettings:
     all_costs: bool = True  # compute every built-in cost, not only the solution's
 
 
-def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None) -> Verdict:
+def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None,
+          cost: Optional[CostFunction] = None) -> Verdict:
     """Judge ``solution`` on ``task``. Bad input (unknown module set, malformed data) raises InputError;
-    everything else — including an invalid assembly — is a violation in the verdict."""
+    everything else — including an invalid assembly — is a violation in the verdict. ``cost``: the solution's
+    cost function as the object the caller already has (the solve pipeline's); without it the solution's
+    ``costFunction`` text is parsed, once (an upload, a file)."""
+    if cost is not None and solution.cost_function not in (str(cost), cost.descriptor()):
+        raise ValueError(f"the cost {cost} given to check is not the solution's costFunction "
+                         f"{solution.cost_function!r}")
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # huge values: inf/nan, reported as such
-        return _check(task, solution, module_set, settings)
+        return _check(task, solution, module_set, settings, cost)
 
 
-def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings]) -> Verdict:
+def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings],
+           cost: Optional[CostFunction] = None) -> Verdict:
     settings = settings or CheckSettings()
     timings: Dict[str, float] = {}
     t0 = time.perf_counter()
     violations: List[Violation] = []
-    cost_fn = parse_cost(solution.cost_function, file=solution.source, path=["costFunction"])
+    cost_fn = cost if cost is not None else parse_cost(solution.cost_function, file=solution.source,
+                                                       path=["costFunction"])
     tr = solution.trajectory
     if solution.task_id != task.id:
         violations.append(Violation("taskID", f"solution is for task {solution.task_id!r}, not {task.id!r}"))
@@ -196,9 +204,9 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
                            goals_achieved=n_ok, num_goals=len(task.goals))
     costs: Dict[str, float] = {}
     if settings.all_costs:
-        for name in known_costs():
+        for name, cf in named_costs().items():
             try:
-                costs[name] = float(parse_cost(name).evaluate(cctx))
+                costs[name] = float(cf.evaluate(cctx))
             except MissingQuantityError:  # a plugin term that needs what a check does not provide
                 continue
     cost = float(cost_fn.evaluate(cctx))
