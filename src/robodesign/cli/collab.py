@@ -130,7 +130,10 @@ def optimize_command(args, ctask: CollabTask) -> int:
     from robodesign.cli.workers import optimize_executor, optimize_workers, search_rules
     from robodesign.collab.optimize import optimize_collab
     from robodesign.design.optimize import Budget
+    from robodesign.design.solve import SolveSettings, check_settings
     from robodesign.formats.module_io import load_module_set
+    settings = SolveSettings(planner=args.planner, plan_time=args.plan_time)
+    check_settings(settings)  # cmd_optimize checked them already: a caller of this function gets the same rule
     if args.optimize_trajectory:
         raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
     if getattr(args, "resume", False):
@@ -146,7 +149,7 @@ def optimize_command(args, ctask: CollabTask) -> int:
                   f"{feas} feasible alone")
     r = optimize_collab(ctask, ms, args.optimizer, args.cost, budget, seed=args.seed,
                         options=parse_options(args.opt), on_robot=on_robot, rules=search_rules(args),
-                        base_search=not args.fixed_base, batch_size=args.batch_size,
+                        base_search=not args.fixed_base, batch_size=args.batch_size, settings=settings,
                         executor_factory=lambda spec: optimize_executor(spec, workers, args.chunk_size))
     out = r.result.solution.write(args.out or "best_solution.json") if r.feasible else None
     if args.json:

@@ -51,13 +51,17 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
     and ``base_search`` define every robot's search space as for :meth:`robodesign.design.problem.Problem.build`.
     Each robot's study asks ``batch_size`` candidates at a time and evaluates them with the executor that
     ``executor_factory(spec)`` returns with its close function (default: in this process), e.g.
-    :func:`robodesign.cli.commands.optimize_executor` for ``--workers``; the result does not depend on it."""
+    :func:`robodesign.cli.commands.optimize_executor` for ``--workers``; the result does not depend on it.
+    ``settings`` (a ``SolveSettings``) solves the combinations; its planner, plan time and timing method are
+    also those of every robot's evaluations (which keep the evaluator's own IK restarts)."""
     import time
 
     from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from robodesign.design.optimize import SerialExecutor, Study, create_optimizer
     from robodesign.design.problem import Problem
     t0 = time.perf_counter()
+    planning = {} if settings is None else {"planner": settings.planner, "plan_time": settings.plan_time,
+                                            "timing": settings.timing}
     nominal = [RobotSetup(rid, module_set, ()) for rid in ctask.robot_ids]
     assignment = assign_goals(ctask, nominal)
     designs: Dict[str, List[RobotDesign]] = {}
@@ -65,7 +69,7 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
     for k, rid in enumerate(ctask.robot_ids):
         part = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
         problem = Problem.build(part, module_set, cost, rules=rules, base_search=base_search)
-        spec = EvaluatorSpec(problem, evaluation_settings(), seed=seed + k)
+        spec = EvaluatorSpec(problem, evaluation_settings(**planning), seed=seed + k)
         opt = create_optimizer(optimizer, problem, seed=seed + k, options=dict(options or {}))
         executor, close = executor_factory(spec) if executor_factory else (SerialExecutor(Evaluator(spec)), None)
         try:
