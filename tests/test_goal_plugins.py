@@ -116,6 +116,19 @@ def test_found_through_its_entry_point_read_and_judged(installed, tmp_path):
     assert tq.goal_windows == {"H": (k0, 150)}
 
 
+def test_the_plugin_reads_its_own_variant(installed, tmp_path):
+    """The task reader hands the goal's JSON to the class's canonical_json before the schema check."""
+    f = _task(tmp_path, 0.4)
+    data = json.loads(f.read_text())
+    x, y, z = data["goals"][0]["position"]
+    data["goals"][0]["Position"] = {"x": x, "y": y, "z": z}  # keys match case-insensitively, as for built-ins
+    del data["goals"][0]["position"]
+    f.write_text(json.dumps(data))
+    task = load_task(f)
+    assert task.goals[0].position == (x, y, z)
+    assert any("goals[0].position" in w and "read as [x, y, z]" in w for w in task.warnings), task.warnings
+
+
 def test_a_spawned_worker_finds_the_goal_type(installed, tmp_path):
     """A worker started with the spawn method imports nothing of the driver's: it finds the goal type through
     the entry point and judges the plugin goal as the driver does."""

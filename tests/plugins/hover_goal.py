@@ -3,8 +3,8 @@ within ``radius`` of a point for the ``duration`` seconds up to the goal time::
 
     {"ID": "H", "type": "hover", "position": [x, y, z], "radius": 0.002, "duration": 0.4}
 
-It subclasses no built-in goal: the class itself provides its parsing (``from_json``, ``json_keys``,
-``json_schema``), its poses (``target_poses``, for the solver's "pose" handler and the views), its time window
+It subclasses no built-in goal: the class itself provides its parsing (``canonical_json``, ``from_json``,
+``json_keys``, ``json_schema``), its poses (``target_poses``, for the solver's "pose" handler and the views), its time window
 and its check. It is found through the entry point ``hover = hover_goal:Hover`` in the group
 ``robodesign.goal_types`` (tests/test_goal_plugins.py installs that entry point in a tmp folder).
 """
@@ -32,6 +32,15 @@ class Hover(Goal):
             "position": {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3},
             "radius": {"type": "number", "exclusiveMinimum": 0}, "duration": {"type": "number", "minimum": 0}},
     }
+
+    @classmethod
+    def canonical_json(cls, data, file, path, warnings):
+        """A variant read with a warning: the position as an object {"x": …, "y": …, "z": …}."""
+        pos = data.get("position")
+        if isinstance(pos, dict) and set(pos) == {"x", "y", "z"}:
+            warnings.add(file, path + ["position"], "read as [x, y, z]")
+            data = {**data, "position": [pos["x"], pos["y"], pos["z"]]}
+        return data
 
     @classmethod
     def from_json(cls, data, ctx) -> "Hover":

@@ -192,6 +192,7 @@ def _canonical_goal(g, f, path, w):
         out[canon] = v
     if gt is not None:
         out["type"] = gt.name
+        out = gt.cls.canonical_json(out, f, path, w)
     if "goalPose" in out:
         out["goalPose"] = ToleratedPose.canonical_json(out["goalPose"], f, path + ["goalPose"], w)
     if isinstance(out.get("trajectory"), dict):

@@ -162,6 +162,7 @@ class Goal:
     it needs (``solver_kind``); its parser is registered under that name in
     :mod:`robodesign.formats.goal_types` (a plugin goal type registers there too, docs/architecture.md).
 
+    The task reader asks the class for :meth:`canonical_json` (the variants of its JSON it reads).
     The judge asks the goal itself (no dispatch on goal classes elsewhere): :meth:`time_window` (the samples
     its goal-level constraints hold over), :meth:`check` (why a trajectory misses it), :attr:`external_wrench`
     (a wrench it applies at the TCP during its window) and :attr:`referenced_goals` (goal IDs it names, which
@@ -198,6 +199,14 @@ class Goal:
         """The tolerated pose where the goal is shown (plots, labels): its first target pose by default."""
         poses = self.target_poses
         return poses[0] if poses else None
+
+    @classmethod
+    def canonical_json(cls, data: Dict[str, Any], file: str, path: List[Any], warnings: Any) -> Dict[str, Any]:
+        """The goal's JSON object (keys already matched to the type's own, case-insensitively) with the
+        variants the type reads brought into the one form its schema and ``from_json`` accept; ``warnings``
+        (:class:`~robodesign.core.input_warnings.InputWarnings`) takes what is read with a warning. Default:
+        unchanged (the built-in types' variants are read by the task reader, docs/formats.md)."""
+        return data
 
     @property
     def referenced_goals(self) -> Tuple[Tuple[str, str], ...]:
