@@ -119,3 +119,24 @@ def test_the_checker_takes_the_cost_object_and_parses_the_files_text_once(tmp_pa
     assert set(v_obj.costs) == set(costs.known_costs())
     with pytest.raises(ValueError, match="not the solution's costFunction"):
         checker.check(task, sol, ms, cost=parse_cost("cyc"))
+
+
+def test_robodesign_solve_parses_the_cost_once(tmp_path, monkeypatch, capsys):
+    """The command line parses --cost once; the CostFunction goes to the trajectory choice, solve and the
+    solution file (which writes it in the reference's notation)."""
+    from robodesign.cli.entry import main
+    calls = []
+
+    def counted(*a, **k):
+        calls.append(a[0])
+        return parse_cost(*a, **k)
+    monkeypatch.setattr(costs, "parse_cost", counted)
+    monkeypatch.setattr(solve_module, "parse_cost", counted)
+    out = tmp_path / "sol.json"
+    code = main(["solve", str(PTP3), "--modules", str(IMPROV), "--order", ",".join(ORDER), "--cost", "qDist_0.5,cyc",
+                 "--out", str(out), "--json"])
+    res = json.loads(capsys.readouterr().out)
+    assert code == 0 and res["feasible"] and res["trajectory"] == "time-optimal"
+    assert calls == ["qDist_0.5,cyc"]
+    assert load_solution(out).cost_function == "cyc,qDist_0.5"
+    assert res["cost"] == res["costs"]["cyc"] + 0.5 * res["costs"]["qDist"]
