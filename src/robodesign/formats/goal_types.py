@@ -98,9 +98,7 @@ def _load_entry_points() -> None:
         return
     _entry_points_loaded = True
     from importlib import metadata
-    eps = metadata.entry_points()
-    group = eps.select(group=ENTRY_POINT_GROUP) if hasattr(eps, "select") else eps.get(ENTRY_POINT_GROUP, [])
-    for ep in group:
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
         obj = ep.load()  # a module registers its goal types when imported
         if isinstance(obj, type) and issubclass(obj, Goal):
             register_goal_type(obj)

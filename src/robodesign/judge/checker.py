@@ -135,13 +135,13 @@ def check(task: Task, solution: Solution, module_set=None, settings: Optional[Ch
 
 
 def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings],
-           cost: Optional[CostFunction] = None) -> Verdict:
+           given: Optional[CostFunction] = None) -> Verdict:
     settings = settings or CheckSettings()
     timings: Dict[str, float] = {}
     t0 = time.perf_counter()
     violations: List[Violation] = []
-    cost_fn = cost if cost is not None else parse_cost(solution.cost_function, file=solution.source,
-                                                       path=["costFunction"])
+    cost_fn = given if given is not None else parse_cost(solution.cost_function, file=solution.source,
+                                                         path=["costFunction"])
     tr = solution.trajectory
     if solution.task_id != task.id:
         violations.append(Violation("taskID", f"solution is for task {solution.task_id!r}, not {task.id!r}"))
