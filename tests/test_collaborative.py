@@ -297,6 +297,36 @@ def test_cli_optimize_base_poses_of_a_fixed_design(tmp_path, capsys):
     assert code == 0 and v["valid"] and v["costs"] == pytest.approx(s["costs"])
 
 
+def test_cli_optimize_collaborative_honours_the_planner(tmp_path, capsys, monkeypatch):
+    """``--planner`` and ``--plan-time`` reach every robot's evaluations and the solve of the combinations (they
+    were dropped for a collaborative task); a bad planner is exit 2 before anything is evaluated."""
+    from robodesign.cli import workers
+    from robodesign.collab import optimize as collab_optimize
+    task = mt.collab_task_path("shared_conveyor")
+    seen = {"evaluations": [], "combinations": []}
+    real_executor, real_solve = workers.optimize_executor, collab_optimize.solve_collab
+
+    def executor(spec, n, chunk_size=None):
+        seen["evaluations"].append((spec.settings.planner, spec.settings.plan_time))
+        return real_executor(spec, n, chunk_size)
+
+    def solve(ctask, setups, cost="cyc", settings=None):
+        seen["combinations"].append((settings.planner, settings.plan_time))
+        return real_solve(ctask, setups, cost=cost, settings=settings)
+    monkeypatch.setattr(workers, "optimize_executor", executor)
+    monkeypatch.setattr(collab_optimize, "solve_collab", solve)
+    argv = ["optimize", task, "--modules", "robodesign_arm", "--optimizer", "base_pose", "--opt",
+            "order=" + ",".join(ORDER), "--budget", "1evals", "--out", tmp_path / "best.json", "--json"]
+    code, o = _main(argv + ["--planner", "rrtConect"], capsys)
+    assert code == 2 and "--planner" in o.err and "rrtConect" in o.err and "Traceback" not in o.err
+    assert seen == {"evaluations": [], "combinations": []}
+    code, o = _main(argv + ["--planner", "prm", "--plan-time", "1.5"], capsys)
+    s = json.loads(o.out)
+    assert code in (0, 1) and s["collaborative"], o.err
+    assert seen["evaluations"] == [("prm", 1.5), ("prm", 1.5)]  # one study per robot
+    assert seen["combinations"] and set(seen["combinations"]) == {("prm", 1.5)}
+
+
 def test_cli_optimize_collaborative_workers_give_the_same_cell(tmp_path, capsys):
     """``--workers`` applies to a collaborative task too (each robot's study runs on the process pool): for
     a seed and batch size, 1 and 2 workers give the same designs, costs and checked cell."""

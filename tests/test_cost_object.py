@@ -92,3 +92,51 @@ def test_a_cost_registered_in_the_driver_is_used_in_the_workers(tmp_path):
     # the reported cost is the term's value on the written trajectory: its number of time steps
     assert out["best"]["cost"] == len(sol.trajectory.t) - 1 == out["best"]["costs"]["samples"]
     assert out["best"]["costs"]["cyc"] == sol.trajectory.t[-1]
+
+
+def test_the_checker_takes_the_cost_object_and_parses_the_files_text_once(tmp_path, monkeypatch):
+    """check(..., cost=cf) judges with the object the caller has and parses no cost text; without it the
+    solution's costFunction is parsed once (the list of every known cost is built from the registry, not
+    parsed name by name). Verdicts are the same either way."""
+    import pytest
+
+    from robodesign.judge import checker
+    from test_checker import plan, solution, task_json
+    from conftest import toy_module_set
+    ms = load_module_set(toy_module_set(tmp_path))
+    f = tmp_path / "toy" / "all.json"
+    f.write_text(json.dumps(task_json()))
+    task = load_task(f)
+    calls = []
+    monkeypatch.setattr(checker, "parse_cost", lambda *a, **k: calls.append(a) or parse_cost(*a, **k))
+    sol = solution(*plan(), cost="Liu2")
+    v_obj = checker.check(task, sol, ms, cost=parse_cost("Liu2"))
+    assert calls == []
+    v_text = checker.check(task, sol, ms)
+    assert calls == [("Liu2",)]
+    assert v_obj.valid and v_obj.to_json() | {"timings": None} == v_text.to_json() | {"timings": None}
+    assert v_obj.cost == v_obj.costs["Liu2"] == pytest.approx(v_obj.costs["mechEnergy"] + 0.2 * v_obj.costs["cyc"])
+    assert set(v_obj.costs) == set(costs.known_costs())
+    with pytest.raises(ValueError, match="not the solution's costFunction"):
+        checker.check(task, sol, ms, cost=parse_cost("cyc"))
+
+
+def test_robodesign_solve_parses_the_cost_once(tmp_path, monkeypatch, capsys):
+    """The command line parses --cost once; the CostFunction goes to the trajectory choice, solve and the
+    solution file (which writes it in the reference's notation)."""
+    from robodesign.cli.entry import main
+    calls = []
+
+    def counted(*a, **k):
+        calls.append(a[0])
+        return parse_cost(*a, **k)
+    monkeypatch.setattr(costs, "parse_cost", counted)
+    monkeypatch.setattr(solve_module, "parse_cost", counted)
+    out = tmp_path / "sol.json"
+    code = main(["solve", str(PTP3), "--modules", str(IMPROV), "--order", ",".join(ORDER), "--cost", "qDist_0.5,cyc",
+                 "--out", str(out), "--json"])
+    res = json.loads(capsys.readouterr().out)
+    assert code == 0 and res["feasible"] and res["trajectory"] == "time-optimal"
+    assert calls == ["qDist_0.5,cyc"]
+    assert load_solution(out).cost_function == "cyc,qDist_0.5"
+    assert res["cost"] == res["costs"]["cyc"] + 0.5 * res["costs"]["qDist"]

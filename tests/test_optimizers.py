@@ -182,6 +182,27 @@ def test_elimination_base_grid():
     assert {c.base for c in first[:9]} == {(x, y) for x in (-0.2, 0.0, 0.2) for y in (-0.1, 0.0, 0.1)}
 
 
+def test_elimination_reach_rule_swallows_only_assembly_errors(monkeypatch):
+    """An order that does not assemble gives no reach bound (the evaluation reports it); any other error
+    from the reach bound is a bug and propagates instead of being taken for "no bound"."""
+    from robodesign.core.errors import AssemblyError
+    sp = SearchSpace(load_module_set("robodesign_arm"), **RULES)
+    opt = load_optimizer("elimination")(_problem(sp), seed=0)
+    c = sp.nominal_candidate(next(iter(sp.enumerate_orders())))
+
+    def broken(space, candidate):
+        raise RuntimeError("a bug in the reach bound")
+    monkeypatch.setattr(SearchSpace, "reach_bound", broken)
+    with pytest.raises(RuntimeError, match="a bug in the reach bound"):
+        opt._reach(c)
+    assert c.key() not in opt._reach_cache
+
+    def unassembled(space, candidate):
+        raise AssemblyError("module order is empty")
+    monkeypatch.setattr(SearchSpace, "reach_bound", unassembled)
+    assert opt._reach(c) == (None, None) and opt._reach_dominated(c) is False
+
+
 # -- heuristic ----------------------------------------------------------------------------------------------------
 def test_heuristic_without_cost_is_complete(bench):
     """Without a cost bound (f = 0) the learned ranking drives the beam; widening makes it exhaustive."""

@@ -59,7 +59,7 @@ from typing import Deque, Iterator, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.plugin import Candidate, Optimizer, option
+from robodesign.plugin import AssemblyError, Candidate, Optimizer, option
 
 
 class HierarchicalElimination(Optimizer):
@@ -195,7 +195,7 @@ class HierarchicalElimination(Optimizer):
         if hit is None:
             try:
                 hit = self.space.reach_bound(c)
-            except Exception:  # the order does not assemble: the evaluation will say so
+            except AssemblyError:  # the order does not assemble: the evaluation will say so
                 hit = (None, None)
             self._reach_cache[k] = hit
         return hit

@@ -79,8 +79,9 @@ def parse_robot_orders(ctask: CollabTask, robots: List[str], order: Optional[str
     return out
 
 
-def solve_command(args, ctask: CollabTask, mode: str) -> int:
-    """``robodesign solve`` of a collaborative task: prioritized planning (docs/collaborative.md)."""
+def solve_command(args, ctask: CollabTask, mode: str, cost=None) -> int:
+    """``robodesign solve`` of a collaborative task: prioritized planning (docs/collaborative.md). ``cost``:
+    --cost as the CostFunction the caller parsed (default: parsed here)."""
     from robodesign.cli.args import print_input_warnings
     print_input_warnings(ctask.task)
     from robodesign.design.solve import SolveSettings
@@ -99,7 +100,10 @@ def solve_command(args, ctask: CollabTask, mode: str) -> int:
     settings = SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing,
                              optimize_trajectory=mode == "optimize", seed=args.seed)
     t0 = time.perf_counter()
-    res = solve_collab(ctask, [RobotSetup(rid, ms, tuple(orders[rid])) for rid in ctask.robot_ids], cost=args.cost,
+    if cost is None:
+        from robodesign.formats.costs import parse_cost
+        cost = parse_cost(args.cost, path="--cost")
+    res = solve_collab(ctask, [RobotSetup(rid, ms, tuple(orders[rid])) for rid in ctask.robot_ids], cost=cost,
                        settings=settings)
     elapsed = time.perf_counter() - t0
     out = res.solution.write(args.out) if (res.solution is not None and args.out) else None
@@ -130,7 +134,12 @@ def optimize_command(args, ctask: CollabTask) -> int:
     from robodesign.cli.workers import optimize_executor, optimize_workers, search_rules
     from robodesign.collab.optimize import optimize_collab
     from robodesign.design.optimize import Budget
+    from robodesign.design.solve import SolveSettings, check_settings
+    from robodesign.formats.costs import parse_cost
     from robodesign.formats.module_io import load_module_set
+    settings = SolveSettings(planner=args.planner, plan_time=args.plan_time)
+    check_settings(settings)  # cmd_optimize checked them already: a caller of this function gets the same rule
+    cost = parse_cost(args.cost, path="--cost")  # once: the object travels to every study and combination
     if args.optimize_trajectory:
         raise InputError("--optimize-trajectory is not supported for a collaborative task yet")
     if getattr(args, "resume", False):
@@ -144,9 +153,9 @@ def optimize_command(args, ctask: CollabTask) -> int:
             feas = sum(e.feasible for e in res.history)
             print(f"robot {rid}: {len(res.history)} evaluations in {res.seconds:.1f} s ({workers} worker(s)), "
                   f"{feas} feasible alone")
-    r = optimize_collab(ctask, ms, args.optimizer, args.cost, budget, seed=args.seed,
+    r = optimize_collab(ctask, ms, args.optimizer, cost, budget, seed=args.seed,
                         options=parse_options(args.opt), on_robot=on_robot, rules=search_rules(args),
-                        base_search=not args.fixed_base, batch_size=args.batch_size,
+                        base_search=not args.fixed_base, batch_size=args.batch_size, settings=settings,
                         executor_factory=lambda spec: optimize_executor(spec, workers, args.chunk_size))
     out = r.result.solution.write(args.out or "best_solution.json") if r.feasible else None
     if args.json:

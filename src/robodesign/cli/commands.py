@@ -35,9 +35,10 @@ def add_trajectory_arguments(p) -> None:
     p.add_argument("--optimize-trajectory", action="store_true", help="the same as --trajectory optimize")
 
 
-def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False) -> str:
-    """"time-optimal" or "optimize" for a cost and the --trajectory / --optimize-trajectory options."""
-    from robodesign.formats.costs import cost_term, parse_cost
+def trajectory_mode(cost, choice: str = "auto", optimize_flag: bool = False) -> str:
+    """"time-optimal" or "optimize" for a cost (a CostFunction, or --cost's text) and the --trajectory /
+    --optimize-trajectory options."""
+    from robodesign.formats.costs import CostFunction, cost_term, parse_cost
     if optimize_flag:
         if choice == "time-optimal":
             raise InputError("--optimize-trajectory contradicts --trajectory time-optimal")
@@ -46,7 +47,7 @@ def trajectory_mode(cost: str, choice: str = "auto", optimize_flag: bool = False
         return choice
     # optimize for the terms trajectory optimization lowers beyond the time-optimal profile: the modelled
     # torque integrals (mechEnergy, effort)
-    weights = parse_cost(cost, path="--cost").terms
+    weights = (cost if isinstance(cost, CostFunction) else parse_cost(cost, path="--cost")).terms
     energy_like = [n for n, w in weights if w > 0 and cost_term(n).trajopt and cost_term(n).needs_torques]
     return "optimize" if energy_like else "time-optimal"
 
@@ -56,13 +57,15 @@ def cmd_solve(args) -> int:
     from robodesign.cli.collab import load_collab_task_file, solve_command
     from robodesign.design.solve import SolveSettings, check_settings, solve
     from robodesign.formats.assembly import Assembly
+    from robodesign.formats.costs import parse_cost
     from robodesign.formats.module_io import load_module_set
     from robodesign.formats.task_io import load_task
-    mode = trajectory_mode(args.cost, args.trajectory, args.optimize_trajectory)
+    cost = parse_cost(args.cost, path="--cost")  # once: the object travels to solve and the solution file
+    mode = trajectory_mode(cost, args.trajectory, args.optimize_trajectory)
     check_settings(SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing))
     ctask = load_collab_task_file(args.task)
     if ctask is not None:  # several robots in one cell: docs/collaborative.md
-        return solve_command(args, ctask, mode)
+        return solve_command(args, ctask, mode, cost)
     if args.robot:
         raise InputError("--robot is for a collaborative task; this task has one robot: use --order")
     if not args.order:
@@ -78,7 +81,7 @@ def cmd_solve(args) -> int:
     settings = SolveSettings(planner=args.planner, plan_time=args.plan_time, timing=args.timing,
                              optimize_trajectory=mode == "optimize", seed=args.seed)
     t0 = time.perf_counter()
-    res = solve(task, ms, order, _base_pose(args.base_pose, task), cost=args.cost, settings=settings)
+    res = solve(task, ms, order, _base_pose(args.base_pose, task), cost=cost, settings=settings)
     elapsed = time.perf_counter() - t0
     out = None
     if res.solution is not None and args.out:

@@ -23,6 +23,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.core.jsonio import load_json, write_json
+from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.solution import Solution, SolutionTrajectory, parse_solution
 from robodesign.formats.task_io import parse_task, resolve_task_path
@@ -178,7 +179,6 @@ class CollabSolution:
     def benchmark_id(self, order: Optional[Sequence[str]] = None) -> str:
         """``[M-set1,M-set2]:[C1,C2]:task`` (robots in ``order``, default the solution's), canonical form."""
         from robodesign.formats.benchmark_id import BenchmarkID, RobotRef, RobotSpec
-        from robodesign.formats.costs import parse_cost
         sols = [self.solution(r) for r in (order or [r for r, _ in self.robots])]
         costs = tuple(parse_cost(s.cost_function) for s in sols)
         bid = BenchmarkID(RobotSpec(tuple(RobotRef(s.module_set, "M-") for s in sols), True), costs[0], self.task_id,
@@ -435,17 +435,19 @@ def _pad(sol: Solution, t: np.ndarray) -> Solution:
     return sol.with_(trajectory=SolutionTrajectory(np.array(t, dtype=float), q, dq, ddq, dict(tr.goal2time)))
 
 
-def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: str = "cyc", settings=None,
-                 priorities: Optional[Sequence[Sequence[str]]] = None) -> CollabSolveResult:
+def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: Union[CostFunction, str] = "cyc",
+                 settings=None, priorities: Optional[Sequence[Sequence[str]]] = None) -> CollabSolveResult:
     """Prioritized planning: the robots are solved one after the other, each starting from its home
     configuration (zero joint angles where that is collision-free and holds against gravity, else its
     first goal's configuration) and waiting, before each move, until the move
     misses the timed motions of the robots before it (``solvers/schedule.py``); every robot then holds its
     last configuration until the last one is done. Priority orders tried: ``priorities``, or the given order
-    and its reverse. The first combination the collaborative checker accepts is returned."""
+    and its reverse. The first combination the collaborative checker accepts is returned. ``cost``: a
+    CostFunction, or a descriptor parsed here once (every robot's solve gets the object)."""
     from robodesign.design.solve import SolveSettings, solve
     from robodesign.solvers.schedule import OtherRobot, static_cell
     settings = settings or SolveSettings()
+    cost = cost if isinstance(cost, CostFunction) else parse_cost(cost, path="cost")
     ids = [s.id for s in setups]
     if sorted(ids) != sorted(ctask.robot_ids):
         raise InputError(f"give one robot for each of the task's robots {list(ctask.robot_ids)}, got {ids}")

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
 from robodesign.collab.core import CollabSolveResult, CollabTask, RobotSetup, assign_goals, solve_collab
+from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
 
 
@@ -41,23 +42,30 @@ class CollabOptimizeResult:
         return self.result is not None and self.result.feasible
 
 
-def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, cost: str, budget, seed: int = 0,
+def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, cost: Union[CostFunction, str], budget,
+                    seed: int = 0,
                     options: Optional[dict] = None, top_k: int = 3, settings=None,
                     on_robot: Optional[Callable[[str, object], None]] = None, rules: Optional[dict] = None,
                     base_search: bool = True, batch_size: int = 1,
                     executor_factory: Optional[Callable] = None) -> CollabOptimizeResult:
     """Optimize every robot's design on its part of ``ctask`` (``budget``: an ``optimize.Budget``, per robot),
-    then combine the ``top_k`` designs per robot by prioritized planning (best summed cost first). ``rules``
+    then combine the ``top_k`` designs per robot by prioritized planning (best summed cost first). ``cost``: a
+    CostFunction, or a descriptor parsed here once; the object reaches every study and combination. ``rules``
     and ``base_search`` define every robot's search space as for :meth:`robodesign.design.problem.Problem.build`.
     Each robot's study asks ``batch_size`` candidates at a time and evaluates them with the executor that
     ``executor_factory(spec)`` returns with its close function (default: in this process), e.g.
-    :func:`robodesign.cli.commands.optimize_executor` for ``--workers``; the result does not depend on it."""
+    :func:`robodesign.cli.commands.optimize_executor` for ``--workers``; the result does not depend on it.
+    ``settings`` (a ``SolveSettings``) solves the combinations; its planner, plan time and timing method are
+    also those of every robot's evaluations (which keep the evaluator's own IK restarts)."""
     import time
 
     from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from robodesign.design.optimize import SerialExecutor, Study, create_optimizer
     from robodesign.design.problem import Problem
     t0 = time.perf_counter()
+    cost = cost if isinstance(cost, CostFunction) else parse_cost(cost, path="cost")
+    planning = {} if settings is None else {"planner": settings.planner, "plan_time": settings.plan_time,
+                                            "timing": settings.timing}
     nominal = [RobotSetup(rid, module_set, ()) for rid in ctask.robot_ids]
     assignment = assign_goals(ctask, nominal)
     designs: Dict[str, List[RobotDesign]] = {}
@@ -65,7 +73,7 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
     for k, rid in enumerate(ctask.robot_ids):
         part = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
         problem = Problem.build(part, module_set, cost, rules=rules, base_search=base_search)
-        spec = EvaluatorSpec(problem, evaluation_settings(), seed=seed + k)
+        spec = EvaluatorSpec(problem, evaluation_settings(**planning), seed=seed + k)
         opt = create_optimizer(optimizer, problem, seed=seed + k, options=dict(options or {}))
         executor, close = executor_factory(spec) if executor_factory else (SerialExecutor(Evaluator(spec)), None)
         try:

@@ -386,6 +386,14 @@ class CostFunction:
         return (_restore_cost, (self.terms, self.name, defs))
 
 
+def named_costs() -> Dict[str, CostFunction]:
+    """name → :class:`CostFunction` of every registered term (weight 1) and compound (its terms, named), the
+    costs :func:`known_costs` lists, built from the registry without parsing text."""
+    out = {n: CostFunction(((n, 1.0),)) for n in _REGISTRY}
+    out.update({n: CostFunction(terms, name=n) for n, terms in _COMPOUNDS.items()})
+    return out
+
+
 def _restore_cost(terms, name, defs) -> "CostFunction":
     for term in defs:
         if term.name not in _REGISTRY and term.name not in _COMPOUNDS:

@@ -1,13 +1,15 @@
-"""The goal-type registry: CoBRA goal ``type`` → the :class:`~robodesign.formats.task_spec.Goal` subclass, its
+"""The goal-type registry: CoBRA goal ``type`` → the :class:`~robodesign.formats.task_spec.Goal` class, its
 parser and the JSON it accepts.
 
 The task reader dispatches every goal through this registry (the built-in types register in
-``formats/task_io.py``). A goal type from another package registers itself with :func:`register_goal_type`
-when it is imported; a package may also name the module that does so under the entry-point group
-``robodesign.goal_types``, which is loaded the first time an unknown type is looked up (so a task file using
-it reads in any process, worker processes included). The goal class says how the rest of robodesign
-handles it (``type_name``, ``solver_kind``, ``target_poses``, ``anchor``); subclassing a built-in goal
-inherits the built-in's check, solver handler and view.
+``formats/task_io.py``). Goal types from other packages are found like optimizers: through the entry-point
+group ``robodesign.goal_types`` (the entry point names a ``Goal`` class, registered with its ``from_json``,
+``json_keys`` and ``json_schema``, or a module that calls :func:`register_goal_type` when imported). The
+group is read the first time an unknown type is looked up or the registered types are listed, in every
+process (spawned workers included), so a task file using such a type reads anywhere. A package may also call
+:func:`register_goal_type` itself. The goal class says how the rest of robodesign handles it: ``type_name``,
+``solver_kind``, ``target_poses``, ``anchor``, and for the judge ``time_window``, ``check``,
+``external_wrench`` and ``referenced_goals`` (docs/architecture.md, "Where to add what").
 """
 from __future__ import annotations
 
@@ -63,12 +65,20 @@ _TYPES: Dict[str, GoalType] = {}
 _entry_points_loaded = False
 
 
-def register_goal_type(cls: Type[Goal], parse: GoalParser, keys: Sequence[str] = (), schema: Optional[dict] = None,
-                       builtin: bool = False) -> GoalType:
-    """Register the goal class ``cls`` under its ``type_name`` with its parser. ``keys``: the goal's own JSON
-    keys (others are dropped with a warning, as for built-in goals); ``schema``: a JSON Schema the goal
-    object must satisfy. Registering the same class again replaces the entry; another class under a taken
-    name is an error."""
+def register_goal_type(cls: Type[Goal], parse: Optional[GoalParser] = None, keys: Optional[Sequence[str]] = None,
+                       schema: Optional[dict] = None, builtin: bool = False) -> GoalType:
+    """Register the goal class ``cls`` under its ``type_name`` with its parser (default: the class's
+    ``from_json(data, ctx)``). ``keys``: the goal's own JSON keys (others are dropped with a warning, as for
+    built-in goals; default: the class's ``json_keys``); ``schema``: a JSON Schema the goal object must
+    satisfy (default: the class's ``json_schema``). Registering the same class again replaces the entry;
+    another class under a taken name is an error."""
+    if not (isinstance(cls, type) and issubclass(cls, Goal)):
+        raise ValueError(f"{cls!r} is not a Goal class")
+    parse = parse or getattr(cls, "from_json", None)
+    if parse is None:
+        raise ValueError(f"{cls.__name__} has no parser: pass parse= or define the classmethod from_json(data, ctx)")
+    keys = tuple(getattr(cls, "json_keys", ()) if keys is None else keys)
+    schema = getattr(cls, "json_schema", None) if schema is None else schema
     name = cls.type_name
     if not name:
         raise ValueError(f"{cls.__name__}.type_name is empty")
@@ -87,9 +97,11 @@ def _load_entry_points() -> None:
     if _entry_points_loaded:
         return
     _entry_points_loaded = True
-    from importlib.metadata import entry_points
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
-        ep.load()  # the module registers its goal types when imported
+    from importlib import metadata
+    for ep in metadata.entry_points(group=ENTRY_POINT_GROUP):
+        obj = ep.load()  # a module registers its goal types when imported
+        if isinstance(obj, type) and issubclass(obj, Goal):
+            register_goal_type(obj)
 
 
 def goal_type(name: str, file: Optional[str] = None, path: Sequence[PathPart] = ()) -> GoalType:
@@ -115,9 +127,13 @@ def find_goal_type(name: str) -> Optional[GoalType]:
 
 
 def known_goal_types() -> List[str]:
+    """The names of the registered goal types, the entry-point group's included."""
+    _load_entry_points()
     return [gt.name for gt in _TYPES.values()]
 
 
 def plugin_goal_types() -> List[GoalType]:
-    """The registered goal types that are not built in (their JSON is checked by their own schema)."""
+    """The registered goal types that are not built in (their JSON is checked by their own schema), the
+    entry-point group's included."""
+    _load_entry_points()
     return [gt for gt in _TYPES.values() if not gt.builtin]

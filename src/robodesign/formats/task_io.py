@@ -192,6 +192,7 @@ def _canonical_goal(g, f, path, w):
         out[canon] = v
     if gt is not None:
         out["type"] = gt.name
+        out = gt.cls.canonical_json(out, f, path, w)
     if "goalPose" in out:
         out["goalPose"] = ToleratedPose.canonical_json(out["goalPose"], f, path + ["goalPose"], w)
     if isinstance(out.get("trajectory"), dict):
@@ -297,8 +298,9 @@ def parse_task(data, file: Path) -> Task:
                 if gid not in gseen:
                     raise InputError(f"unknown goal ID {gid!r}", file=fname, path=["constraints", i, "order", k])
     for i, g in enumerate(goals):
-        if isinstance(g, ReturnTo) and g.return_to is not None and g.return_to not in gseen:
-            raise InputError(f"unknown goal ID {g.return_to!r}", file=fname, path=["goals", i, "returnToGoal"])
+        for key, gid in g.referenced_goals:
+            if gid not in gseen:
+                raise InputError(f"unknown goal ID {gid!r}", file=fname, path=["goals", i, key])
     return Task(header=header, obstacles=tuple(obstacles), goals=tuple(goals), constraints=constraints,
                 frames=frames, root=root, source=str(file), warnings=warnings.messages)
 

@@ -32,29 +32,24 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from robodesign.core.errors import AssemblyError
-from robodesign.formats.costs import CostContext, MissingQuantityError, known_costs, parse_cost
+from robodesign.formats.costs import CostContext, CostFunction, MissingQuantityError, named_costs, parse_cost
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import (
     AllGoalsFulfilled,
-    At,
     BasePlacement,
     CollisionFree,
     EndEffectorConstraint,
-    Follow,
     Goal,
     GoalsInOrder,
     JointLimitsConstraint,
-    Leave,
-    Pause,
-    Reach,
-    ReturnTo,
     SelfCollisionFree,
     Task,
     TaskConstraint,
+    describe_pose_violations,
 )
 from robodesign.judge.arc_torques import MAX_DEPTH, arc_torque_steps, certify_arc_torques
 from robodesign.judge.motion import StepMotion
-from robodesign.judge.quantities import TrajectoryQuantities, find_time_index
+from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
 from robodesign.model.sweep import CollisionEvent, SweepChecker
 
@@ -110,11 +105,6 @@ class Verdict:
                 "timings": self.timings}
 
 
-def _describe(violations) -> str:
-    """``[(projection, value, lo, hi)]`` of a tolerated pose → readable text."""
-    return "; ".join(f"{p} = {val:.6g} not in [{lo:.6g}, {hi:.6g}]" for p, val, lo, hi in violations)
-
-
 def _num(v):
     """A number for strict JSON: None stays None, a non-finite float becomes "inf", "-inf" or "nan"."""
     if v is None:
@@ -131,19 +121,27 @@ class CheckSettings:
     all_costs: bool = True  # compute every built-in cost, not only the solution's
 
 
-def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None) -> Verdict:
+def check(task: Task, solution: Solution, module_set=None, settings: Optional[CheckSettings] = None,
+          cost: Optional[CostFunction] = None) -> Verdict:
     """Judge ``solution`` on ``task``. Bad input (unknown module set, malformed data) raises InputError;
-    everything else — including an invalid assembly — is a violation in the verdict."""
+    everything else — including an invalid assembly — is a violation in the verdict. ``cost``: the solution's
+    cost function as the object the caller already has (the solve pipeline's); without it the solution's
+    ``costFunction`` text is parsed, once (an upload, a file)."""
+    if cost is not None and solution.cost_function not in (str(cost), cost.descriptor()):
+        raise ValueError(f"the cost {cost} given to check is not the solution's costFunction "
+                         f"{solution.cost_function!r}")
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):  # huge values: inf/nan, reported as such
-        return _check(task, solution, module_set, settings)
+        return _check(task, solution, module_set, settings, cost)
 
 
-def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings]) -> Verdict:
+def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckSettings],
+           given: Optional[CostFunction] = None) -> Verdict:
     settings = settings or CheckSettings()
     timings: Dict[str, float] = {}
     t0 = time.perf_counter()
     violations: List[Violation] = []
-    cost_fn = parse_cost(solution.cost_function, file=solution.source, path=["costFunction"])
+    cost_fn = given if given is not None else parse_cost(solution.cost_function, file=solution.source,
+                                                         path=["costFunction"])
     tr = solution.trajectory
     if solution.task_id != task.id:
         violations.append(Violation("taskID", f"solution is for task {solution.task_id!r}, not {task.id!r}"))
@@ -206,9 +204,9 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
                            goals_achieved=n_ok, num_goals=len(task.goals))
     costs: Dict[str, float] = {}
     if settings.all_costs:
-        for name in known_costs():
+        for name, cf in named_costs().items():
             try:
-                costs[name] = float(parse_cost(name).evaluate(cctx))
+                costs[name] = float(cf.evaluate(cctx))
             except MissingQuantityError:  # a plugin term that needs what a check does not provide
                 continue
     cost = float(cost_fn.evaluate(cctx))
@@ -393,7 +391,7 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
         if c.pose is None or c.pose.valid(r.base_pose):
             return []
         return [Violation("basePlacement",
-                          "base pose outside its tolerance: " + _describe(c.pose.violations(r.base_pose)))]
+                          "base pose outside its tolerance: " + describe_pose_violations(c.pose.violations(r.base_pose)))]
     if isinstance(c, EndEffectorConstraint):
         out = []
         if math.isfinite(c.v_max) or c.v_min > 0 or math.isfinite(c.o_max) or c.o_min > 0:
@@ -413,7 +411,7 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
             bad = [k for k in range(k0, k1 + 1) if not c.pose.valid(T[k])]
             for k in bad[:limit]:
                 out.append(Violation("endEffector.pose", "TCP pose outside the tolerance: " +
-                                     _describe(c.pose.violations(T[k])), sample=k, time=float(tq.t[k])))
+                                     describe_pose_violations(c.pose.violations(T[k])), sample=k, time=float(tq.t[k])))
         return out
     # allGoalsFulfilled, order, validAssembly, alwaysTrue are handled elsewhere / always true
     return []
@@ -470,8 +468,9 @@ def _check_order(c: GoalsInOrder, g2t: Dict[str, float]) -> List[Violation]:
 # goals
 # ---------------------------------------------------------------------------------------------
 def check_goal(g: Goal, tq: TrajectoryQuantities) -> List[Violation]:
-    """Why goal ``g`` is not achieved by the trajectory (empty: achieved). Goal-level constraints are
-    checked separately, over :attr:`TrajectoryQuantities.goal_windows`."""
+    """Why goal ``g`` is not achieved by the trajectory (empty: achieved), as the goal's own
+    :meth:`~robodesign.formats.task_spec.Goal.check` says. Goal-level constraints are checked separately,
+    over :attr:`TrajectoryQuantities.goal_windows`."""
     g2t = tq.goal2time
     if g.id not in g2t:
         return [Violation("goal", f"{g.type} goal has no entry in goal2time", goal=g.id)]
@@ -479,73 +478,7 @@ def check_goal(g: Goal, tq: TrajectoryQuantities) -> List[Violation]:
     k = tq.goal_sample(g.id)
     if k is None:
         return [Violation("goal", f"no unique sample at the goal time {tg}", goal=g.id, time=tg)]
-    V = lambda msg, **kw: Violation("goal", msg, goal=g.id, time=kw.pop("time", float(tq.t[k])), **kw)  # noqa: E731
-    if isinstance(g, (At, Reach)):
-        T = tq.tcp_poses[k]
-        out = []
-        if not g.pose.valid(T):
-            out.append(V(f"{g.type}: TCP pose outside the goal tolerance: " + _describe(g.pose.violations(T)),
-                         sample=k))
-        if isinstance(g, Reach):
-            m = float(np.abs(tq.tcp_twists[k]).max())
-            if m > g.velocity_tolerance:
-                out.append(V(f"reach: the TCP is still moving (max twist component {m:.4g} > {g.velocity_tolerance})",
-                             sample=k, value=m, bound=g.velocity_tolerance))
-        return out
-    if isinstance(g, ReturnTo):
-        if g.return_to is None:
-            kr = 0
-        else:
-            if g.return_to not in g2t:
-                return [V(f"returnTo: goal {g.return_to!r} has no goal2time entry", sample=k)]
-            kr = find_time_index(tq.t, g2t[g.return_to])
-            if kr is None:
-                return [V(f"returnTo: no unique sample at goal {g.return_to!r}'s time", sample=k)]
-        out = []
-        for name, arr in (("q", tq.q), ("dq", tq.dq), ("ddq", tq.ddq)):
-            d = float(np.linalg.norm(arr[k] - arr[kr]))
-            if d > g.epsilon:
-                out.append(V(f"returnTo: ‖Δ{name}‖ = {d:.4g} to sample {kr} exceeds {g.epsilon}", sample=k, value=d,
-                             bound=g.epsilon))
-        return out
-    window = tq.goal_windows.get(g.id)
-    if isinstance(g, Pause):
-        if window is None:
-            return [V(f"pause: the window starts at {tg - g.duration:.4f} s, before the trajectory", sample=k)]
-        k0 = window[0]
-        out = []
-        dq_max = float(np.abs(tq.q[k0:k + 1] - tq.q[k0]).max())
-        v_max = float(np.abs(tq.dq[k0:k + 1]).max())
-        a_max = float(np.abs(tq.ddq[k0:k + 1]).max())
-        if dq_max > 1e-9:
-            out.append(V(f"pause: q moves by {dq_max:.3g} during the pause [{tq.t[k0]:.4f}, {tg:.4f}] s", sample=k))
-        if v_max > 1e-9 or a_max > 1e-9:
-            out.append(V(f"pause: dq/ddq not zero during the pause (max |dq| {v_max:.3g}, |ddq| {a_max:.3g})",
-                         sample=k))
-        return out
-    if isinstance(g, Follow):
-        if g.t is None:
-            _, unmet = tq.untimed_follow_match(g, k)
-            return [] if unmet is None else [V(f"follow: pose {unmet} (of {len(g.poses)}) is never met before t_g",
-                                               sample=k)]
-        rel = g.t - g.t[-1]
-        if window is None:
-            return [V(f"follow: the timed trajectory would start at {tg + rel[0]:.4f} s, before t=0", sample=k)]
-        out = []
-        for i, (pose, dt_) in enumerate(zip(g.poses, rel)):
-            ti = tg + dt_
-            Ti = tq.tcp_at(ti)
-            if not pose.valid(Ti):
-                out.append(V(f"follow: pose {i} not met at t={ti:.4f}: " + _describe(pose.violations(Ti)), time=ti))
-        return out
-    if isinstance(g, Leave):
-        t_end = tg + g.duration
-        if window is None:
-            return [V(f"leave: the trajectory ends before t_g + duration = {t_end:.4f} s", sample=k)]
-        T = tq.tcp_poses
-        inside = [kk for kk in range(window[0], window[1] + 1) if g.contains(T[kk])]
-        if inside:
-            return [V(f"leave: the TCP is inside the region to leave at {len(inside)} samples of "
-                      f"[{tg:.4f}, {t_end:.4f}] s (first at t={tq.t[inside[0]]:.4f})", sample=inside[0])]
-        return []
-    return [V(f"unsupported goal type {type(g).__name__}")]
+
+    def violation(message: str, **kw) -> Violation:
+        return Violation("goal", message, goal=g.id, time=kw.pop("time", float(tq.t[k])), **kw)
+    return g.check(tq, k, violation)

@@ -7,12 +7,12 @@ inverse dynamics:
 
 * :attr:`~TrajectoryQuantities.tcp_poses` (N, 4, 4) and :attr:`~TrajectoryQuantities.tcp_twists` (N, 6):
   world TCP pose and world-aligned TCP twist ``[v; ω]`` at every sample;
-* :attr:`~TrajectoryQuantities.goal_windows`: for each goal the samples ``(k0, k1)`` it spans
-  (``pause``/``follow``: [t_g − duration, t_g]; ``leave``: [t_g, t_g + duration]; ``at``/``reach``/
-  ``returnTo``: the sample at t_g). A goal without a window (no goal time, no unique sample at it, or a
-  window outside the trajectory) is absent;
-* :attr:`~TrajectoryQuantities.external_wrenches` (N, 6): the world wrench ``[f; τ]`` a follow goal applies
-  at the TCP during its window (the first such goal wins where windows overlap), zero elsewhere;
+* :attr:`~TrajectoryQuantities.goal_windows`: for each goal the samples ``(k0, k1)`` it spans, as the goal's
+  ``time_window`` says (``pause``/``follow``: [t_g − duration, t_g]; ``leave``: [t_g, t_g + duration];
+  ``at``/``reach``/``returnTo``: the sample at t_g). A goal without a window (no goal time, no unique sample
+  at it, or a window outside the trajectory) is absent;
+* :attr:`~TrajectoryQuantities.external_wrenches` (N, 6): the world wrench ``[f; τ]`` a goal applies at the
+  TCP during its window (a follow goal's; the first such goal wins where windows overlap), zero elsewhere;
 * :attr:`~TrajectoryQuantities.torques` and :attr:`~TrajectoryQuantities.link_torques` (N, dof): drivetrain
   and link-side torques (:meth:`Robot.drivetrain_torques <robodesign.model.robot.Robot.drivetrain_torques>`)
   under those wrenches.
@@ -37,13 +37,12 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign.formats.solution import Solution
-from robodesign.formats.task_spec import At, Follow, Goal, JointLimitsConstraint, Leave, Pause, Reach, ReturnTo, Task
+from robodesign.formats.task_spec import Goal, JointLimitsConstraint, Task
 from robodesign.judge.motion import StepMotion, witness_velocities
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
 TIME_RTOL = 1e-5
-WINDOW_TIME_TOL = 1e-9  # slack when a window's start or end time is compared with the samples [s]
 
 
 # q must be the integral of dq, and dq of ddq, over every step (docs/checker.md, "One motion"). With h the
@@ -264,46 +263,14 @@ class TrajectoryQuantities:
         tg = self.goal2time.get(goal_id)
         return None if tg is None else find_time_index(self.t, tg)
 
-    def untimed_follow_match(self, goal: Follow, k: int) -> Tuple[int, Optional[int]]:
-        """Walking back from sample ``k`` (the goal time), each pose of an untimed follow goal (last to first)
-        is met at an earlier or equal sample. Returns (first sample of the window, index of the first pose
-        never met or None)."""
-        T = self.tcp_poses
-        kk = k
-        for i in range(len(goal.poses) - 1, -1, -1):
-            while kk >= 0 and not goal.poses[i].valid(T[kk]):
-                kk -= 1
-            if kk < 0:
-                return 0, i
-        return kk, None
+    def sample_at(self, time: float) -> Optional[int]:
+        """The unique sample at ``time`` (:func:`find_time_index`), else None."""
+        return find_time_index(self.t, time)
 
     def goal_window(self, goal: Goal) -> Optional[Tuple[int, int]]:
-        """Samples (k0, k1), inclusive, that ``goal`` spans (module docstring), or None."""
+        """Samples (k0, k1), inclusive, that ``goal`` spans (its :meth:`~Goal.time_window`), or None."""
         k = self.goal_sample(goal.id)
-        if k is None:
-            return None
-        tg = self.goal2time[goal.id]
-        t = self.t
-        if isinstance(goal, (At, Reach, ReturnTo)):
-            return k, k
-        if isinstance(goal, Pause):
-            t_start = tg - goal.duration
-            if t_start < t[0] - WINDOW_TIME_TOL:
-                return None
-            return int(np.searchsorted(t, t_start - WINDOW_TIME_TOL, side="left")), k
-        if isinstance(goal, Follow):
-            if goal.t is None:
-                return self.untimed_follow_match(goal, k)[0], k
-            t_start = tg + goal.t[0] - goal.t[-1]
-            if t_start < t[0] - WINDOW_TIME_TOL:
-                return None
-            return int(np.searchsorted(t, t_start - WINDOW_TIME_TOL, side="left")), k
-        if isinstance(goal, Leave):
-            t_end = tg + goal.duration
-            if t_end > t[-1] + WINDOW_TIME_TOL:
-                return None
-            return k, int(np.searchsorted(t, t_end + WINDOW_TIME_TOL, side="right") - 1)
-        return None
+        return None if k is None else goal.time_window(self, k)
 
     @cached_property
     def goal_windows(self) -> Dict[str, Tuple[int, int]]:
@@ -318,14 +285,13 @@ class TrajectoryQuantities:
     # -- dynamics -----------------------------------------------------------------------------------
     @cached_property
     def external_wrenches(self) -> np.ndarray:
-        """(N, 6) world wrench ``[f; τ]`` at the TCP: a follow goal's force and torque during its window."""
+        """(N, 6) world wrench ``[f; τ]`` at the TCP: a goal's :attr:`~Goal.external_wrench` (a follow goal's
+        force and torque) during its window."""
         W = np.zeros((self.n, 6))
         taken = np.zeros(self.n, dtype=bool)
         for g in (self.task.goals if self.task is not None else ()):
-            if not isinstance(g, Follow) or g.id not in self.goal_windows:
-                continue
-            wrench = np.concatenate([g.external_force, g.external_torque]).astype(float)
-            if not np.any(wrench != 0):
+            wrench = g.external_wrench if g.id in self.goal_windows else None
+            if wrench is None or not np.any(wrench != 0):
                 continue
             k0, k1 = self.goal_windows[g.id]
             rows = np.arange(k0, k1 + 1)
