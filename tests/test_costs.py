@@ -3,9 +3,16 @@ import math
 import numpy as np
 import pytest
 
-from robodesign.formats.costs import (CostContext, CostFunction, MissingQuantityError, known_costs, parse_cost,
-                              register_compound, register_cost)
 from robodesign.core.errors import InputError
+from robodesign.formats.costs import (
+    CostContext,
+    CostFunction,
+    MissingQuantityError,
+    known_costs,
+    parse_cost,
+    register_compound,
+    register_cost,
+)
 
 # A tiny 3-sample, 2-joint trajectory with non-uniform time steps.
 T = [0.0, 0.5, 1.5]
@@ -173,7 +180,7 @@ def test_term_properties_match_what_the_terms_do():
     """needs_torques ⇔ the term fails without torques; non_negative terms are ≥ 0 on random contexts;
     trajopt ⇔ trajectory optimization accepts the term."""
     from robodesign.formats.costs import cost_terms
-    from robodesign.solvers.trajopt import parse_cost as trajopt_weights
+    from robodesign.solvers.trajopt import trajopt_weights
     rng = np.random.default_rng(0)
     builtin = ("cyc", "mechEnergy", "linkMechEnergy", "qDist", "effort", "mass", "numJ", "fulfillN", "fulfillP")
     terms = cost_terms()

@@ -139,13 +139,13 @@ def test_a_collision_between_samples_is_repaired_by_timing_along_the_checked_seg
     calls = []
 
     def forged(kind):
-        def fake_check(t, sol, m):
+        def fake_check(t, sol, m, **kw):
             calls.append(sol)
             if len(calls) == 1:
-                v = real(t, sol, m)
+                v = real(t, sol, m, **kw)
                 return Verdict(False, [Violation(kind, "forged contact between samples 3 and 4")], v.costs,
                                v.cost, v.cost_function, v.goals)
-            return real(t, sol, m)
+            return real(t, sol, m, **kw)
         return fake_check
 
     monkeypatch.setattr(solve_module, "check", forged("collisionFree"))
@@ -249,14 +249,14 @@ def test_a_slight_torque_excess_of_the_judge_is_repaired_by_timing_slower(monkey
     calls = []
 
     def forged(value):
-        def fake_check(t, sol, m):
+        def fake_check(t, sol, m, **kw):
             calls.append(sol)
             if len(calls) == 1:
-                v = real(t, sol, m)
+                v = real(t, sol, m, **kw)
                 return Verdict(False, [Violation("joint.tau", "forged", sample=10, value=value, bound=87.0, joint=1),
                                        Violation("joint.tau", "... and 3 more steps over the limit")],
                                v.costs, v.cost, v.cost_function, v.goals)
-            return real(t, sol, m)
+            return real(t, sol, m, **kw)
         return fake_check
 
     monkeypatch.setattr(solve_module, "check", forged(87.1))

@@ -1,13 +1,13 @@
 """CasADi/ipopt trajectory optimization on a 6-DoF IMPROV arm."""
 
 import numpy as np
-
-from conftest import COBRA, IMPROV, assert_within_limits as check_all_samples
 import pytest
+from conftest import COBRA, IMPROV
+from conftest import assert_within_limits as check_all_samples
 
 from robodesign import Robot, load_module_set
 from robodesign.solvers.timing import time_optimal_bound, time_parameterize
-from robodesign.solvers.trajopt import TrajoptError, mechanical_energy, optimize_trajectory, parse_cost
+from robodesign.solvers.trajopt import TrajoptError, mechanical_energy, optimize_trajectory, trajopt_weights
 
 DT = 0.01
 QA = np.array([0.0, -0.5, 1.0, 0.0, 0.5, 0.0])
@@ -80,14 +80,14 @@ def test_min_energy_uses_less_energy(arm, straight, min_time, min_energy):
     assert abs(min_energy.duration - straight.duration) <= 2 * DT + 1e-9
 
 
-def test_parse_cost():
-    assert parse_cost("cyc") == {"cyc": 1.0}
-    assert parse_cost("cyc_0.2,mechEnergy_0.5") == {"cyc": 0.2, "mechEnergy": 0.5}
-    assert parse_cost({"effort": 2}) == {"effort": 2.0}
+def test_trajopt_weights():
+    assert trajopt_weights("cyc") == {"cyc": 1.0}
+    assert trajopt_weights("cyc_0.2,mechEnergy_0.5") == {"cyc": 0.2, "mechEnergy": 0.5}
+    assert trajopt_weights({"effort": 2}) == {"effort": 2.0}
     with pytest.raises(ValueError):
-        parse_cost("mass")
+        trajopt_weights("mass")
     with pytest.raises(ValueError):
-        parse_cost("")
+        trajopt_weights("")
 
 
 def test_start_at_a_joint_limit_keeps_the_limits():

@@ -185,7 +185,7 @@ class _Pipeline:
 
     def check(self) -> None:
         res = self.res
-        v = check(self.task, res.solution, self.module_set)
+        v = check(self.task, res.solution, self.module_set, cost=self.cost)
         if not v.valid and _only_collisions(v) and not self.settings.optimize_trajectory:
             v = self._repair_collisions(v)
         if not v.valid and _only_slight_torque(v) and not self.settings.optimize_trajectory:
@@ -215,7 +215,7 @@ class _Pipeline:
             finally:
                 self.planner.settings = self.settings
             self.res.solution = self.solution()
-            v = check(self.task, self.res.solution, self.module_set)
+            v = check(self.task, self.res.solution, self.module_set, cost=self.cost)
             if v.valid or not _only_collisions(v):
                 return v
         self.res.solution, self.motion, self.g2t = kept
@@ -235,7 +235,7 @@ class _Pipeline:
             except (_Fail, InfeasibleError):
                 break
             self.res.solution = self.solution()
-            v = check(self.task, self.res.solution, self.module_set)
+            v = check(self.task, self.res.solution, self.module_set, cost=self.cost)
             if v.valid:
                 return v
         self.res.solution, self.motion, self.g2t = kept
@@ -277,7 +277,7 @@ def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, mod
         except InfeasibleError:
             return
         sol = solution_of(motion, g2t)
-        v = check(task, sol, module_set)
+        v = check(task, sol, module_set, cost=cost)
         achieved = sum(bool(ok) for ok in v.goals.values())
         if v.valid and (achieved, -v.cost) > (res.goals_achieved, -res.verdict.cost):
             res.verdict, res.solution = v, sol.with_(cost=v.cost)

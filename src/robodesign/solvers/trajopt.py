@@ -72,7 +72,7 @@ class TrajoptError(InfeasibleError):
     """ipopt did not find a feasible trajectory."""
 
 
-def parse_cost(cost) -> Dict[str, float]:
+def trajopt_weights(cost) -> Dict[str, float]:
     """JointTrajectory-optimization weights {term: weight} from a :class:`CostFunction`, a CoBRA cost (either
     notation, compounds such as ``Liu2`` expand) or a dict; only the trajectory-dependent terms ``cyc``,
     ``mechEnergy``, ``effort`` are supported."""
@@ -113,7 +113,7 @@ def optimize_trajectory(robot, warm: JointTrajectory, cost="cyc", n_nodes: int =
     if ipopt fails.
     """
     t_start = _time.perf_counter()
-    weights = parse_cost(cost)
+    weights = trajopt_weights(cost)
     dof, N = robot.dof, int(n_nodes)
     if N < 2:
         raise ValueError("n_nodes must be ≥ 2")
