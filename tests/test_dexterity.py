@@ -30,6 +30,20 @@ ORDERS = {
 }
 
 
+def first_verdict_forged(real, calls: list, violations: list):
+    """A stand-in for the solve pipeline's ``check``: the first verdict has the real costs but the given
+    ``violations`` (INVALID); every later one is the real judge's. Each judged solution is appended to ``calls``."""
+    from robodesign.judge.checker import Verdict
+
+    def fake_check(t, sol, m, **kw):
+        calls.append(sol)
+        v = real(t, sol, m, **kw)
+        if len(calls) == 1:
+            return Verdict(False, list(violations), v.costs, v.cost, v.cost_function, v.goals)
+        return v
+    return fake_check
+
+
 def numeric_rank(robot: Robot, q: np.ndarray, h: float = 1e-6) -> int:
     """Rank of the pose Jacobian by central differences of Robot.fk (position; rotation through the log map),
     angular part scaled by the reach radius like generic_rank."""
@@ -129,7 +143,7 @@ def test_a_collision_between_samples_is_repaired_by_timing_along_the_checked_seg
     from robodesign.core.defaults import DEFAULT_ORDER
     from robodesign.core.paths import builtin_tasks_dir
     from robodesign.design import solve as solve_module
-    from robodesign.judge.checker import Verdict, Violation
+    from robodesign.judge.checker import Violation
 
     task = load_task(builtin_tasks_dir() / "robodesign" / "pick_and_place.json")
     ms = load_module_set("robodesign_arm")
@@ -139,14 +153,7 @@ def test_a_collision_between_samples_is_repaired_by_timing_along_the_checked_seg
     calls = []
 
     def forged(kind):
-        def fake_check(t, sol, m, **kw):
-            calls.append(sol)
-            if len(calls) == 1:
-                v = real(t, sol, m, **kw)
-                return Verdict(False, [Violation(kind, "forged contact between samples 3 and 4")], v.costs,
-                               v.cost, v.cost_function, v.goals)
-            return real(t, sol, m, **kw)
-        return fake_check
+        return first_verdict_forged(real, calls, [Violation(kind, "forged contact between samples 3 and 4")])
 
     monkeypatch.setattr(solve_module, "check", forged("collisionFree"))
     res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
@@ -241,7 +248,7 @@ def test_a_slight_torque_excess_of_the_judge_is_repaired_by_timing_slower(monkey
     from robodesign.core.defaults import DEFAULT_ORDER
     from robodesign.core.paths import builtin_tasks_dir
     from robodesign.design import solve as solve_module
-    from robodesign.judge.checker import Verdict, Violation
+    from robodesign.judge.checker import Violation
 
     task = load_task(builtin_tasks_dir() / "robodesign" / "pick_and_place.json")
     ms = load_module_set("robodesign_arm")
@@ -249,15 +256,9 @@ def test_a_slight_torque_excess_of_the_judge_is_repaired_by_timing_slower(monkey
     calls = []
 
     def forged(value):
-        def fake_check(t, sol, m, **kw):
-            calls.append(sol)
-            if len(calls) == 1:
-                v = real(t, sol, m, **kw)
-                return Verdict(False, [Violation("joint.tau", "forged", sample=10, value=value, bound=87.0, joint=1),
-                                       Violation("joint.tau", "... and 3 more steps over the limit")],
-                               v.costs, v.cost, v.cost_function, v.goals)
-            return real(t, sol, m, **kw)
-        return fake_check
+        return first_verdict_forged(real, calls, [
+            Violation("joint.tau", "forged", sample=10, value=value, bound=87.0, joint=1),
+            Violation("joint.tau", "... and 3 more steps over the limit")])
 
     monkeypatch.setattr(solve_module, "check", forged(87.1))
     res = solve(task, ms, list(DEFAULT_ORDER), settings=SolveSettings(seed=0))
