@@ -202,7 +202,7 @@ def write_json(path: str | Path, obj: Any) -> Path:
     return p
 
 
-def resolve_inside(root: Path, ref: str, file: str, path: Sequence[PathPart], follow_symlinks: bool = False) -> Path:
+def resolve_inside(root: Path, ref: object, file: str, path: Sequence[PathPart], follow_symlinks: bool = False) -> Path:
     """Resolve a file reference from a JSON file relative to ``root``; it must stay inside ``root``.
 
     ``package://`` prefixes are stripped (as the reference does). Absolute paths, ``..`` escapes
