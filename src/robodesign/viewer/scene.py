@@ -46,6 +46,8 @@ if TYPE_CHECKING:  # (the viewer loads them only when it draws a robot)
     from robodesign.formats.solution import SolutionTrajectory
     from robodesign.model.robot import Robot
 
+    OtherRobot = Tuple[str, Robot, Optional[SolutionTrajectory]]  # a further robot of a cell: ID, robot, motion
+
 SCENE_FORMAT = "robodesign-scene/1"
 DEFAULT_FPS = 25.0
 TIME_EPS = 1e-9
@@ -290,8 +292,7 @@ def _frame_poses(robot, q_frames, robot_nodes) -> List[List[np.ndarray]]:
 
 def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[float]] = None,
                 fps: float = DEFAULT_FPS, include_collision: bool = False, max_triangles: int = MAX_TRIANGLES,
-                info: Optional[dict] = None,
-                others: Sequence[Tuple[str, Robot, Optional[SolutionTrajectory]]] = ()) -> dict:
+                info: Optional[dict] = None, others: Sequence[OtherRobot] = ()) -> dict:
     """Scene data for :func:`robodesign.viewer.html.render_html` (see the module docstring).
 
     ``task``: a :class:`~robodesign.formats.task_spec.Task` (obstacles, goals, base placement) or None.
