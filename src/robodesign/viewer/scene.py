@@ -290,7 +290,7 @@ def _frame_poses(robot, q_frames, robot_nodes) -> List[List[np.ndarray]]:
     return out
 
 
-def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[float]] = None,
+def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[npt.ArrayLike] = None,
                 fps: float = DEFAULT_FPS, include_collision: bool = False, max_triangles: int = MAX_TRIANGLES,
                 info: Optional[dict] = None, others: Sequence[OtherRobot] = ()) -> dict:
     """Scene data for :func:`robodesign.viewer.html.render_html` (see the module docstring).
