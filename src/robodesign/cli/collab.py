@@ -55,8 +55,8 @@ def check_command(args, ctask: CollabTask) -> int:
         if verdict.total_cost is not None:
             print(f"total     {verdict.total_cost:.6g}")
         print("goals     " + ", ".join(f"{g}: {r or 'MISSED'}" for g, r in verdict.goal_robot.items()))
-        for rid, v in verdict.violations:
-            print(f"  - [{rid or 'cell'}] {v}")
+        for who, v in verdict.violations:
+            print(f"  - [{who or 'cell'}] {v}")
     return 0 if verdict.valid else 1
 
 
@@ -114,7 +114,7 @@ def solve_command(args, ctask: CollabTask, mode: str, cost=None) -> int:
                           "totalCost": res.verdict.total_cost if res.verdict else None,
                           "solution": str(out) if out else None, "seconds": elapsed}))
     else:
-        if res.feasible:
+        if res.feasible and res.verdict is not None:  # (feasible: a valid verdict)
             print(f"VALID solution of {ctask.id} (prioritized: {', '.join(res.priority)}; {elapsed:.2f} s)")
             for rid, c, cf in zip(ctask.robot_ids, res.verdict.costs, res.verdict.cost_functions):
                 goals = [g for g, r in res.assignment.items() if r == rid]
@@ -157,25 +157,26 @@ def optimize_command(args, ctask: CollabTask) -> int:
                         options=parse_options(args.opt), on_robot=on_robot, rules=search_rules(args),
                         base_search=not args.fixed_base, batch_size=args.batch_size, settings=settings,
                         executor_factory=lambda spec: optimize_executor(spec, workers, args.chunk_size))
-    out = r.result.solution.write(args.out or "best_solution.json") if r.feasible else None
+    best = r.result if r.feasible else None  # the accepted combination: a valid verdict and its solution
+    verdict, csol = (best.verdict, best.solution) if best is not None else (None, None)
+    out = csol.write(args.out or "best_solution.json") if csol is not None else None
     if args.json:
         print(json.dumps({"feasible": r.feasible, "collaborative": True, "evaluations": r.evaluations,
                           "workers": workers, "batch_size": args.batch_size,
                           "combinations_tried": r.combinations_tried, "seconds": r.seconds,
                           "designs": {rid: [{"order": list(d.order), "cost_alone": d.cost} for d in ds]
                                       for rid, ds in r.designs.items()},
-                          "costs": list(r.result.verdict.costs) if r.feasible else None,
-                          "totalCost": r.result.verdict.total_cost if r.feasible else None,
+                          "costs": list(verdict.costs) if verdict is not None else None,
+                          "totalCost": verdict.total_cost if verdict is not None else None,
                           "solution": str(out) if out else None, "notes": r.notes}))
     else:
-        if r.feasible:
-            v = r.result.verdict
+        if best is not None and verdict is not None and csol is not None:
             print(f"VALID design of {ctask.id} after {r.combinations_tried} combination(s) ({r.seconds:.1f} s; "
-                  f"prioritized: {', '.join(r.result.priority)})")
-            for rid, c in zip(ctask.robot_ids, v.costs):
-                s = r.result.solution.solution(rid)
+                  f"prioritized: {', '.join(best.priority)})")
+            for rid, c in zip(ctask.robot_ids, verdict.costs):
+                s = csol.solution(rid)
                 print(f"  {rid}: {','.join(s.module_order)}  {args.cost} = {c:.6g}")
-            print(f"total cost   {v.total_cost:.6g}")
+            print(f"total cost   {verdict.total_cost:.6g}")
             print(f"solution     {out} (checked valid)")
         else:
             print("no valid design of the cell: " + ("; ".join(r.notes[-3:]) or "no combination was accepted"))

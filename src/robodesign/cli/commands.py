@@ -102,7 +102,7 @@ def cmd_solve(args) -> int:
         chosen = " (--trajectory auto, from the cost)" if args.trajectory == "auto" and not args.optimize_trajectory \
             else ""
         print(f"trajectory   {how}{chosen}")
-        if res.feasible:
+        if res.feasible and res.verdict is not None:  # (feasible: a valid verdict)
             print(f"VALID solution of {task.id}: {res.verdict.cost_function} = {res.cost:.6g}  ({elapsed:.2f} s)")
             print("costs  " + ", ".join(f"{k}={v:.6g}" for k, v in res.verdict.costs.items()))
             print(f"goals  {res.goals_achieved} of {res.num_goals} achieved"

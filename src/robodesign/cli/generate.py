@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Dict, List
 
 from robodesign.core.errors import InputError
 from robodesign.generate.registry import families, generate, get_family, regenerate
@@ -20,7 +21,7 @@ def add_generate_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors (default: one line per task)")
     g.add_argument("--verbose", "-v", action="store_true", help="also print the family options used")
-    seen = {}
+    seen: Dict[str, List[str]] = {}
     for fam in families().values():
         for o in fam.options:
             seen.setdefault(o.name, []).append(fam.name)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import shlex
 from pathlib import Path
-from typing import List, Optional
+from typing import IO, List, Optional
 
 from robodesign.core.errors import InputError
 from robodesign.design.optimize import Budget
@@ -53,7 +53,7 @@ class Journal:
     def __init__(self, args, problem, budget: Budget):
         self.path = journal_path(args.out)
         self.resumed = bool(getattr(args, "resume", False))
-        self.lock = None
+        self.lock: Optional[IO[str]] = None
         exists = self.path.exists() and self.path.stat().st_size > 0
         if exists and not self.resumed:
             raise InputError("holds the evaluations of an unfinished search (interrupted?): continue it with the "
@@ -93,11 +93,11 @@ class Journal:
 
     def _lock(self) -> None:
         import fcntl
-        self.lock = open(self.path.with_name(self.path.name + ".lock"), "a+")
+        self.lock = lock = open(self.path.with_name(self.path.name + ".lock"), "a+")
         try:
-            fcntl.flock(self.lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            self.lock.close()
+            lock.close()
             self.lock = None
             raise InputError("another robodesign optimize is writing this journal (use another --out)",
                              file=str(self.path)) from None
@@ -111,7 +111,7 @@ class Journal:
             except Exception:  # noqa: BLE001 - unreadable: keep it for the user to look at
                 pass
             self.db.close()
-            self.db = None
+            del self.db  # closed: ``getattr(self, "db", None)`` is None
         if not keep:
             for p in (self.path, Path(f"{self.path}-wal"), Path(f"{self.path}-shm")):
                 p.unlink(missing_ok=True)

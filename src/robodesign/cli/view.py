@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -88,7 +88,7 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
                 if not verdict.valid:
                     warnings.append(f"the checker finds the solution INVALID ({len(verdict.violations)} "
                                     "violation(s), listed on the page)")
-        images = False
+        images: Union[bool, Dict[str, bytes]] = False
         if plots:
             try:
                 images = trajectory_plots(task_obj, sol, ms, out_dir=path.parent if out else None, stem=path.stem)
@@ -119,6 +119,7 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
         if robot is not None:
             name = "robot " + ",".join(robot.assembly.module_ids) + (f" in {task_obj.id}" if task_obj else "")
         else:
+            assert task_obj is not None  # neither a solution nor --order: --task (checked above)
             name = f"task {task_obj.id}"
         path = Path(out) if out else Path("view.html")
         page = render_html(scene, None, name)

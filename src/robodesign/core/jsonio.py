@@ -15,7 +15,7 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Dict, List, Sequence, Tuple
 
 from robodesign.core.errors import InputError, PathPart, format_json_path
 
@@ -63,7 +63,7 @@ def _checked_int(s: str):
 
 
 # out-of-range numbers become markers whose place _problem reports
-_CHECKED = {"parse_float": _checked_float, "parse_int": _checked_int}
+_CHECKED: Dict[str, Any] = {"parse_float": _checked_float, "parse_int": _checked_int}
 
 
 def _shown(text: str) -> str:
@@ -95,12 +95,12 @@ def _problem(root, values: bool):
     if type(root) is not dict and type(root) is not list:
         reason = _bad_scalar(root) if values else None
         return ([], reason) if reason else None
-    stack = [(root, ())]
+    stack: List[Tuple[Any, Tuple[PathPart, ...]]] = [(root, ())]
     while stack:
         node, path = stack.pop()
         if len(path) >= MAX_DEPTH:
             return format_json_path(path[:6]) + "...", f"nested deeper than {MAX_DEPTH} levels"
-        children = []
+        children: List[Tuple[Any, Tuple[PathPart, ...]]] = []
         for k, v in (node.items() if type(node) is dict else enumerate(node)):
             if values and type(k) is str:
                 if "\0" in k:
@@ -202,7 +202,7 @@ def write_json(path: str | Path, obj: Any) -> Path:
     return p
 
 
-def resolve_inside(root: Path, ref: str, file: str, path: Sequence[PathPart], follow_symlinks: bool = False) -> Path:
+def resolve_inside(root: Path, ref: object, file: str, path: Sequence[PathPart], follow_symlinks: bool = False) -> Path:
     """Resolve a file reference from a JSON file relative to ``root``; it must stay inside ``root``.
 
     ``package://`` prefixes are stripped (as the reference does). Absolute paths, ``..`` escapes

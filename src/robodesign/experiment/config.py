@@ -17,12 +17,12 @@ import dataclasses
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple
+from typing import TYPE_CHECKING, Any, Dict, Iterator, List, Literal, Optional, Sequence, Tuple
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model, field_validator, model_validator
 
-from robodesign.core.errors import InputError, format_json_path
+from robodesign.core.errors import InputError, PathPart, format_json_path
 from robodesign.design.optimize import Budget
 from robodesign.design.problem import Problem
 from robodesign.design.solve import SolveSettings, check_settings
@@ -318,15 +318,15 @@ class ExecutorConfig(BaseModel):
 def _solve_model():
     from robodesign.design.evaluator import evaluation_settings
     defaults = dataclasses.asdict(evaluation_settings())  # the same defaults as the optimize CLI and the API
-    fields = {}
-    for f in dataclasses.fields(SolveSettings):
-        if f.name == "seed":
-            continue  # per-candidate seeds are derived by the evaluator
-        fields[f.name] = (type(f.default) if f.default is not None else Any, defaults[f.name])
+    fields = {f.name: (type(f.default) if f.default is not None else Any, defaults[f.name])
+              for f in dataclasses.fields(SolveSettings) if f.name != "seed"}  # seeds: per candidate (the evaluator)
     return create_model("SolveConfig", __config__=_STRICT, **fields)
 
 
-SolveConfig = _solve_model()
+if TYPE_CHECKING:  # a model class made at import from SolveSettings' fields
+    SolveConfig = BaseModel
+else:
+    SolveConfig = _solve_model()
 
 
 class ExperimentConfig(BaseModel):
@@ -349,7 +349,7 @@ class ExperimentConfig(BaseModel):
     eval_seed: Optional[int] = Field(None, ge=0)
     batch_size: int = Field(1, ge=1)
     executor: ExecutorConfig = Field(default_factory=ExecutorConfig)
-    solve: SolveConfig = Field(default_factory=SolveConfig)  # type: ignore[valid-type]
+    solve: SolveConfig = Field(default_factory=SolveConfig)
 
     _b = field_validator("budget", mode="before")(classmethod(lambda cls, v: _budget_text(v)))
     _c = field_validator("cost", "task_dirs", "module_dirs", mode="before")(classmethod(lambda cls, v: _str_list(v)))
@@ -729,7 +729,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
 
     raw: List[dict] = []
     for i, t in enumerate(cfg.tasks):
-        where = ["tasks", i]
+        where: List[PathPart] = ["tasks", i]
         task_ref, _ = _find_task(t.task, base_dir, task_dirs, display, where + ["task"])
         mod_path = where + ["modules"] if t.modules else ["modules"]
         modules_ref = _find_modules(t.modules or default_modules, base_dir, module_dirs, display, mod_path)
@@ -789,11 +789,11 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             if len({o["base_search"] for o in same}) > 1 and not r["base_search"]:
                 name += "-fixed_base"
         name = _slug(name).strip("/")
-        where = format_json_path(r["where"])
+        where_text = format_json_path(r["where"])
         for p in problems:
             if p.name == name:
-                raise InputError(f"two entries resolve to the same run name {name!r} ({p.where} and {where}): "
-                                 "give one of them a distinct 'name'", file=display, path=where)
+                raise InputError(f"two entries resolve to the same run name {name!r} ({p.where} and {where_text}): "
+                                 "give one of them a distinct 'name'", file=display, path=where_text)
         rules_path = list(r["where"]) + ["rules"] if r["entry"].rules is not None else ["rules"]
         try:
             problem = Problem.build(tasks[r["task_ref"]], sets[r["modules_ref"]], r["cost"],
@@ -803,7 +803,7 @@ def resolve_config(cfg: ExperimentConfig, display: str, base_dir: Path, check_op
             raise InputError(e.reason, file=display, path=format_json_path(rules_path) + (f".{path}" if path else "")
                              ) from None
         problem = dataclasses.replace(problem, task_ref=r["task_ref"], modules_ref=r["modules_ref"])
-        problems.append(ProblemEntry(name=name, problem=problem, base_search=bool(r["base_search"]), where=where,
+        problems.append(ProblemEntry(name=name, problem=problem, base_search=bool(r["base_search"]), where=where_text,
                                      suite=r.get("suite")))
 
     # optimizers

@@ -47,7 +47,7 @@ from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from itertools import islice
-from typing import Dict, Iterable, Iterator, List, Optional, Sequence
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
 
 from robodesign.core.errors import InputError
 from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec
@@ -276,14 +276,20 @@ class _Chunk:
         self.candidates = candidates
         self.future: Optional[Future] = None
         self.attempts = 0
-        self.worker = None  # where the pool sent it (the Ray pool: the actor's index and handle)
+        self.worker: Optional[Tuple[int, Any, Any]] = None  # where the pool sent it (Ray: actor index, handle, ref)
+
+    def sent(self) -> Future:
+        """The future of a chunk that was sent (only those are asked about)."""
+        if self.future is None:
+            raise RuntimeError("the chunk was not sent")
+        return self.future
 
     def evaluated(self) -> bool:
-        f = self.future
+        f = self.sent()
         return f.done() and not f.cancelled() and f.exception() is None
 
     def failed(self) -> bool:
-        f = self.future
+        f = self.sent()
         return f.done() and not f.cancelled() and f.exception() is not None
 
 
@@ -326,7 +332,7 @@ class ChunkedPool(EvaluatorPool):
         return chunks
 
     def _cancel(self, chunk: _Chunk) -> None:
-        chunk.future.cancel()
+        chunk.sent().cancel()
 
     # -- shared
     def _submit(self, spec_id: str, chunk: _Chunk) -> None:
@@ -340,9 +346,9 @@ class ChunkedPool(EvaluatorPool):
         if worst.attempts >= MAX_ATTEMPTS:
             raise RuntimeError(f"{self.worker_noun} died {worst.attempts} times while evaluating "
                                f"{worst.candidates[0].key()!r} (or the candidates sent with it); giving up") \
-                from worst.future.exception()
+                from worst.sent().exception()
         log.warning("%s died (%s); re-running %d chunk(s), %d candidate(s)", self.worker_noun,
-                    type(worst.future.exception()).__name__, len(lost), sum(len(c.candidates) for c in lost))
+                    type(worst.sent().exception()).__name__, len(lost), sum(len(c.candidates) for c in lost))
         self.failures += self._replace_workers(lost)
         for c in lost:
             self._submit(spec_id, c)
@@ -434,19 +440,22 @@ class ProcessPool(ChunkedPool):
         # start every worker now (and surface initializer errors before the first run); they are spawned by
         # the submits (a spawn pool starts a process per submit while none is idle), SIGINT ignored
         with sigint_ignored():
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
-                                             initargs=(self.specs, os.getpid()))
-            futs = [self._pool.submit(_ping) for _ in range(self.workers)]
+            pool = self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx,
+                                                    initializer=_init_worker, initargs=(self.specs, os.getpid()))
+            futs = [pool.submit(_ping) for _ in range(self.workers)]
         self.pids = sorted({f.result() for f in futs})
 
     def _restart(self) -> None:
         try:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+            if self._pool is not None:
+                self._pool.shutdown(wait=False, cancel_futures=True)
         except Exception:  # noqa: BLE001 - a broken pool may fail to shut down cleanly
             pass
         self._start()
 
     def _send(self, spec_id: str, chunk: _Chunk) -> None:
+        if self._pool is None:
+            raise RuntimeError("the pool is closed")
         try:
             chunk.future = self._pool.submit(_evaluate_chunk, spec_id, chunk.candidates)
         except BrokenProcessPool as e:  # answered like a chunk whose worker died

@@ -150,7 +150,10 @@ def anytime(groups) -> Tuple[list, list, dict]:
                 m, q1, q3, mn, mx = _stats(vals)
                 ev_rows.append((task, opt, k + 1, len(vals), _f(m, 10), _f(q1, 10), _f(q3, 10), _f(mn, 10),
                                 _f(mx, 10)))
-                xs.append(k + 1), med.append(m), lo.append(mn), hi.append(mx)
+                xs.append(k + 1)
+                med.append(m)
+                lo.append(mn)
+                hi.append(mx)
             tmax = max((r.wall[-1] for r in rds if r.wall), default=0.0)
             ts = np.linspace(0.0, tmax, TIME_POINTS) if tmax > 0 else np.array([0.0])
             tmed, tlo, thi = [], [], []
@@ -159,7 +162,9 @@ def anytime(groups) -> Tuple[list, list, dict]:
                 m, q1, q3, mn, mx = _stats(vals)
                 t_rows.append((task, opt, f"{t:.4f}", len(vals), _f(m, 10), _f(q1, 10), _f(q3, 10), _f(mn, 10),
                                _f(mx, 10)))
-                tmed.append(m), tlo.append(mn), thi.append(mx)
+                tmed.append(m)
+                tlo.append(mn)
+                thi.append(mx)
             curves[(task, opt)] = {"evals": (xs, med, lo, hi), "time": (list(ts), tmed, tlo, thi)}
     return ev_rows, t_rows, curves
 

@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Dict, Optional
+from typing import Any, Dict, Optional
 
 from robodesign.core.errors import InputError
 from robodesign.design.optimize import Budget, Study, create_optimizer
@@ -46,7 +46,7 @@ PACKAGES = ("robodesign", "robodesign-optimizers", "numpy", "pin", "coal", "ompl
 # meta
 # ------------------------------------------------------------------------------------------------
 def package_versions() -> Dict[str, Optional[str]]:
-    out = {}
+    out: Dict[str, Optional[str]] = {}
     for p in PACKAGES:
         try:
             out[p] = metadata.version(p)
@@ -75,6 +75,7 @@ def machine_info() -> dict:
             mem = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
         except (ValueError, OSError, AttributeError):
             pass
+    usable: Optional[int]
     try:
         usable = len(os.sched_getaffinity(0))
     except AttributeError:
@@ -472,7 +473,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
         lock.release()
         raise
     pool = None
-    session = {"started": _now(), "resume": resume, "argv": sys.argv, "pid": os.getpid()}
+    session: Dict[str, Any] = {"started": _now(), "resume": resume, "argv": sys.argv, "pid": os.getpid()}
     meta = json.loads((out / "meta.json").read_text())
     meta.setdefault("sessions", []).append(session)
     _write_json(out / "meta.json", meta)

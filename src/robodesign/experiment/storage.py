@@ -125,7 +125,7 @@ class ExperimentDB:
         self.checkpoint_seconds = float(checkpoint_seconds)
         self.on_checkpoint = on_checkpoint
         self._last_checkpoint = time.monotonic()
-        self._stored = None  # evaluations stored (counted once, then incremented per insert)
+        self._stored: Optional[int] = None  # evaluations stored (counted once when opened, then +1 per insert)
         try:
             self.con = connect(self.path)
             if self.path.stat().st_size > 0:
@@ -147,6 +147,7 @@ class ExperimentDB:
         """Copy the WAL into the main database file now; returns the number of stored evaluations."""
         self.con.execute("PRAGMA wal_checkpoint(PASSIVE)").fetchone()
         self._last_checkpoint = time.monotonic()
+        assert self._stored is not None  # (an ExperimentDB that did not open raised in __init__)
         if self.on_checkpoint is not None:
             self.on_checkpoint(self._stored)
         return self._stored
@@ -166,7 +167,7 @@ class ExperimentDB:
             con.close()
         except sqlite3.Error:
             pass
-        self.con = None
+        del self.con  # closed: ``getattr(db, "con", None)`` is None
 
     # -- runs -------------------------------------------------------------------------------------
     def ensure_run(self, run_id: str, task: str, optimizer: str, optimizer_name: str, seed: int, ordinal: int,
@@ -213,6 +214,7 @@ class ExperimentDB:
             self.con.execute("ROLLBACK")
             raise RuntimeError(f"evaluation {index} of run {run_id!r} is already stored (a second process writing "
                                f"to the same results folder?)") from None
+        assert self._stored is not None
         self._stored += 1
         if time.monotonic() - self._last_checkpoint >= self.checkpoint_seconds:
             self.checkpoint()

@@ -152,7 +152,7 @@ def summarize_suites(records: Iterable[SuiteRecord]) -> List[dict]:
     out = []
     for (suite, opt), recs in groups.items():
         solved = [r for r in recs if r.solved]
-        bests = [r.best for r in solved]
+        bests = [r.best for r in solved if r.best is not None]  # (a solved run has its best)
         ff = [r.first_feasible_s for r in solved if r.first_feasible_s is not None]
         stops = Counter(r.stopped_at for r in recs if not r.solved)
         out_of_reach = sum(r.verdict == "out_of_reach" for r in recs)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Callable, Dict, FrozenSet, List, Set, Tuple
+from typing import Any, Callable, Dict, FrozenSet, List, Set, Tuple
 
 import numpy as np
 
@@ -160,7 +160,7 @@ def _cell(tid: str, prov: Provenance, opts, cubes: List[np.ndarray], yaw: float,
     }
 
 
-def resolved(prov: Provenance, opts: Dict[str, object]) -> Dict[str, object]:
+def resolved(prov: Provenance, opts: Dict[str, Any]) -> Dict[str, Any]:
     """``mixed`` cycles with the task index: structure index mod 5, difficulty (index // 5) mod 3."""
     out = dict(opts)
     if out["structure"] == "mixed":
@@ -174,7 +174,7 @@ def task_id(prov: Provenance, opts) -> str:
     return f"bpo2024easy_{opts['structure']}_{opts['difficulty']}_s{prov.seed}_{prov.index:04d}"
 
 
-def build_easy(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build_easy(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     opts = resolved(prov, opts)
     rng = prov.rng()
     tid = task_id(prov, opts)
@@ -273,8 +273,8 @@ def mutate(rng: np.random.Generator, archetype: str, level: str):
     """The published mutation of an archetype: the whole structure shifts by (dx, dy, dz) voxels, the goals
     other than the last by a further (dx_g, dy_g, dz_g); with probability 1/2 the goal rotation is turned by
     a quarter turn about its z axis. Returns (goal voxels, obstacle voxels, goal rotation)."""
-    goals, obstacles, R = ARCHETYPES[archetype]
-    R = np.array(R, float)
+    goals, obstacles, rotation = ARCHETYPES[archetype]
+    R = np.array(rotation, float)
     if level == "hard":
         dx = int(rng.choice([9, 8, 1, 0, -1]))
         dy, dz = int(rng.integers(-2, 3)), int(rng.integers(-2, 4))
@@ -292,7 +292,7 @@ def mutate(rng: np.random.Generator, archetype: str, level: str):
     return g, o, R
 
 
-def published_resolved(prov: Provenance, opts: Dict[str, object]) -> Dict[str, object]:
+def published_resolved(prov: Provenance, opts: Dict[str, Any]) -> Dict[str, Any]:
     """``mixed`` cycles with the task index: archetype index mod 10, level (index + index // 10) mod 2, so that
     any few tasks mix medium and hard and every 20 tasks hold each archetype at both levels."""
     out = dict(opts)
@@ -326,7 +326,7 @@ def published_task_id(prov: Provenance, opts) -> str:
     return f"bpo2024_{opts['archetype']}_{opts['level']}_s{prov.seed}_{prov.index:04d}"
 
 
-def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build_published(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     """Draw mutations until every goal lies outside every cube and within the module set's reach bound of
     the base region (the published set also holds goals inside a cube, which no design can reach)."""
     opts = published_resolved(prov, opts)
@@ -346,7 +346,7 @@ def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> 
                           f"in {PUBLISHED_CELL_TRIES} draws (seed {prov.seed}, index {prov.index})")
 
 
-def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     return build_easy(prov, opts, folder) if opts["variant"] == "easy" else build_published(prov, opts, folder)
 
 

@@ -16,7 +16,7 @@ import zlib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -299,7 +299,7 @@ class ReferenceArm(ObstacleField):
         # every restart runs (n_solutions = restarts): a goal that the IK finds from only a few random starts
         # is out, so that solvers with other seeds find it too
         r = solve_ik(self.robot, tp, self.rng, max_restarts=self.ik_restarts, n_solutions=self.ik_restarts)
-        if int(r.stats["converged"]) < self.min_converged:
+        if int(cast(int, r.stats["converged"])) < self.min_converged:  # (stats: Dict[str, object] of counters)
             return False
         limit = self.robot.tau_max
         return any(np.all(np.abs(self.robot.gravity_torque(q)) <= limit) for q in r.solutions)

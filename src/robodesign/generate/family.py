@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Dict, Optional, Tuple
+from typing import Any, Callable, Dict, Optional, Tuple
 
 from robodesign.core.errors import InputError
 from robodesign.generate.common import Provenance, task_text
@@ -51,12 +51,12 @@ VERIFY = Option("verify", str, None,
                 "collision-free, torque-feasible IK solution of it", choices=("solve", "ik"))
 
 
-def verify_mode(opts: Dict[str, object]) -> str:
+def verify_mode(opts: Dict[str, Any]) -> str:
     """The easy variant's ``--verify`` (solve unless given)."""
     return str(opts.get("verify") or "solve")
 
 
-def check_variant_options(family: str, opts: Dict[str, object]) -> None:
+def check_variant_options(family: str, opts: Dict[str, Any]) -> None:
     if opts.get("variant") != "easy" and opts.get("verify") is not None:
         raise InputError(f"{family} --verify: only with --variant easy (the published variant keeps a task by the "
                          f"published rule and a geometric reachability bound, never by robodesign's own designs)")
@@ -82,7 +82,7 @@ class Family:
     version: int
     summary: str
     options: Tuple[Option, ...]
-    build: Callable[[Provenance, Dict[str, object], Path], GeneratedTask]
+    build: Callable[[Provenance, Dict[str, Any], Path], GeneratedTask]
 
     def option(self, name: str) -> Option:
         for o in self.options:
@@ -91,7 +91,7 @@ class Family:
         raise InputError(f"{self.name} has no option --{name.replace('_', '-')} "
                          f"(its options: {', '.join('--' + o.name.replace('_', '-') for o in self.options) or 'none'})")
 
-    def resolve(self, given: Dict[str, object]) -> Dict[str, object]:
+    def resolve(self, given: Dict[str, Any]) -> Dict[str, Any]:
         """Typed values of every option (defaults filled in); unknown options are an error."""
         for k in given:
             self.option(k)

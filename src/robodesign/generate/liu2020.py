@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Tuple
+from typing import Any, Dict, List, Tuple, Union
 
 import numpy as np
 
@@ -122,7 +122,7 @@ class _Geometric(ObstacleField):
         return box_distance(np.asarray(pose["nominal"])[:3, 3], self.lo, self.hi) <= self.reach
 
 
-def _machine_source(opts: Dict[str, object]):
+def _machine_source(opts: Dict[str, Any]):
     """(name in assets/, bytes, uniform scale) of the machine mesh."""
     if opts["machine"] is None:
         return DEFAULT_NAME, default_machine_stl(), 1.0
@@ -201,7 +201,7 @@ def task_id(prov: Provenance, machine: str, layout: Layout = EASY) -> str:
     return f"liu2020{'' if layout.published else 'easy'}_case2b_{stem}_s{prov.seed}_{prov.index:04d}"
 
 
-def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     lay = EASY if opts["variant"] == "easy" else PUBLISHED
     name, data, scale = _machine_source(opts)
     asset = f"assets/{name}"
@@ -244,6 +244,7 @@ def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedT
         trays = _draw_trays(rng, lay)
         if any(placed.distance(coal_box(t), transform(t.centre - shift)) <= 0.02 for t in trays):
             continue
+        arm: Union[_Geometric, ReferenceArm]
         if lay.published:
             arm = _Geometric(_cell(tid, prov, asset, scale, pose, [], {}, lay), folder, base)
         else:
@@ -288,7 +289,7 @@ def coal_box_size(x: float, y: float, z: float):
     return coal.Box(float(x), float(y), float(z))
 
 
-def _tray_goal(rng, arm: ObstacleField, tray: AABB, layout: Layout = EASY):
+def _tray_goal(rng, arm: Union[_Geometric, ReferenceArm], tray: AABB, layout: Layout = EASY):
     for _ in range(GOAL_TRIES // 4):
         p = np.array([rng.uniform(tray.lo[0] + 0.06, tray.hi[0] - 0.06),
                       rng.uniform(tray.lo[1] + 0.06, tray.hi[1] - 0.06), tray.hi[2] + ABOVE_TRAY])
@@ -300,7 +301,7 @@ def _tray_goal(rng, arm: ObstacleField, tray: AABB, layout: Layout = EASY):
     return None
 
 
-def _machine_goal(rng, arm: ObstacleField, near: np.ndarray, shift: np.ndarray, frame: MachineFrame,
+def _machine_goal(rng, arm: Union[_Geometric, ReferenceArm], near: np.ndarray, shift: np.ndarray, frame: MachineFrame,
                   layout: Layout = EASY):
     """A work-area grid point near the anchor, jittered within its grid cell, in world coordinates."""
     for _ in range(GOAL_TRIES):

@@ -20,7 +20,7 @@ import math
 import struct
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -46,7 +46,7 @@ class MachineFrame:
     def matrix(self) -> np.ndarray:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         T = np.eye(4)
-        T[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+        T[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
         T[:3, 3] = self.shift
         return T
 
@@ -111,7 +111,7 @@ def analyse(file: str, scale: float) -> MachineFrame:
     V0 = np.concatenate([v for v, _ in parts])
     offs = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
     F = np.concatenate([f + o for (_, f), o in zip(parts, offs)])
-    best = None
+    best: Optional[MachineFrame] = None
     for quarter in range(4):
         yaw = quarter * math.pi / 2
         V = _rotz(V0, yaw)
@@ -128,7 +128,10 @@ def analyse(file: str, scale: float) -> MachineFrame:
         ix, iy, iz = np.nonzero(cov & sight)
         pts = tuple((float(xs[a] - lo[0]), float(ys[b]), float(zs[c] - lo[2])) for a, b, c in zip(ix, iy, iz))
         if best is None or len(pts) > len(best.points):
-            best = MachineFrame(yaw, (float(-lo[0]), 0.0, float(-lo[2])), tuple(float(x) for x in hi - lo), pts)
+            size = hi - lo
+            best = MachineFrame(yaw, (float(-lo[0]), 0.0, float(-lo[2])),
+                                (float(size[0]), float(size[1]), float(size[2])), pts)
+    assert best is not None  # the first orientation always sets it
     return best
 
 

@@ -7,7 +7,7 @@ folder of tasks; ``regenerate()`` rebuilds one task from the provenance tags in 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from robodesign.core.errors import InputError
 from robodesign.core.jsonio import load_json
@@ -33,7 +33,7 @@ def get_family(name: str) -> Family:
     return fams[name]
 
 
-def option_tags(family: Family, values: Dict[str, object]) -> Tuple[Tuple[str, str], ...]:
+def option_tags(family: Family, values: Dict[str, Any]) -> Tuple[Tuple[str, str], ...]:
     """Options as written into the header tags; a user-given file is recorded by its name in the folder."""
     out = []
     for o in family.options:
@@ -44,7 +44,7 @@ def option_tags(family: Family, values: Dict[str, object]) -> Tuple[Tuple[str, s
     return tuple(sorted(out))
 
 
-def build_one(family: Family, values: Dict[str, object], seed: int, index: int, folder: Path) -> GeneratedTask:
+def build_one(family: Family, values: Dict[str, Any], seed: int, index: int, folder: Path) -> GeneratedTask:
     prov = Provenance(family.name, family.version, seed, index, option_tags(family, values))
     return family.build(prov, values, folder)
 
@@ -56,7 +56,7 @@ def write_task(gen: GeneratedTask, folder: Path) -> Path:
     return out
 
 
-def generate(family_name: str, out: Path, count: int, seed: int, options: Optional[Dict[str, object]] = None,
+def generate(family_name: str, out: Path, count: int, seed: int, options: Optional[Dict[str, Any]] = None,
              progress: Optional[Callable[[Path], None]] = None) -> List[Path]:
     """Write ``count`` tasks of a family into folder ``out`` (task index 0..count-1); returns the files."""
     family = get_family(family_name)
@@ -90,7 +90,7 @@ def regenerate(task_file: Path, out: Path) -> Path:
         raise InputError(f"written by {prov.family} generator version {prov.version}, this is version "
                          f"{family.version}: it cannot be reproduced bit for bit", file=task_file.name,
                          path=["header", "tags"])
-    given: Dict[str, object] = dict(prov.options)
+    given: Dict[str, Any] = dict(prov.options)
     for o in family.options:
         if o.path and o.name in given:
             given[o.name] = str(_find_asset(task_file, str(given[o.name])))

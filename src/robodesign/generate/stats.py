@@ -75,8 +75,8 @@ def _tol(pose: dict) -> Dict[str, tuple]:
 def describe_tolerance(pose: dict) -> str:
     t = _tol(pose)
     parts = []
-    xyz = [t.get(k) for k in "xyz"]
-    if all(v is not None for v in xyz) and len(set(xyz)) == 1 and -xyz[0][0] == xyz[0][1]:
+    xyz = [t[k] for k in "xyz" if k in t]
+    if len(xyz) == 3 and len(set(xyz)) == 1 and -xyz[0][0] == xyz[0][1]:
         h = xyz[0][1]
         parts.append(f"x, y, z ±{h * 1000:g} mm" if h < 0.1 else f"x, y, z ±{h:g} m")
     else:

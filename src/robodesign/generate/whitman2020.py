@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Dict, List
+from typing import Any, Dict, List
 
 import numpy as np
 
@@ -98,7 +98,7 @@ def base_constraint(base: str, base_range: float) -> dict:
     return {"type": "basePlacement", "pose": tolerated(transform(), x=r, y=r, z=r, Theta_R=(0.0, PI))}
 
 
-def _cell(task_id: str, prov: Provenance, opts: Dict[str, object], cubes: List[AABB], goals: List[np.ndarray]) -> dict:
+def _cell(task_id: str, prov: Provenance, opts: Dict[str, Any], cubes: List[AABB], goals: List[np.ndarray]) -> dict:
     n, m = opts["goals"], opts["obstacles"]
     return {
         "header": header(task_id, f"Whitman 2020 style: {n} reach goals, {m} box obstacles, base {opts['base']}",
@@ -115,12 +115,12 @@ def _cell(task_id: str, prov: Provenance, opts: Dict[str, object], cubes: List[A
     }
 
 
-def task_id(prov: Provenance, opts: Dict[str, object]) -> str:
+def task_id(prov: Provenance, opts: Dict[str, Any]) -> str:
     name = "whitman2020easy" if opts.get("variant") == "easy" else "whitman2020"
     return f"{name}_g{opts['goals']}o{opts['obstacles']}_{opts['base']}_s{prov.seed}_{prov.index:04d}"
 
 
-def build_easy(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build_easy(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     rng = prov.rng()
     tid = task_id(prov, opts)
     n, m = int(opts["goals"]), int(opts["obstacles"])
@@ -159,7 +159,7 @@ def published_base_constraint(base: str, base_range: float) -> dict:
     return {"type": "basePlacement", "pose": tolerated(transform(), x=r, y=r, z=r)}
 
 
-def _published_cell(task_id: str, prov: Provenance, opts: Dict[str, object], cubes: List[AABB],
+def _published_cell(task_id: str, prov: Provenance, opts: Dict[str, Any], cubes: List[AABB],
                     goals: List[np.ndarray]) -> dict:
     n, m = opts["goals"], opts["obstacles"]
     return {
@@ -191,13 +191,13 @@ def _published_cubes(rng: np.random.Generator, m: int) -> List[AABB]:
     return cubes
 
 
-def base_region(opts: Dict[str, object]):
+def base_region(opts: Dict[str, Any]):
     """(lo, hi) of the allowed base positions."""
     r = MM if opts["base"] == "fixed" else float(opts["base_range"])
     return np.full(3, -r), np.full(3, r)
 
 
-def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build_published(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     rng = prov.rng()
     tid = task_id(prov, opts)
     n, m = int(opts["goals"]), int(opts["obstacles"])
@@ -218,7 +218,7 @@ def build_published(prov: Provenance, opts: Dict[str, object], folder: Path) -> 
                           f"(seed {prov.seed}, index {prov.index})")
 
 
-def build(prov: Provenance, opts: Dict[str, object], folder: Path) -> GeneratedTask:
+def build(prov: Provenance, opts: Dict[str, Any], folder: Path) -> GeneratedTask:
     return build_easy(prov, opts, folder) if opts["variant"] == "easy" else build_published(prov, opts, folder)
 
 

@@ -97,7 +97,11 @@ def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: n
     chk = checker or SweepChecker(robot, check_self=False, check_env=True, obstacles=list(moving))
     t = np.asarray(t, dtype=float)
     Q = np.asarray(Q, dtype=float)
-    keys = [tuple(int(np.searchsorted(sp.motion_t, tk + 1e-12, side="right")) for sp in specs.values()) for tk in t]
+    times = []
+    for sp in specs.values():
+        assert sp.motion_t is not None  # a moving obstacle has the times of its poses (parse_task)
+        times.append(sp.motion_t)
+    keys = [tuple(int(np.searchsorted(mt, tk + 1e-12, side="right")) for mt in times) for tk in t]
     events: List[CollisionEvent] = []
     last: Dict[tuple, int] = {}  # pair → last sample in contact (one event per pair and contact episode)
     a = 0

@@ -8,7 +8,7 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from robodesign.formats.module_spec import Module
+from robodesign.formats.module_spec import Joint, Module
 
 __all__ = ["connector_distance_bound", "module_extent"]
 
@@ -35,7 +35,7 @@ def _body_frames(m: Module) -> Dict[str, np.ndarray]:
 
 def _joint_path(m: Module, a: str, b: str) -> Optional[list]:
     """The joints on the path from body ``a`` to body ``b`` (breadth-first over the joint tree)."""
-    prev: Dict[str, Tuple[Optional[str], object]] = {a: (None, None)}
+    prev: Dict[str, Optional[Tuple[str, Joint]]] = {a: None}  # body → (previous body, joint); a: the start
     queue = [a]
     while queue:
         u = queue.pop(0)
@@ -49,8 +49,8 @@ def _joint_path(m: Module, a: str, b: str) -> Optional[list]:
     if b not in prev:
         return None
     path, u = [], b
-    while prev[u][0] is not None:
-        u, j = prev[u]
+    while (step := prev[u]) is not None:
+        u, j = step
         path.append(j)
     return path[::-1]
 

@@ -11,7 +11,7 @@ distance query differs (two robots, two models).
 """
 from __future__ import annotations
 
-from typing import Sequence
+from typing import List, Sequence, Tuple
 
 import coal
 import numpy as np
@@ -35,7 +35,7 @@ class RobotPairSweep(SweepChecker):
         self.tolerance = tolerance
         self.max_substeps = max_substeps
         na, nb = a.n_collision_geometries, b.n_collision_geometries
-        self.pairs = [(i, j) for i in range(na) for j in range(nb)]
+        self.pairs: List[Tuple[int, int]] = [(i, j) for i in range(na) for j in range(nb)]  # geometry of a, of b
         Ra, Rb = lever_arms(a), lever_arms(b)
         self.W = np.vstack([Ra[:, [i for i, _ in self.pairs]], Rb[:, [j for _, j in self.pairs]]])
         self.margins = np.full(len(self.pairs), float(margin))

@@ -29,7 +29,7 @@ from robodesign.core.errors import AssemblyError, InputError
 from robodesign.core.spatial import inv
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import coal_shapes
-from robodesign.formats.module_spec import ModuleSet
+from robodesign.formats.module_spec import Connector, ModuleSet
 
 COULOMB_SMOOTHING = 100.0
 
@@ -70,7 +70,7 @@ class Robot:
         self._sync_link_model()
         self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
-        self._reach = None
+        self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
         self._batch_chain: Optional["_BatchKinematics"] = None
         self.obstacles: List[Obstacle] = []
@@ -111,7 +111,7 @@ class Robot:
         self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
         self.joint_infos: List[JointInfo] = []
         lower, upper, vel, acc, eff, gear, im, fc, fv = ([] for _ in range(9))
-        free_connectors: List[Tuple[int, str, int]] = []  # (instance, connector id, frame id)
+        free_connectors: List[Tuple[int, Connector, int]] = []  # (instance, connector, frame id)
         total_mass = 0.0
         geom_body: List[Tuple[int, str]] = []
         direct_joint_pairs = set()
@@ -279,7 +279,7 @@ class Robot:
 
     def _sync_link_model(self) -> None:
         """Invalidate the armature-free model copy (rebuilt lazily by :meth:`rnea`)."""
-        self._link_model = None
+        self._link_model: Optional[pin.Model] = None
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
@@ -662,6 +662,7 @@ class _BatchKinematics:
         for j in range(1, model.njoints):
             jm = model.joints[j]
             name = jm.shortname()
+            ax: Tuple[float, ...]
             if name.startswith("JointModel") and name[10:] in _AXES:
                 kind, ax = _AXES[name[10:]]
             elif name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
@@ -689,8 +690,8 @@ class _BatchKinematics:
         """World rotation (3×3×N: entry (i, j) of every sample contiguous) and position (3×N) of every
         joint in ``need`` (all if None); index 0 = the world (None: identity)."""
         N = len(Q)
-        Rs = {0: None}
-        ps = {0: None}
+        Rs: Dict[int, Optional[np.ndarray]] = {0: None}
+        ps: Dict[int, Optional[np.ndarray]] = {0: None}
         QT = np.ascontiguousarray(Q.T)
         for j in range(1, self.njoints):
             if need is not None and j not in need:
@@ -698,12 +699,13 @@ class _BatchKinematics:
             k = j - 1
             par = self.parents[k]
             Rl, tl = self.R[k], self.t[k]
-            if Rs[par] is None:
+            Rpar, ppar = Rs[par], ps[par]
+            if Rpar is None or ppar is None:  # the world (both None)
                 Rp = np.repeat(Rl[:, :, None], N, axis=2)
                 pp = np.repeat(tl[:, None], N, axis=1)
             else:   # (R·Rl)[i] = Rlᵀ-combination of the columns of R[i]: three (3×3)·(3×N) products
-                Rp = np.matmul(Rl.T, Rs[par])
-                pp = ps[par] + np.matmul(tl, Rs[par])
+                Rp = np.matmul(Rl.T, Rpar)
+                pp = ppar + np.matmul(tl, Rpar)
             q = QT[self.iq[k]]
             a = self.axis[k]
             if self.kind[k] == 1:                 # prismatic: p += R·a·q

@@ -135,7 +135,7 @@ def coaxial_child_joints(robot: Robot) -> List[set]:
     frame) g is a body of revolution about; the motion of such a joint does not change g's distance to
     anything that hangs below it."""
     model, gm = robot.model, robot.geom_model
-    out = [set() for _ in range(robot.n_collision_geometries)]
+    out: List[Set[int]] = [set() for _ in range(robot.n_collision_geometries)]
     for j in range(1, model.njoints):
         axis = revolute_axis(model, j)
         if axis is None:
@@ -162,16 +162,16 @@ class SweepChecker:
         self.max_substeps = max_substeps
         gm = robot.geom_model
         n_self = robot.n_self_collision_pairs
-        pairs = []
+        pairs: List[int] = []
         if check_self:
             pairs += list(range(n_self))
         if check_env:
-            env = range(n_self, len(gm.collisionPairs))
+            env: Sequence[int] = range(n_self, len(gm.collisionPairs))
             if obstacles is not None:
                 keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
                 env = [k for k in env if gm.collisionPairs[k].second in keep]
             pairs += list(env)
-        self.pairs = pairs
+        self.pairs: Sequence[object] = pairs  # what distances() queries: collision pair indices here
         R = lever_arms(robot, symmetry)
         model = robot.model
         ancestors = []  # per geometry: the pinocchio joint ids it hangs from

@@ -32,14 +32,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import TYPE_CHECKING, Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
+import numpy.typing as npt
 
 from robodesign.formats.geometry import GeometrySpec
-from robodesign.formats.task_spec import At, Follow, Leave, Pause, Reach, ReturnTo
+from robodesign.formats.task_spec import At, Follow, Leave, ObstacleSpec, Pause, Reach, ReturnTo
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.viewer.meshes import MAX_TRIANGLES, mesh_entry
+
+if TYPE_CHECKING:  # (the viewer loads them only when it draws a robot)
+    from robodesign.formats.solution import SolutionTrajectory
+    from robodesign.model.robot import Robot
+
+    OtherRobot = Tuple[str, Robot, Optional[SolutionTrajectory]]  # a further robot of a cell: ID, robot, motion
 
 SCENE_FORMAT = "robodesign-scene/1"
 DEFAULT_FPS = 25.0
@@ -114,7 +121,7 @@ def _triad(size: float, pose=None) -> dict:
 # ---------------------------------------------------------------------------------------------
 # animation frames
 # ---------------------------------------------------------------------------------------------
-def animation_samples(t: Sequence[float], goal_times: Iterable[float] = (), fps: float = DEFAULT_FPS
+def animation_samples(t: npt.ArrayLike, goal_times: Iterable[float] = (), fps: float = DEFAULT_FPS
                       ) -> List[Tuple[float, int]]:
     """The frames of the animation as ``(time, sample index or -1)``, sorted by time.
 
@@ -283,9 +290,9 @@ def _frame_poses(robot, q_frames, robot_nodes) -> List[List[np.ndarray]]:
     return out
 
 
-def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[float]] = None,
+def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[npt.ArrayLike] = None,
                 fps: float = DEFAULT_FPS, include_collision: bool = False, max_triangles: int = MAX_TRIANGLES,
-                info: Optional[dict] = None, others: Sequence[Tuple[str, object, object]] = ()) -> dict:
+                info: Optional[dict] = None, others: Sequence[OtherRobot] = ()) -> dict:
     """Scene data for :func:`robodesign.viewer.html.render_html` (see the module docstring).
 
     ``task``: a :class:`~robodesign.formats.task_spec.Task` (obstacles, goals, base placement) or None.
@@ -361,7 +368,7 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[Sequence[
                 focus.append(P[:3, 3])
 
     # ---------------- task ----------------
-    obstacle_anim: List[Tuple[str, object]] = []
+    obstacle_anim: List[Tuple[str, ObstacleSpec]] = []
     if task is not None:
         info.setdefault("task", task.id)
         if task.header.name:

@@ -21,6 +21,7 @@ from robodesign.formats.benchmark_id import BenchmarkID, RobotRef, RobotSpec
 from robodesign.formats.costs import parse_cost
 from robodesign.formats.solution import Solution, parse_solution
 from robodesign.web import db
+from robodesign.web.bench_base import BenchBase
 from robodesign.web.site_errors import Forbidden, NotFound
 from robodesign.web.tokens import verify_token
 
@@ -126,10 +127,10 @@ def solution_summary(row: db.SolutionRow) -> dict:
     return clean_json(out)
 
 
-class Leaderboards:
+class Leaderboards(BenchBase):
     """Solutions as the site shows them: one solution, lists, leaderboards, benchmark counters; withdrawal."""
 
-    def solution_row(self, sid: int) -> db.SolutionRow:
+    def solution_row(self, sid: Union[int, str]) -> db.SolutionRow:
         """The row shown on a solution page (not the solution file itself)."""
         with self.Session() as s:
             row = s.scalar(select(db.SolutionRow).options(db.only(db.SOLUTION_PAGE_COLUMNS))
@@ -138,7 +139,7 @@ class Leaderboards:
             raise NotFound(f"unknown solution {sid}")
         return row
 
-    def solution_text(self, sid: int) -> str:
+    def solution_text(self, sid: Union[int, str]) -> str:
         """The solution file as uploaded."""
         with self.Session() as s:
             text = s.scalar(select(db.SolutionRow.solution_json).where(db.SolutionRow.id == solution_id(sid)))
@@ -146,13 +147,13 @@ class Leaderboards:
             raise NotFound(f"unknown solution {sid}")
         return text
 
-    def solution(self, sid: int) -> Union[Solution, CollabSolution]:
+    def solution(self, sid: Union[int, str]) -> Union[Solution, CollabSolution]:
         """The stored solution, parsed (a CollabSolution when it is collaborative)."""
         name = f"solution-{sid}.json"
         data = loads_json(self.solution_text(sid), name)
         return parse_collab_solution(data, name) if is_collaborative(data) else parse_solution(data, name)
 
-    def withdraw(self, sid: int, token: Optional[str]) -> dict:
+    def withdraw(self, sid: Union[int, str], token: Optional[str]) -> dict:
         with self.Session() as s:
             cols = db.SOLUTION_LIST_COLUMNS + (db.SolutionRow.token_hash, db.SolutionRow.withdrawn_at)
             row = s.scalar(select(db.SolutionRow).options(db.only(cols)).where(db.SolutionRow.id == solution_id(sid)))

@@ -13,6 +13,7 @@ from typing import Dict, Optional, Sequence
 from sqlalchemy import (
     Boolean,
     DateTime,
+    DefaultClause,
     Float,
     Index,
     Integer,
@@ -27,6 +28,7 @@ from sqlalchemy import (
 from sqlalchemy.engine import Engine, make_url
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import DeclarativeBase, Mapped, load_only, mapped_column, sessionmaker
+from sqlalchemy.orm.interfaces import LoaderOption
 
 from robodesign.core.errors import InputError
 
@@ -145,7 +147,7 @@ SOLUTION_LIST_COLUMNS = (SolutionRow.id, SolutionRow.benchmark_id, SolutionRow.t
 SOLUTION_PAGE_COLUMNS = SOLUTION_LIST_COLUMNS + (SolutionRow.verdict_json,)
 
 
-def only(columns: Sequence) -> "load_only":
+def only(columns: Sequence) -> LoaderOption:
     """Query option: load just these columns (the others raise when touched on a detached row)."""
     return load_only(*columns, raiseload=True)
 
@@ -214,7 +216,7 @@ def add_missing_columns(engine: Engine) -> list:
             if col.name in have:
                 continue
             ddl = f"ALTER TABLE {table.name} ADD COLUMN {col.name} {col.type.compile(engine.dialect)}"
-            if col.server_default is not None:
+            if isinstance(col.server_default, DefaultClause):  # (the columns' server defaults are all SQL text)
                 default = col.server_default.arg
                 ddl += " DEFAULT " + (default if isinstance(default, str)
                                       else str(default.compile(dialect=engine.dialect)))

@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 import secrets
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from sqlalchemy import select, update
 
@@ -26,6 +26,7 @@ from robodesign.formats.solution import Solution, parse_solution
 from robodesign.formats.task_spec import Task
 from robodesign.judge.checker import Verdict, check
 from robodesign.web import db
+from robodesign.web.bench_base import BenchBase
 from robodesign.web.boards import canonical_benchmark, clean_json, collab_benchmark_key
 from robodesign.web.safefiles import TooLarge
 from robodesign.web.site_errors import AlreadyJudged, NotFound
@@ -50,7 +51,7 @@ class SubmitResult:
         return self.costs is not None
 
     def to_json(self) -> dict:
-        out = {"id": self.id, "valid": self.valid, "cost": self.cost, "benchmark_id": self.benchmark_id}
+        out: Dict[str, Any] = {"id": self.id, "valid": self.valid, "cost": self.cost, "benchmark_id": self.benchmark_id}
         if self.collaborative:
             out.update(collaborative=True, costs=self.costs, totalCost=self.cost)
         if self.valid and self.token is not None:  # (an async upload got its token with the 202 answer)
@@ -65,7 +66,7 @@ class SubmitResult:
         return out
 
 
-class Judging:
+class Judging(BenchBase):
     """Preparing, judging and storing uploaded solutions; pending (asynchronous) checks."""
 
     def prepare_solution(self, text: str, fname: str, data=None) -> Tuple[Solution, Task, ModuleSet, str, str]:
@@ -159,6 +160,10 @@ class Judging:
         module set and cost; the row to store is built and checked against the database's column rules. A solution
         with a ``robots`` list is collaborative (:meth:`prepare_collab`)."""
         data = loads_json(text, fname)
+        sol: Union[Solution, CollabSolution]
+        task: Union[Task, CollabTask]
+        ms: Union[ModuleSet, Dict[str, ModuleSet]]
+        robot_sols: List[Solution]
         if is_collaborative(data):
             sol, task, ms, display, robots_key = self.prepare_collab(data, fname)
             robot_sols = [s for _, s in sol.robots]
@@ -194,13 +199,17 @@ class Judging:
         solution (so a server killed in between neither loses nor doubles it)."""
         sol, row = sub.solution, sub.row
         if isinstance(sol, CollabSolution):
-            cverdict = check_collab(sub.task, sol, sub.module_set)
+            ctask, msets = sub.task, sub.module_set
+            assert isinstance(ctask, CollabTask) and isinstance(msets, dict)  # prepare_collab made them together
+            cverdict = check_collab(ctask, sol, msets)
             vj = clean_json(cverdict.to_json())
             cost, costs, valid = vj.get("totalCost"), vj.get("costs"), cverdict.valid
             all_costs = {rid: v.get("costs", {}) for rid, v in vj.get("robots", {}).items()}
             dof = sum(int(v.costs.get("numJ", 0) or 0) for v in cverdict.robots.values())
         else:
-            verdict: Verdict = check(sub.task, sol, sub.module_set)
+            task, ms = sub.task, sub.module_set
+            assert isinstance(task, Task) and isinstance(ms, ModuleSet)  # prepare_solution made them together
+            verdict: Verdict = check(task, sol, ms)
             vj = clean_json(verdict.to_json())
             cost, costs, valid = vj.get("cost"), None, verdict.valid
             all_costs, dof = vj.get("costs", {}), int(verdict.costs.get("numJ", 0) or 0)
@@ -208,7 +217,12 @@ class Judging:
             return SubmitResult(False, row.benchmark_id, vj, cost, task_id=sol.task_id, module_set=row.module_set,
                                 costs=costs)
         token = sub.token or (None if token_hash else secrets.token_urlsafe(24))
-        row.token_hash, row.cost, row.dof = (hash_token(token) if token else token_hash), cost, dof
+        if token:
+            row.token_hash = hash_token(token)
+        else:  # an async upload whose file names no token: the hash of the one its answer gave
+            assert token_hash is not None
+            row.token_hash = token_hash
+        row.cost, row.dof = cost, dof
         row.costs_json, row.verdict_json = json.dumps(all_costs), json.dumps(vj)
         if costs is not None:
             row.cost_tuple = json.dumps(costs)
@@ -286,6 +300,7 @@ class Judging:
         JSON answer, "result": SubmitResult (201/422 only)}``. ``unwrap``: ``text`` may be the JSON wrapper
         ``{"solution": ..., "author", "email", "affiliation", "token"}`` (its fields win over ``meta``/``token``).
         This is the CPU-heavy part (parsing, schema, checker): the site runs it on a checker thread or process."""
+        out: Dict[str, Any]
         try:
             if unwrap:
                 text, meta, token = unwrap_upload(text, fname, meta, token)
@@ -296,7 +311,7 @@ class Judging:
         except InputError as e:
             out = {"status": 400, "body": {"detail": self.public(str(e))}}
         except AlreadyJudged:
-            return {"status": 200, "body": self.pending_status(pending) or {}}
+            return {"status": 200, "body": (self.pending_status(pending) if pending is not None else None) or {}}
         except Exception as e:
             if pending is not None:  # never resumed again: it would fail the same way at every start
                 self.finish_pending(pending, 500, {"detail": f"internal error ({type(e).__name__})"})
@@ -366,7 +381,7 @@ def check_text_sizes(data: dict, limits: Limits, fname: str, where: list) -> Non
                                path=where + [key, i])
 
 
-def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str, where: list = ()) -> None:
+def check_solution_size(data: dict, sol: Solution, limits: Limits, fname: str, where: Sequence = ()) -> None:
     """The size caps of :class:`Limits` on one robot's solution (``where``: its JSON path; 413 naming the field)."""
     where = list(where)
     check_text_sizes(data, limits, fname, where)

@@ -30,6 +30,7 @@ from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.task_io import parse_task, validate_task_json
 from robodesign.formats.task_spec import Task
 from robodesign.web import db
+from robodesign.web.bench_base import BenchBase
 from robodesign.web.safefiles import (
     DictSource,
     FileSource,
@@ -75,7 +76,7 @@ def files_source(files: Dict[str, bytes]) -> DictSource:
     return DictSource(out)
 
 
-class Registration:
+class Registration(BenchBase):
     """Seeding, task and module-set registration (files and zips), and the registered objects, parsed once and cached."""
 
     def seed(self, dirs: Sequence[Path]) -> None:
@@ -152,6 +153,8 @@ class Registration:
             return s.scalar(select(db.ModuleSetRow.id).where(db.ModuleSetRow.name == name)) is not None
 
     def _staging(self) -> Path:
+        if self.tmp is None:
+            raise RuntimeError("a checker process of the site (staging=False) registers nothing")
         p = self.tmp / secrets.token_hex(8)
         p.mkdir(parents=True)
         return p
@@ -207,7 +210,7 @@ class Registration:
             task_file = pkg.joinpath(*segs[:-1], segs[-1] + ".json")
             write_new_file(pkg, "/".join(segs) + ".json", text.encode("utf-8"))
             parsed = parse_task_file(loads_json(text, fname), task_file)  # the file as written: its warnings too
-            task = parsed.task if collab else parsed
+            task = parsed.task if isinstance(parsed, CollabTask) else parsed
             assert_no_symlinks(pkg)
             folder = Path("tasks") / f"{segs[-1]}-{secrets.token_hex(6)}"
             os.replace(pkg, self.data / folder)
@@ -217,12 +220,13 @@ class Registration:
         shutil.rmtree(stage, ignore_errors=True)
         row.tags, row.folder, row.assets = json.dumps(list(task.header.tags)), folder.as_posix(), json.dumps(assets)
         row.n_goals, row.n_obstacles = len(task.goals), len(task.obstacles)
-        robots = [{"ID": rid, "name": parsed.robot_names[rid]} for rid in parsed.robot_ids] if collab else []
+        robots = ([{"ID": rid, "name": parsed.robot_names[rid]} for rid in parsed.robot_ids]
+                  if isinstance(parsed, CollabTask) else [])
         row.robots = json.dumps(robots)
         self._commit_new(row, folder, f"task {tid!r} is already registered")
         out = {"id": tid, "name": row.name, "assets": [a["path"] for a in assets], "warnings": list(task.warnings),
                "url": f"/tasks/{tid}", "collaborative": collab}
-        if collab:
+        if isinstance(parsed, CollabTask):
             out["robots"] = robots
             out["goals"] = {g: r or "any" for g, r in parsed.assignment.items()}
         return out

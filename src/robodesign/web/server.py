@@ -159,8 +159,9 @@ def server_config(app, host: str = "127.0.0.1", port: int = 8000, *, header_time
     import uvicorn
     return uvicorn.Config(app, host=host, port=port, log_level=log_level, http=guarded_protocol(header_timeout,
                                                                                                  max_connections),
-                          timeout_keep_alive=keep_alive, limit_concurrency=max_connections + 1, backlog=2048,
-                          h11_max_incomplete_event_size=16 * 1024, server_header=False)
+                          limit_concurrency=max_connections + 1, backlog=2048, h11_max_incomplete_event_size=16 * 1024,
+                          server_header=False,
+                          timeout_keep_alive=keep_alive)  # type: ignore[arg-type]  # uvicorn says int; float seconds work
 
 
 def serve(app, host: str, port: int, **settings) -> None:

@@ -2,12 +2,13 @@
 check queue and checker, the viewer pages and their cache, and the admin rule."""
 from __future__ import annotations
 
+import functools
 import hmac
 import json
 import logging
 import secrets
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Callable, Optional, Union
 
 from fastapi import Request
 from starlette.concurrency import run_in_threadpool
@@ -24,6 +25,7 @@ from robodesign.web.site_settings import MiB
 from robodesign.web.throttle import CheckQueue
 from robodesign.web.uploads import Upload, read_upload
 from robodesign.web.viewer_pages import ViewerPages
+from robodesign.web.workers import ProcessChecker, ThreadChecker
 
 log = logging.getLogger("robodesign.web")
 ADMIN_TOKEN_ENV = "ROBODESIGN_ADMIN_TOKEN"
@@ -35,7 +37,7 @@ class Site:
     settings: Settings
     bench: Bench
     queue: CheckQueue
-    checker: object  # ProcessChecker | ThreadChecker
+    checker: Union[ProcessChecker, ThreadChecker]
     viewer: ViewerPages
     viewer_cache: ByteLRU
     admin_token: Optional[str] = None
@@ -96,7 +98,7 @@ class Site:
             job = self.queue.restore(row.job_id)
             args = (row.text, row.fname, json.loads(row.meta_json or "{}"), None, row.unwrap)
             kw = {"token_hash": row.token_hash, "pending": row.job_id}
-            self.queue.submit(job, lambda a=args, k=kw: self.checker.check(*a, **k), big=row.big)
+            self.queue.submit(job, functools.partial(self.checker.check, *args, **kw), big=row.big)
         if rows:
             log.info("resumed %d pending check(s) of async uploads", len(rows))
         return len(rows)

@@ -111,15 +111,16 @@ def _fps(duration: float, max_frames: int) -> float:
 def _build(sid: int, out: str, max_samples: int, max_frames: int, max_page_bytes: int) -> int:
     """In the viewer process: render solution ``sid`` into the file ``out`` → its size in bytes."""
     b = _bench
+    assert b is not None, "_init made it (the pool initializer)"
     row = b.solution_row(sid)
     verdict = json.loads(row.verdict_json or "{}") or None
     name = f"solution-{row.id}.json"
     data = decimate_json(loads_json(b.solution_text(row.id), name), max_samples)
     if row.collaborative:
         from robodesign.viewer import collab_page
-        sol = parse_collab_solution(data, name)
-        t = sol.robots[0][1].trajectory.t
-        html = collab_page(b.collab_task(row.task_id), sol, {rid: b.module_set(s.module_set) for rid, s in sol.robots},
+        csol = parse_collab_solution(data, name)
+        t = csol.robots[0][1].trajectory.t
+        html = collab_page(b.collab_task(row.task_id), csol, {rid: b.module_set(s.module_set) for rid, s in csol.robots},
                            verdict=pages.collab_viewer_verdict(verdict), fps=_fps(float(t[-1] - t[0]), max_frames))
     else:
         from robodesign.viewer import solution_page
@@ -180,7 +181,7 @@ class ViewerPages:
         with self._lock:
             fut = self._building.get(sid)
             owner = fut is None
-            if owner:
+            if fut is None:
                 if len(self._building) >= self.max_waiting:
                     raise Busy(f"{len(self._building)} viewer pages are being built; try again later", 10)
                 pool = self._get_pool()

@@ -54,6 +54,7 @@ def _init_worker(settings: Settings) -> None:
 
 def _check_in_worker(text: str, fname: str, meta: Dict[str, Optional[str]], token: Optional[str],
                      unwrap: bool, extra: dict) -> dict:
+    assert _worker_bench is not None, "_init_worker made it"
     return _worker_bench.check_upload(text, fname, meta, token, unwrap, **extra)
 
 
