@@ -122,7 +122,7 @@ def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: n
             end = min(b + 1, len(keys) - 1)  # include the motion to the next sample (obstacle still here)
             Qr = Q[a:end + 1]
             evs = chk.check(Qr, first_only=first_only, path=None if path is None else path[a:end],
-                            at=None if at is None else (lambda k, s, a=a: at(k + a, s)))
+                            at=None if at is None else _shifted(at, a))
             for e in evs:
                 e = CollisionEvent(e.sample + a, e.s, e.first, e.second, e.distance, e.environment)
                 if first_only:
@@ -138,3 +138,8 @@ def moving_obstacle_events(robot: Robot, task: Task, moving: Sequence[int], t: n
         for i, _, pose0 in movers:
             robot.move_obstacle(i, pose0)
     return events
+
+
+def _shifted(at: Callable[[int, float], np.ndarray], a: int) -> Callable[[int, float], np.ndarray]:
+    """``at`` for the rows of ``Q`` from ``a`` on: step k of the run is step k + a of the motion."""
+    return lambda k, s: at(k + a, s)
