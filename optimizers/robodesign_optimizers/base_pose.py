@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import Optional, Tuple
+from typing import Deque, Dict, Optional, Tuple
 
 import optuna
 
@@ -56,8 +56,8 @@ class BasePoseSearch(Optimizer):
         self.study = optuna.create_study(direction="minimize", sampler=sampler)
         nominal = space.nominal_candidate(self.options.order)
         self.study.enqueue_trial({self._param(i): float(v) for i, v in zip(self.free, nominal.base)})
-        self._pending = deque()               # (trial, key) asked, not yet told, in ask order
-        self._scores = {}                     # key → score told (a resampled duplicate gets the same)
+        self._pending: Deque[Tuple[optuna.trial.Trial, str]] = deque()  # (trial, key) asked, not yet told, in order
+        self._scores: Dict[str, float] = {}   # key → score told (a resampled duplicate gets the same)
 
     @staticmethod
     def _param(i: int) -> str:

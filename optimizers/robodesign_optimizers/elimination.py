@@ -55,11 +55,14 @@ import itertools
 import math
 from collections import Counter, deque
 from dataclasses import dataclass
-from typing import Deque, Iterator, List, Optional, Tuple
+from typing import Deque, Dict, Iterator, List, Optional, Set, Tuple
 
 import numpy as np
 
 from robodesign.plugin import AssemblyError, Candidate, Optimizer, option
+
+#: (o, R) of the reach bound of a candidate, or (None, None) when its order does not assemble
+_Reach = Tuple[Optional[np.ndarray], Optional[float]]
 
 
 class HierarchicalElimination(Optimizer):
@@ -88,11 +91,11 @@ class HierarchicalElimination(Optimizer):
         self._queue: Deque[Candidate] = deque()
         self._queue_lb = -math.inf
         self.best_score = math.inf                      # best feasible score told so far
-        self._bad_bases = set()
-        self._bad_orders = set()
+        self._bad_bases: Set[Tuple[float, ...]] = set()
+        self._bad_orders: Set[Tuple[str, ...]] = set()
         self._reach_o: List[np.ndarray] = []            # (o, R) of candidates that failed at reach
         self._reach_R: List[float] = []
-        self._reach_cache = {}                          # key → (o, R) computed at ask time
+        self._reach_cache: Dict[str, _Reach] = {}      # key → (o, R) computed at ask time
         self.pruned: Counter = Counter()
         self.pruned_candidates: List[Tuple[str, str]] = []
         self.orders_enumerated = 0
@@ -109,7 +112,7 @@ class HierarchicalElimination(Optimizer):
         monotone along a branch, so a complete order popped from the heap is never beaten by a later one)."""
         sp, cost = self.space, self.cost
         seq = itertools.count()
-        heap = []
+        heap: List[Tuple[float, int, int, Tuple[str, ...]]] = []   # (bound, -length, tie-break, prefix)
         for b in sp.successors(()):
             lb = sp.cost_lower_bound((b,), cost)
             if lb < math.inf:
@@ -189,7 +192,7 @@ class HierarchicalElimination(Optimizer):
                 continue
             return c
 
-    def _reach(self, c: Candidate):
+    def _reach(self, c: Candidate) -> _Reach:
         k = c.key()
         hit = self._reach_cache.get(k)
         if hit is None:
@@ -202,7 +205,7 @@ class HierarchicalElimination(Optimizer):
 
     def _reach_dominated(self, c: Candidate) -> bool:
         o, R = self._reach(c)
-        if o is None:
+        if o is None or R is None:
             return False
         O = np.asarray(self._reach_o)
         RA = np.asarray(self._reach_R)
@@ -219,7 +222,7 @@ class HierarchicalElimination(Optimizer):
             self._bad_orders.add(tuple(c.order))
         elif evaluation.stage == "reach" and self.options.reach_pruning:
             o, R = self._reach(c)
-            if o is not None:
+            if o is not None and R is not None:
                 self._reach_o.append(o)
                 self._reach_R.append(R)
         self._reach_cache.pop(c.key(), None)

@@ -46,7 +46,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Deque, Dict, List, Optional, Tuple
+from typing import Deque, Dict, List, Optional, Set, Tuple
 
 import numpy as np
 
@@ -87,7 +87,7 @@ class HeuristicSearch(Optimizer):
         self._bases: Dict[Prefix, List[Tuple[float, ...]]] = {}  # order → base params asked
         self._best_base: Dict[Prefix, Tuple[float, Tuple[float, ...]]] = {}
         self._closed: Dict[Prefix, int] = {}           # prefix → closed orders below it
-        self._asked = set()
+        self._asked: Set[str] = set()  # keys of the candidates asked
         self._queue: Deque[Candidate] = deque()
         self._exhausted = False
 

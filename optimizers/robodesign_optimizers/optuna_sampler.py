@@ -72,6 +72,7 @@ class OptunaOptimizer(Optimizer):
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            sampler: optuna.samplers.BaseSampler
             if o.multi_objective:
                 sampler = optuna.samplers.NSGAIISampler(population_size=o.population_size, seed=self.seed)
                 self.study = optuna.create_study(directions=["minimize"] * len(o.objectives), sampler=sampler)

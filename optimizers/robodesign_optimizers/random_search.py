@@ -7,7 +7,7 @@ the bounds). A fixed base asks exactly what it asked before."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
+from typing import Optional, Set
 
 from robodesign.plugin import Candidate, Optimizer, option
 
@@ -25,7 +25,7 @@ class RandomSearch(Optimizer):
 
     def __init__(self, problem, seed: int = 0, **options):
         super().__init__(problem, seed, **options)
-        self.seen = set()
+        self.seen: Set[str] = set()   # keys of the candidates asked
 
     def ask(self) -> Optional[Candidate]:
         for _ in range(self.options.max_duplicates):

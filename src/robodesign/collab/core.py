@@ -17,7 +17,7 @@ from __future__ import annotations
 import copy
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -30,6 +30,10 @@ from robodesign.formats.task_io import parse_task, resolve_task_path
 from robodesign.formats.task_spec import CollisionFree, GoalsInOrder, Task
 from robodesign.judge.checker import CheckSettings, Verdict, Violation, check
 from robodesign.model.cell import build_robot, resolve_module_set
+
+if TYPE_CHECKING:  # for annotations only: solve_collab imports the solve pipeline when it runs
+    from robodesign.design.stages import SolveResult
+    from robodesign.model.robot import Robot
 
 ANY = None  # goal assignment: any robot
 
@@ -186,14 +190,15 @@ class CollabSolution:
         return str(BenchmarkID.parse(str(bid)))  # checks the names and the task ID against the grammar
 
     def to_json(self) -> dict:
+        robots: List[dict] = []
         out = {"taskID": self.task_id, "collaborative": True, "computationTime": self.computation_time,
-               "robots": []}
+               "robots": robots}
         if self.notes:
             out["notes"] = self.notes
         for rid, s in self.robots:
             d = s.to_json()
             d.pop("taskID", None)
-            out["robots"].append({"ID": rid, **d})
+            robots.append({"ID": rid, **d})
         return out
 
     def write(self, path) -> Path:
@@ -277,7 +282,8 @@ class CollabVerdict:
     @property
     def total_cost(self) -> Optional[float]:
         """Sum of the robots' costs (the leaderboard's primary key; docs/collaborative.md)."""
-        return None if any(c is None for c in self.costs) else float(sum(self.costs))
+        known = [c for c in self.costs if c is not None]
+        return None if len(known) < len(self.costs) else float(sum(known))
 
     def to_json(self) -> dict:
         return {"valid": self.valid, "collaborative": True,
@@ -343,8 +349,8 @@ def check_collab(ctask: CollabTask, csol: CollabSolution, module_sets=None,
             ms = resolve_module_set(s, robot_module_set(module_sets, rid))
             robots[rid] = build_robot(t_r, ms, s.assembly(ms), s.base_pose)
     any_missing = [g for g in ctask.any_goals if goal_robot.get(g) is None]
-    for g in any_missing:
-        viol.append((None, Violation("allGoalsFulfilled", f"goal {g} (any robot) is achieved by no robot")))
+    for gid in any_missing:
+        viol.append((None, Violation("allGoalsFulfilled", f"goal {gid} (any robot) is achieved by no robot")))
     margin = ctask.safety_margin
     if margin is not None:
         t = csol.robots[0][1].trajectory.t
@@ -391,7 +397,7 @@ class CollabSolveResult:
     solution: Optional[CollabSolution]
     verdict: Optional[CollabVerdict]
     priority: Tuple[str, ...]  # the order in which the robots were planned
-    results: Dict[str, object]  # robot ID → its SolveResult (of the last priority order tried)
+    results: Dict[str, SolveResult]  # robot ID → its result (of the last priority order tried)
     assignment: Dict[str, str]  # goal → robot (the "any robot" goals resolved)
     message: str = ""
 
@@ -456,17 +462,17 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: Union[Co
     orders = [tuple(p) for p in priorities] if priorities else list(dict.fromkeys([tuple(ids), tuple(reversed(ids))]))
     margin = ctask.safety_margin or 0.0
     message = ""
-    results: Dict[str, object] = {}
+    results: Dict[str, SolveResult] = {}
     for order in orders:
-        done: List[Tuple[str, object, object]] = []  # (robot ID, its robot model, its SolveResult)
+        done: List[Tuple[str, Robot, Solution]] = []  # (robot ID, its robot model, its solution)
         results = {}
         for rid in order:
             s = by_id[rid]
             t_r = ctask.task_for(rid, [g for g, r in assignment.items() if r == rid])
             base = _base_of(ctask, s)
             me = build_robot(static_cell(t_r), s.module_set, _assembly(s), base)
-            colliders = [OtherRobot(me, other, res.solution.trajectory.t, res.solution.trajectory.q, margin=margin,
-                                    names=(rid, oid)) for oid, other, res in done]
+            colliders = [OtherRobot(me, other, sol.trajectory.t, sol.trajectory.q, margin=margin, names=(rid, oid))
+                         for oid, other, sol in done]
             for start in _starts(me, settings.seed):
                 res = solve(t_r, s.module_set, list(s.order), base_pose=base, cost=cost, settings=settings,
                             colliders=colliders, start=start)
@@ -476,12 +482,13 @@ def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: Union[Co
             if not res.feasible:
                 message = f"robot {rid} (planned after {[d[0] for d in done]}): {res.stage}: {res.message}"
                 break
-            done.append((rid, me, res))
+            assert res.solution is not None  # a feasible result has its solution (the checked one)
+            done.append((rid, me, res.solution))
         else:
             dt = ctask.task.dt
-            n = max(int(round(res.solution.trajectory.t[-1] / dt)) for _, _, res in done) + 1
+            n = max(int(round(sol.trajectory.t[-1] / dt)) for _, _, sol in done) + 1
             t = np.arange(n) * dt
-            sols = {rid: _pad(res.solution, t) for rid, _, res in done}
+            sols = {rid: _pad(sol, t) for rid, _, sol in done}
             csol = CollabSolution(ctask.id, tuple((rid, sols[rid]) for rid in ctask.robot_ids),
                                   computation_time=sum(sum(st.seconds for st in r.stages) for r in results.values()),
                                   notes=f"robodesign solve (prioritized: {', '.join(order)})")

@@ -83,10 +83,11 @@ def optimize_collab(ctask: CollabTask, module_set: ModuleSet, optimizer: str, co
                 close()
         evaluations[rid] = len(res.history)
         best: Dict[Tuple[str, ...], RobotDesign] = {}
-        for e in sorted((e for e in res.history if e.feasible), key=lambda e: e.cost):
+        costed = [(e.cost, e) for e in res.history if e.feasible and e.cost is not None]  # feasible: has a cost
+        for c, e in sorted(costed, key=lambda ce: ce[0]):
             key = tuple(e.candidate.order)
             if key not in best:  # the best base pose of each module order
-                best[key] = RobotDesign(key, problem.base_pose(e.candidate), float(e.cost))
+                best[key] = RobotDesign(key, problem.base_pose(e.candidate), float(c))
         designs[rid] = list(best.values())[:top_k]
         if on_robot is not None:
             on_robot(rid, res)

@@ -144,7 +144,7 @@ class Assembly:
 
     def to_json(self) -> dict:
         """The CoBRA solution fields describing this assembly."""
-        out = {"moduleOrder": list(self.module_ids)}
+        out: dict = {"moduleOrder": list(self.module_ids)}
         if not self.is_serial():
             out["moduleConnection"] = [[a, ca, b, cb] for a, ca, b, cb in self.connections]
             out["baseConnection"] = [[self.base[0], self.base[1], 0]]

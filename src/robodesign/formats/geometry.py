@@ -12,7 +12,7 @@ import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import List, Optional, Sequence, Tuple
+from typing import List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -39,6 +39,7 @@ class GeometrySpec:
 
     def to_json(self) -> dict:
         from robodesign.core.spatial import pose_to_list
+        params: dict
         if self.kind == "box":
             params = dict(zip("xyz", self.size))
         elif self.kind == "cylinder":
@@ -141,12 +142,14 @@ def parse_geometry(g, root, file, path, required_files=True, warnings=None) -> O
         if len(scale) != 3:
             raise InputError(f"scale must be a number or 3 numbers, got {describe_value(scale)}", file=file,
                              path=pp + ["scale"])
-        sc = tuple(check_finite(s, file, pp + ["scale", i]) for i, s in enumerate(scale))
+        sx, sy, sz = (check_finite(s, file, pp + ["scale", i]) for i, s in enumerate(scale))
+        sc = (sx, sy, sz)
     else:
         s = check_finite(scale, file, pp + ["scale"])
         sc = (s, s, s)
     if any(s <= 0 for s in sc):
         raise InputError(f"scale must be positive, got {list(sc)}", file=file, path=pp + ["scale"])
+    problem: Optional[str]
     if not target.is_file():
         problem = f"mesh file not found: {ref!r} (looked at {target})"
     else:
@@ -244,7 +247,7 @@ def load_mesh_arrays(file: str, scale: Tuple[float, float, float]) -> List[Tuple
         parts = [stl]
     else:
         import trimesh
-        m = trimesh.load(str(p), force="mesh", process=False)
+        m = cast(trimesh.Trimesh, trimesh.load(str(p), force="mesh", process=False))  # force="mesh": one Trimesh
         parts = [(np.asarray(m.vertices, dtype=float), np.asarray(m.faces, dtype=np.int64))]
     s = np.asarray(scale, dtype=float)
     return [(v * s, f) for v, f in parts]

@@ -98,7 +98,7 @@ def parse_module_set(data, file: Path, name: Optional[str] = None) -> ModuleSet:
                                    for i, m in enumerate(data["modules"])])
     validate(data, "modules", fname)
     modules: Dict[str, Module] = {}
-    names = {}
+    names: Dict[str, str] = {}  # module name → its ID
     for i, m in enumerate(data["modules"]):
         mod = _parse_module(m, root, fname, ["modules", i], warnings)
         if mod.id in modules:

@@ -14,7 +14,7 @@ import difflib
 import json
 import math
 from pathlib import Path
-from typing import Dict, Optional, Union
+from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
 
@@ -24,7 +24,7 @@ from robodesign.core.jsonio import check_finite, load_json
 from robodesign.core.paths import builtin_tasks_dir
 from robodesign.core.schema import load_schema, validate
 from robodesign.core.spatial import parse_pose
-from robodesign.formats.geometry import canonical_geometry_json, parse_geometries
+from robodesign.formats.geometry import GeometrySpec, canonical_geometry_json, parse_geometries
 from robodesign.formats.goal_types import GoalContext, find_goal_type, goal_type, plugin_goal_types, register_goal_type
 from robodesign.formats.task_spec import (
     GLOBAL_ONLY,
@@ -384,6 +384,7 @@ def _ci(d: dict) -> dict:
 def _parse_constraint(c, fname, path, resolver, task_level) -> TaskConstraint:
     t = c.get("type")
     ci = _ci(c)
+    out: TaskConstraint
     if t == "joint":
         parts = c.get("parts", ["q", "dq", "ddq", "tau"])
         if isinstance(parts, str):
@@ -409,9 +410,9 @@ def _parse_constraint(c, fname, path, resolver, task_level) -> TaskConstraint:
         out = BasePlacement(_tolerated(c["pose"], fname, path + ["pose"], resolver, empty_means_any=True))
     elif t == "endEffector":
         pose = _tolerated(c["pose"], fname, path + ["pose"], resolver) if "pose" in c else None
-        vals = {}
-        for k, d in (("v_min", 0.0), ("v_max", math.inf), ("o_min", 0.0), ("o_max", math.inf)):
-            vals[k] = check_finite(c.get(k, d), fname, path + [k], allow_inf=True)
+        vals: Dict[str, float] = {}
+        for key, d in (("v_min", 0.0), ("v_max", math.inf), ("o_min", 0.0), ("o_max", math.inf)):
+            vals[key] = check_finite(c.get(key, d), fname, path + [key], allow_inf=True)
         out = EndEffectorConstraint(pose, **vals)
     elif t == "allGoalsFulfilled":
         out = AllGoalsFulfilled()
@@ -501,7 +502,8 @@ def _parse_follow(g, ctx: GoalContext) -> Goal:
 
 def _parse_leave(g, ctx: GoalContext) -> Goal:
     fname, path = ctx.file, ctx.path
-    region, occupied = None, ()
+    region: Optional[ToleratedPose] = None
+    occupied: Tuple[GeometrySpec, ...] = ()
     ko, v = ctx.key("occupiedSpace")
     if v is not None:
         occupied = parse_geometries(v, ctx.root, fname, path + [ko], required_files=True)

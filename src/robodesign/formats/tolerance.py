@@ -604,7 +604,7 @@ class ToleratedPose:
         """
         if not isinstance(obj, dict):
             return obj
-        out = {}
+        out: dict = {}
         base = list(path)
         for k, v in obj.items():
             canon = _JSON_ALIASES.get(k, k)

@@ -298,8 +298,8 @@ def _between_sample_violations(name, extremes, bound, tq: TrajectoryQuantities, 
     ks, js = np.nonzero(over)
     out = []
     what = name.split(".")[-1]
-    for k, j in list(zip(ks, js))[:limit]:
-        kk, j = int(k + k0), int(j)
+    for k, jk in list(zip(ks, js))[:limit]:
+        kk, j = int(k + k0), int(jk)
         if lower is None:
             v, tt, b = float(vals[k, j]), float(tq.t[kk] + when[k, j]), float(bound[j])
             msg = f"|{what}| = {v:.6g} between samples {kk} and {kk + 1} exceeds the limit {b:.6g}"
@@ -347,7 +347,8 @@ def _arc_torque_violations(tq: TrajectoryQuantities, k0: int, k1: int, limit: in
 def _new_steps(at_samples: List[Violation], between: List[Violation]) -> List[Violation]:
     """``between`` without the steps that start or end at a sample already in ``at_samples`` (same joint)."""
     seen = {(v.sample, v.joint) for v in at_samples if v.joint is not None}
-    return [v for v in between if v.joint is None or not ({(v.sample, v.joint), (v.sample + 1, v.joint)} & seen)]
+    return [v for v in between
+            if v.joint is None or v.sample is None or not ({(v.sample, v.joint), (v.sample + 1, v.joint)} & seen)]
 
 
 def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, settings: CheckSettings) -> List[Violation]:
@@ -408,8 +409,8 @@ def _check_constraint(c: TaskConstraint, tq: TrajectoryQuantities, window, setti
                                          bound=float(hi if vals[k] > hi else lo)))
         if c.pose is not None:
             T = tq.tcp_poses
-            bad = [k for k in range(k0, k1 + 1) if not c.pose.valid(T[k])]
-            for k in bad[:limit]:
+            outside = [k for k in range(k0, k1 + 1) if not c.pose.valid(T[k])]
+            for k in outside[:limit]:
                 out.append(Violation("endEffector.pose", "TCP pose outside the tolerance: " +
                                      describe_pose_violations(c.pose.violations(T[k])), sample=k, time=float(tq.t[k])))
         return out
@@ -421,7 +422,8 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     r = tq.robot
     env = isinstance(c, CollisionFree)
     Q = tq.q[k0:k1 + 1]
-    moving = moving_obstacle_indices(r, tq.task) if env else []
+    task = tq.task
+    moving = moving_obstacle_indices(r, task) if env and task is not None else []  # no task: no moving obstacles
     # pairs with moving obstacles are checked piecewise (cell.moving_obstacle_events), all others here
     static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
     checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
@@ -433,8 +435,8 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
         events = checker.check(Q, first_only=False, path=path, at=at)
     else:
         events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
-    if moving:
-        events = sorted(events + moving_obstacle_events(r, tq.task, moving, tq.t[k0:k1 + 1], Q,
+    if moving and task is not None:
+        events = sorted(events + moving_obstacle_events(r, task, moving, tq.t[k0:k1 + 1], Q,
                                                         between_samples=settings.between_samples,
                                                         path=path, at=at),
                         key=lambda e: (e.sample, e.s))

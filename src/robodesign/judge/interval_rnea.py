@@ -20,7 +20,7 @@ the TCP's joint, expressed in that joint's frame (as :meth:`Robot.tcp_wrench_for
 """
 from __future__ import annotations
 
-from typing import List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -198,13 +198,14 @@ class IntervalDynamics:
         acc: List[DI] = [zero3] * (n + 1)
         alpha: List[DI] = [zero3] * (n + 1)
         acc[0] = DI.const(-self.gravity if gravity else np.zeros(3), (P, 3))
-        trig = [None] * (n + 1)
+        trig: Dict[int, Tuple[DI, DI]] = {}  # revolute joint → (cos, sin) of its angle
         f_lin: List[DI] = [zero3] * (n + 1)
         f_ang: List[DI] = [zero3] * (n + 1)
         # world wrench carried down the chain to the TCP's joint (Rᵀ applied joint after joint)
-        w_f = w_t = None
+        w_f: Optional[List[DI]] = None  # None: no wrench to carry
+        w_t: List[DI] = []
         if wrench is not None and self.tcp_joint > 0:
-            w_f, w_t = [None] * (n + 1), [None] * (n + 1)
+            w_f, w_t = [zero3] * (n + 1), [zero3] * (n + 1)  # each joint's entry is set before its children read it
             w_f[0], w_t[0] = DI.const(wrench[:, :3], (P, 3)), DI.const(wrench[:, 3:], (P, 3))
 
         def unit_z(k: DI) -> DI:  # k·e_z for a scalar dual interval k (P,)
@@ -254,7 +255,7 @@ class IntervalDynamics:
                     fl = fl - wf
                     fa = fa - (wt + wf.lin(_skew(self.tcp_offset)))
             f_lin[i], f_ang[i] = fl, fa
-        taus: List[DI] = [None] * n
+        taus: Dict[int, DI] = {}  # joint index → its torque, set from the TCP back to the base
         f_lin, f_ang = list(f_lin), list(f_ang)
         for i in range(n, 0, -1):
             j = i - 1
@@ -273,4 +274,4 @@ class IntervalDynamics:
             fl_p, fa_p = fl.lin(Rp), fa.lin(Rp)
             f_lin[lam] = f_lin[lam] + fl_p
             f_ang[lam] = f_ang[lam] + fa_p + fl_p.lin(_skew(pp))
-        return _stack(taus)
+        return _stack([taus[j] for j in range(n)])

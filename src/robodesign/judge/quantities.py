@@ -193,9 +193,10 @@ class TrajectoryQuantities:
         """Drivetrain torques at every sample with the motion's acceleration just before and just after it
         (torque is affine in q̈ at fixed q, q̇: these two and the file's ddq bound it at the sample)."""
         W = self.external_wrenches
-        W = W if np.any(W) else None
-        return tuple(self.robot.drivetrain_torques(self.q, self.velocities, a, W)
-                     for a in self.one_sided_accelerations)
+        wrenches = W if np.any(W) else None
+        before, after = self.one_sided_accelerations
+        return (self.robot.drivetrain_torques(self.q, self.velocities, before, wrenches),
+                self.robot.drivetrain_torques(self.q, self.velocities, after, wrenches))
 
     @cached_property
     def motion_accelerations(self) -> np.ndarray:
