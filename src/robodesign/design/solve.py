@@ -202,25 +202,19 @@ class _Pipeline:
         cut corners. When collisions between samples are all that is wrong, the moves are timed again with a stop
         at every waypoint (along the checked segments), then planned again with a 4× finer check step; the first
         motion the judge accepts is kept, else the first verdict stands with the motion it judged."""
-        kept = (self.res.solution, self.motion, self.g2t)
-        for resolution in (None, self.settings.resolution / 4):
-            try:
-                if resolution is not None:
-                    self.planner.settings = replace(self.settings, resolution=resolution)
-                    self.planner.choose_and_plan()
-                self.planner.blend_radius = 0.0
-                self.motion, self.g2t = self.planner.time_parameterize()
-            except (_Fail, InfeasibleError):
-                break
-            finally:
-                self.planner.settings = self.settings
-            self.res.solution = self.solution()
-            v = check(self.task, self.res.solution, self.module_set, cost=self.cost)
-            if v.valid or not _only_collisions(v):
-                return v
-        self.res.solution, self.motion, self.g2t = kept
-        return verdict
-
+        def along_segments(resolution=None):
+            def attempt():
+                try:
+                    if resolution is not None:
+                        self.planner.settings = replace(self.settings, resolution=resolution)
+                        self.planner.choose_and_plan()
+                    self.planner.blend_radius = 0.0
+                    return self.planner.time_parameterize()
+                finally:
+                    self.planner.settings = self.settings
+            return attempt
+        return self._first_accepted(verdict, (along_segments(), along_segments(self.settings.resolution / 4)),
+                                    go_on=_only_collisions)
 
     def _repair_torques(self, verdict):
         """The time scaling checks torques at the samples with the file's accelerations; the judge certifies the
@@ -228,15 +222,23 @@ class _Pipeline:
         :data:`TORQUE_REPAIR_RATIO`). Then every goal's motion is timed again with the joint speeds scaled by
         0.97, then 0.9 (accelerations by the square); the first motion the judge accepts is kept, else the first
         verdict stands with the motion it judged."""
+        def slower(s):
+            return lambda: self.planner.time_parameterize(slow={g.id: s for g in self.task.goals})
+        return self._first_accepted(verdict, (slower(0.97), slower(0.9)), go_on=lambda v: True)
+
+    def _first_accepted(self, verdict, attempts, go_on):
+        """Each attempt (a callable giving a new motion and goal times) in turn, judged: the first valid verdict,
+        or the first invalid one for which ``go_on`` is false, is kept with its motion; when an attempt raises
+        an infeasibility or all are used up, the first ``verdict`` stands with the motion it judged."""
         kept = (self.res.solution, self.motion, self.g2t)
-        for s in (0.97, 0.9):
+        for attempt in attempts:
             try:
-                self.motion, self.g2t = self.planner.time_parameterize(slow={g.id: s for g in self.task.goals})
+                self.motion, self.g2t = attempt()
             except (_Fail, InfeasibleError):
                 break
             self.res.solution = self.solution()
             v = check(self.task, self.res.solution, self.module_set, cost=self.cost)
-            if v.valid:
+            if v.valid or not go_on(v):
                 return v
         self.res.solution, self.motion, self.g2t = kept
         return verdict
