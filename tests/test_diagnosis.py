@@ -24,14 +24,16 @@ def _task_file(path, goals, base=FIXED):
     return path
 
 
-def test_optimize_says_provably_out_of_reach(tmp_path, capsys):
+def test_optimize_says_provably_out_of_reach(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # optimize journals its search beside its output file
     R = set_reach(SearchSpace(load_module_set("robodesign_arm"))).bound
     assert R == pytest.approx(5.422)
     f = _task_file(tmp_path / "far.json", [(0.5, 0.0, 0.3), (7.0, 0.0, 0.0)])
     code = main(["optimize", str(f), "--modules", "robodesign_arm", "--optimizer", "random", "--budget", "4evals",
                  "--json"])
-    out = json.loads(capsys.readouterr().out)
-    assert code == 1 and not out["feasible"]
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    assert code == 1 and not out["feasible"], out
     d = out["diagnosis"]
     assert d["verdict"] == "out_of_reach" and d["label"] == "provably out of reach"
     # 7 m from a base held within ±1 mm, minus the base box (1 mm along x) and the goal's corner (√3 mm)
@@ -44,7 +46,8 @@ def test_optimize_says_provably_out_of_reach(tmp_path, capsys):
            "the longest arm of the module set reaches at most 5.422 m from its base" in text
 
 
-def test_optimize_not_found_names_the_best_stage(tmp_path, capsys):
+def test_optimize_not_found_names_the_best_stage(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     # reachable in principle (well within the bound), but 3 random designs at a fixed base find nothing
     f = _task_file(tmp_path / "hard.json", [(1.9, 0.0, -0.5), (-1.9, 0.0, -0.5)])
     code = main(["optimize", str(f), "--modules", "robodesign_arm", "--optimizer", "random", "--budget", "3evals",

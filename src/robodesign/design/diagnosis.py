@@ -2,8 +2,10 @@
 
 * ``out_of_reach`` — *provably out of reach for this module set*: a real bound
   (:func:`robodesign.design.reach.reach_proof`): the longest arm the set can build under the search-space
-  rules against the goals' distances from the base region the task allows, or their spread. Only a proof
-  gives this verdict; it does not depend on the search.
+  rules against the goals' distances from the base region the task allows, or their spread; or a goal the
+  tool cannot be at (:func:`robodesign.design.blocked.blocked_goal_proof`): every end effector the search
+  space allows, held at some goal's pose, lies inside an obstacle deeper than the goal's tolerance can move
+  it. Only a proof gives this verdict; it does not depend on the search.
 * ``torque`` — *torque-infeasible at every tried design*: no evaluated design got past the
   ``static_torque`` stage and some failed there; the figure is the smallest shortfall (Nm needed to hold a
   goal's pose beyond the joint's limit) among them.
@@ -18,9 +20,10 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Any, List, Optional, Sequence, Tuple
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 from robodesign.core.paths import builtin_module_sets
+from robodesign.design.blocked import BlockedGoalProof, blocked_goal_proof
 from robodesign.design.problem import Problem
 from robodesign.design.reach import ReachProof, SetReach, reach_proof, set_reach
 from robodesign.design.solve import STAGES
@@ -55,6 +58,11 @@ def stronger_builtin_sets(torque: float, exclude: str = "") -> List[Tuple[str, f
     return out
 
 
+def allowed_end_effectors(space) -> List[Any]:
+    """The end-effector modules the search space's orders may end with."""
+    return [m for m in space.module_set.of_kind("eef") if space._allowed(m.id)]
+
+
 def _get(e: Any, key: str, default=None):
     return e.get(key, default) if isinstance(e, dict) else getattr(e, key, default)
 
@@ -65,7 +73,7 @@ class Diagnosis:
     message: str                                 # one line with the figure
     evaluations: int = 0
     reach_bound: Optional[float] = None          # m: the module set's reach bound (when computed)
-    proof: Optional[ReachProof] = None           # out_of_reach
+    proof: Optional[Union[ReachProof, BlockedGoalProof]] = None  # out_of_reach
     torque_needed: Optional[float] = None        # torque: Nm needed at the best design's worst joint
     torque_limit: Optional[float] = None
     torque_shortfall: Optional[float] = None     # torque: needed − limit [Nm], the smallest one seen
@@ -99,7 +107,9 @@ def diagnose(problem: Problem, evaluations: Sequence[Any], stopped: str = "budge
     if any(_get(e, "feasible") for e in evaluations):
         return Diagnosis("solved", f"solved: a valid design among {n} evaluations", evaluations=n, stopped=stopped)
     reach = reach or set_reach(problem.space)
-    proof = reach_proof(problem.task, problem.space, reach)
+    proof: Optional[Union[ReachProof, BlockedGoalProof]] = reach_proof(problem.task, problem.space, reach)
+    if proof is None:
+        proof = blocked_goal_proof(problem.task, allowed_end_effectors(problem.space))
     # the furthest design: latest stage, then most goals reached (the evaluator's ranking of infeasible ones)
     far = max(evaluations, key=lambda e: (_get(e, "stage_index", -1), _get(e, "goals_reached", 0) or 0), default=None)
     best_stage = "" if far is None else str(_get(far, "stage", ""))

@@ -8,6 +8,7 @@ from typing import Dict, List, Optional, Sequence
 
 import numpy as np
 
+from robodesign.design.blocked import tool_block
 from robodesign.design.stages import SolveResult, SolveSettings
 from robodesign.formats.costs import CostFunction, cost_term
 from robodesign.formats.task_spec import Goal, Task
@@ -65,6 +66,14 @@ class GoalPlanner:
     # -- IK ------------------------------------------------------------------------------------
     def solve_ik(self) -> None:
         from robodesign.solvers.ik import fixes_full_pose, provably_unreachable, solve_ik
+        # a goal at whose pose this design's end effector lies inside an obstacle deeper than the goal's
+        # tolerance can move it (design/blocked.py) has no collision-free IK solution: no restarts
+        block = self._tool_block()
+        if block is not None:
+            self.res.goals_reached = 0
+            raise _Fail(f"no collision-free IK solution for goal {block.goal}: at its pose the end effector "
+                        f"{block.eef} lies inside obstacle {block.obstacle} deeper than the goal's tolerance can "
+                        f"move it ({block.slack * 1e3:.1f} mm)")
         # an arm that cannot move its tool in all six directions (solvers.ik.fixes_full_pose) does not look for
         # a goal that fixes position and orientation: its restarts would all fail (docs/diagnosis.md)
         full = next((g for g in self.order if any(fixes_full_pose(p) for p in goal_poses(g))), None)
@@ -112,6 +121,13 @@ class GoalPlanner:
             else:
                 reached += 1
         self.res.goals_reached = reached
+
+    def _tool_block(self):
+        """:func:`robodesign.design.blocked.tool_block` of this design's end effector (its only one; the
+        static obstacles alone decide it: other colliders only add to them)."""
+        ms = self.robot.module_set
+        eefs = [mid for mid in self.robot.assembly.module_ids if ms[mid].kind == "eef"]
+        return tool_block(self.task, ms[eefs[0]]) if len(eefs) == 1 else None
 
     def filter_static_torque(self) -> None:
         r = self.robot
