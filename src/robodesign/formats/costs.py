@@ -76,8 +76,8 @@ class CostContext:
     ``tau``, ``tau_link``, ``mass`` may be zero-argument callables; they are evaluated once, on first use.
     ``num_joints`` defaults to ``q.shape[1]``.
     """
-    t: ArrayOrLazy
-    q: ArrayOrLazy
+    t: np.ndarray  # t and q: array-likes, made float arrays by __post_init__ (never lazy)
+    q: np.ndarray
     dq: ArrayOrLazy = None
     ddq: ArrayOrLazy = None
     tau: ArrayOrLazy = None

@@ -14,11 +14,11 @@ import difflib
 import json
 import math
 from pathlib import Path
-from typing import Dict, Optional, Tuple, Union
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from robodesign.core.errors import InputError, describe_value
+from robodesign.core.errors import InputError, PathPart, describe_value
 from robodesign.core.input_warnings import InputWarnings
 from robodesign.core.jsonio import check_finite, load_json
 from robodesign.core.paths import builtin_tasks_dir
@@ -255,9 +255,9 @@ def parse_task(data, file: Path) -> Task:
     grav = h.get("gravity", [0, 0, -9.81])
     if not isinstance(grav, list) or len(grav) != 3:
         raise InputError(f"expected 3 numbers, got {describe_value(grav)}", file=fname, path=["header", "gravity"])
-    grav_t = tuple(check_finite(g, fname, ["header", "gravity", k]) for k, g in enumerate(grav))
+    gx, gy, gz = (check_finite(g, fname, ["header", "gravity", k]) for k, g in enumerate(grav))
     header = TaskHeader(id=tid, version=str(h.get("version", "2023")), name=str(h.get("taskName", "")),
-                        tags=tuple(h.get("tags", [])), date=str(h.get("date", "")), time_step=ts, gravity=grav_t,
+                        tags=tuple(h.get("tags", [])), date=str(h.get("date", "")), time_step=ts, gravity=(gx, gy, gz),
                         author=tuple(_as_list(h.get("author"))), email=tuple(_as_list(h.get("email"))),
                         affiliation=tuple(_as_list(h.get("affiliation"))))
     frames = _parse_frames(data.get("frames", {}), fname)
@@ -267,7 +267,7 @@ def parse_task(data, file: Path) -> Task:
     obstacles = []
     seen = set()
     for i, o in enumerate(data.get("obstacles", [])):
-        op = ["obstacles", i]
+        op: List[PathPart] = ["obstacles", i]
         oid = str(o["ID"])
         if oid in seen:
             raise InputError(f"duplicate obstacle ID {oid!r}", file=fname, path=op + ["ID"])

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, ClassVar, Dict, FrozenSet, List, Optional, Sequence, Tuple
+from typing import Any, Callable, ClassVar, Dict, FrozenSet, List, Optional, Sequence, Tuple, Type, TypeVar
 
 import numpy as np
 
@@ -49,6 +49,7 @@ class ObstacleSpec:
         """World transform applied to the t=0 geometry at time t (zero-order hold between poses)."""
         if self.motion_poses is None:
             return np.eye(4)
+        assert self.motion_t is not None  # a moving obstacle has the times of its poses (parse_task)
         k = int(np.searchsorted(self.motion_t, t + 1e-12, side="right") - 1)
         k = min(max(k, 0), len(self.motion_t) - 1)
         return self.motion_poses[k]
@@ -81,7 +82,7 @@ class SelfCollisionFree(TaskConstraint):
 
 @dataclass(frozen=True, eq=False)
 class BasePlacement(TaskConstraint):
-    pose: ToleratedPose = None
+    pose: Optional[ToleratedPose] = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -147,8 +148,10 @@ def _window_from(t: np.ndarray, t_start: float, k: int) -> Optional[Tuple[int, i
     return int(np.searchsorted(t, t_start - WINDOW_TIME_TOL, side="left")), k
 
 
-def _check_pose(goal: "Goal", pose: ToleratedPose, tq: Any, k: int, violation: ViolationFactory) -> List[Any]:
+def _check_pose(goal: "Goal", pose: Optional[ToleratedPose], tq: Any, k: int, violation: ViolationFactory) \
+        -> List[Any]:
     """The TCP at sample ``k`` within ``pose`` (at and reach goals)."""
+    assert pose is not None  # an at or reach goal read from a task has its pose (its field defaults to None)
     T = tq.tcp_poses[k]
     if pose.valid(T):
         return []
@@ -232,7 +235,7 @@ class Goal:
 
 @dataclass(frozen=True, eq=False)
 class At(Goal):
-    pose: ToleratedPose = None
+    pose: Optional[ToleratedPose] = None
     type_name: ClassVar[str] = "at"
     solver_kind: ClassVar[str] = "pose"
 
@@ -246,7 +249,7 @@ class At(Goal):
 
 @dataclass(frozen=True, eq=False)
 class Reach(Goal):
-    pose: ToleratedPose = None
+    pose: Optional[ToleratedPose] = None
     velocity_tolerance: float = 1e-3  # every component of the TCP twist at t_g
     type_name: ClassVar[str] = "reach"
     solver_kind: ClassVar[str] = "pose"
@@ -430,6 +433,9 @@ class Leave(Goal):
 BUILTIN_GOAL_TYPES = (At, Reach, ReturnTo, Pause, Follow, Leave)
 
 
+_C = TypeVar("_C", bound=TaskConstraint)
+
+
 @dataclass(frozen=True, eq=False)
 class Task:
     header: TaskHeader
@@ -455,7 +461,7 @@ class Task:
                 return g
         raise KeyError(goal_id)
 
-    def constraint(self, cls) -> Optional[TaskConstraint]:
+    def constraint(self, cls: Type[_C]) -> Optional[_C]:
         for c in self.constraints:
             if isinstance(c, cls):
                 return c

@@ -70,7 +70,7 @@ from __future__ import annotations
 import difflib
 import math
 from dataclasses import InitVar, dataclass, field
-from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -184,7 +184,7 @@ def _first_nonzero(v) -> float:
     return 0.0
 
 
-def quaternion_to_rotation(q: Sequence[float]) -> np.ndarray:
+def quaternion_to_rotation(q: Sequence[float] | np.ndarray) -> np.ndarray:
     w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
     return np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -193,7 +193,7 @@ def quaternion_to_rotation(q: Sequence[float]) -> np.ndarray:
     ])
 
 
-def exp3(w: Sequence[float]) -> np.ndarray:
+def exp3(w: Sequence[float] | np.ndarray) -> np.ndarray:
     """Rotation matrix of the rotation vector w (Rodrigues)."""
     w = np.asarray(w, dtype=float)
     th = float(np.linalg.norm(w))
@@ -333,7 +333,7 @@ class ProjectionConstraint:
                 return 0.0
             if best is None or abs(d) < abs(best):
                 best = d
-        return float(best)
+        return float(cast(float, best))  # (pieces is never empty: an empty intersection raised)
 
     def nearest(self, v: float, margin: float = 0.0) -> float:
         """Nearest point of the set to v; with ``margin`` > 0, of the set shrunk by margin on each side."""
@@ -634,7 +634,7 @@ class ToleratedPose:
                                  file=file, path=base + [str(k)])
         if "nominal" not in obj:
             raise InputError("missing required key 'nominal'", file=file, path=base)
-        local = parse_pose(obj["nominal"], file, base + ["nominal"])
+        local = parse_pose(obj["nominal"], file, base + ["nominal"])  # type: ignore[arg-type]  # (a None file works)
         parent = obj.get("nominalParent", "world")
         if not isinstance(parent, str) or not parent:
             raise InputError(f"expected a frame name, got {describe_value(parent)}", file=file,
@@ -649,7 +649,7 @@ class ToleratedPose:
                    empty_means_any=empty_means_any, source_file=file, source_path=base)
 
     def to_json(self) -> dict:
-        out = {"nominal": pose_to_list(self.nominal_local)}
+        out: Dict[str, Any] = {"nominal": pose_to_list(cast(np.ndarray, self.nominal_local))}  # (__post_init__ set it)
         if self.nominal_parent != "world":
             out["nominalParent"] = self.nominal_parent
         if self.projections:
@@ -794,7 +794,7 @@ class ToleratedPose:
             p = self._sample_part(rng, trans, True, max_tries, unbounded_scale)
         if rot:
             R = self._sample_part(rng, rot, False, max_tries, unbounded_scale)
-        return self.nominal @ homogeneous(R, p)
+        return self.nominal @ homogeneous(R, p)  # type: ignore[arg-type]  # (core says Sequence; arrays work)
 
     def _part_ok(self, cs: List[ProjectionConstraint], p=None, R=None) -> bool:
         for c in cs:

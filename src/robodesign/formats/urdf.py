@@ -228,6 +228,7 @@ def _geometry_element(parent: ET.Element, tag: str, name: str, pose: np.ndarray,
         else:
             raise InputError(f"collision object {name!r}: cannot write a {type(shape).__name__} to URDF")
     else:
+        assert spec is not None  # a visual is written from its spec (only collisions pass their coal shape)
         if spec.kind == "box":
             ET.SubElement(geo, "box", size=_vec(spec.size))
         elif spec.kind == "cylinder":
@@ -337,7 +338,7 @@ def export_urdf(robot, path: Union[str, Path], mesh_dir_mode: str = "absolute") 
                 spec = body.collision[gi]
         if spec is not None and spec.kind == "mesh" and spec.file is not None:
             # generated STL of a convex part / hull: shared by every copy of the same (file, scale, part)
-            key = ("collision", str(spec.file), tuple(spec.scale), part, type(go.geometry).__name__)
+            key: tuple = ("collision", str(spec.file), tuple(spec.scale), part, type(go.geometry).__name__)
         else:
             key = ("collision", go.name)
         _geometry_element(links[go.parentJoint], "collision", go.name, rel(go.placement, go.parentJoint, ("geom", k)), spec,
@@ -373,7 +374,7 @@ def export_urdf(robot, path: Union[str, Path], mesh_dir_mode: str = "absolute") 
                    velocity=_num(robot.dq_max[k]))
         if math.isfinite(robot.ddq_max[k]):
             lim["acceleration"] = _num(robot.ddq_max[k])
-        ET.SubElement(el, "limit", **lim)
+        ET.SubElement(el, "limit", lim)
         ET.SubElement(el, "dynamics", damping=_num(robot.friction_viscous[k]),
                       friction=_num(robot.friction_coulomb[k]))
         ET.SubElement(el, "drivetrain", gear_ratio=_num(robot.gear_ratio[k]),
@@ -447,7 +448,7 @@ class _Ctx:
             return np.eye(4)
         xyz = self.floats(el.get("xyz"), 3, f"{field}.xyz", default=(0.0, 0.0, 0.0))
         rpy = self.floats(el.get("rpy"), 3, f"{field}.rpy", default=(0.0, 0.0, 0.0))
-        return homogeneous(rpy_to_matrix(*rpy), xyz)
+        return homogeneous(rpy_to_matrix(*rpy), xyz)  # type: ignore[arg-type]  # (core says Sequence; arrays work)
 
 
 def _align_z_to(axis: np.ndarray) -> np.ndarray:
@@ -578,7 +579,7 @@ def _parse_geometry(ctx: _Ctx, el: ET.Element, field: str, meshes: _MeshResolver
             if warnings is not None:
                 warnings.append(f"{ctx.display}: {gf}.filename: {msg}; the visual is skipped")
             return None
-        spec = GeometrySpec("mesh", pose, (), target, tuple(float(s) for s in scale), shown)
+        spec = GeometrySpec("mesh", pose, (), target, (float(scale[0]), float(scale[1]), float(scale[2])), shown)
         # collision meshes must load now (a clear error) rather than vanish when the Robot is built
         problem = mesh_problem(target, spec.scale, full=required)
         if problem and required:
@@ -643,7 +644,7 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
         raise ctx.err("the URDF has no <link>")
 
     # ---- joints (raw) ---------------------------------------------------------------------------
-    joint_els: Dict[str, ET.Element] = {}
+    joint_els: Dict[str, Tuple[ET.Element, str, str]] = {}  # joint → (element, parent link, child link)
     parent_of: Dict[str, str] = {}
     children: Dict[str, List[str]] = {ln: [] for ln in order}
     for ji, je in enumerate(robot.findall("joint")):
@@ -653,13 +654,12 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
         f = f"joint[{jn}]"
         if jn in joint_els:
             raise ctx.err(f"duplicate joint name {jn!r}", f)
-        joint_els[jn] = je
         pe, ce = je.find("parent"), je.find("child")
         if pe is None or not pe.get("link"):
             raise ctx.err("missing <parent link=...>", f"{f}.parent")
         if ce is None or not ce.get("link"):
             raise ctx.err("missing <child link=...>", f"{f}.child")
-        p, c = pe.get("link"), ce.get("link")
+        p, c = pe.get("link", ""), ce.get("link", "")
         for key, ln in (("parent", p), ("child", c)):
             if ln not in link_els:
                 raise ctx.err(f"unknown link {ln!r}", f"{f}.{key}.link")
@@ -668,6 +668,7 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
                           f"{f}.child")
         parent_of[c] = jn
         children[p].append(jn)
+        joint_els[jn] = (je, p, c)
     roots = [ln for ln in order if ln not in parent_of]
     if len(roots) != 1:
         raise ctx.err(f"expected exactly one root link, found {len(roots)}: {roots[:5]}")
@@ -679,8 +680,7 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
     while stack:
         ln = stack.pop()
         for jn in children[ln]:
-            je = joint_els[jn]
-            c = je.find("child").get("link")
+            je, _, c = joint_els[jn]
             if c in depth:
                 raise ctx.err(f"joint {jn!r} closes a loop", f"joint[{jn}]")
             act = je.get("type") != "fixed"
@@ -698,21 +698,20 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
         for tj in te.findall("joint"):
             mr = tj.find("mechanicalReduction")
             if mr is None:
-                for act in te.findall("actuator"):
-                    mr = act.find("mechanicalReduction") if mr is None else mr
-            if mr is not None and tj.get("name") and mr.text:
+                for actuator in te.findall("actuator"):
+                    mr = actuator.find("mechanicalReduction") if mr is None else mr
+            if mr is not None and (tjn := tj.get("name")) and mr.text:
                 try:
-                    reduction[tj.get("name")] = abs(float(mr.text))
+                    reduction[tjn] = abs(float(mr.text))
                 except ValueError:
                     raise ctx.err(f"expected a number, got {mr.text!r}",
                                   f"transmission[{te.get('name') or ti}].mechanicalReduction") from None
 
     # ---- joints (typed) -------------------------------------------------------------------------
     joints: List[Joint] = []
-    for jn, je in joint_els.items():
+    for jn, (je, p, c) in joint_els.items():
         f = f"joint[{jn}]"
         jtype = je.get("type")
-        p, c = je.find("parent").get("link"), je.find("child").get("link")
         origin = ctx.pose(je.find("origin"), f"{f}.origin")
         if jtype not in ("revolute", "continuous", "prismatic", "fixed"):
             raise ctx.err(f"unsupported joint type {jtype!r} (revolute, continuous, prismatic, fixed)", f"{f}.type")
@@ -724,25 +723,25 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
             joints.append(Joint(id=jn, type="fixed", parent=p, child=c, pose_parent=origin, pose_child=np.eye(4),
                                 limits=JointLimits(0.0, 0.0)))
             continue
-        ax = ctx.floats(je.find("axis").get("xyz") if je.find("axis") is not None else None, 3, f"{f}.axis.xyz",
+        ax = ctx.floats(axe.get("xyz") if (axe := je.find("axis")) is not None else None, 3, f"{f}.axis.xyz",
                         default=(1.0, 0.0, 0.0))
         if np.linalg.norm(ax) < 1e-12:
             raise ctx.err("joint axis must not be zero", f"{f}.axis.xyz")
         R = _align_z_to(ax)
-        le = je.find("limit")
+        lim = je.find("limit")
         lf = f"{f}.limit"
         if jtype == "continuous":
             lower, upper = -CONTINUOUS_LIMIT, CONTINUOUS_LIMIT
         else:
-            if le is None:
+            if lim is None:
                 raise ctx.err(f"a {jtype} joint needs a <limit>", lf)
-            lower = ctx.scalar(le, "lower", lf, default=0.0, allow_inf=True)
-            upper = ctx.scalar(le, "upper", lf, default=0.0, allow_inf=True)
+            lower = ctx.scalar(lim, "lower", lf, default=0.0, allow_inf=True)
+            upper = ctx.scalar(lim, "upper", lf, default=0.0, allow_inf=True)
             if lower > upper:
                 raise ctx.err(f"lower {lower} > upper {upper}", f"{lf}.lower")
-        effort = ctx.scalar(le, "effort", lf, default=math.inf, allow_inf=True)
-        velocity = ctx.scalar(le, "velocity", lf, default=math.inf, allow_inf=True)
-        accel = ctx.scalar(le, "acceleration", lf, default=math.inf, allow_inf=True)
+        effort = ctx.scalar(lim, "effort", lf, default=math.inf, allow_inf=True)
+        velocity = ctx.scalar(lim, "velocity", lf, default=math.inf, allow_inf=True)
+        accel = ctx.scalar(lim, "acceleration", lf, default=math.inf, allow_inf=True)
         for nm, v in (("effort", effort), ("velocity", velocity), ("acceleration", accel)):
             if v < 0:
                 raise ctx.err(f"must be >= 0, got {v}", f"{lf}.{nm}")
@@ -769,7 +768,7 @@ def import_urdf(path: Union[str, Path], name: Optional[str] = None, tcp_link: Op
         tcp = tcp_link
     else:
         def arm_children(ln):  # child links that are not gripper fingers
-            return [jn for jn in children[ln] if joint_els[jn].find("child").get("link") not in finger_links]
+            return [jn for jn in children[ln] if joint_els[jn][2] not in finger_links]
         leaves = [ln for ln in order if ln not in finger_links and not arm_children(ln)] or \
                  [ln for ln in order if not children[ln]]
         tcp = max(leaves, key=lambda ln: (depth[ln], order.index(ln)))
