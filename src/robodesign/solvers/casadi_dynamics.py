@@ -21,7 +21,7 @@ joint frame; the base acceleration is −gravity (so the result includes gravity
 """
 from __future__ import annotations
 
-from typing import List, Optional, Tuple
+from typing import Any, List, Optional, Tuple
 
 import casadi as ca
 import numpy as np
@@ -44,8 +44,8 @@ def _axis(jm) -> Tuple[str, np.ndarray]:
         return kind, np.array(ax, dtype=float)
     if name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
         ext = jm.extract() if hasattr(jm, "extract") else jm
-        ax = np.asarray(ext.axis, dtype=float).reshape(3)
-        return ("R" if "Revolute" in name else "P"), ax / np.linalg.norm(ax)
+        axis = np.asarray(ext.axis, dtype=float).reshape(3)
+        return ("R" if "Revolute" in name else "P"), axis / np.linalg.norm(axis)
     raise NotImplementedError(f"joint type {name} is not supported by casadi_dynamics (1-DoF R*/P* joints only)")
 
 
@@ -136,7 +136,7 @@ def rnea_expr(model: pin.Model, q, dq, ddq, include_armature: bool = False):
         # f = I a + v ×* (I v): (ω × h_l, ω × h_n + v × h_l)
         f[i] = fa_l + ca.cross(wi, hv_l)
         nt[i] = fa_n + ca.cross(wi, hv_n) + ca.cross(vi, hv_l)
-    tau = [None] * model.nv
+    tau: List[Any] = [None] * model.nv  # one SX per dof, each set in the loop below
     for i in range(n - 1, 0, -1):
         J = joints[i - 1]
         S = ca.DM(J.axis)
