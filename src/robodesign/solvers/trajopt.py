@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import math
 import time as _time
-from typing import Dict, Optional, Sequence
+from typing import Any, Dict, Optional, Sequence, Union
 
 import casadi as ca
 import numpy as np
@@ -140,7 +140,7 @@ def optimize_trajectory(robot, warm: JointTrajectory, cost="cyc", n_nodes: int =
     DQ = opti.variable(dof, N + 1)
     U = opti.variable(dof, N)
     if free_T:
-        T = opti.variable()
+        T: Union[ca.MX, float] = opti.variable()
         opti.subject_to(opti.bounded(T_lb, T, 20.0 * Tw + 10.0))
         opti.set_initial(T, max(T0, T_lb))
     else:
@@ -195,7 +195,7 @@ def optimize_trajectory(robot, warm: JointTrajectory, cost="cyc", n_nodes: int =
                 opti.subject_to(opti.bounded(-lim[j], TL[j, :], lim[j]))
                 opti.subject_to(opti.bounded(-lim[j], TR[j, :], lim[j]))
     # objective
-    J = 0
+    J: Union[ca.MX, float] = 0
     if free_T:
         J = J + weights["cyc"] * T
     if weights.get("mechEnergy", 0.0):
@@ -217,7 +217,7 @@ def optimize_trajectory(robot, warm: JointTrajectory, cost="cyc", n_nodes: int =
     opti.set_initial(Q, Wq.T)
     opti.set_initial(DQ, Wdq.T)
     opti.set_initial(U, Wu.T)
-    opts = {"expand": bool(expand), "print_time": False,
+    opts: Dict[str, Any] = {"expand": bool(expand), "print_time": False,
             "ipopt": {"print_level": 5 if verbose else 0, "sb": "yes", "max_iter": int(max_iter), "tol": tol,
                       "acceptable_tol": 1e-5, "mu_strategy": "adaptive", **(ipopt_options or {})}}
     opti.solver("ipopt", opts)
