@@ -88,7 +88,7 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Literal, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -559,7 +559,7 @@ class BlendedPolyline:
     def _eval(self, s, order: int, left: bool) -> np.ndarray:
         scalar = np.ndim(s) == 0
         s = np.clip(np.atleast_1d(np.asarray(s, float)), 0.0, self.length)
-        side = "left" if left else "right"
+        side: Literal["left", "right"] = "left" if left else "right"
         k = np.clip(np.searchsorted(self.breaks, s, side=side) - 1, 0, len(self.p0) - 1)
         sig = (s - self.breaks[k])[:, None]
         if order == 0:
@@ -733,9 +733,8 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     tau = np.asarray(robot.tau_max, float)
     use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
     qs = np.abs(path(grid, 1))
-    with np.errstate(divide="ignore"):
-        with np.errstate(over="ignore"):  # tiny path derivatives: the bound is +inf anyway
-            x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
+    with np.errstate(divide="ignore", over="ignore"):  # tiny path derivatives: the bound is +inf anyway
+        x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
     x_vel = np.minimum(x_vel, 1e6)
     sd = None
     passes = max(1, torque_passes) if use_torque else 1
@@ -759,6 +758,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
         sd = np.maximum(np.asarray(pd.sd_vec, float), 0.0)
         x0 = np.maximum(sd ** 2, 1e-4 * x_vel)
         p += 1
+    assert sd is not None  # the loop ends after a feasible pass (or raises)
     sd[0] = sd[-1] = 0.0
     ds = np.diff(grid)
     denom = sd[:-1] + sd[1:]
