@@ -56,7 +56,7 @@ import difflib
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -150,22 +150,24 @@ def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
     return valid
 
 
-def _memoized(valid):
+class _Memoized:
     """``valid`` remembering its verdict per configuration (by its exact bytes) for one planning call: the
     shortcuts and the final dense check revisit states the planner's checks already decided (the same
-    interpolation formula gives the same floats), and a verdict never changes within a call."""
-    memo: Dict[bytes, bool] = {}
+    interpolation formula gives the same floats), and a verdict never changes within a call. ``memo``: the
+    verdicts by state, ``lookups``: the verdicts asked for."""
 
-    def cached(q: np.ndarray) -> bool:
-        cached.lookups += 1
+    def __init__(self, valid: Callable[[np.ndarray], bool]):
+        self.valid = valid
+        self.memo: Dict[bytes, bool] = {}
+        self.lookups = 0
+
+    def __call__(self, q: np.ndarray) -> bool:
+        self.lookups += 1
         key = q.tobytes()
-        v = memo.get(key)
+        v = self.memo.get(key)
         if v is None:
-            v = memo[key] = valid(q)
+            v = self.memo[key] = self.valid(q)
         return v
-    cached.memo = memo
-    cached.lookups = 0
-    return cached
 
 
 def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter: Optional[List[int]] = None,
@@ -273,31 +275,31 @@ def _shortcut(valid, P: np.ndarray, resolution: float, counter: List[int]) -> np
 def _partial_shortcuts(valid, P: np.ndarray, resolution: float, counter: List[int], rng: np.random.Generator,
                        tries: int, deadline: float) -> np.ndarray:
     """Random shortcuts between points *on* two different segments (not only waypoints)."""
-    P = [np.asarray(p, dtype=float) for p in P]
+    pts = [np.asarray(p, dtype=float) for p in P]
     for _ in range(tries):
-        if len(P) < 3 or time.perf_counter() > deadline:
+        if len(pts) < 3 or time.perf_counter() > deadline:
             break
-        i, j = sorted(rng.choice(len(P) - 1, size=2, replace=False))
+        i, j = sorted(rng.choice(len(pts) - 1, size=2, replace=False))
         if j == i:
             continue
         ta, tb = rng.uniform(), rng.uniform()
-        a = P[i] + ta * (P[i + 1] - P[i])
-        b = P[j] + tb * (P[j + 1] - P[j])
-        old = sum(float(np.linalg.norm(P[k + 1] - P[k])) for k in range(i + 1, j)) \
-            + float(np.linalg.norm(P[i + 1] - a)) + float(np.linalg.norm(b - P[j]))
+        a = pts[i] + ta * (pts[i + 1] - pts[i])
+        b = pts[j] + tb * (pts[j + 1] - pts[j])
+        old = sum(float(np.linalg.norm(pts[k + 1] - pts[k])) for k in range(i + 1, j)) \
+            + float(np.linalg.norm(pts[i + 1] - a)) + float(np.linalg.norm(b - pts[j]))
         if float(np.linalg.norm(b - a)) >= old - 1e-9:
             continue
         if _segment_ok(valid, a, b, resolution, counter, include_start=True):
-            P = P[:i + 1] + [a, b] + P[j + 1:]
+            pts = pts[:i + 1] + [a, b] + pts[j + 1:]
     # drop waypoints that lie on the straight line between their neighbours
-    out = [P[0]]
-    for k in range(1, len(P) - 1):
-        u, v = P[k] - out[-1], P[k + 1] - P[k]
+    out = [pts[0]]
+    for k in range(1, len(pts) - 1):
+        u, v = pts[k] - out[-1], pts[k + 1] - pts[k]
         nu, nv = float(np.linalg.norm(u)), float(np.linalg.norm(v))
         if nu < 1e-12 or (nv > 1e-12 and float(u @ v) > (1 - 1e-12) * nu * nv):
             continue
-        out.append(P[k])
-    out.append(P[-1])
+        out.append(pts[k])
+    out.append(pts[-1])
     return np.array(out)
 
 
@@ -338,7 +340,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
             raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
     counter = [0]
     rest = [qs, qg, *[np.asarray(q, dtype=float).reshape(-1) for q in other_goals]] if static_torque else []
-    valid = _memoized(_config_validator(robot, static_torque, rest))
+    valid = _Memoized(_config_validator(robot, static_torque, rest))
     stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
                                 "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
                                 "length": 0.0, "reason": ""}
@@ -358,7 +360,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     counter[0] += 1
     if not valid(qs):
         return done(None, "invalid_start")
-    goals = [qg]
+    goals: List[Optional[np.ndarray]] = [qg]
     for q in other_goals:
         q = np.asarray(q, dtype=float).reshape(-1)
         if q.shape != (n,) or not np.all(np.isfinite(q)):
@@ -379,7 +381,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
         stats["raw_waypoints"] = 2
         return done(direct, "straight_line")      # also for q_start == q_goal: always [start, goal]
 
-    G = np.vstack([goals[k] for k in ok_goals])
+    G = np.vstack([cast(np.ndarray, goals[k]) for k in ok_goals])  # ok_goals: indices of goals not None
     raw = _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize, counter, stats)
     if raw is None:
         return done(None, "no_solution")
