@@ -41,7 +41,7 @@ import subprocess
 import sys
 import weakref
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional, cast
 
 import numpy as np
 
@@ -58,7 +58,7 @@ try:
 except Exception:  # pragma: no cover - numba is a dependency; without it the Python loop runs
     _IMPORTED = False
 
-    def njit(*args, **kwargs):
+    def njit(*args, **kwargs):  # type: ignore[no-redef]  # the stand-in for numba's decorator
         return (lambda f: f) if not args or not callable(args[0]) else args[0]
 
 
@@ -528,6 +528,7 @@ def chain_kernel(robot) -> Optional[ChainKernel]:
     hit = _CHAINS.get(robot)
     if hit is not None and (hit is False or hit.key == key):
         return hit or None
+    ck: Optional[ChainKernel]
     try:
         ck = ChainKernel(robot)
         if len(ck.iq) == 0:
@@ -615,7 +616,7 @@ _KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are co
 def _cache_dir() -> Path:
     """Where numba caches this module's kernels (``__pycache__`` beside it, ``NUMBA_CACHE_DIR`` or numba's
     user-wide fall-back)."""
-    return Path(lm_batch._cache._cache_path)
+    return Path(cast(Any, lm_batch)._cache._cache_path)   # numba's dispatcher; its stubs omit the cache
 
 
 def stamp_path() -> Path:
