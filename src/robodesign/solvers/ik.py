@@ -64,7 +64,7 @@ import math
 import time
 import weakref
 from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple, cast
 
 import numpy as np
 import pinocchio as pin
@@ -836,9 +836,9 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     lo = np.asarray(robot.q_lower, dtype=float)
     hi = np.asarray(robot.q_upper, dtype=float)
     gm = goal_model(goal)
-    stats: Dict[str, object] = {"attempts": 0, "iterations": 0, "converged": 0, "rejected_limits": 0,
-                                "rejected_collision": 0, "rejected_duplicate": 0, "repairs": 0, "time": 0.0,
-                                "reason": "max_restarts"}
+    stats: Dict[str, Any] = {"attempts": 0, "iterations": 0, "converged": 0, "rejected_limits": 0,
+                             "rejected_collision": 0, "rejected_duplicate": 0, "repairs": 0, "time": 0.0,
+                             "reason": "max_restarts"}
     sols: List[np.ndarray] = []
     total_iter = 0
 
@@ -879,7 +879,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         nonlocal total_iter
         best = math.inf
         since = 0
-        hist = [] if trace is not None else None
+        hist: Optional[List[float]] = [] if trace is not None else None
         found = None
         it = 0
         for it in range(iters):
@@ -926,7 +926,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     def kernel_descend(q: np.ndarray, iters: int):
         """The same descent in the compiled loop."""
         nonlocal total_iter
-        found, its = kernel.descend(q, iters)
+        found, its = cast(_Kernel, kernel).descend(q, iters)   # chosen only when kernel is not None
         total_iter += its
         return found
 
