@@ -6,7 +6,7 @@ import pytest
 
 from robodesign import load_module_set
 from robodesign.judge.checker import check
-from robodesign.design.evaluator import INFEASIBLE, Evaluator, EvaluatorSpec
+from robodesign.design.evaluator import INFEASIBLE, STAGE_PENALTY, Evaluator, EvaluatorSpec
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import BaseBounds, Candidate
 from robodesign.formats.solution import SolutionTrajectory, parse_solution
@@ -145,3 +145,29 @@ def test_missing_visual_mesh_is_a_warning_missing_collision_mesh_an_error(tmp_pa
     from robodesign import InputError
     with pytest.raises(InputError, match=r"PTP_2.json: obstacles\[0\].collision\[0\].parameters.file: mesh file not found"):
         load_task(f)
+
+
+class _NoPath:
+    path = None
+    stats = {"reason": "no_solution"}
+
+    def __bool__(self):
+        return False
+
+
+@pytest.mark.parametrize("planned", [0, 1])
+def test_a_plan_failure_counts_the_goals_whose_moves_were_planned(problem, monkeypatch, planned):
+    """The search ranks plan failures by how far the plan got: goals_reached counts the first goal (the start)
+    and every goal whose move was planned before the failing one."""
+    from robodesign.design import goal_planner
+    real, calls = goal_planner.GoalPlanner._plan, []
+
+    def plan(self, q, target, time_limit, other_goals=()):
+        calls.append(1)
+        return real(self, q, target, time_limit, other_goals) if len(calls) <= planned else _NoPath()
+    monkeypatch.setattr(goal_planner.GoalPlanner, "_plan", plan)
+    ev = Evaluator(EvaluatorSpec(problem, seed=0)).evaluate(Candidate(GOOD))
+    assert ev.stage == "plan" and "no collision-free path to goal" in ev.message
+    assert ev.goals_reached == 1 + planned
+    # one goal further is one point better (lower) within the plan stage's band of scores
+    assert ev.score == INFEASIBLE + (len(STAGES) - STAGES.index("plan")) * STAGE_PENALTY - (1 + planned)

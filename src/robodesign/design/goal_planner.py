@@ -226,6 +226,8 @@ class GoalPlanner:
                 if not r:
                     r, arg = self._plan_to_another_solution(q, arg, g, r)
                 if not r:
+                    # the goals whose moves were planned: a search ranks plan failures by how far they got
+                    self.res.goals_reached = len({gg.id for _, _, gg in self.actions[:i] if gg is not None})
                     raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
                                 f"({r.stats.get('reason')})")
                 self.paths.append(r.path)

@@ -88,7 +88,7 @@ class SolveResult:
     stages: List[StageRecord] = field(default_factory=list)
     solution: Optional[Solution] = None
     verdict: Optional[Verdict] = None
-    goals_reached: int = 0  # goals with an IK solution (how far the ik stage got)
+    goals_reached: int = 0  # how far the design got: goals with an IK solution (ik), goals whose moves were planned (plan)
     # how far the failed stage missed, in its own unit: metres beyond the reach bound (reach: the farthest
     # goal), Nm over the limit (static_torque: the smallest excess among the failing goal's IK solutions);
     # None when the stage passed or does not measure it
