@@ -180,7 +180,8 @@ def free_base_bounds(goals, reach: float) -> BaseBounds:
         lo, hi = G[:, :3].min(axis=0), G[:, :3].max(axis=0)
     lo = [float(v) for v in lo] + [-math.pi]
     hi = [float(v) for v in hi] + [math.pi]
-    return BaseBounds(nominal=np.eye(4), lower=tuple(lo), upper=tuple(hi), tolerance=None)
+    return BaseBounds(nominal=np.eye(4), lower=(lo[0], lo[1], lo[2], lo[3]), upper=(hi[0], hi[1], hi[2], hi[3]),
+                      tolerance=None)
 
 
 def _goal_points(task: Task) -> Tuple[Tuple[float, float, float, float], ...]:

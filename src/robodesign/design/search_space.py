@@ -23,7 +23,7 @@ import math
 import weakref
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Iterator, List, Optional, Sequence, Tuple
+from typing import TYPE_CHECKING, FrozenSet, Iterator, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -33,10 +33,13 @@ from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.model.extent import module_extent
 
+if TYPE_CHECKING:
+    from robodesign.formats.tolerance import ToleratedPose
+
 BASE_PARAMS = ("x", "y", "z", "yaw")
 _NO_MODULE = object()  # free connectors of a prefix whose first module is not in the module set
 _MISS = object()
-_DEAD_END = ((), {}, (), {})  # SearchSpace._step of a state that nothing may follow
+_DEAD_END: Tuple[Tuple[str, ...], dict, tuple, dict] = ((), {}, (), {})  # SearchSpace._step of a state that nothing may follow
 _CACHE_LIMIT = 1 << 16  # entries of a per-order/per-prefix memo before it is cleared
 
 @dataclass(frozen=True)
@@ -73,7 +76,7 @@ class BaseBounds:
     nominal: np.ndarray = field(default_factory=lambda: np.eye(4))
     lower: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     upper: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-    tolerance: object = None  # ToleratedPose that a base pose must satisfy (None: any)
+    tolerance: Optional[ToleratedPose] = None  # that a base pose must satisfy (None: any)
 
     @property
     def free(self) -> Tuple[int, ...]:
@@ -126,7 +129,8 @@ class BaseBounds:
                 lo[3], hi[3] = -b, b
         lo = [max(-10.0, v) for v in lo]
         hi = [min(10.0, v) for v in hi]
-        return BaseBounds(nominal=nominal, lower=tuple(lo), upper=tuple(hi), tolerance=tp)
+        return BaseBounds(nominal=nominal, lower=(lo[0], lo[1], lo[2], lo[3]), upper=(hi[0], hi[1], hi[2], hi[3]),
+                          tolerance=tp)
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,8 +231,8 @@ class SearchSpace:
                 links = 0
             elif k == "link":
                 links += 1
-            if free is not None and free is not _NO_MODULE:
-                free = _mate_step(ms, prev, free, mid)
+            if free is not None and free is not _NO_MODULE:  # then the free connectors (mypy cannot narrow it)
+                free = _mate_step(ms, prev, cast(Tuple[str, ...], free), mid)
             st = (mid, free, dof, links, n + 1, k == "eef")
             new.append((prefix[:j + 1], st))
         if len(cache) + len(new) > _CACHE_LIMIT:
@@ -557,13 +561,15 @@ class SearchSpace:
         :meth:`rank_deficit`), the one whose reach bound covers the goals (smallest :meth:`reach_shortfall`)
         and, among those, whose joints are strongest near the base (smallest :meth:`torque_penalty`) wins
         (ties: the first drawn). With ``orders=1`` the order is uniformly random."""
-        best, best_key = None, None
+        best: Optional[Candidate] = None
+        best_key = None
         for _ in range(max(1, int(orders))):
             order = self.random_order(rng)
             base = self.sample_base(rng, order)
             key = (self.rank_deficit(order), self._shortfall(order, base), self.torque_penalty(order))
             if best_key is None or key < best_key:
                 best, best_key = Candidate(order, base), key
+        assert best is not None  # at least one order was drawn
         return best
 
     def validate_order(self, order: Sequence[str]) -> Optional[str]:
@@ -599,7 +605,8 @@ class SearchSpace:
         clashes with a connector an earlier module than its predecessor left free, see random_order)."""
         ms = self.module_set
         state = None  # state of order[:i] (None: complete, nothing may follow)
-        clash, blocked = False, frozenset()
+        clash = False
+        blocked: FrozenSet[str] = frozenset()
         for i, mid in enumerate(order):
             if mid not in ms:
                 return i, None, clash
@@ -651,7 +658,7 @@ class SearchSpace:
             mid = bases[int(rng.integers(len(bases)))]
             order = [mid]
             state, clash = self._root(mid)
-            blocked = frozenset()  # modules that would mate with an earlier module than the last one
+            blocked: FrozenSet[str] = frozenset()  # modules that would mate with an earlier module than the last one
             while state is not None:
                 names, after, _, blocks = step(state)
                 if not names:
