@@ -75,6 +75,7 @@ def _tool_pieces(module: Module) -> Optional[Tuple[_ToolPiece, ...]]:
     c = eefs[0]
     body_in_tcp = inv(c.pose)
     out = []
+    shape: coal.CollisionGeometry  # coal_shapes types its shapes as object
     for g in module.body(c.body_id).collision:
         for shape in coal_shapes(g):
             shape.computeLocalAABB()

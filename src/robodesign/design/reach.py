@@ -111,9 +111,10 @@ def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None
         return None
     pts = goal_points(task)
     best: Optional[ReachProof] = None
-    if not base_is_free(task):
+    bp = task.base_placement
+    if bp is not None and not base_is_free(task):  # (base_is_free when bp is None)
         for gid, p, tol in pts:
-            dist = distance_to_region(task.base_placement, p)
+            dist = distance_to_region(bp, p)
             need = dist - tol
             if need > R and (best is None or need > best.needed):
                 best = ReachProof("goal", R, need, (gid,), reach.order, dist)
@@ -121,12 +122,12 @@ def reach_proof(task: Task, space: SearchSpace, reach: Optional[SetReach] = None
         # every pair (a sound proof needs only one; beyond _MAX_SPREAD poses, evenly spaced ones are compared)
         sel = pts if len(pts) <= _MAX_SPREAD else [pts[int(i)] for i in np.linspace(0, len(pts) - 1, _MAX_SPREAD)]
         P = np.array([p for _, p, _ in sel])
-        tol = np.array([t for _, _, t in sel])
+        tols = np.array([t for _, _, t in sel])
         D = np.linalg.norm(P[:, None, :] - P[None, :, :], axis=2)
-        need = (D - tol[:, None] - tol[None, :]) / 2.0
-        i, j = np.unravel_index(int(np.argmax(need)), need.shape)
-        if need[i, j] > R:
-            best = ReachProof("spread", R, float(need[i, j]), (sel[i][0], sel[j][0]), reach.order, float(D[i, j]))
+        needs = (D - tols[:, None] - tols[None, :]) / 2.0
+        i, j = np.unravel_index(int(np.argmax(needs)), needs.shape)
+        if needs[i, j] > R:
+            best = ReachProof("spread", R, float(needs[i, j]), (sel[i][0], sel[j][0]), reach.order, float(D[i, j]))
     return best
 
 

@@ -4,9 +4,10 @@ Used by the reach proof (design/reach.py) and the blocked-goal proof (design/blo
 from __future__ import annotations
 
 import math
-from typing import Dict, Sequence
+from typing import Dict
 
 import numpy as np
+import numpy.typing as npt
 
 from robodesign.formats.tolerance import ToleratedPose
 
@@ -44,7 +45,7 @@ def position_radius(tp: ToleratedPose) -> float:
     return best
 
 
-def distance_to_region(tp: ToleratedPose, point: Sequence[float]) -> float:
+def distance_to_region(tp: ToleratedPose, point: npt.ArrayLike) -> float:
     """A lower bound of the distance from world ``point`` to every position ``tp`` allows (0 when a direction
     is unbounded and the point lies that way)."""
     d_nom = tp.nominal[:3, :3].T @ (np.asarray(point, dtype=float) - tp.nominal[:3, 3])
