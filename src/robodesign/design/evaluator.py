@@ -163,7 +163,8 @@ class Evaluator:
                         stage_index=res.stage_index, goals_reached=res.goals_reached,
                         seconds=time.perf_counter() - t0, seed=seed, stages=[s.to_json() for s in res.stages],
                         message=res.message[:500],
-                        solution=res.solution.to_json() if (feasible and self.spec.keep_solutions) else None,
+                        solution=res.solution.to_json()
+                        if (feasible and self.spec.keep_solutions and res.solution is not None) else None,
                         costs=dict(res.verdict.costs) if res.verdict is not None else {},
                         shortfall=None if feasible else res.shortfall)
         return ev

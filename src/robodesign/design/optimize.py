@@ -42,6 +42,7 @@ from typing import (
     Sequence,
     Type,
     Union,
+    cast,
     get_args,
     get_origin,
     get_type_hints,
@@ -182,7 +183,8 @@ def option_specs(cls: Type[Optimizer]) -> List[OptionSpec]:
     out = []
     for f in fields(opts):
         required = f.default is MISSING and f.default_factory is MISSING
-        default = None if required else (f.default if f.default is not MISSING else f.default_factory())
+        default = None if required else (f.default if f.default is not MISSING
+                                          else cast(Callable[[], Any], f.default_factory)())  # not MISSING here
         m = f.metadata
         out.append(OptionSpec(f.name, _type_name(hints[f.name]), default, required, m.get("help", ""),
                               m.get("low"), m.get("high"), m.get("choices")))
@@ -318,9 +320,7 @@ def _takes_space(cls) -> bool:
 
 def available_optimizers() -> Dict[str, metadata.EntryPoint]:
     """name → entry point of every installed optimizer plugin."""
-    eps = metadata.entry_points()
-    group = eps.select(group=ENTRY_POINT_GROUP) if hasattr(eps, "select") else eps.get(ENTRY_POINT_GROUP, [])
-    return {ep.name: ep for ep in group}
+    return {ep.name: ep for ep in metadata.entry_points(group=ENTRY_POINT_GROUP)}
 
 
 def load_optimizer(name: str) -> Type[Optimizer]:
@@ -490,11 +490,12 @@ class Study:
                 if len(fresh) < len(todo):  # the deadline passed within the batch: tell what was evaluated
                     self._dropped += len(todo) - len(fresh)
                     results = results[:todo[len(fresh)]]
-            for i, ev in enumerate(results):
-                opt._observe(ev)
-                history.append(ev)
+            for i, done in enumerate(results):
+                assert done is not None  # every result up to the first candidate not evaluated is filled
+                opt._observe(done)
+                history.append(done)
                 if self.on_evaluation is not None:
-                    self.on_evaluation(n + i, ev, opt.best)
+                    self.on_evaluation(n + i, done, opt.best)
             if self._dropped or late:
                 break
             if len(batch) < size:

@@ -281,7 +281,9 @@ def _achieve_missed_goals(res: SolveResult, plan: "GoalPlanner", task: Task, mod
         sol = solution_of(motion, g2t)
         v = check(task, sol, module_set, cost=cost)
         achieved = sum(bool(ok) for ok in v.goals.values())
-        if v.valid and (achieved, -v.cost) > (res.goals_achieved, -res.verdict.cost):
+        kept = res.verdict
+        assert kept is not None and kept.cost is not None  # a valid verdict (it misses goals): it has a cost
+        if v.valid and v.cost is not None and (achieved, -v.cost) > (res.goals_achieved, -kept.cost):
             res.verdict, res.solution = v, sol.with_(cost=v.cost)
 
 
