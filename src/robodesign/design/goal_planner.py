@@ -4,7 +4,7 @@ a goal's IK solutions, chooses one per goal, plans the moves between them and ti
 from __future__ import annotations
 
 import math
-from typing import Dict, List, Optional, Sequence
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Protocol, Sequence, Tuple, cast
 
 import numpy as np
 
@@ -15,12 +15,47 @@ from robodesign.formats.task_spec import Goal, Task
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
 
+if TYPE_CHECKING:
+    from robodesign.solvers.sequencing import Node
+
 
 class StageFailure(Exception):
     """A stage found the design infeasible; the message says why."""
 
 
 _Fail = StageFailure
+
+
+# What the handler of a goal's solver_kind reads of it besides the Goal attributes (Goal.solver_kind): the
+# goals are told apart by that name, not by their class (a plugin goal type may use any handler)
+class _HoldGoal(Protocol):  # "hold"
+    @property
+    def duration(self) -> float: ...
+
+
+class _ReturnGoal(Protocol):  # "return"
+    @property
+    def return_to(self) -> Optional[str]: ...
+
+
+class _FollowGoal(Protocol):  # "poses"
+    @property
+    def t(self) -> Optional[np.ndarray]: ...
+
+
+class _LeaveGoal(Protocol):  # "leave"
+    @property
+    def id(self) -> str: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def center(self) -> np.ndarray: ...
+    def contains(self, T: np.ndarray) -> bool: ...
+
+
+#: a step of the motion: ("move", target configuration, goal or None), ("hold", duration, goal) or
+#: ("follow", the configurations of the poses, goal)
+_Action = Tuple[str, Any, Optional[Goal]]
 
 
 def goal_poses(g: Goal) -> List[ToleratedPose]:
@@ -111,11 +146,12 @@ class GoalPlanner:
                 seed = None
                 for i, pose in enumerate(g.target_poses):
                     r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
-                    if not r:
+                    q = r.q
+                    if q is None:  # r failed
                         self.res.goals_reached = reached
                         raise _Fail(f"no IK solution for pose {i} of follow goal {g.id}")
-                    seed = r.q
-                    sols.append(r.q)
+                    seed = q
+                    sols.append(q)
                 self.follow_ik[g.id] = sols
                 reached += 1
             else:
@@ -186,7 +222,7 @@ class GoalPlanner:
             q0 = choice[first_pose.id]
         self.q0 = q0
         # build the list of actions: ("move", q_target, goal or None) | ("hold", duration, goal) | ...
-        actions = []
+        actions: List[_Action] = []
         q = q0
         at_config: Dict[str, np.ndarray] = {}
         for g in self.order:
@@ -194,11 +230,12 @@ class GoalPlanner:
                 actions.append(("move", choice[g.id], g))
                 q = choice[g.id]
             elif g.solver_kind == "hold":
-                actions.append(("hold", g.duration, g))
+                actions.append(("hold", cast(_HoldGoal, g).duration, g))
             elif g.solver_kind == "return":
-                target = q0 if g.return_to is None else at_config.get(g.return_to)
+                to = cast(_ReturnGoal, g).return_to
+                target = q0 if to is None else at_config.get(to)
                 if target is None:
-                    raise _Fail(f"returnTo goal {g.id}: goal {g.return_to!r} has no configuration before it")
+                    raise _Fail(f"returnTo goal {g.id}: goal {to!r} has no configuration before it")
                 actions.append(("move", target, g))
                 q = target
             elif g.solver_kind == "poses":
@@ -207,37 +244,39 @@ class GoalPlanner:
                 actions.append(("follow", pts, g))
                 q = pts[-1]
             elif g.solver_kind == "leave":
-                q_out = self._leave_configuration(q, g)
+                leave = cast(_LeaveGoal, g)
+                q_out = self._leave_configuration(q, leave)
                 actions.append(("move", q_out, None))
-                actions.append(("hold", g.duration, g))
+                actions.append(("hold", leave.duration, g))
                 q = q_out
             at_config[g.id] = q
         self.actions = actions
         # plan every move
-        self.paths = []
+        self.paths: List[Optional[np.ndarray]] = []
         q = q0
         for i in range(len(self.actions)):
-            kind, arg, g = self.actions[i]  # an earlier move may have replaced a goal's configuration
+            kind, arg, goal = self.actions[i]  # an earlier move may have replaced a goal's configuration
             if kind == "move":
                 if np.allclose(arg, q, atol=1e-12):
                     self.paths.append(None)
                     continue
                 r = self._plan(q, arg, self.settings.plan_time)
                 if not r:
-                    r, arg = self._plan_to_another_solution(q, arg, g, r)
+                    r, arg = self._plan_to_another_solution(q, arg, goal, r)
                 if not r:
                     # the goals whose moves were planned: a search ranks plan failures by how far they got
                     self.res.goals_reached = len({gg.id for _, _, gg in self.actions[:i] if gg is not None})
-                    raise _Fail(f"no collision-free path to {'goal ' + g.id if g else 'the next waypoint'} "
+                    raise _Fail(f"no collision-free path to {'goal ' + goal.id if goal else 'the next waypoint'} "
                                 f"({r.stats.get('reason')})")
                 self.paths.append(r.path)
                 q = arg
             elif kind == "follow":
                 from robodesign.solvers.planning import check_path
+                assert goal is not None  # a follow action has its goal
                 P = np.vstack(arg)
                 ok, bad = check_path(self.robot, P, self.settings.resolution)
                 if not ok:
-                    raise _Fail(f"follow goal {g.id}: the motion between poses {bad} and {bad + 1} collides")
+                    raise _Fail(f"follow goal {goal.id}: the motion between poses {bad} and {bad + 1} collides")
                 self.paths.append(P)
                 q = arg[-1]
             else:
@@ -278,14 +317,14 @@ class GoalPlanner:
         self.actions = [(kd, alt if (kd == "move" and a is target) else a, gg) for kd, a, gg in self.actions]
         return r, alt
 
-    def _sequence_nodes(self) -> list:
+    def _sequence_nodes(self) -> List[Node]:
         """The goal sequence as a chain for ``solvers.sequencing.choose``. A ``returnTo`` another at/reach
         goal than the first is left out of the objective (its target is chosen by its own neighbours)."""
         from robodesign.solvers.sequencing import Fixed, Free, Jump, Tied
         first = next((g for g in self.order if g.solver_kind in ("pose", "poses")), None)
         if first is None:
             return []
-        nodes = [] if self.start is None else [Fixed(self.start)]
+        nodes: List[Node] = [] if self.start is None else [Fixed(self.start)]
         for g in self.order:
             if g.solver_kind == "pose":
                 nodes.append(Free(g.id, np.asarray(self.ik[g.id])))
@@ -293,14 +332,15 @@ class GoalPlanner:
                 pts = self.follow_ik[g.id]
                 nodes += [Fixed(pts[0]), Jump(pts[-1])]
             elif g.solver_kind == "return" and nodes:
-                if g.return_to is None and self.start is not None:
+                to = cast(_ReturnGoal, g).return_to
+                if to is None and self.start is not None:
                     nodes.append(Tied())
-                elif g.return_to is None:
+                elif to is None:
                     nodes.append(Tied() if first.solver_kind == "pose" else Fixed(self.follow_ik[first.id][0]))
-                elif g.return_to == first.id and first.solver_kind == "pose" and self.start is None:
+                elif to == first.id and first.solver_kind == "pose" and self.start is None:
                     nodes.append(Tied())
-                elif g.return_to in self.follow_ik:
-                    nodes.append(Fixed(self.follow_ik[g.return_to][-1]))
+                elif to in self.follow_ik:
+                    nodes.append(Fixed(self.follow_ik[to][-1]))
         return nodes
 
     def _free_configuration(self) -> np.ndarray:
@@ -311,7 +351,7 @@ class GoalPlanner:
             q = self.robot.random_configuration(self.rng)
         raise _Fail("no collision-free start configuration found")
 
-    def _leave_configuration(self, q: np.ndarray, g: Goal) -> np.ndarray:
+    def _leave_configuration(self, q: np.ndarray, g: _LeaveGoal) -> np.ndarray:
         """A nearby configuration whose TCP is outside the space to leave: the TCP moves in a straight line
         (2 cm steps through the damped Jacobian pseudo-inverse) until it and a point 2 cm further on are
         outside, collision-free. Directions tried: away from the space's centre and along ±x, ±y, ±z; the
@@ -382,6 +422,7 @@ class GoalPlanner:
                 if g is not None:
                     g2t[g.id] = float(traj.t[-1])
             elif kind == "hold":
+                assert g is not None  # a hold action has its goal
                 self._check_hold(traj, arg, g, colliders)
                 if arg > 0:
                     traj = traj.hold(arg, dt)
@@ -389,11 +430,13 @@ class GoalPlanner:
                 if g.solver_kind == "leave":
                     g2t[g.id] = float(traj.t[-1] - _ceil_to(arg, dt))
             elif kind == "follow":
-                if g.t is None:
+                assert g is not None and path is not None  # a follow action has its goal and its path
+                t_rel = cast(_FollowGoal, g).t
+                if t_rel is None:
                     seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
                                             stop_at=list(range(len(path))))
                 else:
-                    seg = _timed_follow(path, g.t, dt)
+                    seg = _timed_follow(path, t_rel, dt)
                 traj = self._append_after_wait(traj, seg, g, colliders)
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
