@@ -5,6 +5,7 @@ import math
 from typing import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from robodesign.core.errors import InputError, PathPart, describe_value
 
@@ -27,7 +28,7 @@ def rot_z(a: float) -> np.ndarray:
     return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]], dtype=float)
 
 
-def homogeneous(R: np.ndarray | None = None, p: Sequence[float] | None = None) -> np.ndarray:
+def homogeneous(R: np.ndarray | None = None, p: npt.ArrayLike | None = None) -> np.ndarray:
     T = np.eye(4)
     if R is not None:
         T[:3, :3] = R
@@ -48,7 +49,7 @@ def inv(T: np.ndarray) -> np.ndarray:
     return out
 
 
-def parse_pose(value, file: str, path: Sequence[PathPart], rot_tol: float = 1e-5) -> np.ndarray:
+def parse_pose(value, file: str | None, path: Sequence[PathPart], rot_tol: float = 1e-5) -> np.ndarray:
     """A CoBRA pose: row-major 4x4 list, or a list of 4x4 matrices multiplied left to right.
 
     The rotation block must be orthonormal with det +1 (to ``rot_tol``) and the last row

@@ -634,7 +634,7 @@ class ToleratedPose:
                                  file=file, path=base + [str(k)])
         if "nominal" not in obj:
             raise InputError("missing required key 'nominal'", file=file, path=base)
-        local = parse_pose(obj["nominal"], file, base + ["nominal"])  # type: ignore[arg-type]  # (a None file works)
+        local = parse_pose(obj["nominal"], file, base + ["nominal"])
         parent = obj.get("nominalParent", "world")
         if not isinstance(parent, str) or not parent:
             raise InputError(f"expected a frame name, got {describe_value(parent)}", file=file,
@@ -794,7 +794,7 @@ class ToleratedPose:
             p = self._sample_part(rng, trans, True, max_tries, unbounded_scale)
         if rot:
             R = self._sample_part(rng, rot, False, max_tries, unbounded_scale)
-        return self.nominal @ homogeneous(R, p)  # type: ignore[arg-type]  # (core says Sequence; arrays work)
+        return self.nominal @ homogeneous(R, p)
 
     def _part_ok(self, cs: List[ProjectionConstraint], p=None, R=None) -> bool:
         for c in cs:

@@ -448,7 +448,7 @@ class _Ctx:
             return np.eye(4)
         xyz = self.floats(el.get("xyz"), 3, f"{field}.xyz", default=(0.0, 0.0, 0.0))
         rpy = self.floats(el.get("rpy"), 3, f"{field}.rpy", default=(0.0, 0.0, 0.0))
-        return homogeneous(rpy_to_matrix(*rpy), xyz)  # type: ignore[arg-type]  # (core says Sequence; arrays work)
+        return homogeneous(rpy_to_matrix(*rpy), xyz)
 
 
 def _align_z_to(axis: np.ndarray) -> np.ndarray:
