@@ -23,15 +23,18 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import coal
 import numpy as np
+import pinocchio as pin
 
 from robodesign.core.spatial import inv
 from robodesign.design.regions import position_radius
+from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import GeometrySpec, coal_shapes
-from robodesign.formats.module_spec import Module
+from robodesign.formats.module_spec import Module, ModuleSet
 from robodesign.formats.task_spec import CollisionFree, Task
 from robodesign.formats.tolerance import ToleratedPose
+from robodesign.model.robot import Obstacle, Robot
 
-__all__ = ["BlockedGoalProof", "ToolBlock", "blocked_goal_proof", "rotation_radius", "tool_block"]
+__all__ = ["BlockedGoalProof", "ToolBlock", "blocked_goal_proof", "fixed_part_proof", "rotation_radius", "tool_block"]
 
 
 def rotation_radius(tp: ToleratedPose) -> float:
@@ -62,18 +65,19 @@ def _tf(M: np.ndarray) -> coal.Transform3s:
 @dataclass(frozen=True)
 class _ToolPiece:
     shape: coal.CollisionGeometry
-    pose: np.ndarray  # in the TCP frame
-    radius: float     # largest distance of its bounding box's corners from the TCP
+    pose: np.ndarray  # in the frame the tolerance moves (the TCP, the base frame)
+    radius: float     # largest distance of its bounding box's corners from that frame's origin
 
 
-def _tool_pieces(module: Module) -> Optional[Tuple[_ToolPiece, ...]]:
-    """The collision geometry of ``module``'s body that holds its eef connector, in the TCP frame; None when
-    the module has not exactly one eef connector."""
-    eefs = [c for c in module.connectors if c.type == "eef"]
-    if len(eefs) != 1:
+def _tool_pieces(module: Module, kind: str = "eef") -> Optional[Tuple[_ToolPiece, ...]]:
+    """The collision geometry of ``module``'s body that holds its ``kind`` connector (``"eef"``: in the TCP
+    frame, the connector's own frame; ``"base"``: in the base frame, whose world pose is the base pose: the
+    connector flipped about x, model/robot.py); None when the module has not exactly one such connector."""
+    cons = [c for c in module.connectors if c.type == kind]
+    if len(cons) != 1:
         return None
-    c = eefs[0]
-    body_in_tcp = inv(c.pose)
+    c = cons[0]
+    body_in_tcp = inv(c.pose) if kind == "eef" else c.entry_pose
     out = []
     shape: coal.CollisionGeometry  # coal_shapes types its shapes as object
     for g in module.body(c.body_id).collision:
@@ -90,13 +94,23 @@ def _tool_pieces(module: Module) -> Optional[Tuple[_ToolPiece, ...]]:
 @dataclass(frozen=True)
 class ToolBlock:
     """End effector ``eef`` at the nominal pose of goal ``goal`` overlaps obstacle ``obstacle`` with a point
-    deeper than ``slack`` [m], the most the goal's tolerance moves any point of it."""
-    goal: str
+    deeper than ``slack`` [m], the most the goal's tolerance moves any point of it. For a base module
+    (``goal`` None), ``eef`` names the base and the pose is the basePlacement's nominal one."""
+    goal: Optional[str]
     eef: str
     obstacle: str
     slack: float
 
+    @property
+    def where(self) -> str:
+        if self.goal is None:
+            return (f"modules {self.eef} at the base placement inside {self.obstacle} (tolerance moves it ≤ "
+                    f"{self.slack * 1e3:.1f} mm)")
+        return f"{self.eef} at goal {self.goal} inside {self.obstacle} (tolerance moves it ≤ {self.slack * 1e3:.1f} mm)"
+
     def to_json(self) -> dict:
+        if self.goal is None:
+            return {"modules": self.eef.split(","), "obstacle": self.obstacle, "slack": self.slack}
         return {"goal": self.goal, "eef": self.eef, "obstacle": self.obstacle, "slack": self.slack}
 
 
@@ -104,7 +118,7 @@ def _static_obstacles(task: Task) -> List[Tuple[str, GeometrySpec]]:
     return [(ob.id, g) for ob in task.obstacles if not ob.moving for g in ob.collision]
 
 
-def _pose_block(goal_id: str, tp: ToleratedPose, eef: str, pieces: Sequence[_ToolPiece],
+def _pose_block(goal_id: Optional[str], tp: ToleratedPose, eef: str, pieces: Sequence[_ToolPiece],
                 obstacles: Sequence[Tuple[str, GeometrySpec]]) -> Optional[ToolBlock]:
     p, th = position_radius(tp), rotation_radius(tp)
     if not (math.isfinite(p) and math.isfinite(th)):
@@ -141,6 +155,69 @@ def tool_block(task: Task, eef: Module) -> Optional[ToolBlock]:
     return out
 
 
+def _fixed_block(task: Task, ms: ModuleSet, prefix: Sequence[str], bp: ToleratedPose) -> Optional[ToolBlock]:
+    """Whether the part of ``prefix`` (an order's first modules) that no joint moves collides with a static
+    obstacle at every base pose ``bp`` allows: the robot's geometry fixed to the world, at the nominal base
+    pose, against the obstacles shrunk by δ = p + θ·r (r: the farthest bounding-box corner of that geometry
+    from the base frame's origin)."""
+    p, th = position_radius(bp), rotation_radius(bp)
+    if not (math.isfinite(p) and math.isfinite(th)):
+        return None
+    robot = Robot(ms, Assembly.from_order(ms, list(prefix)), base_pose=bp.nominal)
+    gd = pin.GeometryData(robot.geom_model)
+    pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, gd, np.zeros(robot.model.nq))
+    origin, r = bp.nominal[:3, 3], 0.0
+    for i, obj in enumerate(robot.geom_model.geometryObjects):
+        if obj.parentJoint != 0:
+            continue
+        shape = obj.geometry
+        shape.computeLocalAABB()
+        lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        M = gd.oMg[i].homogeneous
+        r = max(r, float(np.linalg.norm(corners @ M[:3, :3].T + M[:3, 3] - origin, axis=1).max()))
+    d = p + th * r
+    cores = [Obstacle(oid, core, g.pose) for oid, g in _static_obstacles(task) for core in [_shrunk(g, d)]
+             if core is not None]
+    if not cores:
+        return None
+    robot.set_obstacles(cores)
+    hits = robot.base_collisions()
+    return ToolBlock(None, ",".join(prefix), hits[0][1].removeprefix("obstacle:"), d) if hits else None
+
+
+def fixed_part_proof(task: Task, space, limit: int = 2000) -> Optional["BlockedGoalProof"]:
+    """A proof that every design of ``space`` collides with a static obstacle wherever the task's basePlacement
+    allows its base: every chain from an allowed base module up to and including the first joint module has a
+    part that no joint moves (:func:`_fixed_block`) inside an obstacle. The chains are walked from the base
+    (a blocked chain blocks every extension; the fixed part only grows); None when some chain reaches its
+    first joint unblocked, beyond ``limit`` chains, or without a bounded basePlacement or ``collisionFree``."""
+    bp = task.base_placement
+    if bp is None or bp.is_unconstrained or task.constraint(CollisionFree) is None or not _static_obstacles(task):
+        return None
+    ms = space.module_set
+    blocks: List[ToolBlock] = []
+    stack: List[Tuple[str, ...]] = [(b,) for b in space.base_modules]
+    seen = 0
+    while stack:
+        prefix = stack.pop()
+        seen += 1
+        if seen > limit:
+            return None
+        b = _fixed_block(task, ms, prefix, bp)
+        if b is not None:
+            blocks.append(b)
+            continue
+        kind = ms[prefix[-1]].kind
+        if kind in ("joint", "eef") and len(prefix) > 1:
+            return None  # the first joint (or the end) reached with nothing in the way
+        nxt = space.successors(prefix)
+        if not nxt:
+            continue  # a dead end of the rules: no design passes here
+        stack.extend(prefix + (m,) for m in nxt)
+    return BlockedGoalProof(tuple(blocks), part="fixed") if blocks else None
+
+
 _MEMO: "weakref.WeakKeyDictionary[Task, Dict[str, Optional[ToolBlock]]]" = weakref.WeakKeyDictionary()
 
 
@@ -148,33 +225,37 @@ _MEMO: "weakref.WeakKeyDictionary[Task, Dict[str, Optional[ToolBlock]]]" = weakr
 class BlockedGoalProof:
     """Why no design of the module set fulfils the task: every end effector the search space allows lies, at
     some goal's pose (``blocks``, one per end effector), inside a static obstacle deeper than that goal's
-    tolerance can move it; every design ends with one of them."""
+    tolerance can move it; every design ends with one of them. Or (``part == "fixed"``) every chain of
+    modules the search space allows from a base to its first joint has a part fixed to the world inside an
+    obstacle at every base pose the basePlacement allows (``blocks``: the shortest blocked chains)."""
     blocks: Tuple[ToolBlock, ...]
     kind: str = "blocked"
+    part: str = "eef"
 
     @property
     def goals(self) -> Tuple[str, ...]:
-        return tuple(dict.fromkeys(b.goal for b in self.blocks))
+        return tuple(dict.fromkeys(b.goal for b in self.blocks if b.goal is not None))
 
     @property
     def message(self) -> str:
-        where = "; ".join(f"{b.eef} at goal {b.goal} inside {b.obstacle} (tolerance moves it ≤ {b.slack * 1e3:.1f} mm)"
-                          for b in self.blocks)
+        where = "; ".join(b.where for b in self.blocks)
+        if self.part == "fixed":
+            return (f"provably out of reach: every design of the module set has a part that no joint moves inside an "
+                    f"obstacle deeper than the base placement's tolerance can move it ({len(self.blocks)} chains from "
+                    f"a base to its first joint, e.g. {where})")
         return ("provably out of reach: every end effector of the module set, held at a goal's pose, lies inside an "
                 f"obstacle deeper than the goal's tolerance can move it: {where}")
 
     def to_json(self) -> dict:
-        return {"kind": self.kind, "goals": list(self.goals), "blocks": [b.to_json() for b in self.blocks],
-                "message": self.message}
+        return {"kind": self.kind, "part": self.part, "goals": list(self.goals),
+                "blocks": [b.to_json() for b in self.blocks], "message": self.message}
 
 
-def blocked_goal_proof(task: Task, end_effectors: Sequence[Module]) -> Optional[BlockedGoalProof]:
+def blocked_goal_proof(task: Task, end_effectors: Sequence[Module], space=None) -> Optional[BlockedGoalProof]:
     """A proof that every module of ``end_effectors`` (the end effectors the search space allows) provably
-    collides at some goal pose of ``task`` (:func:`tool_block`), or None (also when there are none)."""
-    blocks = []
-    for eef in end_effectors:
-        b = tool_block(task, eef)
-        if b is None:
-            return None
-        blocks.append(b)
-    return BlockedGoalProof(tuple(blocks)) if blocks else None
+    collides at some goal pose of ``task`` (:func:`tool_block`), or, given the search ``space``, that every
+    design's fixed part does (:func:`fixed_part_proof`); None otherwise."""
+    blocks = [tool_block(task, m) for m in end_effectors]
+    if blocks and all(b is not None for b in blocks):
+        return BlockedGoalProof(tuple(b for b in blocks if b is not None))
+    return fixed_part_proof(task, space) if space is not None else None

@@ -109,7 +109,7 @@ def diagnose(problem: Problem, evaluations: Sequence[Any], stopped: str = "budge
     reach = reach or set_reach(problem.space)
     proof: Optional[Union[ReachProof, BlockedGoalProof]] = reach_proof(problem.task, problem.space, reach)
     if proof is None:
-        proof = blocked_goal_proof(problem.task, allowed_end_effectors(problem.space))
+        proof = blocked_goal_proof(problem.task, allowed_end_effectors(problem.space), problem.space)
     # the furthest design: latest stage, then most goals reached (the evaluator's ranking of infeasible ones)
     far = max(evaluations, key=lambda e: (_get(e, "stage_index", -1), _get(e, "goals_reached", 0) or 0), default=None)
     best_stage = "" if far is None else str(_get(far, "stage", ""))
