@@ -149,6 +149,15 @@ def _str_list(v, what="name"):
     return v
 
 
+def _entry_list(v, key: str):
+    """A list of entries given as one or a list, where a bare string ``s`` stands for ``{key: s}``."""
+    if isinstance(v, str):
+        v = [v]
+    if isinstance(v, list):
+        return [{key: x} if isinstance(x, str) else x for x in v]
+    return v
+
+
 def _check_cost(v: str) -> str:
     from robodesign.formats.costs import parse_cost
     c = parse_cost(v)
@@ -370,32 +379,9 @@ class ExperimentConfig(BaseModel):
             raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it names the results folder)")
         return v
 
-    @field_validator("tasks", mode="before")
-    @classmethod
-    def _tasks(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"task": x} if isinstance(x, str) else x for x in v]
-        return v
-
-    @field_validator("benchmarks", mode="before")
-    @classmethod
-    def _benchmarks(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"id": x} if isinstance(x, str) else x for x in v]
-        return v
-
-    @field_validator("optimizers", mode="before")
-    @classmethod
-    def _optimizers(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"name": x} if isinstance(x, str) else x for x in v]
-        return v
+    _tasks = field_validator("tasks", mode="before")(classmethod(lambda cls, v: _entry_list(v, "task")))
+    _benchmarks = field_validator("benchmarks", mode="before")(classmethod(lambda cls, v: _entry_list(v, "id")))
+    _optimizers = field_validator("optimizers", mode="before")(classmethod(lambda cls, v: _entry_list(v, "name")))
 
     @field_validator("executor", mode="before")
     @classmethod
