@@ -10,7 +10,7 @@ import os
 import secrets
 import shutil
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Dict, List, Optional, Sequence, Type, TypeVar, Union
 
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
@@ -48,6 +48,7 @@ from robodesign.web.safefiles import (
 from robodesign.web.site_errors import Conflict, NotFound
 
 log = logging.getLogger("robodesign.web")
+_Row = TypeVar("_Row", db.TaskRow, db.ModuleSetRow)  # a registered task or module set
 
 
 def parse_task_file(data, file: Path) -> Union[Task, CollabTask]:
@@ -320,23 +321,23 @@ class Registration(BenchBase):
             raise InputError("not UTF-8 text", file=rel) from None
         return self.add_module_set(name, text, _Prefixed(z, prefix))
 
+    def _row(self, table: Type[_Row], columns: tuple, key_column, key: str, what: str, file: bool) -> _Row:
+        """The row of ``table`` whose ``key_column`` is ``key``, with the listing ``columns`` and its file (``json``)
+        only when ``file``; NotFound (``unknown <what> <key>``) when there is none."""
+        cols = columns + ((table.json,) if file else ())
+        with self.Session() as s:
+            row = s.scalar(select(table).options(db.only(cols)).where(key_column == key))
+        if row is None:
+            raise NotFound(f"unknown {what} {key!r}")
+        return row
+
     def task_row(self, tid: str, file: bool = False) -> db.TaskRow:
         """The task's row; its file (``json``) only when ``file``."""
-        cols = db.TASK_LIST_COLUMNS + ((db.TaskRow.json,) if file else ())
-        with self.Session() as s:
-            row = s.scalar(select(db.TaskRow).options(db.only(cols)).where(db.TaskRow.task_id == tid))
-        if row is None:
-            raise NotFound(f"unknown task {tid!r}")
-        return row
+        return self._row(db.TaskRow, db.TASK_LIST_COLUMNS, db.TaskRow.task_id, tid, "task", file)
 
     def module_set_row(self, name: str, file: bool = False) -> db.ModuleSetRow:
         """The module set's row; its file (``json``) only when ``file``."""
-        cols = db.MODULE_SET_LIST_COLUMNS + ((db.ModuleSetRow.json,) if file else ())
-        with self.Session() as s:
-            row = s.scalar(select(db.ModuleSetRow).options(db.only(cols)).where(db.ModuleSetRow.name == name))
-        if row is None:
-            raise NotFound(f"unknown module set {name!r}")
-        return row
+        return self._row(db.ModuleSetRow, db.MODULE_SET_LIST_COLUMNS, db.ModuleSetRow.name, name, "module set", file)
 
     def parsed_task(self, tid: str) -> Union[Task, CollabTask]:
         """The task (a CollabTask when it is collaborative), parsed once."""
