@@ -9,8 +9,9 @@ import logging
 import os
 import secrets
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Type, TypeVar, Union
+from typing import Dict, Iterator, List, Optional, Sequence, Type, TypeVar, Union
 
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
@@ -160,6 +161,23 @@ class Registration(BenchBase):
         p.mkdir(parents=True)
         return p
 
+    @contextmanager
+    def _stage(self) -> Iterator[Path]:
+        """A fresh staging folder (:meth:`_staging`), removed on leaving, whether or not what it held was moved."""
+        stage = self._staging()
+        try:
+            yield stage
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+
+    def _move_in(self, pkg: Path, kind: str, name: str) -> Path:
+        """Move the checked package folder ``pkg`` into the data folder as ``<kind>/<name>-<random>``; that folder,
+        relative to the data folder."""
+        assert_no_symlinks(pkg)
+        folder = Path(kind) / f"{name}-{secrets.token_hex(6)}"
+        os.replace(pkg, self.data / folder)
+        return folder
+
     def _commit_new(self, row: db.Base, folder: Path, taken: str) -> None:
         """Insert ``row`` whose files were just moved to ``folder``; on any failure the folder goes too."""
         with self.Session() as s:
@@ -202,8 +220,7 @@ class Registration(BenchBase):
         db.check_row(row, {"task_id": "header.ID", "name": "header.taskName"}, fname)
         if self._has_task(tid):
             raise Conflict(f"task {tid!r} is already registered (task IDs are immutable; use a new ID or version)")
-        stage = self._staging()
-        try:
+        with self._stage() as stage:
             pkg = stage / "pkg"
             pkg.mkdir()
             refs = check_mesh_refs(data, pkg, fname)
@@ -212,13 +229,7 @@ class Registration(BenchBase):
             write_new_file(pkg, "/".join(segs) + ".json", text.encode("utf-8"))
             parsed = parse_task_file(loads_json(text, fname), task_file)  # the file as written: its warnings too
             task = parsed.task if isinstance(parsed, CollabTask) else parsed
-            assert_no_symlinks(pkg)
-            folder = Path("tasks") / f"{segs[-1]}-{secrets.token_hex(6)}"
-            os.replace(pkg, self.data / folder)
-        except BaseException:
-            shutil.rmtree(stage, ignore_errors=True)
-            raise
-        shutil.rmtree(stage, ignore_errors=True)
+            folder = self._move_in(pkg, "tasks", segs[-1])
         row.tags, row.folder, row.assets = json.dumps(list(task.header.tags)), folder.as_posix(), json.dumps(assets)
         row.n_goals, row.n_obstacles = len(task.goals), len(task.obstacles)
         robots = ([{"ID": rid, "name": parsed.robot_names[rid]} for rid in parsed.robot_ids]
@@ -253,21 +264,14 @@ class Registration(BenchBase):
         db.check_row(db.ModuleSetRow(name=name, json=text, folder=""), {"json": "modules.json"}, fname)
         if self._has_module_set(name):
             raise Conflict(f"module set {name!r} is already registered")
-        stage = self._staging()
-        try:
+        with self._stage() as stage:
             root = stage / name
             root.mkdir()
             refs = check_mesh_refs(data, root, fname)
             assets = self._store_refs(refs, source, root)
             write_new_file(root, "modules.json", text.encode("utf-8"))
             ms = parse_module_set(data, root / "modules.json", name=name)
-            assert_no_symlinks(root)
-            folder = Path("modulesets") / f"{name}-{secrets.token_hex(6)}"
-            os.replace(root, self.data / folder)
-        except BaseException:
-            shutil.rmtree(stage, ignore_errors=True)
-            raise
-        shutil.rmtree(stage, ignore_errors=True)
+            folder = self._move_in(root, "modulesets", name)
         self._commit_new(db.ModuleSetRow(name=name, json=text, folder=folder.as_posix(), assets=json.dumps(assets),
                                          module_ids=json.dumps(list(ms.modules)), origin=origin),
                          folder, f"module set {name!r} is already registered")
