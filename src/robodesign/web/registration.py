@@ -378,17 +378,18 @@ class Registration(BenchBase):
             self._msets[name] = ms
         return ms
 
+    def _rows(self, table: Type[_Row], columns: tuple, key_column) -> List[_Row]:
+        """Every row of ``table`` by ``key_column``, with the listing ``columns`` only."""
+        with self.Session() as s:
+            return list(s.scalars(select(table).options(db.only(columns)).order_by(key_column)))
+
     def tasks(self) -> List[db.TaskRow]:
         """Every task, without its file (``json`` is not loaded)."""
-        with self.Session() as s:
-            return list(s.scalars(select(db.TaskRow).options(db.only(db.TASK_LIST_COLUMNS))
-                                  .order_by(db.TaskRow.task_id)))
+        return self._rows(db.TaskRow, db.TASK_LIST_COLUMNS, db.TaskRow.task_id)
 
     def module_sets(self) -> List[db.ModuleSetRow]:
         """Every module set, without its file (``json`` is not loaded)."""
-        with self.Session() as s:
-            return list(s.scalars(select(db.ModuleSetRow).options(db.only(db.MODULE_SET_LIST_COLUMNS))
-                                  .order_by(db.ModuleSetRow.name)))
+        return self._rows(db.ModuleSetRow, db.MODULE_SET_LIST_COLUMNS, db.ModuleSetRow.name)
 
     def cost_functions(self) -> List[db.CostFunctionRow]:
         with self.Session() as s:
