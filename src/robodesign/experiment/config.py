@@ -149,6 +149,22 @@ def _str_list(v, what="name"):
     return v
 
 
+def _plain_name(v, what: str, note: str = ""):
+    """``v`` (a name or label that names results, or None) when it holds only letters, digits, '_', '.', '+', '-'."""
+    if v is not None and not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
+        raise ValueError(f"{what} {v!r}: use letters, digits, '_', '.', '+', '-' only{note}")
+    return v
+
+
+def _entry_list(v, key: str):
+    """A list of entries given as one or a list, where a bare string ``s`` stands for ``{key: s}``."""
+    if isinstance(v, str):
+        v = [v]
+    if isinstance(v, list):
+        return [{key: x} if isinstance(x, str) else x for x in v]
+    return v
+
+
 def _check_cost(v: str) -> str:
     from robodesign.formats.costs import parse_cost
     c = parse_cost(v)
@@ -253,12 +269,7 @@ class SuiteEntry(_Overrides):
     def _one_or_list(cls, v):
         return [v] if isinstance(v, dict) else v
 
-    @field_validator("name")
-    @classmethod
-    def _name(cls, v):
-        if not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
-            raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it prefixes the task names)")
-        return v
+    _name = field_validator("name")(classmethod(lambda cls, v: _plain_name(v, "name", " (it prefixes the task names)")))
 
     @model_validator(mode="after")
     def _where(self):
@@ -295,12 +306,7 @@ class OptimizerEntry(BaseModel):
 
     _b = field_validator("budget", mode="before")(classmethod(lambda cls, v: _budget_text(v)))
 
-    @field_validator("label")
-    @classmethod
-    def _label(cls, v):
-        if v is not None and not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
-            raise ValueError(f"label {v!r}: use letters, digits, '_', '.', '+', '-' only")
-        return v
+    _label = field_validator("label")(classmethod(lambda cls, v: _plain_name(v, "label")))
 
     @property
     def key(self) -> str:
@@ -363,39 +369,11 @@ class ExperimentConfig(BaseModel):
             _check_cost(c)
         return v
 
-    @field_validator("name")
-    @classmethod
-    def _name(cls, v):
-        if v is not None and not re.fullmatch(r"[A-Za-z0-9_.+\-]+", v):
-            raise ValueError(f"name {v!r}: use letters, digits, '_', '.', '+', '-' only (it names the results folder)")
-        return v
+    _name = field_validator("name")(classmethod(lambda cls, v: _plain_name(v, "name", " (it names the results folder)")))
 
-    @field_validator("tasks", mode="before")
-    @classmethod
-    def _tasks(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"task": x} if isinstance(x, str) else x for x in v]
-        return v
-
-    @field_validator("benchmarks", mode="before")
-    @classmethod
-    def _benchmarks(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"id": x} if isinstance(x, str) else x for x in v]
-        return v
-
-    @field_validator("optimizers", mode="before")
-    @classmethod
-    def _optimizers(cls, v):
-        if isinstance(v, str):
-            v = [v]
-        if isinstance(v, list):
-            return [{"name": x} if isinstance(x, str) else x for x in v]
-        return v
+    _tasks = field_validator("tasks", mode="before")(classmethod(lambda cls, v: _entry_list(v, "task")))
+    _benchmarks = field_validator("benchmarks", mode="before")(classmethod(lambda cls, v: _entry_list(v, "id")))
+    _optimizers = field_validator("optimizers", mode="before")(classmethod(lambda cls, v: _entry_list(v, "name")))
 
     @field_validator("executor", mode="before")
     @classmethod

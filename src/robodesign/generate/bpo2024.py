@@ -27,9 +27,9 @@ from robodesign.generate.common import (
     PI,
     Provenance,
     ReferenceArm,
-    box_distance,
     full_pose,
     header,
+    outside_and_in_reach,
     set_reach_bound,
     tolerated,
     transform,
@@ -339,8 +339,7 @@ def build_published(prov: Provenance, opts: Dict[str, Any], folder: Path) -> Gen
         cubes = [voxel_centre(c) for c in o]
         boxes = [AABB.cube(c, CUBE) for c in cubes]
         goals = [transform(voxel_centre(c), R) for c in g]
-        if all(all(b.distance(T[:3, 3]) > 0.0 for b in boxes) and box_distance(T[:3, 3], lo, hi) <= reach
-               for T in goals):
+        if outside_and_in_reach(goals, boxes, lo, hi, reach):
             return GeneratedTask(tid, _published_cell(tid, prov, opts, cubes, goals))
     raise RobodesignError(f"bpo2024: no {opts['archetype']} ({opts['level']}) cell with every goal outside the cubes "
                           f"in {PUBLISHED_CELL_TRIES} draws (seed {prov.seed}, index {prov.index})")

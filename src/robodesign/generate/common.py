@@ -248,6 +248,13 @@ def box_distance(p, lo, hi) -> float:
     return float(np.linalg.norm(d))
 
 
+def outside_and_in_reach(goals: Sequence[np.ndarray], boxes: Sequence[AABB], lo, hi, reach: float) -> bool:
+    """The published variants' goal test (whitman2020, bpo2024): the position of every goal pose lies outside
+    every box (distance > 0) and within ``reach`` of the base region [lo, hi] (:func:`box_distance`)."""
+    return all(all(b.distance(T[:3, 3]) > 0.0 for b in boxes) and box_distance(T[:3, 3], lo, hi) <= reach
+               for T in goals)
+
+
 class ObstacleField:
     """The obstacles of a task (as the generators write it), for distance queries with coal."""
 

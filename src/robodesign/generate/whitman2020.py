@@ -33,9 +33,9 @@ from robodesign.generate.common import (
     PI,
     Provenance,
     ReferenceArm,
-    box_distance,
     full_pose,
     header,
+    outside_and_in_reach,
     random_rotation,
     set_reach_bound,
     tolerated,
@@ -210,9 +210,7 @@ def build_published(prov: Provenance, opts: Dict[str, Any], folder: Path) -> Gen
             T = transform(rng.uniform([-WORKSPACE, -WORKSPACE, -WORKSPACE], [WORKSPACE, WORKSPACE, GOAL_TOP]))
             T[:3, :3] = random_rotation(rng)
             goals.append(T)
-        ok = all(all(c.distance(T[:3, 3]) > 0.0 for c in cubes) and box_distance(T[:3, 3], lo, hi) <= reach
-                 for T in goals)
-        if ok:
+        if outside_and_in_reach(goals, cubes, lo, hi, reach):
             return GeneratedTask(tid, _published_cell(tid, prov, opts, cubes, goals))
     raise RobodesignError(f"whitman2020: no cell with {n} goals outside {m} cubes in {PUBLISHED_CELL_TRIES} draws "
                           f"(seed {prov.seed}, index {prov.index})")

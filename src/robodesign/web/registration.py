@@ -9,8 +9,9 @@ import logging
 import os
 import secrets
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Union
+from typing import Dict, Iterator, List, Optional, Sequence, Type, TypeVar, Union
 
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
@@ -48,6 +49,7 @@ from robodesign.web.safefiles import (
 from robodesign.web.site_errors import Conflict, NotFound
 
 log = logging.getLogger("robodesign.web")
+_Row = TypeVar("_Row", db.TaskRow, db.ModuleSetRow)  # a registered task or module set
 
 
 def parse_task_file(data, file: Path) -> Union[Task, CollabTask]:
@@ -159,6 +161,23 @@ class Registration(BenchBase):
         p.mkdir(parents=True)
         return p
 
+    @contextmanager
+    def _stage(self) -> Iterator[Path]:
+        """A fresh staging folder (:meth:`_staging`), removed on leaving, whether or not what it held was moved."""
+        stage = self._staging()
+        try:
+            yield stage
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+
+    def _move_in(self, pkg: Path, kind: str, name: str) -> Path:
+        """Move the checked package folder ``pkg`` into the data folder as ``<kind>/<name>-<random>``; that folder,
+        relative to the data folder."""
+        assert_no_symlinks(pkg)
+        folder = Path(kind) / f"{name}-{secrets.token_hex(6)}"
+        os.replace(pkg, self.data / folder)
+        return folder
+
     def _commit_new(self, row: db.Base, folder: Path, taken: str) -> None:
         """Insert ``row`` whose files were just moved to ``folder``; on any failure the folder goes too."""
         with self.Session() as s:
@@ -201,8 +220,7 @@ class Registration(BenchBase):
         db.check_row(row, {"task_id": "header.ID", "name": "header.taskName"}, fname)
         if self._has_task(tid):
             raise Conflict(f"task {tid!r} is already registered (task IDs are immutable; use a new ID or version)")
-        stage = self._staging()
-        try:
+        with self._stage() as stage:
             pkg = stage / "pkg"
             pkg.mkdir()
             refs = check_mesh_refs(data, pkg, fname)
@@ -211,13 +229,7 @@ class Registration(BenchBase):
             write_new_file(pkg, "/".join(segs) + ".json", text.encode("utf-8"))
             parsed = parse_task_file(loads_json(text, fname), task_file)  # the file as written: its warnings too
             task = parsed.task if isinstance(parsed, CollabTask) else parsed
-            assert_no_symlinks(pkg)
-            folder = Path("tasks") / f"{segs[-1]}-{secrets.token_hex(6)}"
-            os.replace(pkg, self.data / folder)
-        except BaseException:
-            shutil.rmtree(stage, ignore_errors=True)
-            raise
-        shutil.rmtree(stage, ignore_errors=True)
+            folder = self._move_in(pkg, "tasks", segs[-1])
         row.tags, row.folder, row.assets = json.dumps(list(task.header.tags)), folder.as_posix(), json.dumps(assets)
         row.n_goals, row.n_obstacles = len(task.goals), len(task.obstacles)
         robots = ([{"ID": rid, "name": parsed.robot_names[rid]} for rid in parsed.robot_ids]
@@ -252,21 +264,14 @@ class Registration(BenchBase):
         db.check_row(db.ModuleSetRow(name=name, json=text, folder=""), {"json": "modules.json"}, fname)
         if self._has_module_set(name):
             raise Conflict(f"module set {name!r} is already registered")
-        stage = self._staging()
-        try:
+        with self._stage() as stage:
             root = stage / name
             root.mkdir()
             refs = check_mesh_refs(data, root, fname)
             assets = self._store_refs(refs, source, root)
             write_new_file(root, "modules.json", text.encode("utf-8"))
             ms = parse_module_set(data, root / "modules.json", name=name)
-            assert_no_symlinks(root)
-            folder = Path("modulesets") / f"{name}-{secrets.token_hex(6)}"
-            os.replace(root, self.data / folder)
-        except BaseException:
-            shutil.rmtree(stage, ignore_errors=True)
-            raise
-        shutil.rmtree(stage, ignore_errors=True)
+            folder = self._move_in(root, "modulesets", name)
         self._commit_new(db.ModuleSetRow(name=name, json=text, folder=folder.as_posix(), assets=json.dumps(assets),
                                          module_ids=json.dumps(list(ms.modules)), origin=origin),
                          folder, f"module set {name!r} is already registered")
@@ -320,23 +325,23 @@ class Registration(BenchBase):
             raise InputError("not UTF-8 text", file=rel) from None
         return self.add_module_set(name, text, _Prefixed(z, prefix))
 
+    def _row(self, table: Type[_Row], columns: tuple, key_column, key: str, what: str, file: bool) -> _Row:
+        """The row of ``table`` whose ``key_column`` is ``key``, with the listing ``columns`` and its file (``json``)
+        only when ``file``; NotFound (``unknown <what> <key>``) when there is none."""
+        cols = columns + ((table.json,) if file else ())
+        with self.Session() as s:
+            row = s.scalar(select(table).options(db.only(cols)).where(key_column == key))
+        if row is None:
+            raise NotFound(f"unknown {what} {key!r}")
+        return row
+
     def task_row(self, tid: str, file: bool = False) -> db.TaskRow:
         """The task's row; its file (``json``) only when ``file``."""
-        cols = db.TASK_LIST_COLUMNS + ((db.TaskRow.json,) if file else ())
-        with self.Session() as s:
-            row = s.scalar(select(db.TaskRow).options(db.only(cols)).where(db.TaskRow.task_id == tid))
-        if row is None:
-            raise NotFound(f"unknown task {tid!r}")
-        return row
+        return self._row(db.TaskRow, db.TASK_LIST_COLUMNS, db.TaskRow.task_id, tid, "task", file)
 
     def module_set_row(self, name: str, file: bool = False) -> db.ModuleSetRow:
         """The module set's row; its file (``json``) only when ``file``."""
-        cols = db.MODULE_SET_LIST_COLUMNS + ((db.ModuleSetRow.json,) if file else ())
-        with self.Session() as s:
-            row = s.scalar(select(db.ModuleSetRow).options(db.only(cols)).where(db.ModuleSetRow.name == name))
-        if row is None:
-            raise NotFound(f"unknown module set {name!r}")
-        return row
+        return self._row(db.ModuleSetRow, db.MODULE_SET_LIST_COLUMNS, db.ModuleSetRow.name, name, "module set", file)
 
     def parsed_task(self, tid: str) -> Union[Task, CollabTask]:
         """The task (a CollabTask when it is collaborative), parsed once."""
@@ -373,17 +378,18 @@ class Registration(BenchBase):
             self._msets[name] = ms
         return ms
 
+    def _rows(self, table: Type[_Row], columns: tuple, key_column) -> List[_Row]:
+        """Every row of ``table`` by ``key_column``, with the listing ``columns`` only."""
+        with self.Session() as s:
+            return list(s.scalars(select(table).options(db.only(columns)).order_by(key_column)))
+
     def tasks(self) -> List[db.TaskRow]:
         """Every task, without its file (``json`` is not loaded)."""
-        with self.Session() as s:
-            return list(s.scalars(select(db.TaskRow).options(db.only(db.TASK_LIST_COLUMNS))
-                                  .order_by(db.TaskRow.task_id)))
+        return self._rows(db.TaskRow, db.TASK_LIST_COLUMNS, db.TaskRow.task_id)
 
     def module_sets(self) -> List[db.ModuleSetRow]:
         """Every module set, without its file (``json`` is not loaded)."""
-        with self.Session() as s:
-            return list(s.scalars(select(db.ModuleSetRow).options(db.only(db.MODULE_SET_LIST_COLUMNS))
-                                  .order_by(db.ModuleSetRow.name)))
+        return self._rows(db.ModuleSetRow, db.MODULE_SET_LIST_COLUMNS, db.ModuleSetRow.name)
 
     def cost_functions(self) -> List[db.CostFunctionRow]:
         with self.Session() as s:
