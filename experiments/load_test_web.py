@@ -389,7 +389,7 @@ def siege(argv) -> int:
                     except OSError:
                         st, dt = -1, 60.0
                     with lock:
-                        samples.append((dt, st))
+                        samples.append((dt, st, path, time.perf_counter() - dt))
                     stop.wait(rng.uniform(*args.think))
 
             def viewer_client(i):  # the viewer attack: one big solution's viewer, again and again
@@ -454,7 +454,7 @@ def siege(argv) -> int:
                 n += 1
                 st, dt, body = upload(json.dumps(sol_json(2 + 0.01 * n + (0.5 if attack else 0))),
                                       f"10.3.{int(attack)}.{n}", f"{name}{n}")
-                honest.append((st, dt))
+                honest.append((st, dt, time.perf_counter() - dt))
                 time.sleep(3.0)
             rss = rss_mib(server.pid)
             stop.set()
@@ -467,15 +467,24 @@ def siege(argv) -> int:
                 t.join(10)
             lat = np.array([x[0] for x in samples]) * 1000
             statuses: dict = {}
-            for _, st in samples:
+            for _, st, _, _ in samples:
                 statuses[st] = statuses.get(st, 0) + 1
+            # where the tail is: per page, and how many of the slowest 1 % overlapped an honest upload's check
+            by_path: dict = {}
+            for dt, _, path, _ in samples:
+                by_path.setdefault(path.split("?")[0], []).append(dt * 1000)
+            slow = sorted(samples, key=lambda x: -x[0])[: max(1, len(samples) // 100)]
+            during = sum(1 for dt, _, _, t0 in slow
+                         if any(h0 - 0.05 <= t0 + dt and t0 <= h0 + hd for _, hd, h0 in honest))
             res = {"page_requests": len(lat),
                    "page_ms": {q: round(float(np.percentile(lat, v)), 1) for q, v in
                                (("p50", 50), ("p95", 95), ("p99", 99), ("max", 100))},
                    "page_statuses": statuses,
                    "honest_upload_s": [round(x[1], 2) for x in honest],
                    "honest_statuses": sorted({x[0] for x in honest}),
-                   "server_rss_mib": round(rss)}
+                   "server_rss_mib": round(rss),
+                   "page_p99_ms_by_path": {k: round(float(np.percentile(v, 99)), 1) for k, v in sorted(by_path.items())},
+                   "slowest_1pct_during_an_upload": f"{during} of {len(slow)}"}
             if attack:
                 vs = [x for x in viewer if x[0] == 200]
                 res["viewer"] = {"requests": len(viewer), "ok": len(vs),
