@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import contextlib
-import gc
 import os
 from pathlib import Path
 from typing import Optional, Sequence
@@ -65,10 +64,6 @@ def create_app(db_url: Optional[str] = None, data_dir: str | Path = "robodesign_
     @contextlib.asynccontextmanager
     async def lifespan(_app):
         site.resume_pending()
-        # what the process holds at start-up (the libraries, the seeded site) lives as long as it: frozen out of
-        # the cyclic collector's full passes, which would scan it again every few hundred requests
-        gc.collect()
-        gc.freeze()
         yield
         queue.close()
         checker.close()
