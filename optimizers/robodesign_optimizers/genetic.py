@@ -101,9 +101,6 @@ class GeneticOptimizer(Optimizer):
         base_sigma: float = option(0.1, low=0.0,
                                    help="sigma of the Gaussian base mutation, as a fraction of each range")
         max_idle_generations: int = option(25, low=1, help="stop after this many generations without a new candidate")
-        restart_evals: int = option(0, low=0, help="while no design is feasible: after this many evaluations since the "
-                                                   "start or the last restart, start afresh from new designs "
-                                                   "(nothing kept but the cache); 0: never")
         informed: int = option(2, low=0, help="the initial population and immigrants: the best of this many "
                                               "random orders by reach (a base from the goals' geometry whose "
                                               "reach bound covers them) and torque profile "
@@ -129,9 +126,6 @@ class GeneticOptimizer(Optimizer):
         self._waiting: Dict[str, List[Individual]] = {}  # asked, not yet told
         self._idle = 0
         self._done = False
-        self._feasible = False      # some told evaluation was feasible
-        self._since_restart = 0     # evaluations told since the start or the last restart
-        self.restarts = 0
 
     # -- ask / tell ---------------------------------------------------------------------------------
     def ask(self) -> Optional[Candidate]:
@@ -174,8 +168,6 @@ class GeneticOptimizer(Optimizer):
     def tell(self, evaluation) -> None:
         k = evaluation.candidate.key()
         self.cache[k] = float(evaluation.score)
-        self._feasible = self._feasible or bool(evaluation.feasible)
-        self._since_restart += 1
         for ind in self._waiting.pop(k, []):
             ind.fitness.values = (float(evaluation.score),)
 
@@ -198,16 +190,6 @@ class GeneticOptimizer(Optimizer):
         pop = [ind for ind in self.population if ind.fitness.valid]
         if not pop:
             return 0
-        if self.options.restart_evals and not self._feasible and self._since_restart >= self.options.restart_evals:
-            # no feasible design yet: the population has settled on designs that stop at the same stage (its
-            # first generations decide much, docs/benchmarks.md); start afresh, as an independent search
-            fresh_pop = [ind for ind in self._initial_population() if ind.key() not in self.cache]
-            if fresh_pop:
-                self._since_restart, self.restarts = 0, self.restarts + 1
-                self.population = fresh_pop
-                self._to_ask = deque(fresh_pop)
-                self.generation += 1
-                return len(fresh_pop)
         elites = [ind.copy() for ind in self.toolbox.elite(pop, self.elite)]
         n = self.options.population_size - len(elites)
         with self._deap_random():
