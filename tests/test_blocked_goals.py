@@ -144,9 +144,10 @@ def test_optimize_reports_the_blocked_goal_as_provably_out_of_reach(tmp_path, ca
 
 
 def test_the_frames_match_the_robot_the_judge_builds():
-    """Independent of design/blocked.py's conventions: the tool's and the base's collision geometry placed by the
-    Robot (pinocchio) equals the TCP pose times the eef pieces, and the base pose times the base pieces."""
+    """Independent of design/blocked.py's conventions: the tool's collision geometry placed by the Robot
+    (pinocchio) equals the TCP pose times the eef pieces."""
     import pinocchio as pin
+
     from robodesign.design.blocked import _tool_pieces
     from robodesign.formats.assembly import Assembly
     from robodesign.model.robot import Robot
@@ -165,13 +166,12 @@ def test_the_frames_match_the_robot_the_judge_builds():
         pin.forwardKinematics(robot.model, robot.data, q)
         pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, gd)
         placed = {o.name: gd.oMg[i].homogeneous for i, o in enumerate(robot.geom_model.geometryObjects)}
-        for frame, kind, idx in ((T, "eef", len(order) - 1), (B, "base", 0)):
-            pieces = _tool_pieces(HEAVY[order[idx]], kind)
-            mine = [frame @ p.pose for p in pieces]
-            theirs = [M for name, M in placed.items() if name.startswith(f"{order[idx]}.")]
-            assert len(mine) == len(theirs) and len(mine) > 0
-            for M in mine:
-                assert min(np.abs(M - N).max() for N in theirs) < 1e-9
+        pieces = _tool_pieces(HEAVY[order[-1]])
+        mine = [T @ p.pose for p in pieces]
+        theirs = [M for name, M in placed.items() if name.startswith(f"{order[-1]}.")]
+        assert len(mine) == len(theirs) and len(mine) > 0
+        for M in mine:
+            assert min(np.abs(M - N).max() for N in theirs) < 1e-9
 
 
 def _fixed_base_task(tmp_path, centre, name):
@@ -192,8 +192,8 @@ def _fixed_base_task(tmp_path, centre, name):
 def test_a_cube_over_a_fixed_base_blocks_every_design_and_every_sampled_design_agrees(tmp_path):
     from robodesign.design.blocked import fixed_part_proof
     from robodesign.design.problem import Problem
-    from robodesign.model.cell import build_robot
     from robodesign.formats.assembly import Assembly
+    from robodesign.model.cell import build_robot
     task = _fixed_base_task(tmp_path, (0.0, 0.0, 0.3), "over")  # the cube spans z 0.175–0.425 above the base
     problem = Problem.build(task, HEAVY, "cyc")
     proof = fixed_part_proof(task, problem.space)

@@ -69,25 +69,29 @@ class _ToolPiece:
     radius: float     # largest distance of its bounding box's corners from that frame's origin
 
 
-def _tool_pieces(module: Module, kind: str = "eef") -> Optional[Tuple[_ToolPiece, ...]]:
-    """The collision geometry of ``module``'s body that holds its ``kind`` connector (``"eef"``: in the TCP
-    frame, the connector's own frame; ``"base"``: in the base frame, whose world pose is the base pose: the
-    connector flipped about x, model/robot.py); None when the module has not exactly one such connector."""
-    cons = [c for c in module.connectors if c.type == kind]
+def _corner_radius(shape: coal.CollisionGeometry, M: np.ndarray, origin=np.zeros(3)) -> float:
+    """The largest distance from ``origin`` of a corner of ``shape``'s bounding box placed at ``M`` (a bound of
+    how far any of its points is)."""
+    shape.computeLocalAABB()
+    lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    return float(np.linalg.norm(corners @ M[:3, :3].T + M[:3, 3] - origin, axis=1).max())
+
+
+def _tool_pieces(module: Module) -> Optional[Tuple[_ToolPiece, ...]]:
+    """The collision geometry of ``module``'s body that holds its eef connector, in the TCP frame (the
+    connector's own frame, model/robot.py); None when the module has not exactly one eef connector."""
+    cons = [c for c in module.connectors if c.type == "eef"]
     if len(cons) != 1:
         return None
     c = cons[0]
-    body_in_tcp = inv(c.pose) if kind == "eef" else c.entry_pose
+    body_in_tcp = inv(c.pose)
     out = []
     shape: coal.CollisionGeometry  # coal_shapes types its shapes as object
     for g in module.body(c.body_id).collision:
         for shape in coal_shapes(g):
-            shape.computeLocalAABB()
-            lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
-            corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
             P = body_in_tcp @ g.pose
-            pts = corners @ P[:3, :3].T + P[:3, 3]
-            out.append(_ToolPiece(shape, P, float(np.linalg.norm(pts, axis=1).max())))
+            out.append(_ToolPiece(shape, P, _corner_radius(shape, P)))
     return tuple(out)
 
 
@@ -166,24 +170,18 @@ def _fixed_block(task: Task, ms: ModuleSet, prefix: Sequence[str], bp: Tolerated
     robot = Robot(ms, Assembly.from_order(ms, list(prefix)), base_pose=bp.nominal)
     gd = pin.GeometryData(robot.geom_model)
     pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, gd, np.zeros(robot.model.nq))
-    origin, r = bp.nominal[:3, 3], 0.0
-    for i, obj in enumerate(robot.geom_model.geometryObjects):
-        if obj.parentJoint != 0:
-            continue
-        shape = obj.geometry
-        shape.computeLocalAABB()
-        lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        M = gd.oMg[i].homogeneous
-        r = max(r, float(np.linalg.norm(corners @ M[:3, :3].T + M[:3, 3] - origin, axis=1).max()))
+    origin = bp.nominal[:3, 3]
+    r = max((_corner_radius(obj.geometry, gd.oMg[i].homogeneous, origin)
+             for i, obj in enumerate(robot.geom_model.geometryObjects) if obj.parentJoint == 0), default=0.0)
     d = p + th * r
-    cores = [Obstacle(oid, core, g.pose) for oid, g in _static_obstacles(task) for core in [_shrunk(g, d)]
-             if core is not None]
+    cores = [Obstacle(f"{oid}#{k}", core, g.pose) for k, (oid, g) in enumerate(_static_obstacles(task))
+             for core in [_shrunk(g, d)] if core is not None]
     if not cores:
         return None
     robot.set_obstacles(cores)
     hits = robot.base_collisions()
-    return ToolBlock(None, ",".join(prefix), hits[0][1].removeprefix("obstacle:"), d) if hits else None
+    return ToolBlock(None, ",".join(prefix), hits[0][1].removeprefix("obstacle:").rsplit("#", 1)[0], d) \
+        if hits else None
 
 
 def fixed_part_proof(task: Task, space, limit: int = 2000) -> Optional["BlockedGoalProof"]:
