@@ -29,7 +29,7 @@ from PIL import Image  # noqa: E402
 
 from robodesign.web import create_app  # noqa: E402
 
-from test_web import BOARD, make_seed, running_server, sol_json  # noqa: E402
+from test_web import BOARD, SLOW_MACHINE_VIEWER_TIMEOUT, make_seed, running_server, sol_json  # noqa: E402
 
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
         "--disable-sync", "--no-first-run", "--disable-dev-shm-usage",
@@ -41,7 +41,8 @@ DOCS_IMG = Path(__file__).resolve().parents[1] / "docs" / "img"
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("browser")
-    app = create_app(data_dir=tmp / "data", seed=[make_seed(tmp / "seed")], seed_builtin=False)
+    app = create_app(data_dir=tmp / "data", seed=[make_seed(tmp / "seed")], seed_builtin=False,
+                     viewer_timeout=SLOW_MACHINE_VIEWER_TIMEOUT)
     with running_server(app) as url:
         yield url, tmp
 

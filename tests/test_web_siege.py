@@ -19,7 +19,8 @@ import pytest
 
 pytest.importorskip("fastapi", reason="the website needs fastapi")
 from fastapi.testclient import TestClient  # noqa: E402
-from test_web import ADMIN, ADMIN_HEADERS, BOARD, free_port, seed_dir, sol_json, upload  # noqa: E402,F401
+from test_web import (ADMIN, ADMIN_HEADERS, BOARD, SLOW_MACHINE_VIEWER_TIMEOUT, free_port, seed_dir, sol_json,  # noqa: E402,F401
+                      upload)
 
 from robodesign.web import create_app  # noqa: E402
 from robodesign.web.server import RateLimitFilter, server_config  # noqa: E402
@@ -28,7 +29,7 @@ from robodesign.web.server import RateLimitFilter, server_config  # noqa: E402
 @pytest.fixture
 def site(tmp_path, seed_dir):
     app = create_app(data_dir=tmp_path / "data", seed=[seed_dir], seed_builtin=False, admin_token=ADMIN,
-                     upload_rate=0, read_rate=0)
+                     upload_rate=0, read_rate=0, viewer_timeout=SLOW_MACHINE_VIEWER_TIMEOUT)
     with TestClient(app, headers=ADMIN_HEADERS, raise_server_exceptions=False) as c:
         yield c
 
