@@ -32,7 +32,11 @@ def main() -> int:
     ap.add_argument("--tasks", default=str(ROOT / "results" / "tasks"), help="the generated task files")
     args = ap.parse_args()
     run = Path(args.run)
-    rows = [json.loads(line) for line in (run / "runs.jsonl").read_text().splitlines() if line.strip()]
+    try:
+        rows = [json.loads(line) for line in (run / "runs.jsonl").read_text().splitlines() if line.strip()]
+    except (OSError, ValueError) as e:
+        print(f"{run / 'runs.jsonl'}: cannot read the run's records ({e})", file=sys.stderr)
+        return 2
     files = {p.stem: p for p in Path(args.tasks).rglob("*.json")}
     proofs = {}
     fam = defaultdict(lambda: {"tasks": 0, "solved": 0, "proven": 0})
@@ -64,4 +68,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # nothing is written before the end: stopping loses only this re-diagnosis
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)
