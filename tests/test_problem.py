@@ -229,3 +229,79 @@ def test_results_store_refuses_to_resume_a_changed_problem(tmp_path):
     with pytest.raises(InputError, match="cannot resume run 'r': its problem changed"):
         db.storage("r", p.with_(cost="Whit2")).load()
     db.close()
+
+
+# -- the default DoF: seven joints where a pose is fixed among obstacles ----------------------------------------
+PTP_3 = ROOT.parent / "shared" / "cobra" / "tasks" / "simple" / "PTP_3.json"
+
+
+def _ptp3_variant(tmp_path, name, change):
+    """PTP_3 (three reach goals, r_sph ≤ 1 cm and Theta_R ≤ 0.01 rad: position and orientation fixed; one
+    obstacle) with ``change`` applied to its JSON, written in the CoBRA folder layout (the obstacle's mesh
+    path is relative to the tasks folder: a link to the reference's assets)."""
+    import json
+    d = json.loads(PTP_3.read_text())
+    change(d)
+    f = tmp_path / name / "simple" / "PTP_3.json"
+    f.parent.mkdir(parents=True)
+    (tmp_path / name / "assets").symlink_to(PTP_3.parents[1] / "assets")
+    f.write_text(json.dumps(d))
+    return f
+
+
+def _loosen(d):
+    for g in d["goals"]:
+        g["goalPose"]["tolerance"][1] = [0, 0.1]  # 5.7°: the orientation is no longer fixed
+
+
+def test_default_dof_is_seven_for_full_pose_goals_among_obstacles(tmp_path):
+    from robodesign.design.problem import default_dof
+    p = Problem.build(PTP_3, "robodesign_heavy", "cyc")
+    assert (p.space.min_dof, p.space.max_dof) == (7, 7)
+    assert default_dof(p.task, p.cost) == (7, 7)
+    # a cost that charges joints or mass lets the search weigh the seventh joint: 6 to 7
+    w = Problem.build(PTP_3, "robodesign_heavy", "Whit2")
+    assert (w.space.min_dof, w.space.max_dof) == (6, 7)
+    assert (Problem.build(PTP_3, "robodesign_heavy", "cyc_1,mass_0.1").space.min_dof) == 6
+    assert (Problem.build(PTP_3, "robodesign_heavy", "mechEnergy").space.min_dof) == 7
+    # without obstacles, or with the orientation left free within 5.7°: six joints
+    no_obstacles = _ptp3_variant(tmp_path, "free", lambda d: d.update(obstacles=[]))
+    loose = _ptp3_variant(tmp_path, "loose", _loosen)
+    for f in (no_obstacles, loose):
+        q = Problem.build(f, "robodesign_heavy", "cyc")
+        assert (q.space.min_dof, q.space.max_dof) == (6, 6), f
+    # rules win; a one-sided rule keeps the other bound consistent with it
+    assert (Problem.build(PTP_3, "robodesign_heavy", rules={"min_dof": 6, "max_dof": 6}).space.max_dof) == 6
+    one = Problem.build(PTP_3, "robodesign_heavy", rules={"max_dof": 6}).space
+    assert (one.min_dof, one.max_dof) == (6, 6)
+    one = Problem.build(PTP_3, "robodesign_heavy", rules={"min_dof": 5}).space
+    assert (one.min_dof, one.max_dof) == (5, 7)
+    one = Problem.build(PTP_1_TASK, "robodesign_heavy", rules={"max_dof": 4}).space
+    assert (one.min_dof, one.max_dof) == (4, 4)
+    assert (p.with_(rules={"max_dof": 6}).space.min_dof, p.with_(rules={"max_links_between": 0}).space.min_dof) == (6, 7)
+    # a module set without 7-joint orders (IMPROV: its connectors allow none) keeps 6, even for this task
+    from robodesign.design.search_space import SearchSpace
+    improv = Problem.build(PTP_3, IMPROV, "cyc")
+    assert SearchSpace(improv.module_set, min_dof=7, max_dof=7).count_orders() == 0
+    assert (improv.space.min_dof, improv.space.max_dof) == (6, 6)
+    # the default reaches the optimizers: every candidate of a fresh search has 7 joints
+    opt = create_optimizer("random", p, seed=0)
+    dofs = {sum(p.module_set[m].dof for m in opt.ask().order) for _ in range(8)}
+    assert dofs == {7}
+
+
+IMPROV = ROOT.parent / "shared" / "cobra" / "modules" / "IMPROV"
+PTP_1_TASK = ROOT.parent / "shared" / "cobra" / "tasks" / "simple" / "PTP_1.json"
+
+
+def test_experiment_rules_leave_the_dof_to_the_task(tmp_path):
+    """An experiment whose rules do not name the DoF gets the task's default; named ones are kept."""
+    from robodesign.experiment.config import Rules
+    r = Rules.model_validate({})
+    assert (r.min_dof, r.max_dof) == (None, None)
+    p = Problem.build(PTP_3, "robodesign_heavy", "cyc", rules=r.model_dump())
+    assert (p.space.min_dof, p.space.max_dof) == (7, 7)
+    p = Problem.build(PTP_3, "robodesign_heavy", "cyc", rules=Rules.model_validate({"dof": 6}).model_dump())
+    assert (p.space.min_dof, p.space.max_dof) == (6, 6)
+    with pytest.raises(ValueError, match="min_dof"):
+        Rules.model_validate({"min_dof": 7, "max_dof": 6})

@@ -297,7 +297,8 @@ def build_parser() -> argparse.ArgumentParser:
     op.add_argument("--out", help="where to write the best checked solution (default best_solution.json)")
     op.add_argument("--opt", action="append", default=[], metavar="KEY=VALUE",
                     help="optimizer option (repeatable; default: none)")
-    op.add_argument("--dof", help="DoF rule, e.g. 6 or 5-7 (default 6)")
+    op.add_argument("--dof", help="DoF rule, e.g. 6 or 5-7 (default: 7 for a task with a goal that fixes position "
+                    "and orientation among obstacles, else 6)")
     op.add_argument("--max-links", type=int, help="max passive link modules between two joints (default 1)")
     op.add_argument("--fixed-base", action="store_true", help="keep the base at its nominal pose")
     op.add_argument("--planner", default="rrtconnect", help="OMPL planner of every evaluation")

@@ -64,7 +64,8 @@ class Problem:
         such as ``"cyc"`` or ``"Whit2"``).
 
         ``rules``: search-space rules (:data:`RULES`; lists are accepted for ``bases``,
-        ``end_effectors``, ``exclude``). The base-pose bounds come from the task's base-placement
+        ``end_effectors``, ``exclude``); a DoF bound not given is the task's and cost's (:func:`default_dof`). The
+        base-pose bounds come from the task's base-placement
         tolerance (the only place they are derived); ``base_search=False`` fixes the base at its
         nominal pose; ``base_bounds`` overrides both.
         """
@@ -80,6 +81,7 @@ class Problem:
         if cf.is_empty:
             raise InputError("empty cost function", path="cost")
         rules = _rules(rules, module_set)
+        rules.update(_dof_range(rules, task, cf, module_set))
         if base_bounds is None:
             base_bounds = _task_base_bounds(task, base_search, SearchSpace(module_set, **rules))
         space = SearchSpace(module_set, base_bounds=base_bounds, **rules, **_geometry(task))
@@ -111,7 +113,10 @@ class Problem:
             changes["cost"] = parse_cost(changes["cost"], path="cost")
         space_changes = {}
         if "rules" in changes:
-            space_changes.update(_rules(changes.pop("rules"), self.module_set))
+            new_rules = _rules(changes.pop("rules"), self.module_set)
+            if "min_dof" in new_rules or "max_dof" in new_rules:  # the other bound as Problem.build sets it
+                new_rules.update(_dof_range(new_rules, self.task, self.cost, self.module_set))
+            space_changes.update(new_rules)
         if "base_search" in changes:
             space_changes["base_bounds"] = _task_base_bounds(
                 self.task, changes.pop("base_search"),
@@ -224,10 +229,60 @@ def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:
         elif v is None:
             continue
         out[k] = v
-    lo, hi = out.get("min_dof", 6), out.get("max_dof", 6)
-    if lo > hi:
+    lo, hi = out.get("min_dof"), out.get("max_dof")
+    if lo is not None and hi is not None and lo > hi:
         raise InputError(f"min_dof ({lo}) is larger than max_dof ({hi})", path="rules")
     return out
+
+
+#: the degrees of freedom of the designs searched when the rules do not say (:func:`default_dof`)
+DEFAULT_DOF = 6
+#: ... and for a task with a goal that fixes position and orientation among static obstacles
+REDUNDANT_DOF = 7
+#: cost terms that charge the design itself (its joints, its mass): with them a seventh joint is a trade-off
+DESIGN_COST_TERMS = frozenset({"numJ", "mass"})
+
+
+def default_dof(task: Task, cost: Optional[CostFunction] = None) -> Tuple[int, int]:
+    """The (min, max) number of joints of the designs of a search when the rules do not say.
+
+    6 joints, except for a task with a goal that fixes the tool's position and orientation
+    (:func:`robodesign.solvers.ik.fixes_full_pose`) and static obstacles: then 7 (:data:`REDUNDANT_DOF`), or
+    6 to 7 when ``cost`` charges joints or mass (:data:`DESIGN_COST_TERMS`, e.g. Whit2), so the search weighs
+    the seventh joint against its price. (:meth:`Problem.build` keeps 6 for a module set that builds no
+    7-joint order.)
+
+    Why: a 6-joint arm holds such a pose in at most 16 configurations; among obstacles few of them are
+    collision-free, and the free space often does not connect those of consecutive goals (the plan stage
+    fails for design after design). A seventh joint gives every pose a curve of configurations (the
+    self-motion), a way around. Measured on the published families (docs/benchmarks.md, "Seven joints where
+    the pose is fixed among obstacles")."""
+    full = any(fixes_full_pose(p) for g in task.goals for p in goal_poses(g))
+    obstacles = any(not o.moving for o in task.obstacles)
+    if not (full and obstacles):
+        return DEFAULT_DOF, DEFAULT_DOF
+    charged = cost is not None and any(n in DESIGN_COST_TERMS and w > 0 for n, w in cost.terms)
+    return (DEFAULT_DOF if charged else REDUNDANT_DOF), REDUNDANT_DOF
+
+
+def _dof_range(rules: Mapping[str, Any], task: Task, cost: Optional[CostFunction],
+               module_set: ModuleSet) -> Dict[str, int]:
+    """``min_dof`` and ``max_dof`` of ``rules``, a missing one from :func:`default_dof` (kept within the
+    given one: ``max_dof=5`` alone searches 5 joints, ``min_dof=8`` alone 8). A module set that builds no
+    7-joint order under the other rules (IMPROV: none at all) keeps the 6 joints."""
+    lo, hi = rules.get("min_dof"), rules.get("max_dof")
+    d_lo, d_hi = default_dof(task, cost)
+    if d_hi > DEFAULT_DOF and (lo is None or hi is None):
+        others = {k: v for k, v in rules.items() if k not in ("min_dof", "max_dof")}
+        if SearchSpace(module_set, **others, min_dof=d_hi, max_dof=d_hi).count_orders() == 0:
+            d_lo = d_hi = DEFAULT_DOF
+    if lo is None and hi is None:
+        return {"min_dof": d_lo, "max_dof": d_hi}
+    if lo is None:
+        return {"min_dof": min(d_lo, hi), "max_dof": hi}
+    if hi is None:
+        return {"min_dof": lo, "max_dof": max(d_hi, lo)}
+    return {"min_dof": lo, "max_dof": hi}
 
 
 _DIGESTS: Dict[Tuple[str, int], str] = {}

@@ -176,8 +176,8 @@ def _check_cost(v: str) -> str:
 class Rules(BaseModel):
     """Search-space rules (``SearchSpace``): DoF range, passive links between joints, allowed modules."""
     model_config = _STRICT
-    min_dof: int = Field(6, ge=1)
-    max_dof: int = Field(6, ge=1)
+    min_dof: Optional[int] = Field(None, ge=1)  # None: the task's (design.problem.default_dof)
+    max_dof: Optional[int] = Field(None, ge=1)
     max_links_between: int = Field(1, ge=0)
     max_modules: int = Field(16, ge=2)
     bases: Optional[List[str]] = None
@@ -205,7 +205,7 @@ class Rules(BaseModel):
 
     @model_validator(mode="after")
     def _range(self):
-        if self.min_dof > self.max_dof:
+        if self.min_dof is not None and self.max_dof is not None and self.min_dof > self.max_dof:
             raise ValueError(f"min_dof ({self.min_dof}) is larger than max_dof ({self.max_dof})")
         return self
 
