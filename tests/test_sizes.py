@@ -14,8 +14,6 @@ BIG_FILES = {
                                 "yet (design/ was being worked on elsewhere)"),
     "design/search_space.py": (764, "one SearchSpace class: validity, successors, enumeration, base bounds, cost and "
                                     "reach bounds; not split yet (design/ was being worked on elsewhere)"),
-    "experiment/config.py": (831, "the config's YAML reading, pydantic models, loading and resolution; being split on this branch"),
-    "experiment/executors.py": (664, "the serial, process and Ray pools and their chunking; being split on this branch"),
     "formats/tolerance.py": (1000, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                    "rotation maths to core/spatial); +13: the plain tolerances' fast values"),
     "formats/urdf.py": (815, "URDF import and export of module sets and robots; being split on this branch"),
@@ -34,8 +32,6 @@ BIG_FUNCTIONS = {
     "cli/view.py:run_view": (90, "the view command: a solution's page or a robot's; being split on this branch"),
     "design/goal_planner.py:choose_and_plan": (84, "IK choice by dynamic programming, then the planned moves, in "
                                                    "one pass; not split yet (design/ was being worked on elsewhere)"),
-    "experiment/config.py:resolve_config": (107, "entries, files, names, problems, optimizers at once; being split on this branch"),
-    "experiment/runner.py:run_experiment": (85, "folder, pool, runs and report in one pass; being split on this branch"),
     "formats/urdf.py:export_urdf": (132, "writes the URDF document in order; being split on this branch"),
     "formats/urdf.py:import_urdf": (216, "reads the URDF document in order; being split on this branch"),
     "judge/arc_torques.py:certify_arc_torques": (143, "whole steps, pieces, bisection sharing closures; being split on this branch"),
