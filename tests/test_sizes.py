@@ -16,7 +16,6 @@ BIG_FILES = {
                                     "reach bounds; not split yet (design/ was being worked on elsewhere)"),
     "formats/tolerance.py": (1000, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                    "rotation maths to core/spatial); +13: the plain tolerances' fast values"),
-    "formats/urdf.py": (815, "URDF import and export of module sets and robots; being split on this branch"),
     "model/robot.py": (782, "the Robot class (model, geometry, limits, dynamics, collisions) and batch kinematics; "
                             "not split yet (model/ was being worked on elsewhere)"),
     "solvers/ik.py": (992, "the IK loop with its own projection terms (issue 23 §2: they move to ToleratedPose); "
@@ -32,8 +31,6 @@ BIG_FUNCTIONS = {
     "cli/view.py:run_view": (90, "the view command: a solution's page or a robot's; being split on this branch"),
     "design/goal_planner.py:choose_and_plan": (84, "IK choice by dynamic programming, then the planned moves, in "
                                                    "one pass; not split yet (design/ was being worked on elsewhere)"),
-    "formats/urdf.py:export_urdf": (132, "writes the URDF document in order; being split on this branch"),
-    "formats/urdf.py:import_urdf": (216, "reads the URDF document in order; being split on this branch"),
     "judge/arc_torques.py:certify_arc_torques": (143, "whole steps, pieces, bisection sharing closures; being split on this branch"),
     "judge/checker.py:_check": (84, "goals, constraints and costs of a solution; being split on this branch"),
     "judge/interval_rnea.py:link_torques": (97, "the forward and backward RNEA passes over intervals; being split on this branch"),
