@@ -47,9 +47,6 @@ BIG_FUNCTIONS = {
     "solvers/trajopt.py:optimize_trajectory": (160, "the CasADi transcription: variables, dynamics, limits, objective"),
     "viewer/html.py:_panel": (82, "every section of the side panel; being split on this branch"),
     "viewer/scene.py:build_scene": (152, "the scene in one pass: nodes, animation, paths, goals, bounds; being split on this branch"),
-    "web/routes_pages.py:add_routes": (94, "every HTML page route; being split on this branch"),
-    "web/routes_registration.py:add_routes": (100, "the task, module set and cost routes; being split on this branch"),
-    "web/routes_solutions.py:add_routes": (90, "the solution, check, queue and leaderboard routes; being split on this branch"),
 }
 
 
