@@ -45,8 +45,6 @@ BIG_FUNCTIONS = {
     "solvers/timing.py:time_parameterize": (97, "the method choice, blending, TOPP-RA passes and the ruckig "
                                                 "fallback (issue 23 §5 lists the timing split)"),
     "solvers/trajopt.py:optimize_trajectory": (160, "the CasADi transcription: variables, dynamics, limits, objective"),
-    "viewer/html.py:_panel": (82, "every section of the side panel; being split on this branch"),
-    "viewer/scene.py:build_scene": (152, "the scene in one pass: nodes, animation, paths, goals, bounds; being split on this branch"),
 }
 
 
