@@ -28,18 +28,15 @@ BIG_FILES = {
 BIG_FUNCTIONS = {
     "design/goal_planner.py:choose_and_plan": (84, "IK choice by dynamic programming, then the planned moves, in "
                                                    "one pass; not split yet (design/ was being worked on elsewhere)"),
-    "judge/arc_torques.py:certify_arc_torques": (143, "whole steps, pieces, bisection sharing closures; being split on this branch"),
-    "judge/checker.py:_check": (84, "goals, constraints and costs of a solution; being split on this branch"),
-    "judge/interval_rnea.py:link_torques": (97, "the forward and backward RNEA passes over intervals; being split on this branch"),
     "model/robot.py:_build": (149, "the pinocchio model and coal geometry of an assembly in one pass"),
     "solvers/ik.py:_make_term": (156, "one closure per tolerance projection (to move to ToleratedPose, issue 23 §2)"),
     "solvers/ik.py:solve_ik": (188, "the restart loop with its screening, sampling and acceptance (+7: whole turns)"),
     "solvers/ik_kernel.py:goal_rows_ws": (98, "a numba kernel: the residual rows and Jacobian of every goal term "
                                               "kind, written out without calls for speed"),
-    "solvers/planning.py:_plan_ompl": (81, "OMPL's space, validity checker, goal states and planner set up in "
-                                           "one call; not split yet (solvers/ was being worked on elsewhere)"),
     "solvers/planning.py:plan_path": (100, "input checks, the straight line, OMPL, shortcutting and the final "
                                            "check in one pass; not split yet (solvers/ was being worked on elsewhere)"),
+    "solvers/planning.py:_plan_ompl": (81, "OMPL's space, validity checker, goal states and planner set up in "
+                                           "one call; not split yet (solvers/ was being worked on elsewhere)"),
     "solvers/timing.py:_dynamics_constraint_class": (82, "a toppra constraint class made at first use (toppra is "
                                                          "imported lazily), its methods inside the factory"),
     "solvers/timing.py:time_parameterize": (97, "the method choice, blending, TOPP-RA passes and the ruckig "
