@@ -1,35 +1,47 @@
-"""Small rooms (issue 23 §5): no source file in src/ over 800 lines and no function over 120 lines. The rooms that
+"""Small rooms (issue 23 §5): no source file in src/ over 600 lines and no function over 80 lines. The rooms that
 are still bigger are listed here with their size today and the reason; a new big file or function fails, and so
 does a listed one that grows (split it, or raise its ceiling here with a reason)."""
 import ast
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "robodesign"
-MAX_FILE_LINES = 800
-MAX_FUNCTION_LINES = 120
+MAX_FILE_LINES = 600
+MAX_FUNCTION_LINES = 80
 
 #: file (relative to src/robodesign) → (its lines today, why it is still that big)
 BIG_FILES = {
-    "experiment/config.py": (853, "the config file's pydantic models and their resolution into problems; to split"),
+    "design/optimize.py": (614, "the optimizer plugin API (options, budget, loading) and the Study loop; not split "
+                                "yet (design/ was being worked on elsewhere)"),
+    "design/search_space.py": (764, "one SearchSpace class: validity, successors, enumeration, base bounds, cost and "
+                                    "reach bounds; not split yet (design/ was being worked on elsewhere)"),
     "formats/tolerance.py": (1000, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                    "rotation maths to core/spatial); +13: the plain tolerances' fast values"),
-    "formats/urdf.py": (816, "URDF import and export of module sets and robots"),
+    "model/robot.py": (782, "the Robot class (model, geometry, limits, dynamics, collisions) and batch kinematics; "
+                            "not split yet (model/ was being worked on elsewhere)"),
     "solvers/ik.py": (992, "the IK loop with its own projection terms (issue 23 §2: they move to ToleratedPose); "
                            "+7 for whole turns (issue 21)"),
+    "solvers/ik_kernel.py": (710, "the numba kernels, their goal compilation and the background compile cache in "
+                                  "one module; not split yet (solvers/ was being worked on elsewhere)"),
     "solvers/timing.py": (932, "trajectory type, limits and bounds, TOPP-RA and ruckig (issue 23 §5 lists the split)"),
 }
 #: "file:function" → (its lines today, why)
 BIG_FUNCTIONS = {
-    "cli/entry.py:build_parser": (149, "the argparse tree of every command, read top to bottom"),
-    "judge/arc_torques.py:certify_arc_torques": (143, "the torque certification between samples: whole steps, "
-                                                       "then pieces, then the cap (merged beside this test)"),
-    "formats/urdf.py:export_urdf": (132, "writes the URDF document in document order"),
-    "formats/urdf.py:import_urdf": (218, "reads the URDF document in document order"),
+    "design/goal_planner.py:choose_and_plan": (84, "IK choice by dynamic programming, then the planned moves, in "
+                                                   "one pass; not split yet (design/ was being worked on elsewhere)"),
     "model/robot.py:_build": (149, "the pinocchio model and coal geometry of an assembly in one pass"),
     "solvers/ik.py:_make_term": (156, "one closure per tolerance projection (to move to ToleratedPose, issue 23 §2)"),
     "solvers/ik.py:solve_ik": (188, "the restart loop with its screening, sampling and acceptance (+7: whole turns)"),
+    "solvers/ik_kernel.py:goal_rows_ws": (98, "a numba kernel: the residual rows and Jacobian of every goal term "
+                                              "kind, written out without calls for speed"),
+    "solvers/planning.py:plan_path": (100, "input checks, the straight line, OMPL, shortcutting and the final "
+                                           "check in one pass; not split yet (solvers/ was being worked on elsewhere)"),
+    "solvers/planning.py:_plan_ompl": (81, "OMPL's space, validity checker, goal states and planner set up in "
+                                           "one call; not split yet (solvers/ was being worked on elsewhere)"),
+    "solvers/timing.py:_dynamics_constraint_class": (82, "a toppra constraint class made at first use (toppra is "
+                                                         "imported lazily), its methods inside the factory"),
+    "solvers/timing.py:time_parameterize": (97, "the method choice, blending, TOPP-RA passes and the ruckig "
+                                                "fallback (issue 23 §5 lists the timing split)"),
     "solvers/trajopt.py:optimize_trajectory": (160, "the CasADi transcription: variables, dynamics, limits, objective"),
-    "viewer/scene.py:build_scene": (152, "the scene in one pass: nodes, animation, paths, goals, bounds"),
 }
 
 
@@ -71,6 +83,7 @@ def test_the_list_of_big_rooms_is_current():
 
 def test_the_size_rules_catch_a_new_big_room():
     """The check itself: a file or function one line over its limit is reported, one at it is not."""
-    assert _over({"a.py": 801, "b.py": 800}, MAX_FILE_LINES, {}) == ["a.py: 801 lines (limit 800)"]
+    assert _over({"a.py": 601, "b.py": 600}, MAX_FILE_LINES, {}) == ["a.py: 601 lines (limit 600)"]
+    assert _over({"x.py:f": 81, "y.py:g": 80}, MAX_FUNCTION_LINES, {}) == ["x.py:f: 81 lines (limit 80)"]
     assert _over({"x.py:f": 150}, MAX_FUNCTION_LINES, {"x.py:f": (149, "r")}) == ["x.py:f: 150 lines (limit 149)"]
     assert _over({"x.py:f": 149}, MAX_FUNCTION_LINES, {"x.py:f": (149, "r")}) == []

@@ -21,7 +21,8 @@ from test_web import make_seed, sol_json
 from robodesign.cli.entry import main
 from robodesign.core.errors import InputError
 from robodesign.core.jsonio import loads_json
-from robodesign.experiment.config import MAX_YAML_NODES, _expanded_size, read_yaml
+from robodesign.experiment.config import MAX_YAML_NODES, read_yaml
+from robodesign.experiment.config_models import _expanded_size
 
 SURROGATE = "\\ud800"  # as written in the JSON text: a lone high surrogate
 

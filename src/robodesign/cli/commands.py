@@ -193,6 +193,12 @@ def cmd_optimize(args) -> int:
         progress.close()
         close_executor(now=res is None or res.stopped == "interrupted")
         journal.close(keep=res is None or res.stopped == "interrupted")
+    return _report_optimize(args, problem, res, walls, workers, executor, journal)
+
+
+def _report_optimize(args, problem, res, walls: List[float], workers: int, executor, journal: Journal) -> int:
+    """Write the best checked solution, print the summary (JSON or text, with the diagnosis when nothing valid was
+    found) and return the exit code of ``robodesign optimize``."""
     from robodesign.experiment.suites import record_of_run
     run = record_of_run("", args.task, args.optimizer, args.seed, [
         {"feasible": e.feasible, "cost": e.cost, "stage": e.stage, "stage_index": e.stage_index, "wall": w,
@@ -220,27 +226,33 @@ def cmd_optimize(args) -> int:
     if args.json:
         print(json.dumps(summary))
     else:
-        sent = f", {summary['messages']} messages to them" if workers > 1 else ""
-        print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s){sent}, "
-              f"batches of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
-        if res.overrun:
-            print(f"time budget exceeded by {res.overrun:.1f} s: evaluations running at the deadline finished "
-                  f"(the longest took {res.last_evaluation_seconds or 0.0:.1f} s); {res.dropped} asked candidate(s) "
-                  f"not evaluated")
-        if best is not None and best.feasible:
-            bp = problem.base_pose(best.candidate)
-            print(f"best robot   {','.join(best.candidate.order)}")
-            print(f"base pose    {base_pose_text(bp.tolist())}")
-            print(f"cost         {args.cost} = {best.cost:.6g}")
-            print(f"solution     {out} (checked valid)")
-        else:
-            print("no feasible robot found within the budget"
-                  + (f"; the best candidate failed at stage '{best.stage}': {best.message}" if best else ""))
-            if run.stage_counts:
-                from robodesign.experiment.suites import stage_counts_text
-                print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
-                      f"{stage_counts_text(run.stage_counts)})")
-            print(f"diagnosis    {diagnosis.message}")
+        _print_optimize_text(args, problem, res, summary, workers, out, run, diagnosis)
     if res.stopped == "interrupted":
         return EXIT_INTERRUPTED
     return 0 if best is not None and best.feasible else 1
+
+
+def _print_optimize_text(args, problem, res, summary: dict, workers: int, out, run, diagnosis) -> None:
+    """The text summary of ``robodesign optimize``."""
+    best = res.best
+    sent = f", {summary['messages']} messages to them" if workers > 1 else ""
+    print(f"{len(res.history)} evaluations in {res.seconds:.1f} s ({res.stopped}; {workers} worker(s){sent}, "
+          f"batches of {args.batch_size}); {sum(e.feasible for e in res.history)} feasible")
+    if res.overrun:
+        print(f"time budget exceeded by {res.overrun:.1f} s: evaluations running at the deadline finished "
+              f"(the longest took {res.last_evaluation_seconds or 0.0:.1f} s); {res.dropped} asked candidate(s) "
+              f"not evaluated")
+    if best is not None and best.feasible:
+        bp = problem.base_pose(best.candidate)
+        print(f"best robot   {','.join(best.candidate.order)}")
+        print(f"base pose    {base_pose_text(bp.tolist())}")
+        print(f"cost         {args.cost} = {best.cost:.6g}")
+        print(f"solution     {out} (checked valid)")
+    else:
+        print("no feasible robot found within the budget"
+              + (f"; the best candidate failed at stage '{best.stage}': {best.message}" if best else ""))
+        if run.stage_counts:
+            from robodesign.experiment.suites import stage_counts_text
+            print(f"every candidate stopped at or before stage '{run.stopped_at}' (failures per stage: "
+                  f"{stage_counts_text(run.stage_counts)})")
+        print(f"diagnosis    {diagnosis.message}")

@@ -237,7 +237,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=_version())
     p.add_argument("--debug", action="store_true", help="print the full traceback of an internal error")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    _add_robot(sub)
+    _add_check(sub)
+    _add_solve(sub)
+    _add_optimize(sub)
+    _add_optimizers(sub)
+    _add_run(sub)
+    _add_serve(sub)
+    _add_generate(sub)
+    _add_view(sub)
 
+    for sp in sub.choices.values():  # also accepted after the subcommand: robodesign check ... --debug
+        sp.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="print the full traceback of an internal error")
+    return p
+
+
+def _add_robot(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign robot``: assemble a robot and print its summary."""
     r = sub.add_parser("robot", help="assemble a robot from a module order and print its summary")
     r.add_argument("modules", help="module set: a folder with modules.json, a built-in name or a URDF file")
     r.add_argument("--order", required=True, help="comma-separated module IDs, base first")
@@ -247,6 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--urdf", help="also write the robot as URDF to this file")
     r.set_defaults(func=cmd_robot)
 
+
+def _add_check(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign check``: check a solution against a task."""
     c = sub.add_parser("check", help="check a CoBRA solution (or a collaborative one) against a task (exit 0 valid, "
                                      "1 invalid, 2 bad input)")
     c.add_argument("task", help="task JSON file (or a built-in task name)")
@@ -255,6 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true", help="print {valid, violations, costs, cost} as JSON")
     c.set_defaults(func=cmd_check)
 
+
+def _add_solve(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign solve``: plan a checked solution for one robot (or every robot of a collaborative task)."""
     from robodesign.cli import commands
     so = sub.add_parser("solve", help="plan a checked solution of a task for one robot (or for every robot of a "
                                       "collaborative task)")
@@ -277,6 +300,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_verbosity_arguments(so, "one line per pipeline stage")
     so.set_defaults(func=commands.cmd_solve)
 
+
+def _add_optimize(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign optimize``: search module orders (and base poses) for the best robot."""
+    from robodesign.cli import commands
     op = sub.add_parser("optimize", help="search module orders (and base poses) for the best robot")
     op.add_argument("task", help="task JSON file or built-in task ID")
     op.add_argument("--modules", required=True, help="module set folder or built-in name")
@@ -315,6 +342,10 @@ def build_parser() -> argparse.ArgumentParser:
     add_verbosity_arguments(op, "progress: a bar on a terminal, otherwise a summary line every 5 s")
     op.set_defaults(func=commands.cmd_optimize)
 
+
+def _add_optimizers(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign optimizers``: list the installed optimizer plugins."""
+    from robodesign.cli import commands
     ol = sub.add_parser("optimizers", help="list installed optimizer plugins")
     ol.add_argument("--verbose", "-v", action="store_true",
                     help="also list each plugin's options (type, default, range, help)")
@@ -322,11 +353,17 @@ def build_parser() -> argparse.ArgumentParser:
                     "(with --verbose: description and options too)")
     ol.set_defaults(func=commands.cmd_optimizers)
 
+
+def _add_run(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign run``: run an experiment config."""
     run = sub.add_parser("run", help="run an experiment config (default: the built-in demo); resumable")
     from robodesign.cli.run import add_run_arguments
     add_run_arguments(run)
     run.set_defaults(func=cmd_run)
 
+
+def _add_serve(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign serve``: run the benchmark website."""
     sv = sub.add_parser("serve", help="run the benchmark website (upload, check and rank solutions)")
     sv.add_argument("--db", help="SQLAlchemy database URL (default: SQLite <data>/bench.db; "
                                  "e.g. postgresql://user:pw@host/bench)")
@@ -364,22 +401,23 @@ def build_parser() -> argparse.ArgumentParser:
                                                                       "once)")
     sv.set_defaults(func=cmd_serve)
 
+
+def _add_generate(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign generate``: write seeded tasks of a task family."""
     ge = sub.add_parser("generate", help="write seeded CoBRA tasks of a published task family into a folder "
                                          "(whitman2020, liu2020, bpo2024; --list)")
     from robodesign.cli.generate import add_generate_arguments, cmd_generate
     add_generate_arguments(ge)
     ge.set_defaults(func=cmd_generate)
 
+
+def _add_view(sub: "argparse._SubParsersAction") -> None:
+    """``robodesign view``: write an HTML page of a solution, task or robot."""
     vw = sub.add_parser("view", help="write one self-contained HTML page that shows a solution (animated), "
                                      "a task or a robot")
     from robodesign.cli.view import add_view_arguments
     add_view_arguments(vw)
     vw.set_defaults(func=cmd_view)
-
-    for sp in sub.choices.values():  # also accepted after the subcommand: robodesign check ... --debug
-        sp.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
-                        help="print the full traceback of an internal error")
-    return p
 
 
 @functools.lru_cache(maxsize=1)

@@ -43,8 +43,6 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
     """Write the page; returns its path and warnings that make the command exit 1: a solution shown in
     a task that is not its own, or (with ``check``) an invalid solution. See docs/viewer.md."""
     from robodesign.formats.task_io import load_task
-    from robodesign.viewer import render_html, solution_page
-    from robodesign.viewer.scene import build_scene
 
     if fps <= 0:
         raise InputError("--fps must be positive")
@@ -64,68 +62,88 @@ def run_view(solution: Optional[str] = None, task: Optional[str] = None, modules
         if is_collaborative(data):  # several robots in one cell (docs/collaborative.md)
             return _view_collab(solution, data, task, modules, out, check, fps, collision)
     if solution is not None:
-        from robodesign.cli.args import module_set_for_solution
-        from robodesign.formats.solution import load_solution
-        from robodesign.viewer.plots import trajectory_plots
-        sol = load_solution(solution)
-        if task_obj is None:
-            try:
-                task_obj = load_task(sol.task_id)
-            except InputError:
-                _note(f"task {sol.task_id!r} not found; showing the robot without its cell (use --task)")
-        if task_obj is not None and sol.task_id != task_obj.id:
-            warnings.append(f"the solution is for task {sol.task_id!r}, not {task_obj.id!r}: the page shows it in "
-                            f"a cell it was not planned for")
-        ms = module_set_for_solution(sol, modules)
-        path = Path(out) if out else Path(Path(solution).stem + "_view.html")
-        verdict = None
-        if check:
-            if task_obj is None:
-                _note("--check needs the task; skipped")
-            else:
-                from robodesign.judge.checker import check as run_check
-                verdict = run_check(task_obj, sol, ms)
-                if not verdict.valid:
-                    warnings.append(f"the checker finds the solution INVALID ({len(verdict.violations)} "
-                                    "violation(s), listed on the page)")
-        images: Union[bool, Dict[str, bytes]] = False
-        if plots:
-            try:
-                images = trajectory_plots(task_obj, sol, ms, out_dir=path.parent if out else None, stem=path.stem)
-            except Exception as e:  # the page still shows the motion
-                _note(f"plots failed: {e}")
-        page = solution_page(task_obj, sol, ms, verdict=verdict, plots=images, fps=fps, include_collision=collision)
+        path, page = _solution_page(solution, task_obj, modules, out, check, plots, collision, fps, warnings)
     else:
-        robot = None
-        if order is not None:
-            from robodesign.cli.args import parse_base_pose, parse_order
-            from robodesign.formats.module_io import load_module_set
-            from robodesign.model.robot import Robot
-            if not modules:
-                raise InputError("--order needs --modules")
-            ms = load_module_set(modules)
-            bp = parse_base_pose(base_pose) if base_pose else (
-                task_obj.nominal_base_pose if task_obj is not None else None)
-            robot = Robot.from_order(ms, parse_order(order), base_pose=bp)
-        qv = None
-        if q is not None:
-            if robot is None:
-                raise InputError("--q needs --modules and --order")
-            from robodesign.cli.args import parse_floats
-            qv = np.array(parse_floats(q, "--q"), dtype=float)
-            if len(qv) != robot.dof:
-                raise InputError(f"--q: the robot has {robot.dof} joints, got {len(qv)} values")
-        scene = build_scene(task_obj, robot, None, q=qv, include_collision=collision)
-        if robot is not None:
-            name = "robot " + ",".join(robot.assembly.module_ids) + (f" in {task_obj.id}" if task_obj else "")
-        else:
-            assert task_obj is not None  # neither a solution nor --order: --task (checked above)
-            name = f"task {task_obj.id}"
-        path = Path(out) if out else Path("view.html")
-        page = render_html(scene, None, name)
+        path, page = _robot_page(task_obj, modules, order, q, base_pose, out, collision)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(page, encoding="utf-8")
     return path, warnings
+
+
+def _solution_page(solution: str, task_obj, modules: Optional[str], out: Optional[str], check: bool, plots: bool,
+                   collision: bool, fps: float, warnings: List[str]) -> Tuple[Path, str]:
+    """The page of a (single-robot) solution, in its task's cell when the task is found; appends to ``warnings``
+    what makes the command exit 1. → (where to write it, the page)."""
+    from robodesign.cli.args import module_set_for_solution
+    from robodesign.formats.solution import load_solution
+    from robodesign.formats.task_io import load_task
+    from robodesign.viewer import solution_page
+    from robodesign.viewer.plots import trajectory_plots
+    sol = load_solution(solution)
+    if task_obj is None:
+        try:
+            task_obj = load_task(sol.task_id)
+        except InputError:
+            _note(f"task {sol.task_id!r} not found; showing the robot without its cell (use --task)")
+    if task_obj is not None and sol.task_id != task_obj.id:
+        warnings.append(f"the solution is for task {sol.task_id!r}, not {task_obj.id!r}: the page shows it in "
+                        f"a cell it was not planned for")
+    ms = module_set_for_solution(sol, modules)
+    path = Path(out) if out else Path(Path(solution).stem + "_view.html")
+    verdict = None
+    if check:
+        if task_obj is None:
+            _note("--check needs the task; skipped")
+        else:
+            from robodesign.judge.checker import check as run_check
+            verdict = run_check(task_obj, sol, ms)
+            if not verdict.valid:
+                warnings.append(f"the checker finds the solution INVALID ({len(verdict.violations)} "
+                                "violation(s), listed on the page)")
+    images: Union[bool, Dict[str, bytes]] = False
+    if plots:
+        try:
+            images = trajectory_plots(task_obj, sol, ms, out_dir=path.parent if out else None, stem=path.stem)
+        except Exception as e:  # the page still shows the motion
+            _note(f"plots failed: {e}")
+    page = solution_page(task_obj, sol, ms, verdict=verdict, plots=images, fps=fps, include_collision=collision)
+    return path, page
+
+
+def _robot_page(task_obj, modules: Optional[str], order: Optional[str], q: Optional[str], base_pose: Optional[str],
+                out: Optional[str], collision: bool) -> Tuple[Path, str]:
+    """The page of a bare robot (``--modules`` with ``--order``, at ``--q``) or of a task's cell alone. → (where
+    to write it, the page)."""
+    from robodesign.viewer import render_html
+    from robodesign.viewer.scene import build_scene
+    robot = None
+    if order is not None:
+        from robodesign.cli.args import parse_base_pose, parse_order
+        from robodesign.formats.module_io import load_module_set
+        from robodesign.model.robot import Robot
+        if not modules:
+            raise InputError("--order needs --modules")
+        ms = load_module_set(modules)
+        bp = parse_base_pose(base_pose) if base_pose else (
+            task_obj.nominal_base_pose if task_obj is not None else None)
+        robot = Robot.from_order(ms, parse_order(order), base_pose=bp)
+    qv = None
+    if q is not None:
+        if robot is None:
+            raise InputError("--q needs --modules and --order")
+        from robodesign.cli.args import parse_floats
+        qv = np.array(parse_floats(q, "--q"), dtype=float)
+        if len(qv) != robot.dof:
+            raise InputError(f"--q: the robot has {robot.dof} joints, got {len(qv)} values")
+    scene = build_scene(task_obj, robot, None, q=qv, include_collision=collision)
+    if robot is not None:
+        name = "robot " + ",".join(robot.assembly.module_ids) + (f" in {task_obj.id}" if task_obj else "")
+    else:
+        assert task_obj is not None  # neither a solution nor --order: --task (checked above)
+        name = f"task {task_obj.id}"
+    path = Path(out) if out else Path("view.html")
+    page = render_html(scene, None, name)
+    return path, page
 
 
 def _view_collab(solution: str, data, task: Optional[str], modules: Optional[str], out: Optional[str], check: bool,

@@ -31,7 +31,7 @@ import time
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Dict, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 from robodesign.core.errors import InputError
 from robodesign.design.optimize import Budget, Study, create_optimizer
@@ -454,24 +454,10 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
                    chunk_size: Optional[int] = None, progress=None, report: bool = True) -> ExperimentOutcome:
     """Run (or resume) an experiment into ``out``. The executor settings of the config can be overridden.
     ``restart`` (with ``resume``): start the experiment over in its folder, the old results moved aside."""
-    from robodesign.experiment.executors import make_pool
     out = Path(out)
     t_start = time.perf_counter()
     progress = progress or NoProgress()
-    if restart and not resume:
-        raise InputError("--restart needs --resume DIR (it starts the experiment in that folder over)")
-    if not resume:
-        prepare_new(exp, config_text, config_path, out)
-    lock = FolderLock(out).acquire()
-    try:
-        meta = json.loads((out / "meta.json").read_text())
-        if restart:
-            _write_json(out / "meta.json", restart_folder(out, meta))
-            progress.message(f"restart: the old results are in {meta['restarts'][-1]['moved_to'] or '(nothing)'}")
-        db = open_for_resume(out, meta) if resume else _open_db(out / DB_FILE, out)
-    except BaseException:
-        lock.release()
-        raise
+    lock, db = _open_folder(exp, out, config_text, config_path, resume, restart, progress)
     pool = None
     session: Dict[str, Any] = {"started": _now(), "resume": resume, "argv": sys.argv, "pid": os.getpid()}
     meta = json.loads((out / "meta.json").read_text())
@@ -481,19 +467,7 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
     skipped = 0
     runs = list(exp.runs())
     try:
-        for k, r in enumerate(runs):
-            db.ensure_run(r.run_id, r.problem.name, r.optimizer.label, r.optimizer.name, r.seed, k,
-                          r.optimizer.budget_text, r.optimizer.batch_size)
-        kind = executor or exp.executor.kind
-        todo = [r for r in runs if db.run_status(r.run_id) != "done"]
-        if todo:
-            pool = make_pool(kind, exp.evaluator_specs(), workers or exp.executor.workers,
-                             address or exp.executor.address, chunk_size or exp.executor.chunk_size)
-            session["executor"] = pool.info()
-            meta = json.loads((out / "meta.json").read_text())
-            meta["sessions"][-1] = session  # recorded now: a killed session keeps its executor in meta.json
-            _write_json(out / "meta.json", meta)
-            progress.message(f"executor: {pool.kind}, {pool.workers} worker(s), ready in {pool.startup_seconds:.1f} s")
+        pool = _start_pool(exp, out, db, runs, session, progress, executor, workers, address, chunk_size)
         for k, r in enumerate(runs, 1):
             if db.run_status(r.run_id) == "done":
                 skipped += 1
@@ -533,6 +507,50 @@ def run_experiment(exp: ResolvedExperiment, out: Path, *, config_text: str = "",
         outcome.best[p.name] = best_of_problem(db, p.name)
     db.close()
     return outcome
+
+
+def _open_folder(exp: ResolvedExperiment, out: Path, config_text: str, config_path, resume: bool, restart: bool,
+                 progress) -> Tuple[FolderLock, ExperimentDB]:
+    """Prepare a new results folder (or take the one resumed, restarted if asked), lock it and open its
+    database. → (the lock, held, and the database)."""
+    if restart and not resume:
+        raise InputError("--restart needs --resume DIR (it starts the experiment in that folder over)")
+    if not resume:
+        prepare_new(exp, config_text, config_path, out)
+    lock = FolderLock(out).acquire()
+    try:
+        meta = json.loads((out / "meta.json").read_text())
+        if restart:
+            _write_json(out / "meta.json", restart_folder(out, meta))
+            progress.message(f"restart: the old results are in {meta['restarts'][-1]['moved_to'] or '(nothing)'}")
+        db = open_for_resume(out, meta) if resume else _open_db(out / DB_FILE, out)
+    except BaseException:
+        lock.release()
+        raise
+    return lock, db
+
+
+def _start_pool(exp: ResolvedExperiment, out: Path, db: ExperimentDB, runs: List[RunSpec], session: Dict[str, Any],
+                progress, executor: Optional[str], workers: Optional[int], address: Optional[str],
+                chunk_size: Optional[int]):
+    """Record every run in the database and, when some are not done, start the executor's pool (recorded in
+    meta.json at once). → the pool, or None when there is nothing to run."""
+    from robodesign.experiment.executors import make_pool
+    for k, r in enumerate(runs):
+        db.ensure_run(r.run_id, r.problem.name, r.optimizer.label, r.optimizer.name, r.seed, k,
+                      r.optimizer.budget_text, r.optimizer.batch_size)
+    kind = executor or exp.executor.kind
+    todo = [r for r in runs if db.run_status(r.run_id) != "done"]
+    if not todo:
+        return None
+    pool = make_pool(kind, exp.evaluator_specs(), workers or exp.executor.workers,
+                     address or exp.executor.address, chunk_size or exp.executor.chunk_size)
+    session["executor"] = pool.info()
+    meta = json.loads((out / "meta.json").read_text())
+    meta["sessions"][-1] = session  # recorded now: a killed session keeps its executor in meta.json
+    _write_json(out / "meta.json", meta)
+    progress.message(f"executor: {pool.kind}, {pool.workers} worker(s), ready in {pool.startup_seconds:.1f} s")
+    return pool
 
 
 def best_of_problem(db: ExperimentDB, problem: str) -> Optional[dict]:

@@ -32,7 +32,7 @@ not proven, and a file cannot make it work without bound.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 import numpy as np
 
@@ -159,70 +159,96 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
     ``sample_torques``: (before, after) (N, dof) drivetrain torques at the samples with the motion's one-sided
     accelerations and the sample's wrench (TrajectoryQuantities.motion_torques), reused at piece ends that are
     samples."""
-    dof = motion.q.shape[1]
     steps = np.asarray(steps, dtype=int)
     if len(steps) == 0:
         return ArcTorqueReport([], 0, 0, 0)
-    dyn = IntervalDynamics(robot)
-    W = np.asarray(wrenches, dtype=float)
-    lim = np.asarray(limit, dtype=float)
-    evaluations = 0
-    pieces_total = 0
-    found: dict = {}
+    c = _Certification(robot, motion, wrenches, limit, sample_torques)
+    steps, step_open = _whole_steps(c, steps, skip)
+    if len(steps) == 0:
+        return ArcTorqueReport(c.violations(), 0, c.evaluations, 0)
+    pieces_total, depth = _bisect(c, _first_pieces(c, steps, step_open), PIECES_PER_STEP * len(steps))
+    return ArcTorqueReport(c.violations(), pieces_total, c.evaluations, depth)
 
-    def record(k, j, t, value, over):
+
+class _Certification:
+    """One certification's inputs, the violations found so far ((step, joint) → the first or a certain one) and
+    the torque evaluations made."""
+
+    def __init__(self, robot, motion, wrenches: np.ndarray, limit: np.ndarray, sample_torques):
+        self.robot, self.motion, self.sample_torques = robot, motion, sample_torques
+        self.dof = motion.q.shape[1]
+        self.dyn = IntervalDynamics(robot)
+        self.W = np.asarray(wrenches, dtype=float)
+        self.lim = np.asarray(limit, dtype=float)
+        self.evaluations = 0
+        self.found: dict = {}
+
+    def record(self, k, j, t, value, over) -> None:
         key = (int(k), int(j))
-        if key not in found or (over and not found[key].certified_over):
-            found[key] = ArcTorqueViolation(int(k), int(j), float(t), float(value), over)
+        if key not in self.found or (over and not self.found[key].certified_over):
+            self.found[key] = ArcTorqueViolation(int(k), int(j), float(t), float(value), over)
 
-    def arc2_of(k, a, b):  # the joints on their second arc over the piece [a, b] of step k
-        return ((a + b) / 2)[:, None] >= motion.tau[k]
+    def violations(self) -> List[ArcTorqueViolation]:
+        return sorted(self.found.values(), key=lambda v: (v.step, v.joint))
 
-    def wrench_of(k):
-        same = np.all(W[k] == W[k + 1], axis=1)
-        return np.where(same[:, None], W[k], 0.0)
+    def decided(self, k_arr) -> np.ndarray:
+        """(piece, joint) bool: a violation is recorded for the piece's step and the joint."""
+        return np.array([[(int(k), j) in self.found for j in range(self.dof)] for k in k_arr])
 
-    def torque(k, s, arc2, wr):
-        nonlocal evaluations
-        q, v = _piece_state(motion, k, s, arc2)
-        acc = np.where(arc2, motion.a2[k], motion.a1[k])
-        evaluations += len(k)
+    def arc2_of(self, k, a, b):  # the joints on their second arc over the piece [a, b] of step k
+        return ((a + b) / 2)[:, None] >= self.motion.tau[k]
+
+    def wrench_of(self, k):
+        same = np.all(self.W[k] == self.W[k + 1], axis=1)
+        return np.where(same[:, None], self.W[k], 0.0)
+
+    def torque(self, k, s, arc2, wr):
+        q, v = _piece_state(self.motion, k, s, arc2)
+        acc = np.where(arc2, self.motion.a2[k], self.motion.a1[k])
+        self.evaluations += len(k)
         has = np.any(wr != 0, axis=1)
-        return robot.drivetrain_torques(q, v, acc, wr if np.any(has) else None)
+        return self.robot.drivetrain_torques(q, v, acc, wr if np.any(has) else None)
 
-    def end_torque(k, s, arc2, wr, at_sample, sample, side):
+    def end_torque(self, k, s, arc2, wr, at_sample, sample, side):
         """τ at piece ends s of steps k: the samples' own one-sided torques where the end is a sample under the
         same wrench (the motion passes through the sample exactly), else evaluated."""
-        out = np.empty((len(k), dof))
-        reuse = at_sample & np.all(W[sample] == wr, axis=1) if sample_torques is not None else np.zeros(len(s), bool)
+        out = np.empty((len(k), self.dof))
+        reuse = at_sample & np.all(self.W[sample] == wr, axis=1) if self.sample_torques is not None else \
+            np.zeros(len(s), bool)
         if np.any(reuse):
-            out[reuse] = sample_torques[side][sample[reuse]]
+            out[reuse] = self.sample_torques[side][sample[reuse]]
         if not np.all(reuse):
-            out[~reuse] = torque(k[~reuse], s[~reuse], arc2[~reuse], wr[~reuse])
+            out[~reuse] = self.torque(k[~reuse], s[~reuse], arc2[~reuse], wr[~reuse])
         return out
 
-    # whole steps first: τ just after sample k and just before k + 1, the groups' bounds
+
+def _whole_steps(c: _Certification, steps: np.ndarray, skip: Optional[np.ndarray]):
+    """Whole steps first: τ just after sample k and just before k + 1, the groups' bounds. → (the steps left,
+    (step, joint) bool: still to decide)."""
+    motion, lim = c.motion, c.lim
     h_all = motion.h[steps, 0]
     zero = np.zeros(len(steps))
-    w_st = wrench_of(steps)
-    ta_st = end_torque(steps, zero, arc2_of(steps, zero, zero), w_st, np.ones(len(steps), bool), steps, 1)
+    w_st = c.wrench_of(steps)
+    ta_st = c.end_torque(steps, zero, c.arc2_of(steps, zero, zero), w_st, np.ones(len(steps), bool), steps, 1)
     before = motion.tau[steps] < h_all[:, None]  # the acceleration just before sample k + 1: the second arc's
-    tb_st = end_torque(steps, h_all, before, w_st, np.ones(len(steps), bool), steps + 1, 0)
-    step_open = np.ones((len(steps), dof), dtype=bool)
+    tb_st = c.end_torque(steps, h_all, before, w_st, np.ones(len(steps), bool), steps + 1, 0)
+    step_open = np.ones((len(steps), c.dof), dtype=bool)
     if skip is not None:
         step_open &= ~skip[steps]
     for tv, s in ((ta_st, zero), (tb_st, h_all)):  # a non-finite torque (huge input) is reported, not split
         for p, j in zip(*np.nonzero(step_open & ((np.abs(tv) > lim) | ~np.isfinite(tv)))):
-            record(steps[p], j, motion.t[steps[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
+            c.record(steps[p], j, motion.t[steps[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
             step_open[p, j] = False
     if np.any(step_open):
-        step_open &= ~_step_prefilter(dyn, robot, motion, W, steps, ta_st, tb_st, lim)
-    steps = steps[np.any(step_open, axis=1)]
-    step_open = step_open[np.any(step_open, axis=1)]
-    if len(steps) == 0:
-        return ArcTorqueReport(sorted(found.values(), key=lambda v: (v.step, v.joint)), 0, evaluations, 0)
-    # the steps left: cut at their joints' switch instants where the acceleration changes (sorted, duplicates
-    # and empty pieces dropped)
+        step_open &= ~_step_prefilter(c.dyn, c.robot, motion, c.W, steps, ta_st, tb_st, lim)
+    return steps[np.any(step_open, axis=1)], step_open[np.any(step_open, axis=1)]
+
+
+def _first_pieces(c: _Certification, steps: np.ndarray, step_open: np.ndarray) -> tuple:
+    """The steps left, cut at their joints' switch instants where the acceleration changes (sorted, duplicates
+    and empty pieces dropped), with their end torques; piece ends above the limit are recorded. → (k, s0, s1,
+    τ after s0, τ before s1, open, arc2, wrench) per piece."""
+    motion, lim = c.motion, c.lim
     h = motion.h[steps, 0]
     tau = motion.tau[steps]
     inner = np.where((tau > 0) & (tau < h[:, None]) & (motion.a1[steps] != motion.a2[steps]), tau, np.nan)
@@ -232,18 +258,27 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
     si, ci = np.nonzero(ok)
     k_arr, s0, s1 = steps[si], a[si, ci], b[si, ci]
     open_ = step_open[si].copy()  # (piece, joint) still to decide
-    arc2 = arc2_of(k_arr, s0, s1)
-    wr = wrench_of(k_arr)
-    ta = end_torque(k_arr, s0, arc2, wr, s0 == 0, k_arr, 1)  # just after sample k
-    tb = end_torque(k_arr, s1, arc2, wr, s1 == motion.h[k_arr, 0], k_arr + 1, 0)  # just before sample k + 1
+    arc2 = c.arc2_of(k_arr, s0, s1)
+    wr = c.wrench_of(k_arr)
+    ta = c.end_torque(k_arr, s0, arc2, wr, s0 == 0, k_arr, 1)  # just after sample k
+    tb = c.end_torque(k_arr, s1, arc2, wr, s1 == motion.h[k_arr, 0], k_arr + 1, 0)  # just before sample k + 1
     # piece ends above the limit (switch instants, and samples with the piece's acceleration)
     for tv, s in ((ta, s0), (tb, s1)):
         for p, j in zip(*np.nonzero(open_ & ((np.abs(tv) > lim) | ~np.isfinite(tv)))):
-            record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
-    if found:
-        open_ &= ~np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr])
+            c.record(k_arr[p], j, motion.t[k_arr[p]] + s[p], tv[p, j], bool(np.abs(tv[p, j]) > lim[j]))
+    if c.found:
+        open_ &= ~c.decided(k_arr)
+    return k_arr, s0, s1, ta, tb, open_, arc2, wr
+
+
+def _bisect(c: _Certification, pieces: tuple, budget: int) -> Tuple[int, int]:
+    """Bound each open piece (its q and q̇ intervals, the torque rate's bounds), certify it or split it in two at
+    its middle (where τ is evaluated), down to MAX_DEPTH or until ``budget`` pieces were bounded; what is left
+    undecided is recorded as not certified. → (pieces bounded, depth reached)."""
+    motion, lim, robot = c.motion, c.lim, c.robot
+    k_arr, s0, s1, ta, tb, open_, arc2, wr = pieces
     depth = 0
-    budget = PIECES_PER_STEP * len(steps)  # the steps left
+    pieces_total = 0
     while True:
         live = np.any(open_, axis=1)
         if not np.any(live):
@@ -261,12 +296,12 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         qv = np.where(inside, qa + va * sv / 2, qa)  # q at the vertex: qa + va·sv + acc·sv²/2 = qa + va·sv/2
         Q = _interval(np.minimum(np.minimum(qa, qb), qv), np.maximum(np.maximum(qa, qb), qv))
         V = _interval(np.minimum(va, vb), np.maximum(va, vb))
-        d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, acc, acc, wr)
+        d_lo, d_hi = _rate_bounds(c.dyn, robot, Q, V, acc, acc, wr)
         ub, lb = _bounds(ta, tb, d_lo, d_hi, delta[:, None])
         certified = (ub <= lim) & (lb >= -lim)
         open_ &= ~certified
         for p, j in zip(*np.nonzero(open_ & ~(np.isfinite(ub) & np.isfinite(lb)))):  # no bound to split on
-            record(k_arr[p], j, motion.t[k_arr[p]] + (s0[p] + s1[p]) / 2, np.inf, False)
+            c.record(k_arr[p], j, motion.t[k_arr[p]] + (s0[p] + s1[p]) / 2, np.inf, False)
             open_[p, j] = False
         if not np.any(open_):
             break
@@ -274,25 +309,23 @@ def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, 
         k_arr, s0, s1, ta, tb, open_, arc2, wr, ub, lb = (x[live] for x in (k_arr, s0, s1, ta, tb, open_, arc2, wr,
                                                                                ub, lb))
         sm = (s0 + s1) / 2
-        tm = torque(k_arr, sm, arc2, wr)
+        tm = c.torque(k_arr, sm, arc2, wr)
         over = open_ & (np.abs(tm) > lim)
         for p, j in zip(*np.nonzero(over)):
-            record(k_arr[p], j, motion.t[k_arr[p]] + sm[p], tm[p, j], True)
-        if found:
-            bad = np.array([[(int(k), j) in found for j in range(dof)] for k in k_arr])
-            open_ &= ~bad
+            c.record(k_arr[p], j, motion.t[k_arr[p]] + sm[p], tm[p, j], True)
+        if c.found:
+            open_ &= ~c.decided(k_arr)
         if depth >= MAX_DEPTH or pieces_total + 2 * int(np.count_nonzero(np.any(open_, axis=1))) > budget:
             for p, j in zip(*np.nonzero(open_)):
                 b = ub[p, j] if ub[p, j] > lim[j] else lb[p, j]
-                record(k_arr[p], j, motion.t[k_arr[p]] + sm[p], b, False)
+                c.record(k_arr[p], j, motion.t[k_arr[p]] + sm[p], b, False)
             break
         depth += 1
         # split: [s0, sm] and [sm, s1]
         k_arr, arc2, wr, open_ = (np.concatenate([x, x]) for x in (k_arr, arc2, wr, open_))
         s0, s1 = np.concatenate([s0, sm]), np.concatenate([sm, s1])
         ta, tb = np.concatenate([ta, tm]), np.concatenate([tm, tb])
-    viol = sorted(found.values(), key=lambda v: (v.step, v.joint))
-    return ArcTorqueReport(viol, pieces_total, evaluations, depth)
+    return pieces_total, depth
 
 
 def arc_torque_steps(n: int, k0: int, k1: int) -> np.ndarray:

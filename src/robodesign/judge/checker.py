@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -193,7 +193,20 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
     for c in order_c:
         violations += _check_order(c, tr.goal2time)
     t1 = time.perf_counter()
-    n_ok = sum(goal_ok.values())
+    costs, cost = _costs(task, robot, tr, tq, settings, cost_fn, sum(goal_ok.values()))
+    if not math.isfinite(cost):
+        violations.append(Violation("cost", f"the cost {cost_fn.descriptor()} evaluates to {cost} (not a finite "
+                                            "number: a weight or a value overflows)", value=cost))
+    timings["costs"] = time.perf_counter() - t1
+    timings["total"] = time.perf_counter() - t0
+    real = [v for v in violations if v.constraint != "goal (not required)"]
+    return Verdict(valid=not real, violations=real + [v for v in violations if v not in real], costs=costs, cost=cost,
+                   cost_function=cost_fn.descriptor(), goals=goal_ok, timings=timings, samples=tr.n)
+
+
+def _costs(task: Task, robot, tr, tq: TrajectoryQuantities, settings: CheckSettings, cost_fn: CostFunction,
+           n_ok: int) -> Tuple[Dict[str, float], float]:
+    """The solution's cost, and every named cost with ``settings.all_costs``. → (named costs, the cost)."""
     if settings.one_motion and tr.n >= 2:  # costs on the judged motion, not on the file's dq/ddq (docs/checker.md)
         cctx = CostContext(t=tr.t, q=tr.q, dq=tq.velocities, ddq=tq.motion_accelerations,
                            tau=lambda: tq.motion_drivetrain_torques, tau_link=lambda: tq.motion_link_torques,
@@ -209,15 +222,7 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
                 costs[name] = float(cf.evaluate(cctx))
             except MissingQuantityError:  # a plugin term that needs what a check does not provide
                 continue
-    cost = float(cost_fn.evaluate(cctx))
-    if not math.isfinite(cost):
-        violations.append(Violation("cost", f"the cost {cost_fn.descriptor()} evaluates to {cost} (not a finite "
-                                            "number: a weight or a value overflows)", value=cost))
-    timings["costs"] = time.perf_counter() - t1
-    timings["total"] = time.perf_counter() - t0
-    real = [v for v in violations if v.constraint != "goal (not required)"]
-    return Verdict(valid=not real, violations=real + [v for v in violations if v not in real], costs=costs, cost=cost,
-                   cost_function=cost_fn.descriptor(), goals=goal_ok, timings=timings, samples=tr.n)
+    return costs, float(cost_fn.evaluate(cctx))
 
 
 # ---------------------------------------------------------------------------------------------

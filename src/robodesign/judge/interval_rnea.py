@@ -20,7 +20,7 @@ the TCP's joint, expressed in that joint's frame (as :meth:`Robot.tcp_wrench_for
 """
 from __future__ import annotations
 
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -237,15 +237,7 @@ class IntervalDynamics:
                 al_i = al_par
                 a_i = a_par - _cross(d, al_par) + s_qdd + _cross(w_i, s_qd)
             vel[i], ang[i], acc[i], alpha[i] = v_i, w_i, a_i, al_i
-            # body wrench: I·a + v ×* I·v, with I (mass m, lever c, rotational inertia Ic about the com)
-            mass, cvec, Ic = self.mass[j], self.lever[j], self.inertia[j]
-            Sc = _skew(cvec)
-            h_lin = (v_i - w_i.lin(Sc)).scale(mass)
-            h_ang = w_i.lin(Ic) + h_lin.lin(Sc)
-            g_lin = (a_i - al_i.lin(Sc)).scale(mass)
-            g_ang = al_i.lin(Ic) + g_lin.lin(Sc)
-            fl = g_lin + _cross(w_i, h_lin)
-            fa = g_ang + _cross(w_i, h_ang) + _cross(v_i, h_lin)
+            fl, fa = self._body_wrench(j, v_i, w_i, a_i, al_i)
             if w_f is not None:
                 wf, wt = w_f[lam].lin(Rp.T), w_t[lam].lin(Rp.T)
                 if self.kinds[j] == 0:
@@ -255,6 +247,26 @@ class IntervalDynamics:
                     fl = fl - wf
                     fa = fa - (wt + wf.lin(_skew(self.tcp_offset)))
             f_lin[i], f_ang[i] = fl, fa
+        return self._backward(q, f_lin, f_ang, trig, unit_z)
+
+    def _body_wrench(self, j: int, v_i: DI, w_i: DI, a_i: DI, al_i: DI) -> Tuple[DI, DI]:
+        """Body wrench of joint ``j``'s body: I·a + v ×* I·v, with I (mass m, lever c, rotational inertia Ic about
+        the com). → (force, moment)."""
+        mass, cvec, Ic = self.mass[j], self.lever[j], self.inertia[j]
+        Sc = _skew(cvec)
+        h_lin = (v_i - w_i.lin(Sc)).scale(mass)
+        h_ang = w_i.lin(Ic) + h_lin.lin(Sc)
+        g_lin = (a_i - al_i.lin(Sc)).scale(mass)
+        g_ang = al_i.lin(Ic) + g_lin.lin(Sc)
+        fl = g_lin + _cross(w_i, h_lin)
+        fa = g_ang + _cross(w_i, h_ang) + _cross(v_i, h_lin)
+        return fl, fa
+
+    def _backward(self, q: DI, f_lin: List[DI], f_ang: List[DI], trig: Dict[int, Tuple[DI, DI]],
+                  unit_z: Callable[[DI], DI]) -> DI:
+        """The backward pass of RNEA: each body's wrench carried to its parent, the joint torques read off from
+        the TCP back to the base. → (P, dof) torques."""
+        n = self.dof
         taus: Dict[int, DI] = {}  # joint index → its torque, set from the TCP back to the base
         f_lin, f_ang = list(f_lin), list(f_ang)
         for i in range(n, 0, -1):

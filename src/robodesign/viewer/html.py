@@ -16,7 +16,7 @@ import json
 import math
 from functools import lru_cache
 from pathlib import Path
-from typing import Dict, Mapping, Optional, Union
+from typing import Dict, List, Mapping, Optional, Union
 
 import numpy as np
 
@@ -85,8 +85,41 @@ def _fmt_pose(T) -> str:
 
 
 def _panel(scene: dict) -> str:
+    """The side panel: layer switches, overview, the checker's verdict, goals, meshes and notes."""
     info = scene.get("info") or {}
-    rows = []
+    parts = ['<h2>Overview</h2><table>' + "".join(_overview_rows(scene, info)) + "</table>"]
+    verdict = info.get("verdict")
+    if verdict:
+        parts.append(_verdict_html(verdict))
+    goals = scene.get("goals") or []
+    if goals:
+        parts.append(_goals_html(goals))
+
+    meshes = scene.get("meshes") or {}
+    if meshes:
+        n_tri = sum(m["n_triangles"] for m in meshes.values())
+        dec = [m["name"] for m in meshes.values() if m.get("decimated")]
+        txt = f"{len(meshes)} mesh files, {n_tri} triangles"
+        if dec:
+            txt += "; decimated: " + ", ".join(dec)
+        parts.append(f"<h2>Meshes</h2><div>{_e(txt)}</div>")
+
+    msgs = scene.get("messages") or []
+    if msgs:
+        parts.append("<h2>Notes</h2><ul>" + "".join(f'<li class="msg">{_e(m)}</li>' for m in msgs) + "</ul>")
+
+    layers = [("robot", "robot", True), ("obstacle", "workcell", True), ("goal", "goals", True),
+              ("tolerance", "tolerances", True), ("path", "TCP path", True), ("collision", "collision geometry", False),
+              ("grid", "grid", True)]
+    boxes = "".join(f'<label><input type="checkbox" data-layer="{k}"{" checked" if on else ""}> {_e(t)}</label>'
+                    for k, t, on in layers)
+    parts.insert(0, f'<div class="layers">{boxes}</div>')
+    return "\n".join(parts)
+
+
+def _overview_rows(scene: dict, info: dict) -> List[str]:
+    """The overview table's rows: task, solution, robot, base, q, trajectory, cost (those the scene has)."""
+    rows: List[str] = []
 
     def row(k, v):
         rows.append(f"<tr><th>{_e(k)}</th><td>{v}</td></tr>")
@@ -113,59 +146,40 @@ def _panel(scene: dict) -> str:
                           f"{len(anim.get('t', []))} frames shown (≤ {anim.get('fps', 25):g} fps + goal instants)")
     if "cost" in info and info["cost"] is not None:
         row("cost", _e(f"{info.get('cost_function', '')} = {info['cost']:.6g}"))
-    parts = ['<h2>Overview</h2><table>' + "".join(rows) + "</table>"]
+    return rows
 
-    verdict = info.get("verdict")
-    if verdict:
-        ok = bool(verdict.get("valid"))
-        v = [f'<h2>Check: <span class="{"valid" if ok else "invalid"}">{"VALID" if ok else "INVALID"}</span></h2>']
-        if verdict.get("cost") is not None:
-            v.append(f"<div>{_e(verdict.get('costFunction', 'cost'))} = {verdict['cost']:.6g}</div>")
-        viol = verdict.get("violations") or []
-        if viol:
-            items = "".join(f"<li>{_e(x.get('constraint', ''))}: {_e(x.get('message', ''))}"
-                            + (f" (t = {x['time']:.3f} s)" if isinstance(x.get("time"), (int, float)) else "")
-                            + "</li>" for x in viol[:12])
-            more = f"<li>… {len(viol) - 12} more</li>" if len(viol) > 12 else ""
-            v.append(f"<ul>{items}{more}</ul>")
-        parts.append("".join(v))
 
-    goals = scene.get("goals") or []
-    if goals:
-        g_rows = []
-        for g in goals:
-            when = "–"
-            if g.get("time") is not None:
-                when = f"{g['time']:.3f} s"
-                if g.get("frame") is not None:
-                    when = f'<button class="goto" data-frame="{int(g["frame"])}" title="show this instant">{when}</button>'
-            tol = "<br>".join(_e(t) for t in g.get("tolerance") or [])
-            det = _e(g.get("details") or "")
-            g_rows.append(f"<tr><td><b>{_e(g['id'])}</b></td><td>{_e(g['type'])}</td><td>{when}</td>"
-                          f"<td>{tol}{'<br>' if tol and det else ''}{det}</td></tr>")
-        parts.append("<h2>Goals</h2><table><tr><th>ID</th><th>type</th><th>t</th><th>tolerance</th></tr>"
-                     + "".join(g_rows) + "</table>")
+def _verdict_html(verdict: dict) -> str:
+    """The checker's verdict: VALID / INVALID, the cost, the first 12 violations."""
+    ok = bool(verdict.get("valid"))
+    v = [f'<h2>Check: <span class="{"valid" if ok else "invalid"}">{"VALID" if ok else "INVALID"}</span></h2>']
+    if verdict.get("cost") is not None:
+        v.append(f"<div>{_e(verdict.get('costFunction', 'cost'))} = {verdict['cost']:.6g}</div>")
+    viol = verdict.get("violations") or []
+    if viol:
+        items = "".join(f"<li>{_e(x.get('constraint', ''))}: {_e(x.get('message', ''))}"
+                        + (f" (t = {x['time']:.3f} s)" if isinstance(x.get("time"), (int, float)) else "")
+                        + "</li>" for x in viol[:12])
+        more = f"<li>… {len(viol) - 12} more</li>" if len(viol) > 12 else ""
+        v.append(f"<ul>{items}{more}</ul>")
+    return "".join(v)
 
-    meshes = scene.get("meshes") or {}
-    if meshes:
-        n_tri = sum(m["n_triangles"] for m in meshes.values())
-        dec = [m["name"] for m in meshes.values() if m.get("decimated")]
-        txt = f"{len(meshes)} mesh files, {n_tri} triangles"
-        if dec:
-            txt += "; decimated: " + ", ".join(dec)
-        parts.append(f"<h2>Meshes</h2><div>{_e(txt)}</div>")
 
-    msgs = scene.get("messages") or []
-    if msgs:
-        parts.append("<h2>Notes</h2><ul>" + "".join(f'<li class="msg">{_e(m)}</li>' for m in msgs) + "</ul>")
-
-    layers = [("robot", "robot", True), ("obstacle", "workcell", True), ("goal", "goals", True),
-              ("tolerance", "tolerances", True), ("path", "TCP path", True), ("collision", "collision geometry", False),
-              ("grid", "grid", True)]
-    boxes = "".join(f'<label><input type="checkbox" data-layer="{k}"{" checked" if on else ""}> {_e(t)}</label>'
-                    for k, t, on in layers)
-    parts.insert(0, f'<div class="layers">{boxes}</div>')
-    return "\n".join(parts)
+def _goals_html(goals: list) -> str:
+    """The goals table: ID, type, the instant it is reached (a button that shows it), tolerance and details."""
+    g_rows = []
+    for g in goals:
+        when = "–"
+        if g.get("time") is not None:
+            when = f"{g['time']:.3f} s"
+            if g.get("frame") is not None:
+                when = f'<button class="goto" data-frame="{int(g["frame"])}" title="show this instant">{when}</button>'
+        tol = "<br>".join(_e(t) for t in g.get("tolerance") or [])
+        det = _e(g.get("details") or "")
+        g_rows.append(f"<tr><td><b>{_e(g['id'])}</b></td><td>{_e(g['type'])}</td><td>{when}</td>"
+                      f"<td>{tol}{'<br>' if tol and det else ''}{det}</td></tr>")
+    return ("<h2>Goals</h2><table><tr><th>ID</th><th>type</th><th>t</th><th>tolerance</th></tr>"
+            + "".join(g_rows) + "</table>")
 
 
 def render_html(scene: dict, plots: Optional[Mapping[str, Union[str, bytes]]] = None,

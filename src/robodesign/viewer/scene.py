@@ -39,8 +39,10 @@ import numpy.typing as npt
 
 from robodesign.formats.geometry import GeometrySpec
 from robodesign.formats.task_spec import At, Follow, Leave, ObstacleSpec, Pause, Reach, ReturnTo
-from robodesign.formats.tolerance import ToleratedPose
 from robodesign.viewer.meshes import MAX_TRIANGLES, mesh_entry
+from robodesign.viewer.tolerances import TOLERANCE_CLIP as TOLERANCE_CLIP
+from robodesign.viewer.tolerances import TOLERANCE_OPACITY as TOLERANCE_OPACITY
+from robodesign.viewer.tolerances import _pose, tolerance_geometries, tolerance_text
 
 if TYPE_CHECKING:  # (the viewer loads them only when it draws a robot)
     from robodesign.formats.solution import SolutionTrajectory
@@ -52,7 +54,6 @@ SCENE_FORMAT = "robodesign-scene/1"
 DEFAULT_FPS = 25.0
 TIME_EPS = 1e-9
 MAX_PATH_POINTS = 5000
-TOLERANCE_CLIP = 0.3  # m: half-size shown for an unbounded translational interval
 
 COLORS = {
     "base": "#4a4f57", "joint": "#2f6db5", "link": "#b9bdc4", "eef": "#e08a1e",
@@ -60,7 +61,6 @@ COLORS = {
     "placement": "#9467bd", "path": "#ff7f0e", "follow": "#17becf", "returnTo": "#7f7f7f",
 }
 OBSTACLE_OPACITY = 0.25
-TOLERANCE_OPACITY = 0.25
 GOAL_TRIAD = 0.08
 BASE_TRIAD = 0.15
 TCP_TRIAD = 0.06
@@ -69,16 +69,6 @@ TCP_TRIAD = 0.06
 # ---------------------------------------------------------------------------------------------
 # helpers
 # ---------------------------------------------------------------------------------------------
-def _pose(T) -> List[List[float]]:
-    return np.asarray(T, dtype=float).reshape(4, 4).tolist()
-
-
-def _fmt(x: float) -> str:
-    if math.isinf(x):
-        return "∞" if x > 0 else "−∞"
-    return f"{x:.6g}"
-
-
 class _MeshTable:
     def __init__(self, max_triangles: int):
         self.max_triangles = max_triangles
@@ -158,85 +148,6 @@ def _q_at(t: np.ndarray, q: np.ndarray, time_: float) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------
-# tolerances
-# ---------------------------------------------------------------------------------------------
-def _frame_rotation(tp: ToleratedPose, frame: str) -> np.ndarray:
-    """Q_f: nominal axes → axes of the tolerance frame (see robodesign.formats.tolerance)."""
-    Q = getattr(tp, "_Q", {}).get(frame)
-    if Q is not None:
-        return np.asarray(Q, dtype=float)
-    Rn = tp.nominal[:3, :3]
-    if frame == "world":
-        return Rn.copy()
-    if frame != "nominal" and tp.frame_resolver is not None:
-        try:
-            return np.asarray(tp.frame_resolver(frame), float)[:3, :3].T @ Rn
-        except Exception:  # pragma: no cover - unknown frame: show in nominal axes
-            pass
-    return np.eye(3)
-
-
-def _clip_interval(lo: float, hi: float, clip: float) -> Tuple[float, float, bool]:
-    clipped = False
-    if math.isinf(lo) and math.isinf(hi):
-        return -clip, clip, True
-    if math.isinf(lo):
-        lo, clipped = min(hi, 0.0) - clip, True
-    if math.isinf(hi):
-        hi, clipped = max(lo, 0.0) + clip, True
-    return lo, hi, clipped
-
-
-def tolerance_geometries(tp: ToleratedPose, color: str, clip: float = TOLERANCE_CLIP,
-                         opacity: float = TOLERANCE_OPACITY) -> List[dict]:
-    """Translucent shapes of the translational tolerance, posed relative to the nominal frame.
-
-    ``r_sph`` → a sphere of radius hi; ``r_cyl`` → a cylinder about the frame's z axis (height from a
-    ``z`` interval in the same frame); ``x``/``y``/``z`` → a box in the tolerance frame's axes.
-    Unbounded sides are cut at ``clip`` and the shape is drawn as a wireframe. Angular projections
-    (``phi_*``, ``theta``, rotations) are listed as text only.
-    """
-    by_frame: Dict[str, Dict[str, Tuple[float, float]]] = {}
-    for c in tp.constraints:
-        if not c.info.translational or c.covers_allowed_range():
-            continue
-        by_frame.setdefault(c.frame, {})[c.projection] = (c.lower(), c.upper())
-    out = []
-    for frame, d in by_frame.items():
-        QT = _frame_rotation(tp, frame).T
-
-        def posed(center):
-            P = np.eye(4)
-            P[:3, :3] = QT
-            P[:3, 3] = QT @ np.asarray(center, float)
-            return P
-
-        base = {"role": "tolerance", "color": color, "opacity": float(opacity)}
-        if "r_sph" in d and math.isfinite(d["r_sph"][1]):
-            out.append(dict(base, type="sphere", radius=max(d["r_sph"][1], 1e-4), pose=_pose(np.eye(4))))
-        if "r_cyl" in d and math.isfinite(d["r_cyl"][1]):
-            zlo, zhi, cl = _clip_interval(*d.get("z", (-math.inf, math.inf)), clip)
-            out.append(dict(base, type="cylinder", radius=max(d["r_cyl"][1], 1e-4), length=max(zhi - zlo, 1e-4),
-                            pose=_pose(posed([0.0, 0.0, 0.5 * (zlo + zhi)])), wireframe=cl))
-        if "x" in d or "y" in d or ("z" in d and "r_cyl" not in d):
-            lo_hi = [_clip_interval(*d.get(a, (-math.inf, math.inf)), clip) for a in "xyz"]
-            size = [max(hi - lo, 1e-4) for lo, hi, _ in lo_hi]
-            center = [0.5 * (lo + hi) for lo, hi, _ in lo_hi]
-            out.append(dict(base, type="box", size=size, pose=_pose(posed(center)),
-                            wireframe=any(c for _, _, c in lo_hi)))
-    return out
-
-
-def tolerance_text(tp: ToleratedPose) -> List[str]:
-    if tp.is_unconstrained:
-        return ["any pose"]
-    out = []
-    for p, (lo, hi), f in tp.entries:
-        out.append(f"{p} ∈ [{_fmt(lo)}, {_fmt(hi)}]" + ("" if f == "nominal" else f" ({f})"))
-    return out
-
-
-# ---------------------------------------------------------------------------------------------
 # the scene
 # ---------------------------------------------------------------------------------------------
 def _add_robot_nodes(robot, prefix: str, include_collision: bool, meshes: "_MeshTable", nodes: List[dict]
@@ -312,116 +223,150 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[npt.Array
     anim = None
     paths: Dict[str, list] = {}
 
-    # ---------------- robot ----------------
     frames_t: List[Tuple[float, int]] = []
     robot_nodes: List[Tuple[str, int]] = []  # (node id, frame id)
-    q_frames = None
+    poses: List[List[np.ndarray]] = []  # per frame, per robot node: 4x4
     if robot is not None:
-        ms, asm = robot.module_set, robot.assembly
-        info.setdefault("module_set", ms.name)
-        info.setdefault("modules", list(asm.module_ids))
-        info.setdefault("dof", int(robot.dof))
-        info.setdefault("base_pose", _pose(robot.base_pose))
-        robot_nodes = _add_robot_nodes(robot, "", include_collision, meshes, nodes)
-        focus.append(robot.base_pose[:3, 3])
-
-        if trajectory is not None:
-            t = np.asarray(trajectory.t, dtype=float)
-            Q = np.asarray(trajectory.q, dtype=float)
-            if Q.ndim != 2 or Q.shape[1] != robot.dof:
-                raise ValueError(f"trajectory has {Q.shape[-1]} joint columns, the robot {robot.dof} joints")
-            g2t = dict(trajectory.goal2time or {})
-            frames_t = animation_samples(t, g2t.values(), fps)
-            q_frames = [Q[k] if k >= 0 else _q_at(t, Q, tt) for tt, k in frames_t]
-            info.setdefault("duration", float(t[-1] - t[0]))
-            info.setdefault("samples", int(len(t)))
-            # TCP path at the samples (strided to ≤ MAX_PATH_POINTS)
-            stride = max(1, int(math.ceil(len(t) / MAX_PATH_POINTS)))
-            ks = list(range(0, len(t), stride))
-            if ks[-1] != len(t) - 1:
-                ks.append(len(t) - 1)
-            paths["tcp"] = [robot.fk(Q[k])[:3, 3].tolist() for k in ks]
-        else:
-            q0 = np.zeros(robot.dof) if q is None else np.asarray(q, dtype=float)
-            q_frames = [q0]
-            info.setdefault("q", q0.tolist())
-
-        poses = _frame_poses(robot, q_frames, robot_nodes)  # per frame, per robot node: 4x4
-        for name, other, tr in others:  # further robots of a collaborative cell, on the same time base
-            o_nodes = _add_robot_nodes(other, f"{name}/", include_collision, meshes, nodes)
-            focus.append(other.base_pose[:3, 3])
-            if tr is not None and frames_t:
-                to, Qo = np.asarray(tr.t, dtype=float), np.asarray(tr.q, dtype=float)
-                if Qo.ndim != 2 or Qo.shape[1] != other.dof:
-                    raise ValueError(f"robot {name}: trajectory has {Qo.shape[-1]} joint columns, the robot {other.dof}")
-                qo = [_q_at(to, Qo, tt) for tt, _ in frames_t]
-            else:
-                qo = [np.zeros(other.dof)] * len(q_frames)
-            o_poses = _frame_poses(other, qo, o_nodes)
-            poses = [a + b for a, b in zip(poses, o_poses)]
-            robot_nodes = robot_nodes + o_nodes
-        for j, (nid, _) in enumerate(robot_nodes):
-            node = next(n for n in nodes if n["id"] == nid)
-            node["pose"] = _pose(poses[0][j])
-        for frame_poses in poses:
-            for P in frame_poses:
-                focus.append(P[:3, 3])
-
-    # ---------------- task ----------------
+        frames_t, robot_nodes, poses = _robot_part(robot, trajectory, q, fps, include_collision, others, meshes,
+                                                   nodes, info, focus, paths)
     obstacle_anim: List[Tuple[str, ObstacleSpec]] = []
     if task is not None:
-        info.setdefault("task", task.id)
-        if task.header.name:
-            info.setdefault("task_name", task.header.name)
-        t0 = frames_t[0][0] if frames_t else 0.0
-        for ob in task.obstacles:
-            geoms = []
-            vis = ob.visual or ob.collision
-            for g in vis:
-                rec = geometry_record(g, meshes, "visual", COLORS["obstacle"], OBSTACLE_OPACITY)
-                if rec is not None:
-                    if not ob.visual:
-                        rec["from_collision"] = True
-                    geoms.append(rec)
-            if include_collision and ob.visual:
-                for g in ob.collision:
-                    rec = geometry_record(g, meshes, "collision", COLORS["collision"], 0.3)
-                    if rec is not None:
-                        geoms.append(rec)
-            nid = f"obstacle/{ob.id}"
-            nodes.append({"id": nid, "name": ob.name or ob.id, "group": "obstacle", "moving": bool(ob.moving),
-                          "pose": _pose(ob.transform_at(t0)), "geometries": geoms})
-            if ob.moving:
-                obstacle_anim.append((nid, ob))
-        g2t = dict(trajectory.goal2time) if (trajectory is not None and robot is not None) else {}
-        times = [f[0] for f in frames_t]
-        for g in task.goals:
-            goal_records.append(_goal(g, g2t, times, nodes, focus, paths, meshes))
-        _merge_labels([n for n in nodes if n["group"] == "goal"])
-        bp = task.base_placement
-        if bp is not None and not bp.is_unconstrained:
-            geoms = [_triad(BASE_TRIAD * 0.6)] + tolerance_geometries(bp, COLORS["placement"])
-            nodes.append({"id": "placement", "name": "base placement", "group": "placement",
-                          "pose": _pose(bp.nominal), "geometries": geoms})
-            focus.append(bp.nominal[:3, 3])
-        info.setdefault("base_placement", tolerance_text(bp) if bp is not None else ["any pose"])
-
-    # ---------------- animation ----------------
+        goal_records, obstacle_anim = _task_part(task, robot, trajectory, frames_t, include_collision, meshes, nodes,
+                                                 info, focus, paths)
     if robot is not None and trajectory is not None:
-        anim_ids = [nid for nid, _ in robot_nodes] + [nid for nid, _ in obstacle_anim]
-        all_poses = []
-        for j, (tt, _) in enumerate(frames_t):
-            row = [P[:3, :].tolist() for P in poses[j]]
-            row += [np.asarray(ob.transform_at(tt), float)[:3, :].tolist() for _, ob in obstacle_anim]
-            all_poses.append(row)
-        times = [f[0] for f in frames_t]
-        goal_frames = {}
-        for gid, tg in (trajectory.goal2time or {}).items():
-            goal_frames[str(gid)] = int(np.argmin(np.abs(np.asarray(times) - float(tg))))
-        anim = {"fps": float(fps), "t": times, "sample": [int(k) for _, k in frames_t], "nodes": anim_ids,
-                "poses": all_poses, "goal_frames": goal_frames}
+        anim = _animation(trajectory, fps, frames_t, robot_nodes, poses, obstacle_anim)
+    bounds = _bounds(focus, nodes, meshes, robot)
+    return {"format": SCENE_FORMAT, "info": info, "meshes": meshes.meshes, "nodes": nodes, "animation": anim,
+            "paths": paths, "goals": goal_records, "bounds": bounds, "messages": messages}
 
-    # ---------------- bounds ----------------
+
+def _robot_part(robot, trajectory, q, fps: float, include_collision: bool, others: Sequence[OtherRobot],
+                meshes: "_MeshTable", nodes: List[dict], info: dict, focus: List[np.ndarray], paths: Dict[str, list]
+                ) -> Tuple[List[Tuple[float, int]], List[Tuple[str, int]], List[List[np.ndarray]]]:
+    """The robot's nodes (and the other robots' of a collaborative cell), its frames and TCP path. → (frame times
+    with their sample index, (node id, frame id) of every robot node, per frame the 4x4 pose of every robot node)."""
+    ms, asm = robot.module_set, robot.assembly
+    info.setdefault("module_set", ms.name)
+    info.setdefault("modules", list(asm.module_ids))
+    info.setdefault("dof", int(robot.dof))
+    info.setdefault("base_pose", _pose(robot.base_pose))
+    robot_nodes = _add_robot_nodes(robot, "", include_collision, meshes, nodes)
+    focus.append(robot.base_pose[:3, 3])
+
+    frames_t: List[Tuple[float, int]] = []
+    if trajectory is not None:
+        t = np.asarray(trajectory.t, dtype=float)
+        Q = np.asarray(trajectory.q, dtype=float)
+        if Q.ndim != 2 or Q.shape[1] != robot.dof:
+            raise ValueError(f"trajectory has {Q.shape[-1]} joint columns, the robot {robot.dof} joints")
+        g2t = dict(trajectory.goal2time or {})
+        frames_t = animation_samples(t, g2t.values(), fps)
+        q_frames = [Q[k] if k >= 0 else _q_at(t, Q, tt) for tt, k in frames_t]
+        info.setdefault("duration", float(t[-1] - t[0]))
+        info.setdefault("samples", int(len(t)))
+        # TCP path at the samples (strided to ≤ MAX_PATH_POINTS)
+        stride = max(1, int(math.ceil(len(t) / MAX_PATH_POINTS)))
+        ks = list(range(0, len(t), stride))
+        if ks[-1] != len(t) - 1:
+            ks.append(len(t) - 1)
+        paths["tcp"] = [robot.fk(Q[k])[:3, 3].tolist() for k in ks]
+    else:
+        q0 = np.zeros(robot.dof) if q is None else np.asarray(q, dtype=float)
+        q_frames = [q0]
+        info.setdefault("q", q0.tolist())
+
+    poses = _frame_poses(robot, q_frames, robot_nodes)  # per frame, per robot node: 4x4
+    for name, other, tr in others:  # further robots of a collaborative cell, on the same time base
+        o_nodes = _add_robot_nodes(other, f"{name}/", include_collision, meshes, nodes)
+        focus.append(other.base_pose[:3, 3])
+        if tr is not None and frames_t:
+            to, Qo = np.asarray(tr.t, dtype=float), np.asarray(tr.q, dtype=float)
+            if Qo.ndim != 2 or Qo.shape[1] != other.dof:
+                raise ValueError(f"robot {name}: trajectory has {Qo.shape[-1]} joint columns, the robot {other.dof}")
+            qo = [_q_at(to, Qo, tt) for tt, _ in frames_t]
+        else:
+            qo = [np.zeros(other.dof)] * len(q_frames)
+        o_poses = _frame_poses(other, qo, o_nodes)
+        poses = [a + b for a, b in zip(poses, o_poses)]
+        robot_nodes = robot_nodes + o_nodes
+    for j, (nid, _) in enumerate(robot_nodes):
+        node = next(n for n in nodes if n["id"] == nid)
+        node["pose"] = _pose(poses[0][j])
+    for frame_poses in poses:
+        for P in frame_poses:
+            focus.append(P[:3, 3])
+    return frames_t, robot_nodes, poses
+
+
+def _task_part(task, robot, trajectory, frames_t: List[Tuple[float, int]], include_collision: bool,
+               meshes: "_MeshTable", nodes: List[dict], info: dict, focus: List[np.ndarray], paths: Dict[str, list]
+               ) -> Tuple[List[dict], List[Tuple[str, ObstacleSpec]]]:
+    """The task's obstacles, goals and base placement. → (the goal records, (node id, obstacle) of the moving
+    obstacles)."""
+    info.setdefault("task", task.id)
+    if task.header.name:
+        info.setdefault("task_name", task.header.name)
+    t0 = frames_t[0][0] if frames_t else 0.0
+    obstacle_anim: List[Tuple[str, ObstacleSpec]] = []
+    for ob in task.obstacles:
+        geoms = _obstacle_geometries(ob, meshes, include_collision)
+        nid = f"obstacle/{ob.id}"
+        nodes.append({"id": nid, "name": ob.name or ob.id, "group": "obstacle", "moving": bool(ob.moving),
+                      "pose": _pose(ob.transform_at(t0)), "geometries": geoms})
+        if ob.moving:
+            obstacle_anim.append((nid, ob))
+    g2t = dict(trajectory.goal2time) if (trajectory is not None and robot is not None) else {}
+    times = [f[0] for f in frames_t]
+    goal_records = [_goal(g, g2t, times, nodes, focus, paths, meshes) for g in task.goals]
+    _merge_labels([n for n in nodes if n["group"] == "goal"])
+    bp = task.base_placement
+    if bp is not None and not bp.is_unconstrained:
+        geoms = [_triad(BASE_TRIAD * 0.6)] + tolerance_geometries(bp, COLORS["placement"])
+        nodes.append({"id": "placement", "name": "base placement", "group": "placement",
+                      "pose": _pose(bp.nominal), "geometries": geoms})
+        focus.append(bp.nominal[:3, 3])
+    info.setdefault("base_placement", tolerance_text(bp) if bp is not None else ["any pose"])
+    return goal_records, obstacle_anim
+
+
+def _obstacle_geometries(ob: ObstacleSpec, meshes: "_MeshTable", include_collision: bool) -> List[dict]:
+    """An obstacle's visual geometry (its collision geometry when it has none), and its collision geometry too
+    when asked."""
+    geoms = []
+    vis = ob.visual or ob.collision
+    for g in vis:
+        rec = geometry_record(g, meshes, "visual", COLORS["obstacle"], OBSTACLE_OPACITY)
+        if rec is not None:
+            if not ob.visual:
+                rec["from_collision"] = True
+            geoms.append(rec)
+    if include_collision and ob.visual:
+        for g in ob.collision:
+            rec = geometry_record(g, meshes, "collision", COLORS["collision"], 0.3)
+            if rec is not None:
+                geoms.append(rec)
+    return geoms
+
+
+def _animation(trajectory, fps: float, frames_t: List[Tuple[float, int]], robot_nodes: List[Tuple[str, int]],
+               poses: List[List[np.ndarray]], obstacle_anim: List[Tuple[str, ObstacleSpec]]) -> dict:
+    """The animation: per frame the poses of the robot nodes and the moving obstacles, and each goal's frame."""
+    anim_ids = [nid for nid, _ in robot_nodes] + [nid for nid, _ in obstacle_anim]
+    all_poses = []
+    for j, (tt, _) in enumerate(frames_t):
+        row = [P[:3, :].tolist() for P in poses[j]]
+        row += [np.asarray(ob.transform_at(tt), float)[:3, :].tolist() for _, ob in obstacle_anim]
+        all_poses.append(row)
+    times = [f[0] for f in frames_t]
+    goal_frames = {}
+    for gid, tg in (trajectory.goal2time or {}).items():
+        goal_frames[str(gid)] = int(np.argmin(np.abs(np.asarray(times) - float(tg))))
+    return {"fps": float(fps), "t": times, "sample": [int(k) for _, k in frames_t], "nodes": anim_ids,
+            "poses": all_poses, "goal_frames": goal_frames}
+
+
+def _bounds(focus: List[np.ndarray], nodes: List[dict], meshes: "_MeshTable", robot) -> dict:
+    """The box the camera frames: the focus points padded (the obstacles' corners when there are none)."""
     if not focus:
         for n in nodes:
             if n["group"] != "obstacle":
@@ -436,12 +381,8 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[npt.Array
         pad = max(0.1, 0.1 * float(np.linalg.norm(hi - lo)))
         if robot is None:  # goals only: leave room for the robot that will reach them
             pad = max(0.4, 0.25 * float(np.linalg.norm(hi - lo)))
-        bounds = {"min": (lo - pad).tolist(), "max": (hi + pad).tolist()}
-    else:
-        bounds = {"min": [-1.0, -1.0, -0.1], "max": [1.0, 1.0, 1.5]}
-
-    return {"format": SCENE_FORMAT, "info": info, "meshes": meshes.meshes, "nodes": nodes, "animation": anim,
-            "paths": paths, "goals": goal_records, "bounds": bounds, "messages": messages}
+        return {"min": (lo - pad).tolist(), "max": (hi + pad).tolist()}
+    return {"min": [-1.0, -1.0, -0.1], "max": [1.0, 1.0, 1.5]}
 
 
 def _merge_labels(goal_nodes: List[dict]) -> None:

@@ -23,7 +23,15 @@ VIEWER_CSP = ("default-src 'none'; script-src 'unsafe-inline' 'unsafe-eval' blob
 
 def add_routes(app: FastAPI, site: Site) -> None:
     """The HTML pages (and the stylesheet, the API docs page, the health check)."""
-    bench, viewer, viewer_cache, submit = site.bench, site.viewer, site.viewer_cache, site.submit
+    _add_site_routes(app, site)
+    _add_catalog_pages(app, site)
+    _add_solution_pages(app, site)
+    _add_upload_pages(app, site)
+
+
+def _add_site_routes(app: FastAPI, site: Site) -> None:
+    """The stylesheet, the API docs page, the health check and the index."""
+    bench = site.bench
 
     @app.get("/static/style.css", include_in_schema=False)
     def css():
@@ -40,6 +48,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
     @app.get("/", response_class=HTMLResponse, include_in_schema=False)
     def index():
         return pages.index(bench.tasks(), bench.module_sets(), bench.cost_functions(), bench.benchmarks())
+
+
+def _add_catalog_pages(app: FastAPI, site: Site) -> None:
+    """The task, module set and leaderboard pages."""
+    bench = site.bench
 
     @app.get("/tasks/{task_id:path}", response_class=HTMLResponse, include_in_schema=False)
     def task_page(task_id: str):
@@ -68,6 +81,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
         board, rows = bench.leaderboard(bid)
         return pages.leaderboard(board, rows)
 
+
+def _add_solution_pages(app: FastAPI, site: Site) -> None:
+    """A solution's page, its 3D viewer and the withdrawal form."""
+    bench, viewer, viewer_cache = site.bench, site.viewer, site.viewer_cache
+
     @app.get("/solutions/{sid}", response_class=HTMLResponse, include_in_schema=False)
     def solution_page(sid: str):
         row = bench.solution_row(sid)
@@ -95,6 +113,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
         return HTMLResponse(pages.layout("Withdrawn", f'<div class="card" id="result"><p>Solution #{res["id"]} was '
                                          f'withdrawn from <a href="{pages.e(pages.bid_url(res["benchmark_id"]))}">'
                                          f'{pages.e(res["benchmark_id"])}</a>.</p></div>'))
+
+
+def _add_upload_pages(app: FastAPI, site: Site) -> None:
+    """The upload form and its submission."""
+    submit = site.submit
 
     @app.get("/upload", response_class=HTMLResponse, include_in_schema=False)
     def upload_page():

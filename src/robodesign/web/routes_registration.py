@@ -20,6 +20,13 @@ from robodesign.web.uploads import b64_files, decode_text, is_zip, read_upload
 
 def add_routes(app: FastAPI, site: Site) -> None:
     """/api/tasks, /api/modulesets, /api/costs."""
+    _add_task_routes(app, site)
+    _add_moduleset_routes(app, site)
+    _add_cost_routes(app, site)
+
+
+def _add_task_routes(app: FastAPI, site: Site) -> None:
+    """/api/tasks: the list, a task's file, registration."""
     bench, require_admin = site.bench, site.require_admin
 
     @app.get("/api/tasks")
@@ -64,6 +71,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
                 files = {n: d for n, d in up.files.get("files", [])}
                 created = [await run_in_threadpool(bench.add_task, decode_text(data, name), files_source(files), name)]
         return JSONResponse({"tasks": created}, status_code=201)
+
+
+def _add_moduleset_routes(app: FastAPI, site: Site) -> None:
+    """/api/modulesets: the list, a set's file, registration."""
+    bench, require_admin = site.bench, site.require_admin
 
     @app.get("/api/modulesets")
     def api_modulesets():
@@ -113,6 +125,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
                 files = {n: d for n, d in up.files.get("files", [])}
                 res = await run_in_threadpool(bench.add_module_set, name, decode_text(data, fname), files_source(files))
         return JSONResponse(res, status_code=201)
+
+
+def _add_cost_routes(app: FastAPI, site: Site) -> None:
+    """/api/costs: the cost functions."""
+    bench = site.bench
 
     @app.get("/api/costs")
     def api_costs():

@@ -21,6 +21,13 @@ from robodesign.web.uploads import Upload, decode_text, float_param
 
 def add_routes(app: FastAPI, site: Site) -> None:
     """/api/solutions, /api/checks, /api/queue, /api/benchmarks, /api/leaderboard."""
+    _add_upload_routes(app, site)
+    _add_solution_routes(app, site)
+    _add_leaderboard_routes(app, site)
+
+
+def _add_upload_routes(app: FastAPI, site: Site) -> None:
+    """/api/benchmarks, uploads (synchronous or async), their status and the check queue."""
     bench, queue, submit, wants_async = site.bench, site.queue, site.submit, site.wants_async
 
     @app.get("/api/benchmarks")
@@ -65,6 +72,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
     def api_queue():
         return queue.stats()
 
+
+def _add_solution_routes(app: FastAPI, site: Site) -> None:
+    """/api/solutions: lists, one solution, its file, withdrawal."""
+    bench = site.bench
+
     @app.get("/api/solutions")
     def api_solutions(request: Request):
         qp = request.query_params
@@ -92,6 +104,11 @@ def add_routes(app: FastAPI, site: Site) -> None:
     @app.delete("/api/solutions/{sid}")
     async def api_withdraw(sid: str, request: Request):
         return await run_in_threadpool(bench.withdraw, sid, request.headers.get("x-author-token"))
+
+
+def _add_leaderboard_routes(app: FastAPI, site: Site) -> None:
+    """/api/leaderboard: a benchmark's ranked entries."""
+    bench = site.bench
 
     @app.get("/api/leaderboard/{bid:path}")
     def api_leaderboard(bid: str):
