@@ -276,13 +276,9 @@ def _dof_range(rules: Mapping[str, Any], task: Task, cost: Optional[CostFunction
         others = {k: v for k, v in rules.items() if k not in ("min_dof", "max_dof")}
         if SearchSpace(module_set, **others, min_dof=d_hi, max_dof=d_hi).count_orders() == 0:
             d_lo = d_hi = DEFAULT_DOF
-    if lo is None and hi is None:
-        return {"min_dof": d_lo, "max_dof": d_hi}
     if lo is None:
-        return {"min_dof": min(d_lo, hi), "max_dof": hi}
-    if hi is None:
-        return {"min_dof": lo, "max_dof": max(d_hi, lo)}
-    return {"min_dof": lo, "max_dof": hi}
+        return {"min_dof": d_lo, "max_dof": d_hi} if hi is None else {"min_dof": min(d_lo, int(hi)), "max_dof": int(hi)}
+    return {"min_dof": int(lo), "max_dof": max(d_hi, int(lo)) if hi is None else int(hi)}
 
 
 _DIGESTS: Dict[Tuple[str, int], str] = {}
