@@ -96,6 +96,11 @@ def run_task(variant: str, set_name: str, index: int, task: Path, out: Path, bud
              seed: int, workers: int = 1) -> dict:
     sol = out / "solutions" / variant / set_name / f"{task.stem}.json"
     sol.parent.mkdir(parents=True, exist_ok=True)
+    # a task killed in flight (not in runs.jsonl) left its search's journal, which optimize would refuse to start
+    # over ("use --resume"): the task is searched afresh, as if it had never started (a resumed time budget would
+    # not be the budget of the other tasks)
+    for stale in sol.parent.glob(f"{task.stem}.journal.sqlite*"):
+        stale.unlink()
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), str(ROOT / "optimizers"),
                                                         os.environ.get("PYTHONPATH", "")]))
     t0 = time.perf_counter()
