@@ -19,11 +19,12 @@ import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Optional
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(setting: str, dof: str, task: str, budget: str, seed: int) -> dict:
+def run(setting: str, dof: str, task: str, budget: str, seed: int) -> Optional[dict]:
     exe = Path(sys.executable).with_name("robodesign")
     rd = [str(exe)] if exe.is_file() else [sys.executable, "-m", "robodesign.cli"]
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), str(ROOT / "optimizers"),
@@ -34,6 +35,8 @@ def run(setting: str, dof: str, task: str, budget: str, seed: int) -> dict:
                                  "--cost", "cyc", "--budget", budget, "--seed", str(seed), "--workers", "1",
                                  "--json", "--out", str(Path(d) / "best.json")] + (["--dof", dof] if dof else []),
                            capture_output=True, text=True, cwd=d, env=env)
+    if p.returncode in (130, -2):  # interrupted (Ctrl-C): not a result; a re-run searches the task again
+        return None
     try:
         j = json.loads(p.stdout[p.stdout.index("{"):])
     except ValueError:
@@ -63,6 +66,8 @@ def main(argv=None) -> int:
 
     def one(st):
         r = run(st[0], settings[st[0]], st[1], a.budget, a.seed)
+        if r is None:
+            return
         with out.open("a") as f:
             f.write(json.dumps(r) + "\n")
         print(r["config"], r["task"], "valid" if r["feasible"] else "not found", r["cost"], r["evals"], r["first"],
