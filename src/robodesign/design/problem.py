@@ -203,8 +203,12 @@ def _goal_points(task: Task) -> Tuple[Tuple[float, float, float, float], ...]:
 def _geometry(task: Task) -> Dict[str, Any]:
     """The task geometry a search space samples base poses with: goal positions and static obstacles."""
     obstacles = tuple(geo for o in task.obstacles if not o.moving for geo in o.collision)
-    full = any(fixes_full_pose(p) for g in task.goals for p in goal_poses(g))
-    return {"goals": _goal_points(task), "obstacles": obstacles, "goal_rank": 6 if full else 0}
+    return {"goals": _goal_points(task), "obstacles": obstacles, "goal_rank": 6 if _fixes_a_full_pose(task) else 0}
+
+
+def _fixes_a_full_pose(task: Task) -> bool:
+    """Whether some goal of ``task`` fixes the tool's position and orientation (:func:`fixes_full_pose`)."""
+    return any(fixes_full_pose(p) for g in task.goals for p in goal_poses(g))
 
 
 def _rules(rules: Optional[Mapping[str, Any]], ms: ModuleSet) -> Dict[str, Any]:
@@ -257,9 +261,7 @@ def default_dof(task: Task, cost: Optional[CostFunction] = None) -> Tuple[int, i
     fails for design after design). A seventh joint gives every pose a curve of configurations (the
     self-motion), a way around. Measured on the published families (docs/benchmarks.md, "Seven joints where
     the pose is fixed among obstacles")."""
-    full = any(fixes_full_pose(p) for g in task.goals for p in goal_poses(g))
-    obstacles = any(not o.moving for o in task.obstacles)
-    if not (full and obstacles):
+    if not (_fixes_a_full_pose(task) and any(not o.moving for o in task.obstacles)):
         return DEFAULT_DOF, DEFAULT_DOF
     charged = cost is not None and any(n in DESIGN_COST_TERMS and w > 0 for n, w in cost.terms)
     return (DEFAULT_DOF if charged else REDUNDANT_DOF), REDUNDANT_DOF
