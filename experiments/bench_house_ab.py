@@ -203,8 +203,9 @@ def g_solve(a, shared) -> tuple:
 
 
 def g_screen(a, shared) -> tuple:
-    import numpy as np
     from collections import Counter
+
+    import numpy as np
     sv = rd("design.solve", "solve")
     sp = rd("design.search_space", "search_space")
     task, ms = _problem(shared)
