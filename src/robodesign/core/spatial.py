@@ -99,4 +99,16 @@ def log3(R: np.ndarray) -> np.ndarray:
 
 
 def rpy_to_matrix(r: float, p: float, y: float) -> np.ndarray:
+    """R = Rz(y)·Ry(p)·Rx(r): the roll-pitch-yaw convention of URDF and CoBRA, the only one in robodesign."""
     return rot_z(y) @ rot_y(p) @ rot_x(r)
+
+
+def matrix_to_rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) with R = Rz(yaw)·Ry(pitch)·Rx(roll) (the inverse of :func:`rpy_to_matrix`); pitch in
+    [−π/2, π/2]. At gimbal lock (pitch = ±π/2, only roll ∓ yaw is defined) roll = 0 and yaw carries the angle."""
+    R = np.asarray(R, dtype=float)
+    c = math.hypot(R[0, 0], R[1, 0])
+    pitch = math.atan2(-R[2, 0], c)
+    if c < 1e-10:
+        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])

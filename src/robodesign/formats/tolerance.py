@@ -75,7 +75,9 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tupl
 import numpy as np
 
 from robodesign.core.errors import InfeasibleError, InputError, PathPart, describe_value
-from robodesign.core.spatial import homogeneous, inv, log3, parse_pose, pose_to_list, rot_x, rot_y, rot_z
+from robodesign.core.spatial import homogeneous, inv, log3, parse_pose, pose_to_list
+from robodesign.core.spatial import matrix_to_rpy as rotation_to_rpy
+from robodesign.core.spatial import rpy_to_matrix as rpy_matrix
 
 FrameResolver = Callable[[str], np.ndarray]
 
@@ -136,19 +138,6 @@ class ToleranceSamplingError(InfeasibleError):
 # ---------------------------------------------------------------------------------------------------------
 # Projections of a single (p, R)
 # ---------------------------------------------------------------------------------------------------------
-def rotation_to_rpy(R: np.ndarray) -> Tuple[float, float, float]:
-    """(roll, pitch, yaw) with R = Rz(yaw)·Ry(pitch)·Rx(roll); pitch ∈ [−π/2, π/2]. At gimbal lock roll = 0."""
-    c = math.hypot(R[0, 0], R[1, 0])
-    pitch = math.atan2(-R[2, 0], c)
-    if c < 1e-10:
-        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-
-def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    return rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
-
-
 def rotation_angle_precise(R: np.ndarray) -> float:
     """θ ∈ [0, π], accurate also for tiny angles."""
     s = 0.5 * math.sqrt((R[2, 1] - R[1, 2]) ** 2 + (R[0, 2] - R[2, 0]) ** 2 + (R[1, 0] - R[0, 1]) ** 2)

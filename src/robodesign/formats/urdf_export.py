@@ -13,7 +13,7 @@ from typing import Callable, Dict, List, Optional, Tuple, Union
 import numpy as np
 
 from robodesign.core.errors import InputError
-from robodesign.core.spatial import inv, pose_to_list
+from robodesign.core.spatial import inv, matrix_to_rpy, pose_to_list
 from robodesign.formats.geometry import GeometrySpec, load_mesh_arrays
 from robodesign.formats.module_spec import Body
 
@@ -38,27 +38,9 @@ def _vec(v) -> str:
     return " ".join(_num(x) for x in v)
 
 
-def _matrix_to_rpy(R: np.ndarray) -> np.ndarray:
-    """URDF roll-pitch-yaw (R = Rz(y) Ry(p) Rx(r)) of a rotation matrix, exact to ~1e-16."""
-    R = np.asarray(R, dtype=float)
-    sp = -R[2, 0]
-    cp = math.hypot(R[0, 0], R[1, 0])
-    p = math.atan2(sp, cp)
-    if cp > 1e-10:
-        r = math.atan2(R[2, 1], R[2, 2])
-        y = math.atan2(R[1, 0], R[0, 0])
-    else:  # gimbal lock: only r ∓ y is defined; put it all into r
-        y = 0.0
-        if sp > 0:  # p = +π/2: R = [[0, sin(r-y), cos(r-y)], [.., cos(r-y), -sin(r-y)], ...]
-            r = math.atan2(R[0, 1], R[1, 1])
-        else:  # p = −π/2
-            r = math.atan2(-R[0, 1], R[1, 1])
-    return np.array([r, p, y])
-
-
 def _origin(parent: ET.Element, T: np.ndarray) -> ET.Element:
     T = np.asarray(T, dtype=float)
-    return ET.SubElement(parent, "origin", xyz=_vec(T[:3, 3]), rpy=_vec(_matrix_to_rpy(T[:3, :3])))
+    return ET.SubElement(parent, "origin", xyz=_vec(T[:3, 3]), rpy=_vec(matrix_to_rpy(T[:3, :3])))
 
 
 _SAFE = re.compile(r"[^A-Za-z0-9_.\-]+")

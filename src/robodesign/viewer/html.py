@@ -20,6 +20,7 @@ from typing import Dict, List, Mapping, Optional, Union
 
 import numpy as np
 
+from robodesign.core.spatial import matrix_to_rpy
 from robodesign.viewer.meshes import b64
 
 STATIC = Path(__file__).resolve().parent / "static"
@@ -75,9 +76,7 @@ def _fmt_pose(T) -> str:
     T = np.asarray(T, dtype=float)
     p = T[:3, 3]
     R = T[:3, :3]
-    yaw = math.atan2(R[1, 0], R[0, 0])
-    pitch = math.asin(max(-1.0, min(1.0, -R[2, 0])))
-    roll = math.atan2(R[2, 1], R[2, 2])
+    roll, pitch, yaw = matrix_to_rpy(R)
     def num(v: float, digits: int) -> str:  # rounded, and never "-0"
         return f"{round(float(v), digits) + 0.0:g}"
     return (f"xyz [{num(p[0], 4)}, {num(p[1], 4)}, {num(p[2], 4)}] m, rpy [{num(math.degrees(roll), 2)}°, "
