@@ -29,7 +29,8 @@ import robodesign.judge.checker as checker
 import robodesign.judge.motion as motion
 from robodesign import load_module_set
 from robodesign.design.solve import SolveSettings, solve
-from robodesign.formats.solution import SolutionTrajectory, load_solution
+from robodesign.core.trajectory import Trajectory
+from robodesign.formats.solution import load_solution
 from robodesign.formats.task_io import load_task
 from robodesign.judge.arc_torques import certify_arc_torques
 from robodesign.judge.quantities import TrajectoryQuantities
@@ -58,7 +59,7 @@ def main():
     sol = solve(task, ms, ["1", "21", "4", "22", "5", "23", "12"], settings=SolveSettings(seed=0)).solution
     tr = sol.trajectory
     dq = np.gradient(tr.q, tr.t, axis=0)
-    grad = sol.with_(trajectory=SolutionTrajectory(tr.t, tr.q, dq, np.gradient(dq, tr.t, axis=0), dict(tr.goal2time)))
+    grad = sol.with_(trajectory=Trajectory(tr.t, tr.q, dq, np.gradient(dq, tr.t, axis=0), dict(tr.goal2time)))
     arc = checker._arc_torque_violations
     files = [("solver's file", sol), ("gradient-filled copy", grad)] + [(f, load_solution(f)) for f in args.solution]
     for name, s in files:

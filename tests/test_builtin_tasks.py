@@ -17,7 +17,8 @@ from robodesign.model.cell import build_robot
 from robodesign.judge.checker import check
 from robodesign.judge.quantities import TrajectoryQuantities, step_residuals
 from robodesign.formats.module_io import load_module_set
-from robodesign.formats.solution import Solution, SolutionTrajectory, load_solution
+from robodesign.core.trajectory import Trajectory
+from robodesign.formats.solution import Solution, load_solution
 from robodesign.solvers.ik import solve_ik
 from robodesign.formats.task_io import load_task
 from robodesign.formats.task_spec import (BasePlacement, CollisionFree, EndEffectorConstraint, Follow, JointLimitsConstraint,
@@ -63,7 +64,7 @@ def kinds(verdict):
 
 def with_trajectory(sol: Solution, q=None, g2t=None, base=None) -> Solution:
     tr = sol.trajectory
-    return sol.with_(trajectory=SolutionTrajectory(tr.t, tr.q if q is None else q, tr.dq, tr.ddq,
+    return sol.with_(trajectory=Trajectory(tr.t, tr.q if q is None else q, tr.dq, tr.ddq,
                                            dict(tr.goal2time if g2t is None else g2t)),
                      base_pose=sol.base_pose if base is None else base)
 
@@ -302,7 +303,7 @@ def test_base_placement_moving_part_is_checked_over_time(ms, solved):
     t = np.arange(n) * mt.DT
     Q = np.tile(q_hit, (n, 1))
     hold = Solution(task_id=task.id, cost_function="cyc", module_set=mt.MODULE_SET, module_order=sol.module_order,
-                    base_pose=sol.base_pose, trajectory=SolutionTrajectory(t, Q, np.zeros_like(Q), np.zeros_like(Q), {}))
+                    base_pose=sol.base_pose, trajectory=Trajectory(t, Q, np.zeros_like(Q), np.zeros_like(Q), {}))
     v = check(task, hold, ms)
     hits = [x for x in v.violations if x.constraint == "collisionFree" and "part" in x.message]
     assert hits, [str(x) for x in v.violations]

@@ -15,7 +15,8 @@ from robodesign.cli import entry as cli
 from robodesign.cli.entry import main
 from robodesign.core.jsonio import MAX_DEPTH, loads_json
 from robodesign.core.errors import InputError
-from robodesign.formats.solution import Solution, SolutionTrajectory
+from robodesign.core.trajectory import Trajectory
+from robodesign.formats.solution import Solution
 
 from conftest import IMPROV, ROOT, TASKS
 
@@ -43,7 +44,7 @@ def ptp3_solution(tmp_path_factory):
     q = np.zeros((5, 6))
     sol = Solution(task_id="simple/PTP_3", cost_function="cyc", module_set="IMPROV",
                    module_order=("1", "21", "4", "22", "5", "23", "12"), base_pose=np.eye(4),
-                   trajectory=SolutionTrajectory(t, q, q.copy(), q.copy(), {"1": 0.02}))
+                   trajectory=Trajectory(t, q, q.copy(), q.copy(), {"1": 0.02}))
     d = tmp_path_factory.mktemp("sol")
     return json.loads(sol.write(d / "sol.json").read_text())
 

@@ -151,14 +151,15 @@ def _swing(dof, joint, D, T, dt):
 def test_checker_finds_robot_robot_collision_at_the_right_time(ctask, ms):
     """Both arms pitch their shoulders towards the belt at the same time (no waiting): the checker reports
     the robot–robot collision between samples, at the instant a dense independent scan finds it."""
-    from robodesign.formats.solution import Solution, SolutionTrajectory
+    from robodesign.core.trajectory import Trajectory
+    from robodesign.formats.solution import Solution
     robots = _robots(ctask, ms)
     a = robots["left"]
     D = 1.5 if a.fk(np.eye(1, a.dof, 1)[0] * 1.5)[1, 3] < mt.SC_BASE_Y else -1.5  # towards the belt
     t, Q, DQ, DDQ = _swing(a.dof, 1, D, 2.0, ctask.task.dt)
     sols = tuple((rid, Solution(task_id=ctask.id, cost_function="cyc", module_set="robodesign_arm",
                                 module_order=ORDER, base_pose=ctask.robot_tasks[rid].nominal_base_pose,
-                                trajectory=SolutionTrajectory(t, Q, DQ, DDQ, {})))
+                                trajectory=Trajectory(t, Q, DQ, DDQ, {})))
                  for rid in ctask.robot_ids)
     v = check_collab(ctask, CollabSolution(ctask.id, sols), ms)
     hits = [x for r, x in v.violations if x.constraint == "robotCollisionFree"]
@@ -215,7 +216,8 @@ def _main(argv, capsys):
 
 
 def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, capsys):
-    from robodesign.formats.solution import Solution, SolutionTrajectory
+    from robodesign.core.trajectory import Trajectory
+    from robodesign.formats.solution import Solution
     task = mt.collab_task_path("shared_conveyor")
     good = solved.solution.write(tmp_path / "good.json")
     code, out = _main(["check", task, good], capsys)
@@ -229,7 +231,7 @@ def test_cli_check_valid_hostile_and_bad_input(ctask, ms, solved, tmp_path, caps
     bad = CollabSolution(ctask.id, tuple(
         (rid, Solution(task_id=ctask.id, cost_function="cyc", module_set="robodesign_arm", module_order=ORDER,
                        base_pose=ctask.robot_tasks[rid].nominal_base_pose,
-                       trajectory=SolutionTrajectory(t, Q, DQ, DDQ, {})))
+                       trajectory=Trajectory(t, Q, DQ, DDQ, {})))
         for rid in ctask.robot_ids)).write(tmp_path / "bad.json")
     code, out = _main(["check", task, bad, "--json"], capsys)
     v = json.loads(out.out)

@@ -14,7 +14,8 @@ import pytest
 
 from robodesign.formats import goal_types
 from robodesign.formats.module_io import load_module_set
-from robodesign.formats.solution import Solution, SolutionTrajectory
+from robodesign.core.trajectory import Trajectory
+from robodesign.formats.solution import Solution
 from robodesign.formats.task_io import load_task
 from robodesign.formats.task_spec import BUILTIN_GOAL_TYPES
 from robodesign.judge.checker import check
@@ -61,7 +62,7 @@ def _task(folder: Path, duration: float) -> Path:
 def _solution() -> Solution:
     t, q, dq, ddq, _ = plan()
     return Solution(task_id="toy/hover", cost_function="cyc", module_set="toy", module_order=("B", "J", "J", "E"),
-                    base_pose=np.eye(4), trajectory=SolutionTrajectory(t, q, dq, ddq, {"H": T_GOAL}))
+                    base_pose=np.eye(4), trajectory=Trajectory(t, q, dq, ddq, {"H": T_GOAL}))
 
 
 def _judge(task_file: str, solution: Solution, modules: str):

@@ -12,7 +12,8 @@ import pytest
 
 from robodesign import Robot, load_module_set
 from robodesign.cli.entry import main as cli_main
-from robodesign.formats.solution import Solution, SolutionTrajectory, load_solution
+from robodesign.core.trajectory import Trajectory
+from robodesign.formats.solution import Solution, load_solution
 from robodesign.formats.task_io import load_task
 from robodesign.viewer import build_scene, render_html, solution_page, trajectory_plots
 from robodesign.viewer.html import asset, decode_page_data
@@ -73,7 +74,7 @@ def world(tmp_path_factory):
     q = 0.6 * np.sin(np.pi * t / 2)[:, None] * np.linspace(1.0, 0.3, robot.dof)[None, :]
     dq = np.gradient(q, t, axis=0)
     ddq = np.gradient(dq, t, axis=0)
-    traj = SolutionTrajectory(t, q, dq, ddq, dict(G2T))
+    traj = Trajectory(t, q, dq, ddq, dict(G2T))
     sol = Solution(task_id="cell/view", cost_function="cyc", module_set="robodesign_arm", module_order=ORDER,
                    base_pose=np.eye(4), trajectory=traj)
     sol_file = sol.write(root / "sol.json")

@@ -23,9 +23,10 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.core.jsonio import load_json, write_json
+from robodesign.core.trajectory import Trajectory
 from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
-from robodesign.formats.solution import Solution, SolutionTrajectory, parse_solution
+from robodesign.formats.solution import Solution, parse_solution
 from robodesign.formats.task_io import parse_task, resolve_task_path
 from robodesign.formats.task_spec import CollisionFree, GoalsInOrder, Task
 from robodesign.judge.checker import CheckSettings, Verdict, Violation, check
@@ -438,7 +439,7 @@ def _pad(sol: Solution, t: np.ndarray) -> Solution:
     ddq = np.vstack([tr.ddq, np.zeros((n_extra, tr.q.shape[1]))])
     if n_extra:
         ddq[tr.n - 1] = 0.0  # at rest from the last move's end on
-    return sol.with_(trajectory=SolutionTrajectory(np.array(t, dtype=float), q, dq, ddq, dict(tr.goal2time)))
+    return sol.with_(trajectory=Trajectory(np.array(t, dtype=float), q, dq, ddq, dict(tr.goal2time)))
 
 
 def solve_collab(ctask: CollabTask, setups: Sequence[RobotSetup], cost: Union[CostFunction, str] = "cyc",

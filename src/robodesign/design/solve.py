@@ -25,6 +25,7 @@ from typing import Dict, Optional, Sequence, Union
 import numpy as np
 
 from robodesign.core.errors import AssemblyError, InfeasibleError
+from robodesign.core.trajectory import Trajectory
 from robodesign.design.goal_planner import GoalPlanner, goal_poses, position_slack
 from robodesign.design.goal_planner import StageFailure as _Fail
 from robodesign.design.stages import (  # noqa: F401 - TIMING_METHODS, check_settings: the documented import path
@@ -38,7 +39,7 @@ from robodesign.design.stages import (  # noqa: F401 - TIMING_METHODS, check_set
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.costs import CostFunction, parse_cost
 from robodesign.formats.module_spec import ModuleSet
-from robodesign.formats.solution import Solution, SolutionTrajectory
+from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Task
 from robodesign.judge.checker import check
 from robodesign.model.cell import build_robot
@@ -178,7 +179,7 @@ class _Pipeline:
         m, g2t = (self.motion, self.g2t) if motion is None else (motion, g2t)
         return Solution(task_id=self.task.id, cost_function=str(self.cost), module_set=ms.name,
                         module_order=tuple(asm.module_ids), base_pose=self.base_pose,
-                        trajectory=SolutionTrajectory(m.t, m.q, m.dq, m.ddq, g2t),
+                        trajectory=Trajectory(m.t, m.q, m.dq, m.ddq, g2t),
                         module_connection=None if asm.is_serial() else asm.connections,
                         base_connection=None if asm.is_serial() else asm.base,
                         computation_time=sum(s.seconds for s in self.res.stages), notes="robodesign solve")

@@ -6,9 +6,9 @@ the CoBRA solution format (docs/formats.md). Missing ``dq``/``ddq`` are derived 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Dict, Optional, Tuple, Union
+from typing import Optional, Tuple, Union
 
 import numpy as np
 
@@ -16,25 +16,11 @@ from robodesign.core.errors import InputError, describe_value
 from robodesign.core.jsonio import check_finite, load_json, write_json
 from robodesign.core.schema import validate
 from robodesign.core.spatial import parse_pose, pose_to_list
+from robodesign.core.trajectory import Trajectory
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_spec import ModuleSet
 
-
-@dataclass(frozen=True, eq=False)
-class SolutionTrajectory:
-    t: np.ndarray  # (N,)
-    q: np.ndarray  # (N, dof)
-    dq: np.ndarray
-    ddq: np.ndarray
-    goal2time: Dict[str, float] = field(default_factory=dict)
-
-    @property
-    def n(self) -> int:
-        return len(self.t)
-
-    @property
-    def duration(self) -> float:
-        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+SolutionTrajectory = Trajectory  # the old name, kept for code written against it
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,7 +30,7 @@ class Solution:
     module_set: str
     module_order: Tuple[str, ...]
     base_pose: np.ndarray
-    trajectory: SolutionTrajectory
+    trajectory: Trajectory
     module_connection: Optional[Tuple[Tuple[int, str, int, str], ...]] = None
     base_connection: Optional[Tuple[int, str]] = None
     version: str = "2023"
@@ -161,7 +147,7 @@ def parse_solution(data, fname: str, source: Optional[str] = None) -> Solution:
             raise InputError(f"goal time {v} is outside the trajectory [{t[0]}, {t[-1]}]", file=fname,
                              path=tp + ["goal2time", gid])
         g2t[str(gid)] = v
-    traj = SolutionTrajectory(t=t, q=q, dq=grads["dq"], ddq=grads["ddq"], goal2time=g2t)
+    traj = Trajectory(t=t, q=q, dq=grads["dq"], ddq=grads["ddq"], goal2time=g2t)
     bp = data.get("basePose", [np.eye(4).tolist()])
     if isinstance(bp, list) and bp and isinstance(bp[0], list) and bp and isinstance(bp[0][0], list):
         base_pose = parse_pose(bp[0], fname, ["basePose", 0])

@@ -1,6 +1,5 @@
-"""Time parameterization of joint-space paths, and the project's trajectory type.
-
-:class:`JointTrajectory` holds samples ``t (N,)``, ``q, dq, ddq (N, dof)``.
+"""Time parameterization of joint-space paths into :class:`~robodesign.core.trajectory.Trajectory`
+samples (the project's one trajectory type; ``JointTrajectory`` is its old name here).
 
 Integration rule (guaranteed by every trajectory this module and :mod:`.trajopt` produce)
 -----------------------------------------------------------------------------------------
@@ -10,9 +9,9 @@ Piecewise-constant acceleration ("zero-order hold" on ``ddq``): ``ddq[k]`` is th
     q[k+1]  = q[k] + dq[k]·h + ½·ddq[k]·h²
     dq[k+1] = dq[k] + ddq[k]·h
 
-both up to floating-point rounding (measured ≤ 1e-12; :meth:`JointTrajectory.consistency_residual`).
+both up to floating-point rounding (measured ≤ 1e-12; :meth:`Trajectory.consistency_residual`).
 The sampled trajectory therefore *is* a continuous, exactly integrated C¹ trajectory, and
-:meth:`JointTrajectory.interpolate` evaluates it between samples. ``ddq`` of the last sample is the
+:meth:`Trajectory.interpolate` evaluates it between samples. ``ddq`` of the last sample is the
 acceleration after the motion: 0 for every trajectory that ends at rest.
 
 Rest samples: every rest-to-rest motion starts with one step of zero acceleration (a "pre-roll" of one
@@ -87,151 +86,21 @@ from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Dict, List, Literal, Optional, Sequence, Tuple
 
 import numpy as np
 
 from robodesign.core.errors import InfeasibleError
+from robodesign.core.trajectory import Trajectory
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
+JointTrajectory = Trajectory  # the old name, kept for code written against it
 
 
 class TimingError(InfeasibleError):
     """No time parameterization was found (e.g. the path is statically infeasible for the torques)."""
-
-
-# ==============================================================================================
-# trajectory type
-# ==============================================================================================
-@dataclass
-class JointTrajectory:
-    """Sampled joint trajectory: ``t (N,)``, ``q, dq, ddq (N, dof)``; see the module docstring for the
-    integration rule. ``info`` carries solver metadata (not compared)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray
-    ddq: np.ndarray
-    info: dict = field(default_factory=dict, compare=False, repr=False)
-
-    def __post_init__(self):
-        self.t = np.asarray(self.t, dtype=float).reshape(-1)
-        n = len(self.t)
-        self.q = np.asarray(self.q, dtype=float).reshape(n, -1)
-        dof = self.q.shape[1]
-        self.dq = np.asarray(self.dq, dtype=float).reshape(n, dof)
-        self.ddq = np.asarray(self.ddq, dtype=float).reshape(n, dof)
-        if n == 0:
-            raise ValueError("a trajectory needs at least one sample")
-        if n > 1 and not np.all(np.diff(self.t) > 0):
-            raise ValueError("trajectory times must be strictly increasing")
-
-    # -- basic properties ---------------------------------------------------------------------
-    def __len__(self) -> int:
-        return len(self.t)
-
-    @property
-    def dof(self) -> int:
-        return self.q.shape[1]
-
-    @property
-    def duration(self) -> float:
-        return float(self.t[-1] - self.t[0])
-
-    @property
-    def dt(self) -> Optional[float]:
-        """The (first) sample step, or None for a single sample."""
-        return float(self.t[1] - self.t[0]) if len(self.t) > 1 else None
-
-    @classmethod
-    def at_rest(cls, q, t0: float = 0.0) -> "JointTrajectory":
-        q = np.asarray(q, dtype=float).reshape(1, -1)
-        return cls(np.array([t0]), q.copy(), np.zeros_like(q), np.zeros_like(q))
-
-    def copy(self) -> "JointTrajectory":
-        return JointTrajectory(self.t.copy(), self.q.copy(), self.dq.copy(), self.ddq.copy(), dict(self.info))
-
-    def shifted(self, t0: float) -> "JointTrajectory":
-        """The same trajectory starting at time ``t0``."""
-        out = self.copy()
-        out.t = self.t - self.t[0] + t0
-        return out
-
-    def slice(self, k0: int, k1: int) -> "JointTrajectory":
-        """Samples k0..k1 (inclusive), times kept; e.g. one rest-to-rest part between two
-        ``info["stop_samples"]`` entries."""
-        k0, k1 = int(k0) % len(self.t), int(k1) % len(self.t)
-        if k1 < k0:
-            raise ValueError("slice end before start")
-        sl = slice(k0, k1 + 1)
-        return JointTrajectory(self.t[sl].copy(), self.q[sl].copy(), self.dq[sl].copy(), self.ddq[sl].copy())
-
-    # -- composition ----------------------------------------------------------------------------
-    def concatenate(self, other: "JointTrajectory", tol: float = 1e-9) -> "JointTrajectory":
-        """``self`` followed by ``other`` shifted in time to start at ``self.t[-1]``.
-
-        The junction sample appears once: it keeps ``self.q[-1]`` and takes ``other``'s dq and ddq
-        (``ddq`` of a sample is the acceleration *after* it). Positions and velocities must agree at
-        the junction within ``tol``.
-        """
-        if other.dof != self.dof:
-            raise ValueError(f"cannot concatenate trajectories with {self.dof} and {other.dof} joints")
-        if np.max(np.abs(self.q[-1] - other.q[0])) > tol:
-            raise ValueError(f"positions differ at the junction by {np.max(np.abs(self.q[-1] - other.q[0])):.3g}")
-        if np.max(np.abs(self.dq[-1] - other.dq[0])) > tol:
-            raise ValueError(f"velocities differ at the junction by {np.max(np.abs(self.dq[-1] - other.dq[0])):.3g}")
-        t_other = other.t[1:] - other.t[0] + self.t[-1]
-        q = np.vstack([self.q, other.q[1:]])
-        dq = np.vstack([self.dq[:-1], other.dq])
-        ddq = np.vstack([self.ddq[:-1], other.ddq])
-        return JointTrajectory(np.concatenate([self.t, t_other]), q, dq, ddq)
-
-    def hold(self, duration: float, dt: Optional[float] = None) -> "JointTrajectory":
-        """Append a pause: samples every ``dt`` covering at least ``duration`` with q bit-identical to
-        the last sample and dq = ddq = 0 exactly. The trajectory must end at rest (dq = 0 exactly); its
-        last ddq is set to 0 as well (the CoBRA pause window starts at that sample)."""
-        if dt is None:
-            dt = self.dt
-            if dt is None:
-                raise ValueError("hold() on a single sample needs dt")
-        if dt <= 0:
-            raise ValueError("dt must be positive")
-        if np.any(self.dq[-1] != 0.0):
-            raise ValueError("hold() needs a trajectory that ends at rest (dq == 0 exactly)")
-        n = max(0, int(math.ceil(duration / dt - 1e-9)))
-        out = self.copy()
-        out.ddq[-1] = 0.0
-        if n == 0:
-            return out
-        t_new = self.t[-1] + dt * np.arange(1, n + 1)
-        q_new = np.repeat(self.q[-1:], n, axis=0)
-        z = np.zeros((n, self.dof))
-        return JointTrajectory(np.concatenate([self.t, t_new]), np.vstack([out.q, q_new]), np.vstack([out.dq, z]),
-                          np.vstack([out.ddq, z]), out.info)
-
-    # -- evaluation -----------------------------------------------------------------------------
-    def interpolate(self, t) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, dq, ddq) at arbitrary times by the integration rule (piecewise-quadratic q)."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        k = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 1)
-        tau = (t - self.t[k])[:, None]
-        a = self.ddq[k]
-        return self.q[k] + self.dq[k] * tau + 0.5 * a * tau ** 2, self.dq[k] + a * tau, a.copy()
-
-    def consistency_residual(self) -> Tuple[float, float]:
-        """Largest violation of the two integration rules (q rule, dq rule)."""
-        if len(self.t) < 2:
-            return 0.0, 0.0
-        h = np.diff(self.t)[:, None]
-        rq = self.q[1:] - (self.q[:-1] + self.dq[:-1] * h + 0.5 * self.ddq[:-1] * h ** 2)
-        rv = self.dq[1:] - (self.dq[:-1] + self.ddq[:-1] * h)
-        return float(np.max(np.abs(rq))), float(np.max(np.abs(rv)))
-
-    def torques(self, robot) -> np.ndarray:
-        """Drivetrain torques at every sample (RNEA + armature + friction)."""
-        return robot.drivetrain_torques(self.q, self.dq, self.ddq)
 
 
 # ==============================================================================================

@@ -45,10 +45,10 @@ from robodesign.viewer.tolerances import TOLERANCE_OPACITY as TOLERANCE_OPACITY
 from robodesign.viewer.tolerances import _pose, tolerance_geometries, tolerance_text
 
 if TYPE_CHECKING:  # (the viewer loads them only when it draws a robot)
-    from robodesign.formats.solution import SolutionTrajectory
+    from robodesign.core.trajectory import Trajectory
     from robodesign.model.robot import Robot
 
-    OtherRobot = Tuple[str, Robot, Optional[SolutionTrajectory]]  # a further robot of a cell: ID, robot, motion
+    OtherRobot = Tuple[str, Robot, Optional[Trajectory]]  # a further robot of a cell: ID, robot, motion
 
 SCENE_FORMAT = "robodesign-scene/1"
 DEFAULT_FPS = 25.0
@@ -208,7 +208,7 @@ def build_scene(task=None, robot=None, trajectory=None, *, q: Optional[npt.Array
 
     ``task``: a :class:`~robodesign.formats.task_spec.Task` (obstacles, goals, base placement) or None.
     ``robot``: a :class:`~robodesign.model.robot.Robot` (at its ``base_pose``) or None.
-    ``trajectory``: a :class:`~robodesign.formats.solution.SolutionTrajectory` for ``robot``, or None for a static robot
+    ``trajectory``: a :class:`~robodesign.core.trajectory.Trajectory` for ``robot``, or None for a static robot
     at ``q`` (default zeros). ``include_collision`` adds the collision geometry (hidden by default on
     the page). Meshes with more than ``max_triangles`` triangles are decimated. ``others``: further robots
     of a collaborative cell as ``(robot ID, Robot, trajectory on the same time base)``; they animate with
