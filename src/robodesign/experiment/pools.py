@@ -15,6 +15,7 @@ from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tupl
 
 from robodesign.core.errors import InputError
 from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec
+from robodesign.design.optimize import SerialExecutor
 from robodesign.design.search_space import Candidate
 
 log = logging.getLogger("robodesign.experiment.executors")  # the executors' logger, as before the split
@@ -173,7 +174,8 @@ class EvaluatorPool:
 
 # ------------------------------------------------------------------------------------------------
 class SerialPool(EvaluatorPool):
-    """Evaluates in this process (evaluators built on first use of a spec)."""
+    """Evaluates in this process (evaluators built on first use of a spec): the study's
+    :class:`~robodesign.design.optimize.SerialExecutor` per problem."""
     kind = "serial"
 
     def __init__(self, specs, workers: int = 1):
@@ -189,8 +191,7 @@ class SerialPool(EvaluatorPool):
         return ev
 
     def map(self, spec_id, candidates):
-        ev = self.evaluator(spec_id)
-        return [ev(c) for c in candidates]
+        return SerialExecutor(self.evaluator(spec_id)).map(candidates)
 
 
 
