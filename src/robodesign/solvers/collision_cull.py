@@ -51,7 +51,7 @@ class DistanceField:
         self.shape, self.cell = shape, float(cell)
         M = np.asarray(pose, dtype=float)
         self.tf = pin.SE3(M[:3, :3].copy(), M[:3, 3].copy())
-        self.known: Dict[Tuple[int, int, int], float] = {}
+        self.known: Dict[int, float] = {}  # by the cell's packed integer coordinates
         import coal
         self._coal = coal
         self._point = coal.Sphere(0.0)
@@ -69,17 +69,19 @@ class DistanceField:
         h = self.cell
         idx = np.floor(P / h).astype(np.int64)
         centres = (idx + 0.5) * h
-        keys, inverse = np.unique(idx, axis=0, return_inverse=True)
+        code = (idx[:, 0] << 42) + ((idx[:, 1] & _MASK) << 21) + (idx[:, 2] & _MASK)  # |index| < 2²⁰ cells
+        keys, first, inverse = np.unique(code, return_index=True, return_inverse=True)
         known = self.known
         D = np.empty(len(keys))
-        for i, k in enumerate(map(tuple, keys.tolist())):
+        for i, (k, f) in enumerate(zip(keys.tolist(), first.tolist())):
             d = known.get(k)
             if d is None:
-                d = known[k] = self._exact((np.asarray(k, dtype=float) + 0.5) * h)
+                d = known[k] = self._exact(centres[f])
             D[i] = d
         return D[inverse.reshape(-1)] - np.linalg.norm(P - centres, axis=1)
 
 
+_MASK = (1 << 21) - 1
 _FIELDS: Dict[Tuple[int, bytes], Tuple[object, DistanceField]] = {}
 
 

@@ -142,6 +142,20 @@ def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
             if R is not None and (g > moving_max).any() and np.min(np.max(np.abs(R - q), axis=1)) > REST_RADIUS:
                 return False
         return True
+
+    def rows_ok(Q: np.ndarray) -> np.ndarray:
+        """``ok`` of every row of ``Q`` (the same elementwise tests, vectorised)."""
+        out = ~((Q < lo).any(axis=1) | (Q > hi).any(axis=1))
+        if gravity is not None and out.any():
+            idx = np.flatnonzero(out)
+            G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
+            bad = (G > tau_max).any(axis=1)
+            if R is not None:
+                far = np.min(np.max(np.abs(R[None, :, :] - Q[idx][:, None, :]), axis=2), axis=1) > REST_RADIUS
+                bad |= (G > moving_max).any(axis=1) & far
+            out[idx[bad]] = False
+        return out
+    ok.rows = rows_ok  # type: ignore[attr-defined]
     return ok
 
 
@@ -217,6 +231,7 @@ class _Memoized:
             keys = [q.tobytes() for q in rows]
             new = [i for i, k in enumerate(keys) if k not in memo]
             S = culler.survivors(rows[new])
+            ok = static_ok.rows(rows[new])  # type: ignore[attr-defined]
             at = {i: j for j, i in enumerate(new)}
             for i, key in enumerate(keys):
                 if counter is not None:
@@ -224,11 +239,11 @@ class _Memoized:
                 self.lookups += 1
                 v = memo.get(key)
                 if v is None:
-                    q = rows[i]
-                    v = bool(static_ok(q))
+                    j = at[i]
+                    v = bool(ok[j])
                     if v:
-                        ks = np.flatnonzero(S[at[i]])
-                        v = not (len(ks) and culler.collides(q, ks))
+                        ks = np.flatnonzero(S[j])
+                        v = not (len(ks) and culler.collides(rows[i], ks))
                     memo[key] = v
                 if not v:
                     return start + i
