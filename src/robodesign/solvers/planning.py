@@ -145,7 +145,7 @@ def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
 
     def rows_ok(Q: np.ndarray) -> np.ndarray:
         """``ok`` of every row of ``Q`` (the same elementwise tests, vectorised)."""
-        out = ~((Q < lo).any(axis=1) | (Q > hi).any(axis=1))
+        out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
         if gravity is not None and out.any():
             idx = np.flatnonzero(out)
             G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
