@@ -21,6 +21,7 @@ cleared pair is one coal would not report; the verdicts are identical to ``in_co
 """
 from __future__ import annotations
 
+import weakref
 from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -189,4 +190,27 @@ class CollisionCuller:
         return -1
 
 
-__all__ = ["CollisionCuller", "DistanceField", "distance_field", "SLACK", "CELL"]
+_CULLERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def culler_of(robot) -> CollisionCuller:
+    """The robot's :class:`CollisionCuller`, kept while its geometry stays the same: the same geometry model
+    and data objects (held by the entry, so they are the same objects, not a new one at a reused address), base
+    pose, safety margin and obstacle placements (what ``set_base_pose``, ``set_obstacles`` and
+    ``move_obstacle`` change)."""
+    gm, gd = robot.geom_model, robot.geom_data
+    objs = gm.geometryObjects
+    state = (robot.base_pose.tobytes(), float(getattr(robot, "safety_margin", 0.0)),
+             b"".join(objs[k].placement.homogeneous.tobytes() for k in range(robot.n_collision_geometries, len(objs))))
+    hit = _CULLERS.get(robot)
+    if hit is not None and hit[0] is gm and hit[1] is gd and hit[2] == state:
+        return hit[3]
+    c = CollisionCuller(robot)
+    try:
+        _CULLERS[robot] = (gm, gd, state, c)
+    except TypeError:   # an object without weak references: not kept
+        pass
+    return c
+
+
+__all__ = ["CollisionCuller", "DistanceField", "culler_of", "distance_field", "SLACK", "CELL"]

@@ -205,9 +205,9 @@ class _Memoized:
     def culler(self):
         """The robot's CollisionCuller (built on first use), or None where it does not apply."""
         if self._culler is None and self.robot is not None:
-            from robodesign.solvers.collision_cull import CollisionCuller
+            from robodesign.solvers.collision_cull import culler_of
             try:
-                self._culler = CollisionCuller(self.robot)
+                self._culler = culler_of(self.robot)
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
                 self.robot = None
         return self._culler
