@@ -7,7 +7,10 @@
 One line per evaluation: scenario, index, stage reached, goals reached, feasible, cost, duration of the motion and
 a hash of the solution's trajectory. Scenarios: the known-good IMPROV arm on PTP_1, PTP_2 and PTP_3 for
 ``--seeds`` study seeds each; random PTP_3 candidates (seeded, default search space) until ``--feasible`` of them
-are feasible or ``--max`` are evaluated, every one printed.
+are feasible or ``--max`` are evaluated, every one printed; then ``--plans`` planning queries of the known-good
+arm in the PTP_3 cell between random collision-free configurations whose midpoint collides (seeded; OMPL and the
+shortcuts):
+reason, checks, distinct states, waypoints and a hash of the path.
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=6)
     ap.add_argument("--feasible", type=int, default=12)
     ap.add_argument("--max", type=int, default=400)
+    ap.add_argument("--plans", type=int, default=30)
     args = ap.parse_args()
     sys.path.insert(0, str(Path(args.src).resolve() / "src"))
     import numpy as np
@@ -59,6 +63,21 @@ def main() -> None:
         found += bool(e.feasible)
         if found >= args.feasible:
             break
+    from robodesign.formats.assembly import Assembly
+    from robodesign.model.cell import build_robot
+    from robodesign.solvers.planning import plan_path
+    from robodesign.solvers.schedule import static_cell
+    robot = build_robot(static_cell(p.task), p.module_set, Assembly.from_order(p.module_set, GOOD),
+                        p.task.nominal_base_pose)
+    rng = np.random.default_rng(4)
+    free = [q for q in (robot.random_configuration(rng) for _ in range(20 * args.plans))
+            if not robot.in_collision(q)]
+    pairs = [(a, b) for a, b in zip(free[::2], free[1::2]) if robot.in_collision(0.5 * (a + b))]  # blocked lines
+    for i, (a, b) in enumerate(pairs[:args.plans]):
+        r = plan_path(robot, a, b, time_limit=0.5, seed=i, static_torque=True)
+        h = hashlib.md5(r.path.tobytes()).hexdigest()[:10]
+        print("PTP_3 plan", i, r.stats["reason"], r.stats["checks"], r.stats["distinct_states"], len(r.path), h,
+              flush=True)
 
 
 if __name__ == "__main__":
