@@ -274,7 +274,7 @@ def test_converged_torque_passes_are_not_repeated(which, request, monkeypatch):
 
 @pytest.mark.parametrize("which", ["arm", "weak_arm"])
 def test_lean_toppra_loop_gives_toppras_numbers(which, request):
-    """timing._rest_to_rest runs toppra's controllable-set and forward passes without its per-stage Python
+    """toppra_loop.rest_to_rest runs toppra's controllable-set and forward passes without its per-stage Python
     overhead: the same path velocities, bit for bit, as toppra's compute_parameterization (free and torque-limited)."""
     from robodesign.solvers import timing
     robot = request.getfixturevalue(which)
@@ -291,5 +291,6 @@ def test_lean_toppra_loop_gives_toppras_numbers(which, request):
                                    solver_wrapper="seidel")
     ref = algo()
     ref.compute_parameterization(0.0, 0.0)
-    lean = timing._rest_to_rest(algo())
+    from robodesign.solvers.toppra_loop import rest_to_rest
+    lean = rest_to_rest(algo())
     assert lean is not None and np.array_equal(lean, ref.problem_data.sd_vec)
