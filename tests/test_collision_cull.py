@@ -105,3 +105,25 @@ def test_the_culler_is_kept_while_the_geometry_is(cell):
         assert (bool(S.any()) and c2.collides(q, np.flatnonzero(S[0]))) == robot.in_collision(q)
     finally:
         robot.set_base_pose(T)
+
+
+def test_verdicts_equal_in_collision_with_a_safety_margin(cell):
+    """With a 3 cm safety margin on the robot–obstacle pairs (coal's security margin), the bounds keep the pairs
+    that come within it: the same verdicts as ``in_collision`` on states near the machine."""
+    robot, stops = cell
+    obstacles, margin = list(robot.obstacles), robot.safety_margin
+    rng = np.random.default_rng(8)
+    Q = np.vstack([stops, stops + rng.normal(0.0, 0.1, stops.shape),
+                   [robot.random_configuration(rng) for _ in range(300)]])
+    try:
+        robot.set_obstacles(obstacles, safety_margin=0.03)
+        c = culler_of(robot)
+        fresh = np.array([robot.in_collision(q) for q in Q])
+        S = c.survivors(Q)
+        culled = np.array([bool(np.any(S[i])) and c.collides(q, np.flatnonzero(S[i])) for i, q in enumerate(Q)])
+        assert np.array_equal(culled, fresh)
+        robot.set_obstacles(obstacles, safety_margin=0.0)
+        plain = np.array([robot.in_collision(q) for q in Q])
+        assert (fresh & ~plain).any()     # the margin does make some states collide
+    finally:
+        robot.set_obstacles(obstacles, safety_margin=margin)
