@@ -106,6 +106,7 @@ class CollisionCuller:
 
     def __init__(self, robot):
         self.robot = robot
+        robot.joint_poses_batch(np.zeros((1, robot.dof)))   # NotImplementedError now for a joint it cannot batch
         gm, gd = robot.geom_model, robot.geom_data
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
