@@ -253,3 +253,44 @@ def test_a_torque_limit_that_slowing_cannot_meet_ends_early(arm, monkeypatch):
     with pytest.raises(TimingError, match="slowing down does not bring the torque|slowed down more than 100 times"):
         time_parameterize(r, path, method="ruckig")
     assert len(calls) < 30  # the old check ran all 60 slow-downs
+
+
+@pytest.mark.parametrize("which", ["arm", "weak_arm"])
+def test_converged_torque_passes_are_not_repeated(which, request, monkeypatch):
+    """A torque pass whose tangent points equal the previous pass's is not run again: the trajectory is the
+    one all passes give (the IMPROV arm: pass 2 repeats pass 1; halved torque limits: the passes differ)."""
+    from robodesign.solvers import timing
+    robot = request.getfixturevalue(which)
+    path = PATH[[0, 3]]
+    quick = time_parameterize(robot, path)
+    passes = timing._toppra_profile(robot, timing.BlendedPolyline(path, 0.05), timing._finite(robot.dq_max),
+                      timing._finite(robot.ddq_max), True, 0.02, 3)[1]["torque_passes"]
+    monkeypatch.setattr(timing, "_same_tangents", lambda a, b: False)
+    full = time_parameterize(robot, path)
+    for a, b in ((quick.t, full.t), (quick.q, full.q), (quick.dq, full.dq), (quick.ddq, full.ddq)):
+        assert np.array_equal(a, b)
+    assert passes == (2 if which == "arm" else 3)
+
+
+@pytest.mark.parametrize("which", ["arm", "weak_arm"])
+def test_lean_toppra_loop_gives_toppras_numbers(which, request):
+    """toppra_loop.rest_to_rest runs toppra's controllable-set and forward passes without its per-stage Python
+    overhead: the same path velocities, bit for bit, as toppra's compute_parameterization (free and torque-limited)."""
+    from robodesign.solvers import timing
+    robot = request.getfixturevalue(which)
+    tp = timing._toppra()
+    dyn_cls = timing._dynamics_constraint_class()
+    path = timing.BlendedPolyline(PATH, 0.05)
+    grid = path.gridpoints(0.02)
+    terms = timing._PathTerms(robot, path, grid, True)
+    vmax, amax = timing._finite(robot.dq_max), timing._finite(robot.ddq_max)
+
+    def algo():
+        dyn = dyn_cls(robot, amax, np.asarray(robot.tau_max, float), np.full(len(grid), 0.3), True, terms)
+        return tp.algorithm.TOPPRA([timing._velocity_constraint(vmax), dyn], path, gridpoints=grid,
+                                   solver_wrapper="seidel")
+    ref = algo()
+    ref.compute_parameterization(0.0, 0.0)
+    from robodesign.solvers.toppra_loop import rest_to_rest
+    lean = rest_to_rest(algo())
+    assert lean is not None and np.array_equal(lean, ref.problem_data.sd_vec)

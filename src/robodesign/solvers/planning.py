@@ -122,22 +122,17 @@ def planner_name(planner: str) -> str:
 # ---------------------------------------------------------------------------------------------------------
 # Dense checking
 # ---------------------------------------------------------------------------------------------------------
-def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
-    """Joint limits and collisions; with ``static_torque`` also that the joints hold the configuration
-    against gravity within their torque limits (|g(q)| ≤ τ_max), so that a path never needs more torque
-    standing still than the joints have: time scaling cannot repair such a path by slowing down. With
-    ``rest`` (the configurations where the motion stands still: its start and goals) a state farther than
-    :data:`REST_RADIUS` from all of them must also leave room for Coulomb friction, |g(q)| + f_c ≤ τ_max:
-    the robot moves through it, and however slowly it moves, friction adds f_c."""
+def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
+    """The part of :func:`_config_validator` before the collision query: joint limits and, with
+    ``static_torque``, the torque tests."""
     lo = np.asarray(robot.q_lower, dtype=float) - _LIMIT_SLACK
     hi = np.asarray(robot.q_upper, dtype=float) + _LIMIT_SLACK
-    in_collision = robot.in_collision
     tau_max = np.asarray(robot.tau_max, dtype=float)
     gravity = robot.gravity_torque if static_torque and np.isfinite(tau_max).any() else None
     moving_max = tau_max - np.asarray(getattr(robot, "friction_coulomb", np.zeros_like(tau_max)), dtype=float)
     R = np.vstack([np.asarray(q, dtype=float) for q in rest]) if len(rest) and gravity is not None else None
 
-    def valid(q: np.ndarray) -> bool:
+    def ok(q: np.ndarray) -> bool:
         if (q < lo).any() or (q > hi).any():
             return False
         if gravity is not None:
@@ -146,7 +141,37 @@ def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
                 return False
             if R is not None and (g > moving_max).any() and np.min(np.max(np.abs(R - q), axis=1)) > REST_RADIUS:
                 return False
-        return not in_collision(q)
+        return True
+
+    def rows_ok(Q: np.ndarray) -> np.ndarray:
+        """``ok`` of every row of ``Q`` (the same elementwise tests, vectorised)."""
+        out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
+        if gravity is not None and out.any():
+            idx = np.flatnonzero(out)
+            G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
+            bad = (G > tau_max).any(axis=1)
+            if R is not None:
+                far = np.min(np.max(np.abs(R[None, :, :] - Q[idx][:, None, :]), axis=2), axis=1) > REST_RADIUS
+                bad |= (G > moving_max).any(axis=1) & far
+            out[idx[bad]] = False
+        return out
+    ok.rows = rows_ok  # type: ignore[attr-defined]
+    return ok
+
+
+def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
+    """Joint limits and collisions; with ``static_torque`` also that the joints hold the configuration
+    against gravity within their torque limits (|g(q)| ≤ τ_max), so that a path never needs more torque
+    standing still than the joints have: time scaling cannot repair such a path by slowing down. With
+    ``rest`` (the configurations where the motion stands still: its start and goals) a state farther than
+    :data:`REST_RADIUS` from all of them must also leave room for Coulomb friction, |g(q)| + f_c ≤ τ_max:
+    the robot moves through it, and however slowly it moves, friction adds f_c."""
+    static_ok = _static_validator(robot, static_torque, rest)
+    in_collision = robot.in_collision
+
+    def valid(q: np.ndarray) -> bool:
+        return static_ok(q) and not in_collision(q)
+    valid.static_ok = static_ok  # type: ignore[attr-defined]  # read by _Memoized.first_invalid
     return valid
 
 
@@ -154,12 +179,20 @@ class _Memoized:
     """``valid`` remembering its verdict per configuration (by its exact bytes) for one planning call: the
     shortcuts and the final dense check revisit states the planner's checks already decided (the same
     interpolation formula gives the same floats), and a verdict never changes within a call. ``memo``: the
-    verdicts by state, ``lookups``: the verdicts asked for."""
+    verdicts by state, ``lookups``: the verdicts asked for.
 
-    def __init__(self, valid: Callable[[np.ndarray], bool]):
+    :meth:`first_invalid` decides many states (a segment's) at once with the same verdicts: the torque tests
+    per state, the collision queries through :class:`~robodesign.solvers.collision_cull.CollisionCuller`
+    (coal asked only about the pairs its bounds do not clear) when ``robot`` is given and ``valid`` came
+    from :func:`_config_validator`."""
+
+    def __init__(self, valid: Callable[[np.ndarray], bool], robot=None):
         self.valid = valid
         self.memo: Dict[bytes, bool] = {}
         self.lookups = 0
+        self.static_ok = getattr(valid, "static_ok", None)
+        self.robot = robot if self.static_ok is not None else None
+        self._culler = None
 
     def __call__(self, q: np.ndarray) -> bool:
         self.lookups += 1
@@ -169,6 +202,60 @@ class _Memoized:
             v = self.memo[key] = self.valid(q)
         return v
 
+    def culler(self):
+        """The robot's CollisionCuller (built on first use), or None where it does not apply."""
+        if self._culler is None and self.robot is not None:
+            from robodesign.solvers.collision_cull import culler_of
+            try:
+                self._culler = culler_of(self.robot)
+            except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
+                self.robot = None
+        return self._culler
+
+    def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None) -> int:
+        """The first row of ``Q`` that is invalid, or -1: the verdicts (and counts) of asking ``self(q)`` row
+        by row until then; ``counter[0]`` grows by the rows asked."""
+        culler = self.culler()
+        if culler is None:
+            for i, q in enumerate(Q):
+                if counter is not None:
+                    counter[0] += 1
+                if not self(q):
+                    return i
+            return -1
+        memo, static_ok = self.memo, self.static_ok
+        assert static_ok is not None  # a culler only with _config_validator's valid
+        start = 0
+        for size in _CHUNKS:   # a segment that collides early pays for few states' bounds
+            rows = Q[start:start + size]
+            keys = [q.tobytes() for q in rows]
+            new = [i for i, k in enumerate(keys) if k not in memo]
+            S = culler.survivors(rows[new])
+            ok = static_ok.rows(rows[new])  # type: ignore[attr-defined]
+            at = {i: j for j, i in enumerate(new)}
+            for i, key in enumerate(keys):
+                if counter is not None:
+                    counter[0] += 1
+                self.lookups += 1
+                v = memo.get(key)
+                if v is None:
+                    j = at[i]
+                    v = bool(ok[j])
+                    if v:
+                        ks = np.flatnonzero(S[j])
+                        v = not (len(ks) and culler.collides(rows[i], ks))
+                    memo[key] = v
+                if not v:
+                    return start + i
+            start += size
+            if start >= len(Q):
+                break
+        return -1
+
+
+#: the row blocks :meth:`_Memoized.first_invalid` bounds at once (the last one takes the rest)
+_CHUNKS = (4, 28, 1 << 62)
+
 
 def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter: Optional[List[int]] = None,
                 include_start: bool = False) -> bool:
@@ -176,25 +263,18 @@ def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter:
 
     The sub-states are checked in a coarse-to-fine (van der Corput) order, so a collision in the
     middle is found after few checks; the set of checked states is the same as a sequential sweep.
+    A :class:`_Memoized` ``valid`` decides them together (:meth:`_Memoized.first_invalid`: the same verdicts
+    and counts, the collision queries culled).
     """
     d = b - a
     n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12))) if d.size else 1
-    if include_start:
+    states = ([a] if include_start else []) + [b] + [a + d * (k / n) for k in _bisection_order(n)]
+    if isinstance(valid, _Memoized):
+        return valid.first_invalid(np.array(states), counter) < 0
+    for q in states:
         if counter is not None:
             counter[0] += 1
-        if not valid(a):
-            return False
-    if counter is not None:
-        counter[0] += 1
-    if not valid(b):
-        return False
-    if n == 1:
-        return True
-    # interior points k/n, k = 1..n-1, in bisection order
-    for k in _bisection_order(n):
-        if counter is not None:
-            counter[0] += 1
-        if not valid(a + d * (k / n)):
+        if not valid(q):
             return False
     return True
 
@@ -235,7 +315,7 @@ def check_path(robot, path, resolution: float = 0.01, static_torque: bool = Fals
     if not np.all(np.isfinite(P)):
         bad = int(np.nonzero(~np.all(np.isfinite(P), axis=1))[0][0])
         return False, bad
-    valid = _config_validator(robot, static_torque) if _valid is None else _valid
+    valid = _Memoized(_config_validator(robot, static_torque), robot) if _valid is None else _valid
     if not valid(P[0]):
         return False, 0
     for i in range(len(P) - 1):
@@ -250,6 +330,8 @@ def check_path(robot, path, resolution: float = 0.01, static_torque: bool = Fals
 def _interior_ok(valid, a, b, resolution) -> bool:
     d = b - a
     n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12)))
+    if n > 1 and isinstance(valid, _Memoized):   # in order: the first bad state is the one nearest to a
+        return valid.first_invalid(np.array([a + d * (k / n) for k in range(1, n)])) < 0
     for k in range(1, n):          # sequential: the first bad state is the one nearest to a
         if not valid(a + d * (k / n)):
             return False
@@ -340,7 +422,7 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
             raise InputError(f"{label} must be {n} finite joint values, got {np.asarray(q).tolist()}")
     counter = [0]
     rest = [qs, qg, *[np.asarray(q, dtype=float).reshape(-1) for q in other_goals]] if static_torque else []
-    valid = _Memoized(_config_validator(robot, static_torque, rest))
+    valid = _Memoized(_config_validator(robot, static_torque, rest), robot)
     stats: Dict[str, object] = {"planner": name, "straight_line": False, "time": 0.0, "plan_time": 0.0,
                                 "simplify_time": 0.0, "checks": 0, "raw_waypoints": 0, "waypoints": 0,
                                 "length": 0.0, "reason": ""}

@@ -65,7 +65,9 @@ time, using that ṡ ≥ 0 fixes the sign of each joint's velocity:
   in x = ṡ² and exact at x = x₀. Pass 1 uses x₀ = ¼ of the velocity-limit curve (divided by 16 while
   toppra finds it infeasible); every further pass uses x₀ = the previous solution, which keeps that
   solution feasible, so passes never get slower (``torque_passes``, default 3; measured on a
-  6-DoF IMPROV move with halved torque limits: 2.70 s → 2.20 s → 2.16 s; without friction 1.62 s).
+  6-DoF IMPROV move with halved torque limits: 2.70 s → 2.20 s → 2.16 s; without friction 1.62 s). A pass
+  whose x₀ would equal the previous pass's bit for bit is not run: it would solve the same problem again
+  (a move the torque limits do not slow down gives the same profile in pass 2 as in pass 1).
 
 Constraints are enforced at both ends of every grid interval ("interpolation" discretization, with
 the left/right limits of q''(s) at blend boundaries); what remains between grid points is caught by the
@@ -93,6 +95,7 @@ import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
+from robodesign.solvers.toppra_loop import rest_to_rest
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
@@ -591,6 +594,11 @@ def _dynamics_constraint_class():
 _DYN_CLS = None
 
 
+def _same_tangents(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two passes' viscous tangent points are the same bit for bit (then so are their profiles)."""
+    return bool(np.array_equal(a, b))
+
+
 def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: bool, grid_step: float,
                     torque_passes: int) -> Tuple[_Profile, dict]:
     global _DYN_CLS
@@ -615,18 +623,25 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     while p < passes:
         dyn = _DYN_CLS(robot, amax, tau, x0, use_torque, terms)
         algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
-        algo.compute_parameterization(0.0, 0.0)
-        pd = algo.problem_data
-        if pd.return_code != tp.algorithm.ParameterizationReturnCode.Ok or pd.sd_vec is None:
+        sd_vec = rest_to_rest(algo)
+        if sd_vec is None:   # a branch of toppra's own loop (numerical trouble, uncontrollable): toppra decides
+            algo.compute_parameterization(0.0, 0.0)
+            pd = algo.problem_data
+            ok = pd.return_code == tp.algorithm.ParameterizationReturnCode.Ok and pd.sd_vec is not None
+            sd_vec = pd.sd_vec if ok else None
+        if sd_vec is None:
             if sd is not None:
                 break  # keep the previous (feasible) pass
             if use_torque and np.max(x0 / x_vel) > 1e-4:
                 x0 = x0 / 16.0
                 continue
             raise TimingError(f"toppra failed: {pd.return_code}")
-        sd = np.maximum(np.asarray(pd.sd_vec, float), 0.0)
-        x0 = np.maximum(sd ** 2, 1e-4 * x_vel)
+        sd = np.maximum(np.asarray(sd_vec, float), 0.0)
+        x_next = np.maximum(sd ** 2, 1e-4 * x_vel)
         p += 1
+        if _same_tangents(x_next, x0):
+            break  # the next pass would solve the same problem again: the same profile (converged)
+        x0 = x_next
     assert sd is not None  # the loop ends after a feasible pass (or raises)
     sd[0] = sd[-1] = 0.0
     ds = np.diff(grid)
@@ -652,7 +667,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
         return path(s_of_t(np.asarray(t, float))[0], 0)
 
     prof = _Profile(float(T_grid[-1]), velocity, path.points[0].copy(), path.points[-1].copy(), position)
-    return prof, {"gridpoints": len(grid), "toppra_duration": float(T_grid[-1]), "torque_passes": passes}
+    return prof, {"gridpoints": len(grid), "toppra_duration": float(T_grid[-1]), "torque_passes": p}
 
 
 # ==============================================================================================
