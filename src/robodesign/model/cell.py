@@ -6,7 +6,9 @@ plotted robot are the same object.
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, List, Optional, Sequence, Union
+import threading
+from collections import OrderedDict
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -60,6 +62,68 @@ def build_robot(task: Optional[Task], ms: ModuleSet, assembly: Assembly, base_po
     robot = Robot(ms, assembly, base_pose=base_pose, gravity=task.header.gravity)
     robot.set_obstacles(task_obstacles(task), safety_margin=safety_margin(task))
     return robot
+
+
+class RobotPool:
+    """Robots built in one cell (``task``: its obstacles with the safety margin and its gravity; None: none),
+    kept for reuse: a search evaluates the same assembly at many base poses, and taking a robot back costs a
+    base-pose change instead of a build (the model, the collision geometry and pairs, the collision scratch
+    space). The cell's obstacles are set up once. A robot is lent to one user at a time (:meth:`take`, then
+    :meth:`give_back` when done with it); it answers every query as a fresh :func:`build_robot` does. At most
+    ``size`` robots are kept (the least recently given back go first)."""
+
+    def __init__(self, task: Optional[Task], size: int = 24):
+        self.task, self.size = task, int(size)
+        self.obstacles = task_obstacles(task) if task is not None else []
+        self.margin = safety_margin(task) if task is not None else 0.0
+        self._free: "OrderedDict[Tuple[int, str], List[Robot]]" = OrderedDict()
+        self._count = 0
+        self._lock = threading.Lock()
+
+    def take(self, ms: ModuleSet, assembly: Assembly, base_pose: np.ndarray) -> Robot:
+        """A robot of ``assembly`` at ``base_pose`` in the cell, built or taken back from the pool."""
+        key = (id(ms), assembly.key())
+        with self._lock:
+            robots = self._free.get(key)
+            robot = robots.pop() if robots else None
+            if robot is not None:
+                self._count -= 1
+        if robot is None or robot.module_set is not ms or robot.assembly != assembly:
+            if self.task is None:
+                return Robot(ms, assembly, base_pose=base_pose)
+            robot = Robot(ms, assembly, base_pose=base_pose, gravity=self.task.header.gravity)
+            robot.set_obstacles(self.obstacles, safety_margin=self.margin)
+            return robot
+        robot.set_base_pose(base_pose)
+        _fresh_guesses(robot)
+        return robot
+
+    def give_back(self, robot: Robot) -> None:
+        """Return a robot that :meth:`take` lent (its obstacles where they were, nothing else changed)."""
+        key = (id(robot.module_set), robot.assembly.key())
+        with self._lock:
+            self._free.setdefault(key, []).append(robot)
+            self._free.move_to_end(key)
+            self._count += 1
+            while self._count > self.size:
+                old = next(iter(self._free))
+                self._count -= len(self._free.pop(old))
+
+
+_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a fresh coal request's
+
+
+def _fresh_guesses(robot: Robot) -> None:
+    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which
+    pinocchio enables): a robot taken back from a pool starts from the guesses of a fresh build again, so its
+    answers do not depend on what it answered before."""
+    gd = robot._geom_data
+    if gd is None:
+        return
+    for reqs in (gd.collisionRequests, gd.distanceRequests):
+        for r in reqs:
+            r.cached_gjk_guess = _GUESS
+            r.cached_support_func_guess = _SUPPORT_GUESS
 
 
 def solution_robot(task: Optional[Task], solution: Solution, module_set=None) -> Robot:

@@ -235,22 +235,23 @@ class Robot:
         self._add_self_collision_pairs(direct_joint_pairs)
 
     def _add_self_collision_pairs(self, direct_joint_pairs) -> None:
-        geom, model = self.geom_model, self.model
-        mode = self.module_set.ignore_collisions
-        parents = model.parents
-        objs = geom.geometryObjects
-        n = len(objs)
-        for a in range(n):
-            ja = objs[a].parentJoint
-            for b in range(a + 1, n):
-                jb = objs[b].parentJoint
-                if ja == jb:
-                    continue  # rigidly connected
-                if mode == "rigid_via_joint" and (parents[ja] == jb or parents[jb] == ja):
-                    continue
-                if mode == "via_joint" and frozenset((self._geom_body[a], self._geom_body[b])) in direct_joint_pairs:
-                    continue
-                geom.addCollisionPair(pin.CollisionPair(a, b))
+        """Every pair of robot objects on different joints, but those the module set ignores (one call, row-major)."""
+        geom, mode = self.geom_model, self.module_set.ignore_collisions
+        parents = np.asarray(self.model.parents, dtype=int)
+        J = np.array([o.parentJoint for o in geom.geometryObjects], dtype=int)
+        keep = np.triu(J[:, None] != J[None, :], 1)  # rigidly connected: same joint
+        if mode == "rigid_via_joint":
+            keep &= (parents[J][:, None] != J[None, :]) & (parents[J][None, :] != J[:, None])
+        if mode == "via_joint" and direct_joint_pairs:
+            ids = {b: k for k, b in enumerate(dict.fromkeys(self._geom_body))}  # body → index
+            B = np.array([ids[b] for b in self._geom_body], dtype=int)
+            D = np.zeros((len(ids), len(ids)), dtype=bool)  # bodies joined directly by a joint
+            for pair in direct_joint_pairs:
+                ab = [ids[b] for b in pair if b in ids]
+                if len(ab) == 2:
+                    D[ab[0], ab[1]] = D[ab[1], ab[0]] = True
+            keep &= ~D[B[:, None], B[None, :]]
+        geom.setCollisionPairs(keep)
 
     # ------------------------------------------------------------------------------------------
     # configuration of the robot in its cell
@@ -268,8 +269,7 @@ class Robot:
             else:
                 self.geom_model.geometryObjects[idx].placement = P
         self.data = self.model.createData()
-        self._sync_link_model()
-        self._geom_data = None
+        self._sync_link_model()  # the collision scratch space stays: it holds no placement between queries
         self._reach = None
         self._batch_chain = None
 

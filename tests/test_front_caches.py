@@ -1,0 +1,152 @@
+"""The candidate front end's caches (issue 25): the self-collision pairs set in one call are the pairs of the
+former pair-by-pair loop, a robot taken back from a cell's :class:`RobotPool` answers as a freshly built one,
+the pool keeps assemblies and cells apart, and a solve that reuses a robot gives the result of one that builds."""
+import dataclasses
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robodesign import load_module_set
+from robodesign.design.problem import Problem
+from robodesign.design.search_space import Candidate, SearchSpace
+from robodesign.design.solve import _POOLS, robot_pool, solve
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+from robodesign.formats.assembly import Assembly
+from robodesign.model.cell import RobotPool, build_robot
+from robodesign.model.robot import Robot
+from robodesign.solvers.schedule import static_cell
+
+from conftest import IMPROV, PRIMITIVES, TASKS
+
+PTP3 = TASKS / "simple" / "PTP_3.json"
+GOOD = ("1", "21", "4", "22", "5", "23", "12")
+
+
+def _pairs_pair_by_pair(robot: Robot) -> list:
+    """The self-collision pairs as the pair-by-pair loop of earlier releases chose them."""
+    model, objs = robot.model, robot.geom_model.geometryObjects
+    mode, parents = robot.module_set.ignore_collisions, model.parents
+    direct = set()
+    for i, mid in enumerate(robot.assembly.module_ids):
+        for jt in robot.module_set[mid].joints:
+            direct.add(frozenset(((i, jt.parent), (i, jt.child))))
+    out = []
+    n = robot.n_collision_geometries
+    for a in range(n):
+        for b in range(a + 1, n):
+            ja, jb = objs[a].parentJoint, objs[b].parentJoint
+            if ja == jb or mode == "rigid_via_joint" and (parents[ja] == jb or parents[jb] == ja):
+                continue
+            if mode == "via_joint" and frozenset((robot._geom_body[a], robot._geom_body[b])) in direct:
+                continue
+            out.append((a, b))
+    return out
+
+
+@pytest.mark.parametrize("folder", [IMPROV, PRIMITIVES, "robodesign_arm"])
+@pytest.mark.parametrize("mode", [None, "rigid_via_joint", "via_joint"])
+def test_self_collision_pairs_are_those_of_the_pair_by_pair_loop(folder, mode):
+    base = load_module_set(folder)
+    ms = base if mode is None else dataclasses.replace(base, ignore_collisions=mode)  # the cached set unchanged
+    space = SearchSpace(base, min_dof=6, max_dof=7)
+    rng = np.random.default_rng(3)
+    for _ in range(8):
+        robot = Robot.from_order(ms, space.random_order(rng))
+        got = [(cp.first, cp.second) for cp in robot.geom_model.collisionPairs]
+        assert got == _pairs_pair_by_pair(robot) and got
+
+
+def _answers(robot: Robot, rng) -> list:
+    """What the pipeline asks a robot: reach bound, FK, collisions at random configurations, base contacts,
+    distances, the Jacobian's rank."""
+    qs = [robot.random_configuration(rng) for _ in range(12)]
+    o, R = robot.reach_bound()
+    return [o.tolist(), R, robot.base_collisions(), robot.generic_rank(),
+            [robot.fk(q).tolist() for q in qs], [robot.in_collision(q) for q in qs],
+            [robot.colliding_pairs(q) for q in qs], [robot.min_distances(q) for q in qs],
+            [robot.gravity_torque(q).tolist() for q in qs]]
+
+
+@pytest.fixture(scope="module")
+def ptp3():
+    return Problem.build(PTP3, IMPROV, "cyc")
+
+
+def test_a_robot_taken_back_answers_as_a_fresh_build(ptp3):
+    ms, cell = ptp3.module_set, static_cell(ptp3.task)
+    pool = RobotPool(cell)
+    rng = np.random.default_rng(5)
+    orders = [GOOD] + [ptp3.space.random_order(rng) for _ in range(3)]
+    bases = [[ptp3.base_pose(Candidate(o, ptp3.space.base_bounds.sample(rng))) for o in orders] for _ in range(3)]
+    seen = set()
+    for k in range(3):
+        for o, T in zip(orders, bases[k]):
+            asm = Assembly.from_order(ms, o)
+            robot = pool.take(ms, asm, T)
+            reused = id(robot) in seen
+            seen.add(id(robot))
+            fresh = build_robot(cell, ms, asm, T)
+            assert robot.assembly == asm and np.array_equal(robot.base_pose, T)
+            assert _answers(robot, np.random.default_rng(k)) == _answers(fresh, np.random.default_rng(k))
+            assert reused == (k > 0)  # every later round takes the robot of its order back
+            pool.give_back(robot)
+
+
+def test_the_pool_keeps_assemblies_cells_and_sizes_apart(ptp3):
+    ms = ptp3.module_set
+    a, b = Assembly.from_order(ms, GOOD), Assembly.from_order(ms, ("1", "21", "4", "22", "5", "23", "13"))
+    pool = RobotPool(static_cell(ptp3.task), size=2)
+    T = ptp3.task.nominal_base_pose
+    ra = pool.take(ms, a, T)
+    pool.give_back(ra)
+    rb = pool.take(ms, b, T)  # another order: not the robot of the first
+    assert rb is not ra and rb.assembly == b
+    assert pool.take(ms, a, T) is ra  # lent once: taken, it is no longer in the pool
+    assert pool.take(ms, a, T) is not ra
+    pool.give_back(ra)
+    pool.give_back(rb)
+    pool.give_back(Robot(ms, b))
+    assert pool.take(ms, a, T) is not ra  # size 2: the least recently given back went first
+    other = load_module_set(IMPROV)  # the same modules, another set object: never shares a robot
+    pool.give_back(rb)
+    assert pool.take(other, b, T).module_set is other
+    # one pool per task; its obstacles are the task's static cell
+    task2 = Problem.build(TASKS / "simple" / "PTP_1.json", IMPROV, "cyc").task
+    assert robot_pool(ptp3.task) is robot_pool(ptp3.task) and robot_pool(task2) is not robot_pool(ptp3.task)
+    assert [o.name for o in robot_pool(ptp3.task).obstacles] == [o.name for o in build_robot(
+        static_cell(ptp3.task), ms, a, T).obstacles]
+    # without obstacles: the robot is the bare one
+    bare = RobotPool(None).take(ms, a, T)
+    assert bare.obstacles == [] and len(bare.geom_model.collisionPairs) == bare.n_self_collision_pairs
+
+
+def test_a_solve_that_reuses_robots_gives_the_result_of_one_that_builds(ptp3):
+    ev = Evaluator(EvaluatorSpec(ptp3, seed=0))
+    rng = np.random.default_rng(2)
+    orders = [GOOD, ptp3.space.random_order(rng)]
+    cands = [Candidate(o, ptp3.space.base_bounds.sample(rng)) for _ in range(2) for o in orders]
+
+    def verdicts(clear_each):
+        out = []
+        for c in cands:
+            if clear_each:
+                _POOLS.clear()
+            e = ev.evaluate(c)
+            out.append((e.stage, e.goals_reached, e.feasible, e.cost, e.score, e.shortfall, e.message,
+                        None if e.solution is None else e.solution["trajectory"]))
+        return out
+    _POOLS.clear()
+    assert verdicts(clear_each=False) == verdicts(clear_each=True)
+    assert len(robot_pool(ptp3.task)._free) >= 1
+
+
+def test_a_solve_gives_its_robot_back():
+    from robodesign.design.solve import SolveSettings
+    problem = Problem.build(PTP3, IMPROV, "cyc")
+    pool = robot_pool(problem.task)
+    before = pool._count
+    res = solve(problem.task, problem.module_set, list(GOOD), settings=SolveSettings(stop_after="reach"))
+    assert res.stage == "done" and pool._count == before + 1
+    assert isinstance(pool.take(problem.module_set, Assembly.from_order(problem.module_set, GOOD),
+                                problem.task.nominal_base_pose).geom_data, pin.GeometryData)
