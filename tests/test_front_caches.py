@@ -150,3 +150,105 @@ def test_a_solve_gives_its_robot_back():
     assert res.stage == "done" and pool._count == before + 1
     assert isinstance(pool.take(problem.module_set, Assembly.from_order(problem.module_set, GOOD),
                                 problem.task.nominal_base_pose).geom_data, pin.GeometryData)
+
+
+def _base_collisions_pair_by_pair(robot: Robot) -> list:
+    """The base stage's contacts as the loop over every robot–obstacle pair of earlier releases found them."""
+    if not robot.obstacles:
+        return []
+    objs, pairs = robot.geom_model.geometryObjects, robot.geom_model.collisionPairs
+    pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, robot.geom_data, np.zeros(robot.dof))
+    return [(objs[pairs[k].first].name, objs[pairs[k].second].name)
+            for k in range(robot.n_self_collision_pairs, len(pairs))
+            if objs[pairs[k].first].parentJoint == 0 and pin.computeCollision(robot.geom_model, robot.geom_data, k)]
+
+
+@pytest.fixture(scope="module")
+def whitman(tmp_path_factory):
+    from robodesign.generate.registry import generate
+    files = generate("whitman2020", tmp_path_factory.mktemp("whitman"), 1, 0,
+                     {"goals": 5, "obstacles": 5, "base": "xyz_any_rot"})
+    return Problem.build(files[0], "robodesign_arm", "cyc")
+
+
+def test_base_contacts_are_those_of_the_pair_by_pair_loop(whitman):
+    from robodesign.model.robot import Obstacle
+    ms, cell = whitman.module_set, static_cell(whitman.task)
+    rng = np.random.default_rng(7)
+    hits = 0
+    for _ in range(40):
+        c = whitman.space.random_candidate(rng)
+        T = whitman.base_pose(c)
+        robot = build_robot(cell, ms, Assembly.from_order(ms, c.order), T)
+        # obstacles around the base too, so that some designs touch one with their fixed part
+        extra = [Obstacle(f"near{k}", o.shape, T @ np.array([[1, 0, 0, 0.1 * k], [0, 1, 0, 0], [0, 0, 1, 0.05],
+                                                                [0, 0, 0, 1.0]])) for k, o in enumerate(robot.obstacles[:2])]
+        robot.set_obstacles(robot.obstacles + extra, safety_margin=robot.safety_margin)
+        got = robot.base_collisions()
+        robot._geom_data = None  # the reference on a fresh scratch space
+        assert got == _base_collisions_pair_by_pair(robot)
+        hits += bool(got)
+    assert hits > 0
+
+
+def test_a_pool_adopts_the_robot_a_search_space_built_for_its_kinematics(whitman):
+    from robodesign.model import cell as cell_mod
+    ms, cell = whitman.module_set, static_cell(whitman.task)
+    rng = np.random.default_rng(8)
+    order = whitman.space.random_order(rng)
+    whitman.space._cache("_memo_reach").clear()
+    whitman.space.rank_deficit(order)  # builds the order's robot once: kept as a spare
+    asm = Assembly.from_order(ms, order)
+    spare = cell_mod._SPARE.get((id(ms), asm.key()))
+    assert spare is not None and spare.assembly == asm
+    c = Candidate(tuple(order), whitman.space.sample_base(rng, order))
+    T = whitman.base_pose(c)
+    robot = RobotPool(cell).take(ms, asm, T)
+    assert robot is spare and (id(ms), asm.key()) not in cell_mod._SPARE  # adopted once
+    fresh = build_robot(cell, ms, asm, T)
+    assert np.array_equal(robot.model.gravity.vector, fresh.model.gravity.vector)
+    assert _answers(robot, np.random.default_rng(1)) == _answers(fresh, np.random.default_rng(1))
+    assert RobotPool(cell).take(ms, asm, T) is not spare  # another pool builds its own
+
+
+def _sample_base_as_before(space, rng, order, tries=64):
+    """SearchSpace.sample_base as earlier releases wrote it (clearance tested before the shortfall)."""
+    from robodesign.core.spatial import rot_z
+    bb, free = space.base_bounds, space.base_bounds.free
+    order = tuple(str(m) for m in order)
+    o_local, R = space._order_reach(order)
+    G = space._goal_array()
+    inv = np.linalg.inv(bb.nominal)
+    best, best_s = None, float("inf")
+    for k in range(tries):
+        if k % 2 == 0:
+            full = [float(rng.uniform(bb.lower[i], bb.upper[i])) for i in range(4)]
+            g = G[int(rng.integers(len(G))), :3]
+            v = rng.normal(size=3)
+            v *= rng.uniform(0.2, 0.75) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
+            t = (inv @ np.append(g + v, 1.0))[:3] - rot_z(full[3]) @ o_local
+            for i in range(3):
+                if i in free:
+                    full[i] = float(t[i])
+            params = tuple(full[i] for i in free)
+        else:
+            params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
+        if not bb.valid(params) or not space._clear(params):
+            continue
+        s = space._shortfall(order, params)
+        if s == 0.0:
+            return params
+        if s < best_s:
+            best, best_s = params, s
+    return best if best is not None else bb.sample(rng)
+
+
+def test_sample_base_draws_and_returns_what_it_did(whitman):
+    space = whitman.space
+    rng = np.random.default_rng(4)
+    for _ in range(30):
+        order = space.random_order(rng)
+        seed = int(rng.integers(1 << 30))
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        assert space.sample_base(a, order, tries=16) == _sample_base_as_before(space, b, order, tries=16)
+        assert a.random() == b.random()  # the same draws

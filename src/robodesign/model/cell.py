@@ -89,10 +89,14 @@ class RobotPool:
             if robot is not None:
                 self._count -= 1
         if robot is None or robot.module_set is not ms or robot.assembly != assembly:
-            if self.task is None:
-                return Robot(ms, assembly, base_pose=base_pose)
-            robot = Robot(ms, assembly, base_pose=base_pose, gravity=self.task.header.gravity)
-            robot.set_obstacles(self.obstacles, safety_margin=self.margin)
+            robot = _adopt(ms, assembly)  # a bare robot of the assembly built for its kinematics, or None
+            if robot is None:
+                robot = Robot(ms, assembly, base_pose=base_pose)
+            else:
+                robot.set_base_pose(base_pose)
+            if self.task is not None:
+                robot.set_gravity(self.task.header.gravity)
+                robot.set_obstacles(self.obstacles, safety_margin=self.margin)
             return robot
         robot.set_base_pose(base_pose)
         _fresh_guesses(robot)
@@ -108,6 +112,33 @@ class RobotPool:
             while self._count > self.size:
                 old = next(iter(self._free))
                 self._count -= len(self._free.pop(old))
+
+
+_SPARE: "OrderedDict[Tuple[int, str], Robot]" = OrderedDict()  # (id(module set), assembly key) → bare robot
+_SPARE_SIZE = 64
+_SPARE_LOCK = threading.Lock()
+
+
+def kinematic_robot(ms: ModuleSet, order: Sequence[str], base_pose: np.ndarray) -> Robot:
+    """``Robot.from_order(ms, order, base_pose=base_pose)`` for a look at its kinematics (reach bound, Jacobian
+    rank: what a search space asks of an order before any evaluation). The robot is kept afterwards (at most
+    64 of them): the first :meth:`RobotPool.take` of its assembly adopts it instead of building it again. The
+    caller must not change it."""
+    robot = Robot.from_order(ms, order, base_pose=base_pose)
+    with _SPARE_LOCK:
+        _SPARE[(id(ms), robot.assembly.key())] = robot
+        while len(_SPARE) > _SPARE_SIZE:
+            _SPARE.popitem(last=False)
+    return robot
+
+
+def _adopt(ms: ModuleSet, assembly: Assembly) -> Optional[Robot]:
+    """The bare robot :func:`kinematic_robot` built of ``assembly`` (taken out of the spares), or None. Only its
+    base pose, gravity and obstacles are then set: a robot equal to a fresh build (its Jacobian's generic rank,
+    if computed, is kept: it does not depend on the base pose)."""
+    with _SPARE_LOCK:
+        robot = _SPARE.pop((id(ms), assembly.key()), None)
+    return robot if robot is not None and robot.module_set is ms and robot.assembly == assembly else None
 
 
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a fresh coal request's

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -30,6 +30,7 @@ from robodesign.core.spatial import inv
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import coal_shapes
 from robodesign.formats.module_spec import Connector, ModuleSet
+from robodesign.model.batch_fk import _BatchKinematics
 
 COULOMB_SMOOTHING = 100.0
 
@@ -38,6 +39,16 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
     s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
     return s / np.sqrt(1.0 + s * s)
+
+
+_MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
+
+
+def _memo(spec, make):
+    hit = _MEMO.get(id(spec))
+    if hit is None or hit[0] is not spec:
+        hit = _MEMO[id(spec)] = (spec, make(spec))
+    return hit[1]
 
 
 @dataclass(frozen=True)
@@ -72,7 +83,7 @@ class Robot:
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
-        self._batch_chain: Optional["_BatchKinematics"] = None
+        self._batch_chain: Optional[Any] = None  # batch_fk._BatchKinematics, built on first use
         self.obstacles: List[Obstacle] = []
         self._obstacle_ids: List[int] = []
         self.safety_margin = 0.0  # of robot–obstacle pairs (set_obstacles)
@@ -107,10 +118,12 @@ class Robot:
         start = (bi, base_con.body_id, 0, base_con.entry_pose)
         visited = set()
         queue = deque([start])
-        body_joint: Dict[Tuple[int, str], int] = {}
+        first: Dict[str, int] = {"universe": 0}  # frame name → its first frame id; joint id → joint name
+        joint_names: Dict[int, str] = {}
         self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
         self.joint_infos: List[JointInfo] = []
-        lower, upper, vel, acc, eff, gear, im, fc, fv = ([] for _ in range(9))
+        columns: List[List[float]] = [[] for _ in range(9)]
+        lower, upper, vel, acc, eff, gear, im, fc, fv = columns
         free_connectors: List[Tuple[int, Connector, int]] = []  # (instance, connector, frame id)
         total_mass = 0.0
         geom_body: List[Tuple[int, str]] = []
@@ -120,21 +133,22 @@ class Robot:
             if (i, body_id) in visited:
                 continue
             visited.add((i, body_id))
-            body_joint[(i, body_id)] = jid
             mod = ms[asm.module_ids[i]]
             body = mod.body(body_id)
             label = labels[i]
             total_mass += body.mass
             if body.mass > 0:
-                Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+                Y = _memo(body, lambda b: pin.Inertia(b.mass, np.asarray(b.com, float), np.asarray(b.inertia, float)))
                 model.appendBodyToJoint(jid, Y, pin.SE3(M))
-            parent_frame = model.getFrameId(model.names[jid]) if jid > 0 else 0
+            parent_frame = first[joint_names[jid]] if jid > 0 else 0  # getFrameId: the first frame of the name
             fid = model.addFrame(pin.Frame(f"{label}.{body_id}", jid, parent_frame, pin.SE3(M), pin.FrameType.BODY))
+            first.setdefault(f"{label}.{body_id}", fid)
             if jid == 0:
                 self._root_items.append(("frame", fid, M.copy()))
             for ci, c in enumerate(body.connectors):
                 Mc = M @ c.pose
                 cf = model.addFrame(pin.Frame(f"{label}.{body_id}.{c.id}", jid, fid, pin.SE3(Mc), pin.FrameType.OP_FRAME))
+                first.setdefault(f"{label}.{body_id}.{c.id}", cf)
                 if jid == 0:
                     self._root_items.append(("frame", cf, Mc.copy()))
                 other = conn.get((i, c.id))
@@ -160,7 +174,7 @@ class Robot:
                     P, Q = jt.pose_parent, jt.pose_child
                 elif jt.child == body_id:
                     other_body, rev = jt.parent, True
-                    P, Q = inv(jt.pose_child), inv(jt.pose_parent)
+                    P, Q = _memo(jt, lambda j: (inv(j.pose_child), inv(j.pose_parent)))
                 else:
                     continue
                 if (i, other_body) in visited:
@@ -176,20 +190,16 @@ class Robot:
                     jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
                 name = f"{label}.{jt.id}"
                 new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
-                model.addJointFrame(new_jid, -1)
+                first.setdefault(name, model.addJointFrame(new_jid, -1))
+                joint_names[new_jid] = name
                 if jid == 0:
                     self._root_items.append(("joint", new_jid, placement.copy()))
                 self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
                 L = jt.limits
-                lower.append(L.lower)
-                upper.append(L.upper)
-                vel.append(L.velocity)
-                acc.append(L.acceleration)
-                eff.append(L.torque)
-                gear.append(jt.gear_ratio)
-                im.append(jt.motor_inertia)
-                fc.append(jt.friction_coulomb)
-                fv.append(jt.friction_viscous)
+                for column, v in zip(columns, (
+                        L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
+                        jt.friction_coulomb, jt.friction_viscous)):
+                    column.append(v)
                 queue.append((i, other_body, new_jid, Q))
         missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
         if missing:
@@ -558,14 +568,13 @@ class Robot:
         collides at every configuration."""
         if not self._obstacle_ids:
             return []
-        objs = self.geom_model.geometryObjects
+        objs, n = self.geom_model.geometryObjects, len(self._geom_body)
         self._update_geometry(np.zeros(self.dof))
-        out = []
-        for k in range(self._n_self_pairs, len(self.geom_model.collisionPairs)):
-            cp = self.geom_model.collisionPairs[k]
-            if objs[cp.first].parentJoint == 0 and pin.computeCollision(self.geom_model, self.geom_data, k):
-                out.append((objs[cp.first].name, objs[cp.second].name))
-        return out
+        root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
+        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
+        hits = [(a, ob) for j, ob in enumerate(self._obstacle_ids) for a in root
+                if pin.computeCollision(self.geom_model, self.geom_data, self._n_self_pairs + j * n + a)]
+        return [(objs[a].name, objs[ob].name) for a, ob in hits]
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
@@ -647,120 +656,8 @@ class Robot:
 
 
 # ---------------------------------------------------------------------------------------------------------
-# forward kinematics batched over samples
+# forward kinematics batched over samples (the joint tree as arrays: model/batch_fk.py)
 # ---------------------------------------------------------------------------------------------------------
-_AXES = {"RX": (0, (1.0, 0.0, 0.0)), "RY": (0, (0.0, 1.0, 0.0)), "RZ": (0, (0.0, 0.0, 1.0)),
-         "PX": (1, (1.0, 0.0, 0.0)), "PY": (1, (0.0, 1.0, 0.0)), "PZ": (1, (0.0, 0.0, 1.0))}
-
-
-class _BatchKinematics:
-    """The pinocchio model's joint tree as arrays (for the current base pose): per joint its parent, the
-    placement in the parent (R, t), its kind (0 revolute, 1 prismatic) and unit axis, its q index."""
-
-    def __init__(self, model: "pin.Model"):
-        self.parents, self.R, self.t, self.kind, self.axis, self.iq, self.z = [], [], [], [], [], [], []
-        for j in range(1, model.njoints):
-            jm = model.joints[j]
-            name = jm.shortname()
-            ax: Tuple[float, ...]
-            if name.startswith("JointModel") and name[10:] in _AXES:
-                kind, ax = _AXES[name[10:]]
-            elif name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
-                kind = 0 if "Revolute" in name else 1
-                ax = tuple(float(x) for x in (jm.extract().axis if hasattr(jm, "extract") else jm.axis))
-            else:
-                raise NotImplementedError(f"batched FK does not model {name}")
-            if jm.nq != 1:
-                raise NotImplementedError("multi-DoF joint")
-            M = model.jointPlacements[j]
-            self.parents.append(int(model.parents[j]))
-            self.R.append(np.array(M.rotation, dtype=float))
-            self.t.append(np.array(M.translation, dtype=float))
-            self.kind.append(kind)
-            self.axis.append(np.asarray(ax, dtype=float))
-            self.iq.append(int(jm.idx_q))
-            self.z.append(kind == 0 and np.allclose(ax, (0.0, 0.0, 1.0), atol=0.0))
-        self.frames = {}
-        for f, fr in enumerate(model.frames):
-            self.frames[f] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
-                              np.array(fr.placement.translation, dtype=float))
-        self.njoints = model.njoints
-
-    def _walk(self, Q: np.ndarray, need: Optional[set] = None):
-        """World rotation (3×3×N: entry (i, j) of every sample contiguous) and position (3×N) of every
-        joint in ``need`` (all if None); index 0 = the world (None: identity)."""
-        N = len(Q)
-        Rs: Dict[int, Optional[np.ndarray]] = {0: None}
-        ps: Dict[int, Optional[np.ndarray]] = {0: None}
-        QT = np.ascontiguousarray(Q.T)
-        for j in range(1, self.njoints):
-            if need is not None and j not in need:
-                continue
-            k = j - 1
-            par = self.parents[k]
-            Rl, tl = self.R[k], self.t[k]
-            Rpar, ppar = Rs[par], ps[par]
-            if Rpar is None or ppar is None:  # the world (both None)
-                Rp = np.repeat(Rl[:, :, None], N, axis=2)
-                pp = np.repeat(tl[:, None], N, axis=1)
-            else:   # (R·Rl)[i] = Rlᵀ-combination of the columns of R[i]: three (3×3)·(3×N) products
-                Rp = np.matmul(Rl.T, Rpar)
-                pp = ppar + np.matmul(tl, Rpar)
-            q = QT[self.iq[k]]
-            a = self.axis[k]
-            if self.kind[k] == 1:                 # prismatic: p += R·a·q
-                R = Rp
-                p = pp + np.matmul(a, Rp) * q
-            elif self.z[k]:                       # revolute about +z: mix columns 0 and 1
-                c, s = np.cos(q), np.sin(q)
-                c0, c1 = Rp[:, 0], Rp[:, 1]
-                R = np.empty_like(Rp)
-                R[:, 0] = c0 * c + c1 * s
-                R[:, 1] = c1 * c - c0 * s
-                R[:, 2] = Rp[:, 2]
-                p = pp
-            else:                                 # revolute about a: Rodrigues, R·Rj
-                c, s = np.cos(q), np.sin(q)
-                K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-                Rj = np.eye(3)[:, :, None] + s * K[:, :, None] + (1.0 - c) * (K @ K)[:, :, None]   # 3×3×N
-                R = np.einsum("ikn,kjn->ijn", Rp, Rj)
-                p = pp
-            Rs[j], ps[j] = R, p
-        return Rs, ps
-
-    def _needed(self, j: int) -> set:
-        need = set()
-        while j > 0:
-            need.add(j)
-            j = self.parents[j - 1]
-        return need
-
-    def frame_poses(self, Q: np.ndarray, frame: int) -> np.ndarray:
-        jid, Rf, tf = self.frames[frame]
-        Rs, ps = self._walk(Q, self._needed(jid))
-        N = len(Q)
-        out = np.zeros((N, 4, 4))
-        out[:, 3, 3] = 1.0
-        if Rs[jid] is None:
-            out[:, :3, :3] = Rf
-            out[:, :3, 3] = tf
-        else:
-            out[:, :3, :3] = np.matmul(Rf.T, Rs[jid]).transpose(2, 0, 1)
-            out[:, :3, 3] = (ps[jid] + np.matmul(tf, Rs[jid])).T
-        return out
-
-    def joint_poses(self, Q: np.ndarray) -> np.ndarray:
-        Rs, ps = self._walk(Q)
-        N = len(Q)
-        out = np.zeros((N, self.njoints, 4, 4))
-        out[:, :, 3, 3] = 1.0
-        out[:, 0, :3, :3] = np.eye(3)
-        for j in range(1, self.njoints):
-            out[:, j, :3, :3] = Rs[j].transpose(2, 0, 1)
-            out[:, j, :3, 3] = ps[j].T
-        return out
-
-
 def _batch_kinematics(robot: Robot) -> _BatchKinematics:
     if robot._batch_chain is None:
         robot._batch_chain = _BatchKinematics(robot.model)
