@@ -6,7 +6,7 @@ Runs ``optimize``'s study (optimizer ``genetic``, the optimizers' evaluation set
 process, batches of 16) on ``--tasks`` generated tasks of whitman2020 g5o5 (free base) and bpo2024
 (mixed), the profile tasks of experiments/profile_evaluator.py, with the built-in module set. ``--src``: the
 checkout whose src/ is evaluated (to compare two checkouts in one run). Prints per task: evaluations,
-seconds, evaluations/s, how many stopped at each stage, the summed seconds of every stage, the best score
+seconds, evaluations/s (wall and process CPU time), how many stopped at each stage, the summed seconds of every stage, the best score
 and a hash of every evaluation's (stage, goals reached, feasible, cost, score) in ask order: equal hashes
 mean the search took the same path with the same verdicts.
 """
@@ -32,7 +32,8 @@ def main() -> None:
     ap.add_argument("--tasks", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--only", default="", help="whitman2020_g5o5 or bpo2024")
-    ap.add_argument("--profile", type=int, default=0, help="print the cProfile's top N functions (cumulative)")
+    ap.add_argument("--profile", type=int, default=0, help="print the cProfile's top N functions")
+    ap.add_argument("--sort", default="cumulative", help="the profile's order (cumulative, tottime)")
     args = ap.parse_args()
     sys.path.insert(0, str(Path(args.src).resolve() / "src"))
 
@@ -54,14 +55,16 @@ def main() -> None:
             ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(), seed=args.seed))
             opt = create_optimizer("genetic", problem, seed=args.seed, options={})
             prof = cProfile.Profile() if args.profile else None
+            c0 = time.process_time()
             t0 = time.perf_counter()
             if prof:
                 prof.enable()
             res = Study(opt, SerialExecutor(ev), Budget.parse(args.budget), batch_size=16).run()
             dt = time.perf_counter() - t0
+            cpu = time.process_time() - c0
             if prof:
                 prof.disable()
-                pstats.Stats(prof).sort_stats("cumulative").print_stats(args.profile)
+                pstats.Stats(prof).sort_stats(args.sort).print_stats(args.profile)
             stops = Counter(e.stage for e in res.history)
             secs: dict = defaultdict(float)
             for e in res.history:
@@ -71,7 +74,8 @@ def main() -> None:
                                         for e in res.history]).encode()).hexdigest()[:12]
             n = len(res.history)
             print(json.dumps({"task": f.name, "evaluations": n, "seconds": round(dt, 2),
-                              "evals_per_s": round(n / dt, 2), "stopped_at": dict(stops),
+                              "evals_per_s": round(n / dt, 2),
+                              "cpu_seconds": round(cpu, 2), "evals_per_cpu_s": round(n / cpu, 2), "stopped_at": dict(stops),
                               "stage_seconds": {k: round(v, 2) for k, v in secs.items()},
                               "best": None if res.best is None else res.best.score, "hash": h}), flush=True)
 

@@ -252,3 +252,18 @@ def test_sample_base_draws_and_returns_what_it_did(whitman):
         a, b = np.random.default_rng(seed), np.random.default_rng(seed)
         assert space.sample_base(a, order, tries=16) == _sample_base_as_before(space, b, order, tries=16)
         assert a.random() == b.random()  # the same draws
+
+
+def test_assembly_of_an_order_is_remembered_per_set_and_order():
+    from robodesign.core.errors import AssemblyError
+    ms = load_module_set(IMPROV)
+    a = Assembly.from_order(ms, list(GOOD))
+    assert Assembly.from_order(ms, GOOD) is a and a == Assembly._from_order(ms, GOOD)
+    other = dataclasses.replace(ms)  # an equal set, another object: its own entry
+    b = Assembly.from_order(other, GOOD)
+    assert b == a and b is not a and Assembly.from_order(other, GOOD) is b
+    shorter = Assembly.from_order(ms, GOOD[:-1] + ("13",))
+    assert shorter.module_ids[-1] == "13" and shorter != a
+    for _ in range(2):  # a failure is not remembered: it raises every time
+        with pytest.raises(AssemblyError):
+            Assembly.from_order(ms, ("1", "12", "4"))
