@@ -6,18 +6,17 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import IMPROV, PRIMITIVES, TASKS
 
 from robodesign import load_module_set
+from robodesign.design.evaluator import Evaluator, EvaluatorSpec
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import Candidate, SearchSpace
 from robodesign.design.solve import _POOLS, robot_pool, solve
-from robodesign.design.evaluator import Evaluator, EvaluatorSpec
 from robodesign.formats.assembly import Assembly
 from robodesign.model.cell import RobotPool, build_robot
 from robodesign.model.robot import Robot
 from robodesign.solvers.schedule import static_cell
-
-from conftest import IMPROV, PRIMITIVES, TASKS
 
 PTP3 = TASKS / "simple" / "PTP_3.json"
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
@@ -267,3 +266,58 @@ def test_assembly_of_an_order_is_remembered_per_set_and_order():
     for _ in range(2):  # a failure is not remembered: it raises every time
         with pytest.raises(AssemblyError):
             Assembly.from_order(ms, ("1", "12", "4"))
+
+
+def _guesses(gd) -> list:
+    """The state a collision or distance query leaves in the requests."""
+    return [(tuple(r.cached_gjk_guess), tuple(r.cached_support_func_guess), r.distance_upper_bound)
+            for r in gd.collisionRequests] + \
+        [(tuple(r.cached_gjk_guess), tuple(r.cached_support_func_guess)) for r in gd.distanceRequests]
+
+
+def test_base_contacts_on_a_probe_leave_the_state_a_full_scratch_space_would(whitman):
+    """The base stage queries its pairs on a probe before the robot has a collision scratch space: the answers,
+    and the GJK guesses the later queries start from, are those of the queries on the full scratch space."""
+    from robodesign.model.robot import Obstacle
+    ms, cell = whitman.module_set, static_cell(whitman.task)
+    rng = np.random.default_rng(9)
+    hits = 0
+    for _ in range(25):
+        c = whitman.space.random_candidate(rng)
+        T = whitman.base_pose(c)
+        asm = Assembly.from_order(ms, c.order)
+        robots = [build_robot(cell, ms, asm, T) for _ in range(2)]
+        for r in robots:
+            near = [Obstacle(f"near{k}", o.shape, T @ np.array([[1, 0, 0, 0.1 * k], [0, 1, 0, 0], [0, 0, 1, 0.05],
+                                                                   [0, 0, 0, 1.0]])) for k, o in enumerate(r.obstacles[:2])]
+            r.set_obstacles(r.obstacles + near, safety_margin=0.01)
+        full, probed = robots
+        full.geom_data  # the full scratch space first: no probe
+        a = full.base_collisions()
+        b = probed.base_collisions()
+        assert probed._geom_data is None and probed._base_probe is not None
+        assert a == b
+        hits += bool(a)
+        for ra, rb in zip(full.geom_data.collisionRequests, probed.geom_data.collisionRequests):
+            assert (ra.security_margin, ra.enable_contact, ra.distance_upper_bound, ra.break_distance) == \
+                   (rb.security_margin, rb.enable_contact, rb.distance_upper_bound, rb.break_distance)
+        assert _guesses(full.geom_data) == _guesses(probed.geom_data)
+        qs = [full.random_configuration(rng) for _ in range(6)]
+        assert [full.colliding_pairs(q) for q in qs] == [probed.colliding_pairs(q) for q in qs]
+        assert _guesses(full.geom_data) == _guesses(probed.geom_data)
+    assert hits > 0
+
+
+def test_a_new_base_pose_starts_the_collision_queries_afresh(ptp3):
+    ms, cell = ptp3.module_set, static_cell(ptp3.task)
+    asm = Assembly.from_order(ms, GOOD)
+    T0, T1 = ptp3.task.nominal_base_pose, ptp3.base_pose(Candidate(GOOD, ptp3.space.base_bounds.sample(
+        np.random.default_rng(1))))
+    used = build_robot(cell, ms, asm, T0)
+    rng = np.random.default_rng(2)
+    for _ in range(10):
+        used.min_distances(used.random_configuration(rng))
+    used.set_base_pose(T1)
+    fresh = build_robot(cell, ms, asm, T1)
+    assert _guesses(used.geom_data) == _guesses(fresh.geom_data)
+    assert _answers(used, np.random.default_rng(3)) == _answers(fresh, np.random.default_rng(3))

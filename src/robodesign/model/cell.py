@@ -98,8 +98,7 @@ class RobotPool:
                 robot.set_gravity(self.task.header.gravity)
                 robot.set_obstacles(self.obstacles, safety_margin=self.margin)
             return robot
-        robot.set_base_pose(base_pose)
-        _fresh_guesses(robot)
+        robot.set_base_pose(base_pose)  # (its collision scratch space as a new one's)
         return robot
 
     def give_back(self, robot: Robot) -> None:
@@ -139,22 +138,6 @@ def _adopt(ms: ModuleSet, assembly: Assembly) -> Optional[Robot]:
     with _SPARE_LOCK:
         robot = _SPARE.pop((id(ms), assembly.key()), None)
     return robot if robot is not None and robot.module_set is ms and robot.assembly == assembly else None
-
-
-_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a fresh coal request's
-
-
-def _fresh_guesses(robot: Robot) -> None:
-    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which
-    pinocchio enables): a robot taken back from a pool starts from the guesses of a fresh build again, so its
-    answers do not depend on what it answered before."""
-    gd = robot._geom_data
-    if gd is None:
-        return
-    for reqs in (gd.collisionRequests, gd.distanceRequests):
-        for r in reqs:
-            r.cached_gjk_guess = _GUESS
-            r.cached_support_func_guess = _SUPPORT_GUESS
 
 
 def solution_robot(task: Optional[Task], solution: Solution, module_set=None) -> Robot:

@@ -18,6 +18,7 @@ Conventions (docs/formats.md):
 from __future__ import annotations
 
 import math
+import sys
 from collections import deque
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Sequence, Tuple
@@ -81,6 +82,7 @@ class Robot:
         self._sync_link_model()
         self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
+        self._base_probe: Optional[tuple] = None  # base_collisions' own pairs before there is a geom_data
         self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
         self._batch_chain: Optional[Any] = None  # batch_fk._BatchKinematics, built on first use
@@ -279,7 +281,10 @@ class Robot:
             else:
                 self.geom_model.geometryObjects[idx].placement = P
         self.data = self.model.createData()
-        self._sync_link_model()  # the collision scratch space stays: it holds no placement between queries
+        self._sync_link_model()
+        if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
+            _fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
+        self._base_probe = None
         self._reach = None
         self._batch_chain = None
 
@@ -307,7 +312,7 @@ class Robot:
             for a in range(n_robot):
                 geom.addCollisionPair(pin.CollisionPair(a, k))
         self.safety_margin = float(safety_margin)
-        self._geom_data = None
+        self._geom_data = self._base_probe = None
 
     @property
     def obstacle_geometry_ids(self) -> Tuple[int, ...]:
@@ -316,6 +321,7 @@ class Robot:
 
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
+        self._base_probe = None
 
     def _robot_only_geom(self):
         g = pin.GeometryModel()
@@ -332,6 +338,12 @@ class Robot:
         if gd is None:
             gd = self._geom_data = pin.GeometryData(self.geom_model)
             self._apply_margins(gd)
+            probe, self._base_probe = self._base_probe, None
+            if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
+                for k, req in zip(probe[2], probe[1].collisionRequests):
+                    to = gd.collisionRequests[k]
+                    to.cached_gjk_guess, to.cached_support_func_guess = req.cached_gjk_guess, req.cached_support_func_guess
+                    to.distance_upper_bound = req.distance_upper_bound  # (pinocchio sets it at every query)
         return gd
 
     def _apply_margins(self, gd) -> None:
@@ -569,12 +581,18 @@ class Robot:
         if not self._obstacle_ids:
             return []
         objs, n = self.geom_model.geometryObjects, len(self._geom_body)
-        self._update_geometry(np.zeros(self.dof))
         root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
         # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
-        hits = [(a, ob) for j, ob in enumerate(self._obstacle_ids) for a in root
-                if pin.computeCollision(self.geom_model, self.geom_data, self._n_self_pairs + j * n + a)]
-        return [(objs[a].name, objs[ob].name) for a, ob in hits]
+        ab = [(a, ob) for ob in self._obstacle_ids for a in root]
+        pairs = [self._n_self_pairs + j * n + a for j in range(len(self._obstacle_ids)) for a in root]
+        if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
+            gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
+            pin.updateGeometryPlacements(self.model, self.data, gm, gd, np.zeros(self.dof))
+            hit = [pin.computeCollision(gm, gd, i) for i in range(len(pairs))]
+        else:
+            self._update_geometry(np.zeros(self.dof))
+            hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
+        return [(objs[a].name, objs[ob].name) for (a, ob), h in zip(ab, hit) if h]
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
@@ -653,6 +671,38 @@ class Robot:
             "n_self_collision_pairs": self.n_self_collision_pairs,
             "self_collision": self.in_self_collision(q),
         }
+
+
+_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
+_NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+def _fresh_guesses(gd: "pin.GeometryData") -> None:
+    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
+    enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
+    for reqs in (gd.collisionRequests, gd.distanceRequests):
+        for r in reqs:
+            r.cached_gjk_guess = _GUESS
+            r.cached_support_func_guess = _SUPPORT_GUESS
+    for r in gd.collisionRequests:
+        r.distance_upper_bound = _NO_BOUND  # (pinocchio sets it at every query)
+
+
+def _probe(robot: Robot, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
+    """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
+    the requests of the robot's own scratch space (contacts on, the safety margin)."""
+    objs, gm = robot.geom_model.geometryObjects, pin.GeometryModel()
+    index = {}
+    for a, ob in ab:
+        for g in (a, ob):
+            if g not in index:
+                index[g] = gm.addGeometryObject(objs[g])
+        gm.addCollisionPair(pin.CollisionPair(index[a], index[ob]))
+    gd = pin.GeometryData(gm)
+    for req in gd.collisionRequests:
+        req.enable_contact = True
+        req.security_margin = robot.safety_margin
+    return gm, gd, pairs
 
 
 # ---------------------------------------------------------------------------------------------------------
