@@ -1,6 +1,9 @@
-"""The candidate front end's caches (issue 25): the self-collision pairs set in one call are the pairs of the
-former pair-by-pair loop, a robot taken back from a cell's :class:`RobotPool` answers as a freshly built one,
-the pool keeps assemblies and cells apart, and a solve that reuses a robot gives the result of one that builds."""
+"""The candidate front end's caches and shortcuts (issue 25), against what they replace, with real values: the
+self-collision pairs set in one call are the pairs of the former pair-by-pair loop; a robot taken back from a
+cell's :class:`RobotPool` (or adopted from the search space's spares) answers as a freshly built one; the pool
+keeps assemblies, module sets and cells apart; a solve that reuses robots gives the result of one that builds;
+the base contacts (on a probe or the full scratch space) are those of the former loop and leave the same
+collision state; sample_base draws and returns what it did; Assembly.from_order's memo keys by set and order."""
 import dataclasses
 
 import numpy as np
