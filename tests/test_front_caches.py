@@ -324,3 +324,38 @@ def test_a_new_base_pose_starts_the_collision_queries_afresh(ptp3):
     fresh = build_robot(cell, ms, asm, T1)
     assert _guesses(used.geom_data) == _guesses(fresh.geom_data)
     assert _answers(used, np.random.default_rng(3)) == _answers(fresh, np.random.default_rng(3))
+
+
+def _geometry(robot: Robot) -> tuple:
+    gm = robot.geom_model
+    return ([(o.name, o.parentJoint, o.parentFrame, o.placement.homogeneous.tolist(), type(o.geometry).__name__,
+              o.geometry.aabb_local.min_.tolist(), o.geometry.aabb_local.max_.tolist())
+             for o in gm.geometryObjects], [(cp.first, cp.second) for cp in gm.collisionPairs])
+
+
+def test_the_geometry_made_on_first_use_is_the_one_made_at_once(whitman):
+    """The collision geometry is made when first asked for: before or after the base pose and the obstacles are
+    set, the objects (names, joints, frames, exact placements, shapes) and pairs are the same."""
+    from robodesign.model.robot import Obstacle
+    ms = whitman.module_set
+    rng = np.random.default_rng(10)
+    obstacles = [Obstacle(f"o{k}", o.shape, o.pose) for k, o in enumerate(RobotPool(static_cell(whitman.task)).obstacles)]
+    for _ in range(6):
+        c = whitman.space.random_candidate(rng)
+        asm, T = Assembly.from_order(ms, c.order), whitman.base_pose(c)
+        early = Robot(ms, asm)
+        early.geom_model  # made before the base pose and the obstacles
+        late = Robot(ms, asm)
+        for r in (early, late):
+            r.set_base_pose(T)
+            r.set_obstacles(obstacles, safety_margin=0.02)
+        assert late._geom_model is None and late.n_collision_geometries == early.n_collision_geometries
+        assert _geometry(late) == _geometry(early)
+        assert late.n_self_collision_pairs == early.n_self_collision_pairs
+        # moved obstacles and a second set of obstacles: the same in both
+        for r in (early, late):
+            r.move_obstacle(0, T)
+            r.set_obstacles(obstacles[:2], safety_margin=0.0)
+        assert _geometry(late) == _geometry(early)
+        # never placed: the objects at the identity base pose
+        assert _geometry(Robot(ms, asm))[0] == _geometry(Robot(ms, asm, base_pose=np.eye(4)))[0]

@@ -80,7 +80,6 @@ class Robot:
         self.base_pose = np.eye(4)
         self.data = self.model.createData()
         self._sync_link_model()
-        self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._base_probe: Optional[tuple] = None  # base_collisions' own pairs before there is a geom_data
         self._reach: Optional[Tuple[np.ndarray, float]] = None
@@ -101,7 +100,7 @@ class Robot:
         ms, asm = self.module_set, self.assembly
         model = pin.Model()
         model.name = "robodesign:" + ",".join(asm.module_ids)
-        geom = pin.GeometryModel()
+        geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []  # (name, joint, frame, placement, shape)
         counts: Dict[str, int] = {}
         labels = []
         for mid in asm.module_ids:
@@ -163,10 +162,9 @@ class Robot:
                     free_connectors.append((i, c, cf))
             for gi, g in enumerate(body.collision):
                 P = M @ g.pose
-                for si, shape in enumerate(coal_shapes(g, convex_meshes)):
-                    go = pin.GeometryObject(f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid,
-                                            pin.SE3(P), shape)
-                    k = geom.addGeometryObject(go)
+                for si, shape in enumerate(coal_shapes(g, convex_meshes)):  # made by geom_model on first use
+                    k = len(geom_specs)
+                    geom_specs.append((f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid, P, shape))
                     geom_body.append((i, body_id))
                     if jid == 0:
                         self._root_items.append(("geom", k, P.copy()))
@@ -242,15 +240,17 @@ class Robot:
             self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
             self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
         self.model = model
-        self.geom_model = geom
-        self._geom_body = geom_body
-        self._add_self_collision_pairs(direct_joint_pairs)
+        self._geom_model: Optional[pin.GeometryModel] = None
+        self._geom_specs, self._geom_body, self._placed = geom_specs, geom_body, False
+        self._self_pairs = self._self_collision_map(direct_joint_pairs)
+        self._n_self_pairs = int(self._self_pairs.sum())
 
-    def _add_self_collision_pairs(self, direct_joint_pairs) -> None:
-        """Every pair of robot objects on different joints, but those the module set ignores (one call, row-major)."""
-        geom, mode = self.geom_model, self.module_set.ignore_collisions
+    def _self_collision_map(self, direct_joint_pairs) -> np.ndarray:
+        """Every pair of robot objects on different joints, but those the module set ignores (a boolean map, set
+        in one call, row-major)."""
+        mode = self.module_set.ignore_collisions
         parents = np.asarray(self.model.parents, dtype=int)
-        J = np.array([o.parentJoint for o in geom.geometryObjects], dtype=int)
+        J = np.array([spec[1] for spec in self._geom_specs], dtype=int).reshape(-1)
         keep = np.triu(J[:, None] != J[None, :], 1)  # rigidly connected: same joint
         if mode == "rigid_via_joint":
             keep &= (parents[J][:, None] != J[None, :]) & (parents[J][None, :] != J[:, None])
@@ -263,7 +263,41 @@ class Robot:
                 if len(ab) == 2:
                     D[ab[0], ab[1]] = D[ab[1], ab[0]] = True
             keep &= ~D[B[:, None], B[None, :]]
-        geom.setCollisionPairs(keep)
+        return keep
+
+    @property
+    def geom_model(self) -> "pin.GeometryModel":
+        """The coal collision geometry: the robot's objects (pairs among them first), then the obstacles (each with
+        every robot object), made on first use (a design that fails before any collision query needs none)."""
+        geom = self._geom_model
+        if geom is None:
+            geom = self._geom_model = pin.GeometryModel()
+            for k in range(len(self._geom_specs)):
+                geom.addGeometryObject(self._geometry_object(k))
+            geom.setCollisionPairs(self._self_pairs)
+            self._add_obstacles(geom)
+        return geom
+
+    @geom_model.setter
+    def geom_model(self, geom: "pin.GeometryModel") -> None:
+        self._geom_model = geom
+
+    def _geometry_object(self, k: int) -> "pin.GeometryObject":
+        """Robot object ``k`` as the geometry holds it (one fixed to the world at the base pose)."""
+        name, jid, fid, P, shape = self._geom_specs[k]
+        return pin.GeometryObject(name, jid, fid, pin.SE3(self.base_pose @ P if jid == 0 and self._placed else P),
+                                  shape)
+
+    def _obstacle_object(self, ob: "Obstacle") -> "pin.GeometryObject":
+        return pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape)
+
+    def _add_obstacles(self, geom) -> None:
+        n_robot = len(self._geom_body)
+        for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
+            geom.addGeometryObject(self._obstacle_object(ob))
+        for k in self._obstacle_ids:
+            for a in range(n_robot):
+                geom.addCollisionPair(pin.CollisionPair(a, k))
 
     # ------------------------------------------------------------------------------------------
     # configuration of the robot in its cell
@@ -278,8 +312,9 @@ class Robot:
                 self.model.jointPlacements[idx] = P
             elif kind == "frame":
                 self.model.frames[idx].placement = P
-            else:
-                self.geom_model.geometryObjects[idx].placement = P
+            elif self._geom_model is not None:
+                self._geom_model.geometryObjects[idx].placement = P
+        self._placed = True
         self.data = self.model.createData()
         self._sync_link_model()
         if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
@@ -298,19 +333,14 @@ class Robot:
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
-        geom = self.geom_model
-        # drop previous obstacles (they sit after the robot's own objects)
         n_robot = len(self._geom_body)
-        if len(geom.geometryObjects) > n_robot:
-            self.geom_model = geom = self._robot_only_geom()
         self.obstacles = list(obstacles)
-        self._obstacle_ids = []
-        for ob in self.obstacles:
-            k = geom.addGeometryObject(pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape))
-            self._obstacle_ids.append(k)
-        for k in self._obstacle_ids:
-            for a in range(n_robot):
-                geom.addCollisionPair(pin.CollisionPair(a, k))
+        self._obstacle_ids = list(range(n_robot, n_robot + len(self.obstacles)))  # after the robot's own objects
+        geom = self._geom_model
+        if geom is not None:  # drop the previous obstacles; else geom_model adds these when it is made
+            if len(geom.geometryObjects) > n_robot:
+                self._geom_model = geom = self._robot_only_geom()
+            self._add_obstacles(geom)
         self.safety_margin = float(safety_margin)
         self._geom_data = self._base_probe = None
 
@@ -580,7 +610,7 @@ class Robot:
         collides at every configuration."""
         if not self._obstacle_ids:
             return []
-        objs, n = self.geom_model.geometryObjects, len(self._geom_body)
+        n = len(self._geom_body)
         root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
         # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
         ab = [(a, ob) for ob in self._obstacle_ids for a in root]
@@ -592,7 +622,8 @@ class Robot:
         else:
             self._update_geometry(np.zeros(self.dof))
             hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
-        return [(objs[a].name, objs[ob].name) for (a, ob), h in zip(ab, hit) if h]
+        names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
+        return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
@@ -691,12 +722,13 @@ def _fresh_guesses(gd: "pin.GeometryData") -> None:
 def _probe(robot: Robot, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
     """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
     the requests of the robot's own scratch space (contacts on, the safety margin)."""
-    objs, gm = robot.geom_model.geometryObjects, pin.GeometryModel()
-    index = {}
+    gm, n, made = pin.GeometryModel(), len(robot._geom_body), robot._geom_model
+    index: Dict[int, int] = {}
     for a, ob in ab:
         for g in (a, ob):
-            if g not in index:
-                index[g] = gm.addGeometryObject(objs[g])
+            if g not in index:  # the objects as the robot's geometry holds (or will hold) them
+                index[g] = gm.addGeometryObject(made.geometryObjects[g] if made is not None else robot._geometry_object(
+                    g) if g < n else robot._obstacle_object(robot.obstacles[g - n]))
         gm.addCollisionPair(pin.CollisionPair(index[a], index[ob]))
     gd = pin.GeometryData(gm)
     for req in gd.collisionRequests:
