@@ -1,6 +1,7 @@
 """Profile of the evaluator, stage by stage (issue 25): where a candidate's time goes.
 
     nice .venv/bin/python experiments/profile_evaluator.py [--feasible 20] [--failing 40] [--tasks 2] [--seed 0]
+        [--src CHECKOUT]
 
 Scenarios (one process, one core, the compiled IK loop warmed up first):
 
@@ -15,7 +16,9 @@ Scenarios (one process, one core, the compiled IK loop warmed up first):
 
 Per scenario and group (feasible / failed at IK / failed elsewhere) it prints the median milliseconds of
 every stage (assembly = model build, base, reach, ik, static_torque, plan, timing, trajopt, check), its
-share of the summed medians, the median total evaluation time and the count. Timings come from the
+share of the summed medians, the median total evaluation time, the median CPU time of the process per
+evaluation (steadier than wall time on a shared machine; random candidates only) and the count. ``--src``
+evaluates another checkout's src/ on this checkout's tasks (an A/B in one command line per side). Timings come from the
 evaluator's own stage records (``Evaluation.stages``), so they are what an optimizer pays.
 """
 from __future__ import annotations
@@ -30,7 +33,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
+# --src CHECKOUT: evaluate that checkout's src/ (an A/B on the same tasks, from this script); default: this one
+_SRC = Path(sys.argv[sys.argv.index("--src") + 1]) if "--src" in sys.argv[:-1] else ROOT
+sys.path.insert(0, str(_SRC.resolve() / "src"))
 
 from robodesign.design.evaluator import Evaluator, EvaluatorSpec  # noqa: E402
 from robodesign.design.problem import Problem  # noqa: E402
@@ -59,14 +64,14 @@ def group_of(ev) -> str:
     return "failed at ik" if ev.stage == "ik" else "failed elsewhere"
 
 
-def record(ev, groups) -> None:
+def record(ev, groups, cpu: float = float("nan")) -> None:
     st = {s["name"]: s["seconds"] for s in ev.stages}
-    groups[group_of(ev)].append((st, ev.seconds, ev.stage))
+    groups[group_of(ev)].append((st, ev.seconds, ev.stage, cpu))
 
 
 def table(title: str, groups) -> str:
-    lines = [f"\n### {title}\n", "| group | n | " + " | ".join(STAGES) + " | total (median) |",
-             "|---|---:|" + "---:|" * len(STAGES) + "---:|"]
+    lines = [f"\n### {title}\n", "| group | n | " + " | ".join(STAGES) + " | total (median) | CPU (median) |",
+             "|---|---:|" + "---:|" * len(STAGES) + "---:|---:|"]
     for g in ("feasible", "failed at ik", "failed elsewhere"):
         rows = groups.get(g, [])
         if not rows:
@@ -77,12 +82,13 @@ def table(title: str, groups) -> str:
         for s in STAGES:
             cells.append(f"{med[s]:.2f} ({100 * med[s] / tot:.0f} %)" if tot > 0 and med[s] >= 0.005 else "–")
         total = statistics.median([r[1] for r in rows]) * 1e3
-        lines.append(f"| {g} | {len(rows)} | " + " | ".join(cells) + f" | {total:.1f} ms |")
+        cpu = statistics.median([r[3] for r in rows]) * 1e3
+        lines.append(f"| {g} | {len(rows)} | " + " | ".join(cells) + f" | {total:.1f} ms | {cpu:.1f} ms |")
         if g == "failed elsewhere":
             stages = defaultdict(int)
             for r in rows:
                 stages[r[2]] += 1
-            lines.append(f"| (stopped at: {dict(stages)}) |" + " |" * (len(STAGES) + 1))
+            lines.append(f"| (stopped at: {dict(stages)}) |" + " |" * (len(STAGES) + 2))
     return "\n".join(lines)
 
 
@@ -96,7 +102,9 @@ def run_random(problem: Problem, seed: int, want_feasible: int, want_failing: in
         if len(groups["feasible"]) >= want_feasible and len(groups["failed at ik"]) >= want_failing:
             break
         c = problem.space.random_candidate(rng)
-        record(ev.evaluate(c), groups)
+        t = time.process_time()
+        e = ev.evaluate(c)
+        record(e, groups, time.process_time() - t)
         n += 1
     return groups, n, time.perf_counter() - t0
 
@@ -108,6 +116,7 @@ def main() -> None:
     ap.add_argument("--tasks", type=int, default=2, help="generated tasks per family")
     ap.add_argument("--max", type=int, default=400, help="at most this many random candidates per task")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--src", default=str(ROOT), help="the checkout whose src/ is evaluated (default: this one)")
     ap.add_argument("--only", default="", help="comma-separated subset: ptp3, good, whitman2020_g5o5, bpo2024")
     args = ap.parse_args()
     only = set(filter(None, args.only.split(",")))
@@ -116,6 +125,8 @@ def main() -> None:
     # otherwise start the background compilation and run the Python loop for the whole process)
     if not ik_kernel.warm_up():
         print("note: ROBODESIGN_JIT=0 or no numba: the Python IK loop runs")
+    import robodesign
+    print(f"# src: {Path(robodesign.__file__).parent}", flush=True)
     warm_up()
     out = []
 

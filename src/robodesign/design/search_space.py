@@ -459,9 +459,9 @@ class SearchSpace:
         cache = self._cache("_memo_reach")
         hit = cache.get(order)
         if hit is None:
-            from robodesign.model.robot import Robot
+            from robodesign.model.cell import kinematic_robot  # kept for the evaluation of the order to adopt
             pose0 = self.base_bounds.pose(tuple(0.0 for _ in self.base_bounds.free))
-            robot = Robot.from_order(self.module_set, order, base_pose=pose0)
+            robot = kinematic_robot(self.module_set, order, base_pose=pose0)
             o, R = robot.reach_bound()
             o_local = np.linalg.solve(pose0, np.append(np.asarray(o, dtype=float), 1.0))[:3]
             rank = robot.generic_rank() if self.goal_rank else 6
@@ -546,9 +546,9 @@ class SearchSpace:
                 params = tuple(full[i] for i in free)
             else:
                 params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-            if not bb.valid(params) or not self._clear(params):
-                continue
-            s = self._shortfall(order, params)
+            s = self._shortfall(order, params) if bb.valid(params) else None
+            if s is None or s != 0.0 and s >= best_s or not self._clear(params):
+                continue  # invalid, or neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
                 return params
             if s < best_s:

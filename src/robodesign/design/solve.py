@@ -19,6 +19,7 @@ that moves (``solvers/schedule.py``, certified between samples with the checker'
 from __future__ import annotations
 
 import time
+import weakref
 from dataclasses import replace
 from typing import Dict, Optional, Sequence, Union
 
@@ -42,7 +43,7 @@ from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Task
 from robodesign.judge.checker import check
-from robodesign.model.cell import build_robot
+from robodesign.model.cell import RobotPool
 from robodesign.solvers.schedule import moving_obstacles, static_cell
 
 
@@ -102,7 +103,21 @@ def solve(task: Task, module_set: ModuleSet, order_or_assembly, base_pose: Optio
             getattr(run, name)()
         if res.stage != "done" or _stop(res, settings):
             break
+    run.give_back()
     return res
+
+
+_POOLS: "weakref.WeakKeyDictionary[Task, RobotPool]" = weakref.WeakKeyDictionary()
+
+
+def robot_pool(task: Task) -> RobotPool:
+    """The robots built for ``task``'s static cell in this process (:class:`~robodesign.model.cell.RobotPool`):
+    every solve of the task takes its robot from there, so a search that meets an assembly again does not
+    build it again."""
+    pool = _POOLS.get(task)
+    if pool is None:
+        pool = _POOLS[task] = RobotPool(static_cell(task))
+    return pool
 
 
 def warm_up() -> None:
@@ -125,13 +140,20 @@ class _Pipeline:
         self.colliders, self.start = list(colliders), start
         self.base_pose, self.cost, self.settings, self.res = base_pose, cost, settings, res
         self.rng = np.random.default_rng(settings.seed)
+        self.robot = None
 
     def assembly(self) -> None:
         ms, a = self.module_set, self.order_or_assembly
         self.asm = a if isinstance(a, Assembly) else Assembly.from_order(ms, a)
-        self.robot = build_robot(static_cell(self.task), ms, self.asm, self.base_pose)
+        self.robot = robot_pool(self.task).take(ms, self.asm, self.base_pose)
         moving = moving_obstacles(self.task, ms, self.asm, self.base_pose)
         self.colliders = ([moving] if moving is not None else []) + self.colliders
+
+    def give_back(self) -> None:
+        """The robot back to the task's pool (the solve is over)."""
+        if self.robot is not None:
+            robot_pool(self.task).give_back(self.robot)
+            self.robot = None
 
     def base(self) -> None:
         bp = self.task.base_placement

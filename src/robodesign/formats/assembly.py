@@ -15,6 +15,7 @@ from robodesign.core.errors import AssemblyError
 from robodesign.formats.module_spec import Connector, ModuleSet
 
 Connection = Tuple[int, str, int, str]  # (instance a, connector of a, instance b, connector of b)
+_ORDERS: Dict[Tuple[int, Tuple[str, ...]], Tuple[ModuleSet, "Assembly"]] = {}  # Assembly.from_order's memo
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,20 @@ class Assembly:
     # -- construction -----------------------------------------------------------------------
     @staticmethod
     def from_order(ms: ModuleSet, order: Sequence) -> "Assembly":
+        """The serial assembly of ``order`` (AssemblyError if its modules do not chain); remembered per module set
+        and order (a search builds the same orders again and again)."""
+        key = (id(ms), tuple(str(x) for x in order))
+        hit = _ORDERS.get(key)
+        if hit is not None and hit[0] is ms:
+            return hit[1]
+        asm = Assembly._from_order(ms, key[1])
+        if len(_ORDERS) >= 4096:
+            _ORDERS.clear()
+        _ORDERS[key] = (ms, asm)
+        return asm
+
+    @staticmethod
+    def _from_order(ms: ModuleSet, order: Sequence) -> "Assembly":
         order = [str(x) for x in order]
         if not order:
             raise AssemblyError("module order is empty")

@@ -6,7 +6,9 @@ plotted robot are the same object.
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, List, Optional, Sequence, Union
+import threading
+from collections import OrderedDict
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -60,6 +62,82 @@ def build_robot(task: Optional[Task], ms: ModuleSet, assembly: Assembly, base_po
     robot = Robot(ms, assembly, base_pose=base_pose, gravity=task.header.gravity)
     robot.set_obstacles(task_obstacles(task), safety_margin=safety_margin(task))
     return robot
+
+
+class RobotPool:
+    """Robots built in one cell (``task``: its obstacles with the safety margin and its gravity; None: none),
+    kept for reuse: a search evaluates the same assembly at many base poses, and taking a robot back costs a
+    base-pose change instead of a build (the model, the collision geometry and pairs, the collision scratch
+    space). The cell's obstacles are set up once. A robot is lent to one user at a time (:meth:`take`, then
+    :meth:`give_back` when done with it); it answers every query as a fresh :func:`build_robot` does. At most
+    ``size`` robots are kept (the least recently given back go first)."""
+
+    def __init__(self, task: Optional[Task], size: int = 24):
+        self.task, self.size = task, int(size)
+        self.obstacles = task_obstacles(task) if task is not None else []
+        self.margin = safety_margin(task) if task is not None else 0.0
+        self._free: "OrderedDict[Tuple[int, str], List[Robot]]" = OrderedDict()
+        self._count = 0
+        self._lock = threading.Lock()
+
+    def take(self, ms: ModuleSet, assembly: Assembly, base_pose: np.ndarray) -> Robot:
+        """A robot of ``assembly`` at ``base_pose`` in the cell, built or taken back from the pool."""
+        key = (id(ms), assembly.key())
+        with self._lock:
+            robots = self._free.get(key)
+            robot = robots.pop() if robots else None
+            if robot is not None:
+                self._count -= 1
+        if robot is None or robot.module_set is not ms or robot.assembly != assembly:
+            robot = _adopt(ms, assembly)  # a bare robot of the assembly built for its kinematics, or None
+            if robot is None:
+                robot = Robot(ms, assembly, base_pose=base_pose)
+            else:
+                robot.set_base_pose(base_pose)
+            if self.task is not None:
+                robot.set_gravity(self.task.header.gravity)
+                robot.set_obstacles(self.obstacles, safety_margin=self.margin)
+            return robot
+        robot.set_base_pose(base_pose)  # (its collision scratch space as a new one's)
+        return robot
+
+    def give_back(self, robot: Robot) -> None:
+        """Return a robot that :meth:`take` lent (its obstacles where they were, nothing else changed)."""
+        key = (id(robot.module_set), robot.assembly.key())
+        with self._lock:
+            self._free.setdefault(key, []).append(robot)
+            self._free.move_to_end(key)
+            self._count += 1
+            while self._count > self.size:
+                old = next(iter(self._free))
+                self._count -= len(self._free.pop(old))
+
+
+_SPARE: "OrderedDict[Tuple[int, str], Robot]" = OrderedDict()  # (id(module set), assembly key) → bare robot
+_SPARE_SIZE = 64
+_SPARE_LOCK = threading.Lock()
+
+
+def kinematic_robot(ms: ModuleSet, order: Sequence[str], base_pose: np.ndarray) -> Robot:
+    """``Robot.from_order(ms, order, base_pose=base_pose)`` for a look at its kinematics (reach bound, Jacobian
+    rank: what a search space asks of an order before any evaluation). The robot is kept afterwards (at most
+    64 of them): the first :meth:`RobotPool.take` of its assembly adopts it instead of building it again. The
+    caller must not change it."""
+    robot = Robot.from_order(ms, order, base_pose=base_pose)
+    with _SPARE_LOCK:
+        _SPARE[(id(ms), robot.assembly.key())] = robot
+        while len(_SPARE) > _SPARE_SIZE:
+            _SPARE.popitem(last=False)
+    return robot
+
+
+def _adopt(ms: ModuleSet, assembly: Assembly) -> Optional[Robot]:
+    """The bare robot :func:`kinematic_robot` built of ``assembly`` (taken out of the spares), or None. Only its
+    base pose, gravity and obstacles are then set: a robot equal to a fresh build (its Jacobian's generic rank,
+    if computed, is kept: it does not depend on the base pose)."""
+    with _SPARE_LOCK:
+        robot = _SPARE.pop((id(ms), assembly.key()), None)
+    return robot if robot is not None and robot.module_set is ms and robot.assembly == assembly else None
 
 
 def solution_robot(task: Optional[Task], solution: Solution, module_set=None) -> Robot:

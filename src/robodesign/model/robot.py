@@ -18,9 +18,10 @@ Conventions (docs/formats.md):
 from __future__ import annotations
 
 import math
+import sys
 from collections import deque
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -30,6 +31,7 @@ from robodesign.core.spatial import inv
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import coal_shapes
 from robodesign.formats.module_spec import Connector, ModuleSet
+from robodesign.model.batch_fk import _BatchKinematics
 
 COULOMB_SMOOTHING = 100.0
 
@@ -38,6 +40,16 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
     s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
     return s / np.sqrt(1.0 + s * s)
+
+
+_MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
+
+
+def _memo(spec, make):
+    hit = _MEMO.get(id(spec))
+    if hit is None or hit[0] is not spec:
+        hit = _MEMO[id(spec)] = (spec, make(spec))
+    return hit[1]
 
 
 @dataclass(frozen=True)
@@ -68,11 +80,11 @@ class Robot:
         self.base_pose = np.eye(4)
         self.data = self.model.createData()
         self._sync_link_model()
-        self._n_self_pairs = len(self.geom_model.collisionPairs)
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
+        self._base_probe: Optional[tuple] = None  # base_collisions' own pairs before there is a geom_data
         self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
-        self._batch_chain: Optional["_BatchKinematics"] = None
+        self._batch_chain: Optional[Any] = None  # batch_fk._BatchKinematics, built on first use
         self.obstacles: List[Obstacle] = []
         self._obstacle_ids: List[int] = []
         self.safety_margin = 0.0  # of robot–obstacle pairs (set_obstacles)
@@ -88,7 +100,7 @@ class Robot:
         ms, asm = self.module_set, self.assembly
         model = pin.Model()
         model.name = "robodesign:" + ",".join(asm.module_ids)
-        geom = pin.GeometryModel()
+        geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []  # (name, joint, frame, placement, shape)
         counts: Dict[str, int] = {}
         labels = []
         for mid in asm.module_ids:
@@ -107,10 +119,12 @@ class Robot:
         start = (bi, base_con.body_id, 0, base_con.entry_pose)
         visited = set()
         queue = deque([start])
-        body_joint: Dict[Tuple[int, str], int] = {}
+        first: Dict[str, int] = {"universe": 0}  # frame name → its first frame id; joint id → joint name
+        joint_names: Dict[int, str] = {}
         self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
         self.joint_infos: List[JointInfo] = []
-        lower, upper, vel, acc, eff, gear, im, fc, fv = ([] for _ in range(9))
+        columns: List[List[float]] = [[] for _ in range(9)]
+        lower, upper, vel, acc, eff, gear, im, fc, fv = columns
         free_connectors: List[Tuple[int, Connector, int]] = []  # (instance, connector, frame id)
         total_mass = 0.0
         geom_body: List[Tuple[int, str]] = []
@@ -120,21 +134,22 @@ class Robot:
             if (i, body_id) in visited:
                 continue
             visited.add((i, body_id))
-            body_joint[(i, body_id)] = jid
             mod = ms[asm.module_ids[i]]
             body = mod.body(body_id)
             label = labels[i]
             total_mass += body.mass
             if body.mass > 0:
-                Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+                Y = _memo(body, lambda b: pin.Inertia(b.mass, np.asarray(b.com, float), np.asarray(b.inertia, float)))
                 model.appendBodyToJoint(jid, Y, pin.SE3(M))
-            parent_frame = model.getFrameId(model.names[jid]) if jid > 0 else 0
+            parent_frame = first[joint_names[jid]] if jid > 0 else 0  # getFrameId: the first frame of the name
             fid = model.addFrame(pin.Frame(f"{label}.{body_id}", jid, parent_frame, pin.SE3(M), pin.FrameType.BODY))
+            first.setdefault(f"{label}.{body_id}", fid)
             if jid == 0:
                 self._root_items.append(("frame", fid, M.copy()))
             for ci, c in enumerate(body.connectors):
                 Mc = M @ c.pose
                 cf = model.addFrame(pin.Frame(f"{label}.{body_id}.{c.id}", jid, fid, pin.SE3(Mc), pin.FrameType.OP_FRAME))
+                first.setdefault(f"{label}.{body_id}.{c.id}", cf)
                 if jid == 0:
                     self._root_items.append(("frame", cf, Mc.copy()))
                 other = conn.get((i, c.id))
@@ -147,10 +162,9 @@ class Robot:
                     free_connectors.append((i, c, cf))
             for gi, g in enumerate(body.collision):
                 P = M @ g.pose
-                for si, shape in enumerate(coal_shapes(g, convex_meshes)):
-                    go = pin.GeometryObject(f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid,
-                                            pin.SE3(P), shape)
-                    k = geom.addGeometryObject(go)
+                for si, shape in enumerate(coal_shapes(g, convex_meshes)):  # made by geom_model on first use
+                    k = len(geom_specs)
+                    geom_specs.append((f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid, P, shape))
                     geom_body.append((i, body_id))
                     if jid == 0:
                         self._root_items.append(("geom", k, P.copy()))
@@ -160,7 +174,7 @@ class Robot:
                     P, Q = jt.pose_parent, jt.pose_child
                 elif jt.child == body_id:
                     other_body, rev = jt.parent, True
-                    P, Q = inv(jt.pose_child), inv(jt.pose_parent)
+                    P, Q = _memo(jt, lambda j: (inv(j.pose_child), inv(j.pose_parent)))
                 else:
                     continue
                 if (i, other_body) in visited:
@@ -176,20 +190,16 @@ class Robot:
                     jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
                 name = f"{label}.{jt.id}"
                 new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
-                model.addJointFrame(new_jid, -1)
+                first.setdefault(name, model.addJointFrame(new_jid, -1))
+                joint_names[new_jid] = name
                 if jid == 0:
                     self._root_items.append(("joint", new_jid, placement.copy()))
                 self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
                 L = jt.limits
-                lower.append(L.lower)
-                upper.append(L.upper)
-                vel.append(L.velocity)
-                acc.append(L.acceleration)
-                eff.append(L.torque)
-                gear.append(jt.gear_ratio)
-                im.append(jt.motor_inertia)
-                fc.append(jt.friction_coulomb)
-                fv.append(jt.friction_viscous)
+                for column, v in zip(columns, (
+                        L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
+                        jt.friction_coulomb, jt.friction_viscous)):
+                    column.append(v)
                 queue.append((i, other_body, new_jid, Q))
         missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
         if missing:
@@ -230,27 +240,64 @@ class Robot:
             self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
             self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
         self.model = model
-        self.geom_model = geom
-        self._geom_body = geom_body
-        self._add_self_collision_pairs(direct_joint_pairs)
+        self._geom_model: Optional[pin.GeometryModel] = None
+        self._geom_specs, self._geom_body, self._placed = geom_specs, geom_body, False
+        self._self_pairs = self._self_collision_map(direct_joint_pairs)
+        self._n_self_pairs = int(self._self_pairs.sum())
 
-    def _add_self_collision_pairs(self, direct_joint_pairs) -> None:
-        geom, model = self.geom_model, self.model
+    def _self_collision_map(self, direct_joint_pairs) -> np.ndarray:
+        """Every pair of robot objects on different joints, but those the module set ignores (a boolean map, set
+        in one call, row-major)."""
         mode = self.module_set.ignore_collisions
-        parents = model.parents
-        objs = geom.geometryObjects
-        n = len(objs)
-        for a in range(n):
-            ja = objs[a].parentJoint
-            for b in range(a + 1, n):
-                jb = objs[b].parentJoint
-                if ja == jb:
-                    continue  # rigidly connected
-                if mode == "rigid_via_joint" and (parents[ja] == jb or parents[jb] == ja):
-                    continue
-                if mode == "via_joint" and frozenset((self._geom_body[a], self._geom_body[b])) in direct_joint_pairs:
-                    continue
-                geom.addCollisionPair(pin.CollisionPair(a, b))
+        parents = np.asarray(self.model.parents, dtype=int)
+        J = np.array([spec[1] for spec in self._geom_specs], dtype=int).reshape(-1)
+        keep = np.triu(J[:, None] != J[None, :], 1)  # rigidly connected: same joint
+        if mode == "rigid_via_joint":
+            keep &= (parents[J][:, None] != J[None, :]) & (parents[J][None, :] != J[:, None])
+        if mode == "via_joint" and direct_joint_pairs:
+            ids = {b: k for k, b in enumerate(dict.fromkeys(self._geom_body))}  # body → index
+            B = np.array([ids[b] for b in self._geom_body], dtype=int)
+            D = np.zeros((len(ids), len(ids)), dtype=bool)  # bodies joined directly by a joint
+            for pair in direct_joint_pairs:
+                ab = [ids[b] for b in pair if b in ids]
+                if len(ab) == 2:
+                    D[ab[0], ab[1]] = D[ab[1], ab[0]] = True
+            keep &= ~D[B[:, None], B[None, :]]
+        return keep
+
+    @property
+    def geom_model(self) -> "pin.GeometryModel":
+        """The coal collision geometry: the robot's objects (pairs among them first), then the obstacles (each with
+        every robot object), made on first use (a design that fails before any collision query needs none)."""
+        geom = self._geom_model
+        if geom is None:
+            geom = self._geom_model = pin.GeometryModel()
+            for k in range(len(self._geom_specs)):
+                geom.addGeometryObject(self._geometry_object(k))
+            geom.setCollisionPairs(self._self_pairs)
+            self._add_obstacles(geom)
+        return geom
+
+    @geom_model.setter
+    def geom_model(self, geom: "pin.GeometryModel") -> None:
+        self._geom_model = geom
+
+    def _geometry_object(self, k: int) -> "pin.GeometryObject":
+        """Robot object ``k`` as the geometry holds it (one fixed to the world at the base pose)."""
+        name, jid, fid, P, shape = self._geom_specs[k]
+        return pin.GeometryObject(name, jid, fid, pin.SE3(self.base_pose @ P if jid == 0 and self._placed else P),
+                                  shape)
+
+    def _obstacle_object(self, ob: "Obstacle") -> "pin.GeometryObject":
+        return pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape)
+
+    def _add_obstacles(self, geom) -> None:
+        n_robot = len(self._geom_body)
+        for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
+            geom.addGeometryObject(self._obstacle_object(ob))
+        for k in self._obstacle_ids:
+            for a in range(n_robot):
+                geom.addCollisionPair(pin.CollisionPair(a, k))
 
     # ------------------------------------------------------------------------------------------
     # configuration of the robot in its cell
@@ -265,11 +312,14 @@ class Robot:
                 self.model.jointPlacements[idx] = P
             elif kind == "frame":
                 self.model.frames[idx].placement = P
-            else:
-                self.geom_model.geometryObjects[idx].placement = P
+            elif self._geom_model is not None:
+                self._geom_model.geometryObjects[idx].placement = P
+        self._placed = True
         self.data = self.model.createData()
         self._sync_link_model()
-        self._geom_data = None
+        if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
+            _fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
+        self._base_probe = None
         self._reach = None
         self._batch_chain = None
 
@@ -283,21 +333,16 @@ class Robot:
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
-        geom = self.geom_model
-        # drop previous obstacles (they sit after the robot's own objects)
         n_robot = len(self._geom_body)
-        if len(geom.geometryObjects) > n_robot:
-            self.geom_model = geom = self._robot_only_geom()
         self.obstacles = list(obstacles)
-        self._obstacle_ids = []
-        for ob in self.obstacles:
-            k = geom.addGeometryObject(pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape))
-            self._obstacle_ids.append(k)
-        for k in self._obstacle_ids:
-            for a in range(n_robot):
-                geom.addCollisionPair(pin.CollisionPair(a, k))
+        self._obstacle_ids = list(range(n_robot, n_robot + len(self.obstacles)))  # after the robot's own objects
+        geom = self._geom_model
+        if geom is not None:  # drop the previous obstacles; else geom_model adds these when it is made
+            if len(geom.geometryObjects) > n_robot:
+                self._geom_model = geom = self._robot_only_geom()
+            self._add_obstacles(geom)
         self.safety_margin = float(safety_margin)
-        self._geom_data = None
+        self._geom_data = self._base_probe = None
 
     @property
     def obstacle_geometry_ids(self) -> Tuple[int, ...]:
@@ -306,6 +351,7 @@ class Robot:
 
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
+        self._base_probe = None
 
     def _robot_only_geom(self):
         g = pin.GeometryModel()
@@ -322,6 +368,12 @@ class Robot:
         if gd is None:
             gd = self._geom_data = pin.GeometryData(self.geom_model)
             self._apply_margins(gd)
+            probe, self._base_probe = self._base_probe, None
+            if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
+                for k, req in zip(probe[2], probe[1].collisionRequests):
+                    to = gd.collisionRequests[k]
+                    to.cached_gjk_guess, to.cached_support_func_guess = req.cached_gjk_guess, req.cached_support_func_guess
+                    to.distance_upper_bound = req.distance_upper_bound  # (pinocchio sets it at every query)
         return gd
 
     def _apply_margins(self, gd) -> None:
@@ -558,14 +610,20 @@ class Robot:
         collides at every configuration."""
         if not self._obstacle_ids:
             return []
-        objs = self.geom_model.geometryObjects
-        self._update_geometry(np.zeros(self.dof))
-        out = []
-        for k in range(self._n_self_pairs, len(self.geom_model.collisionPairs)):
-            cp = self.geom_model.collisionPairs[k]
-            if objs[cp.first].parentJoint == 0 and pin.computeCollision(self.geom_model, self.geom_data, k):
-                out.append((objs[cp.first].name, objs[cp.second].name))
-        return out
+        n = len(self._geom_body)
+        root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
+        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
+        ab = [(a, ob) for ob in self._obstacle_ids for a in root]
+        pairs = [self._n_self_pairs + j * n + a for j in range(len(self._obstacle_ids)) for a in root]
+        if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
+            gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
+            pin.updateGeometryPlacements(self.model, self.data, gm, gd, np.zeros(self.dof))
+            hit = [pin.computeCollision(gm, gd, i) for i in range(len(pairs))]
+        else:
+            self._update_geometry(np.zeros(self.dof))
+            hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
+        names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
+        return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
@@ -646,121 +704,42 @@ class Robot:
         }
 
 
+_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
+_NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+def _fresh_guesses(gd: "pin.GeometryData") -> None:
+    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
+    enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
+    for reqs in (gd.collisionRequests, gd.distanceRequests):
+        for r in reqs:
+            r.cached_gjk_guess = _GUESS
+            r.cached_support_func_guess = _SUPPORT_GUESS
+    for r in gd.collisionRequests:
+        r.distance_upper_bound = _NO_BOUND  # (pinocchio sets it at every query)
+
+
+def _probe(robot: Robot, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
+    """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
+    the requests of the robot's own scratch space (contacts on, the safety margin)."""
+    gm, n, made = pin.GeometryModel(), len(robot._geom_body), robot._geom_model
+    index: Dict[int, int] = {}
+    for a, ob in ab:
+        for g in (a, ob):
+            if g not in index:  # the objects as the robot's geometry holds (or will hold) them
+                index[g] = gm.addGeometryObject(made.geometryObjects[g] if made is not None else robot._geometry_object(
+                    g) if g < n else robot._obstacle_object(robot.obstacles[g - n]))
+        gm.addCollisionPair(pin.CollisionPair(index[a], index[ob]))
+    gd = pin.GeometryData(gm)
+    for req in gd.collisionRequests:
+        req.enable_contact = True
+        req.security_margin = robot.safety_margin
+    return gm, gd, pairs
+
+
 # ---------------------------------------------------------------------------------------------------------
-# forward kinematics batched over samples
+# forward kinematics batched over samples (the joint tree as arrays: model/batch_fk.py)
 # ---------------------------------------------------------------------------------------------------------
-_AXES = {"RX": (0, (1.0, 0.0, 0.0)), "RY": (0, (0.0, 1.0, 0.0)), "RZ": (0, (0.0, 0.0, 1.0)),
-         "PX": (1, (1.0, 0.0, 0.0)), "PY": (1, (0.0, 1.0, 0.0)), "PZ": (1, (0.0, 0.0, 1.0))}
-
-
-class _BatchKinematics:
-    """The pinocchio model's joint tree as arrays (for the current base pose): per joint its parent, the
-    placement in the parent (R, t), its kind (0 revolute, 1 prismatic) and unit axis, its q index."""
-
-    def __init__(self, model: "pin.Model"):
-        self.parents, self.R, self.t, self.kind, self.axis, self.iq, self.z = [], [], [], [], [], [], []
-        for j in range(1, model.njoints):
-            jm = model.joints[j]
-            name = jm.shortname()
-            ax: Tuple[float, ...]
-            if name.startswith("JointModel") and name[10:] in _AXES:
-                kind, ax = _AXES[name[10:]]
-            elif name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
-                kind = 0 if "Revolute" in name else 1
-                ax = tuple(float(x) for x in (jm.extract().axis if hasattr(jm, "extract") else jm.axis))
-            else:
-                raise NotImplementedError(f"batched FK does not model {name}")
-            if jm.nq != 1:
-                raise NotImplementedError("multi-DoF joint")
-            M = model.jointPlacements[j]
-            self.parents.append(int(model.parents[j]))
-            self.R.append(np.array(M.rotation, dtype=float))
-            self.t.append(np.array(M.translation, dtype=float))
-            self.kind.append(kind)
-            self.axis.append(np.asarray(ax, dtype=float))
-            self.iq.append(int(jm.idx_q))
-            self.z.append(kind == 0 and np.allclose(ax, (0.0, 0.0, 1.0), atol=0.0))
-        self.frames = {}
-        for f, fr in enumerate(model.frames):
-            self.frames[f] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
-                              np.array(fr.placement.translation, dtype=float))
-        self.njoints = model.njoints
-
-    def _walk(self, Q: np.ndarray, need: Optional[set] = None):
-        """World rotation (3×3×N: entry (i, j) of every sample contiguous) and position (3×N) of every
-        joint in ``need`` (all if None); index 0 = the world (None: identity)."""
-        N = len(Q)
-        Rs: Dict[int, Optional[np.ndarray]] = {0: None}
-        ps: Dict[int, Optional[np.ndarray]] = {0: None}
-        QT = np.ascontiguousarray(Q.T)
-        for j in range(1, self.njoints):
-            if need is not None and j not in need:
-                continue
-            k = j - 1
-            par = self.parents[k]
-            Rl, tl = self.R[k], self.t[k]
-            Rpar, ppar = Rs[par], ps[par]
-            if Rpar is None or ppar is None:  # the world (both None)
-                Rp = np.repeat(Rl[:, :, None], N, axis=2)
-                pp = np.repeat(tl[:, None], N, axis=1)
-            else:   # (R·Rl)[i] = Rlᵀ-combination of the columns of R[i]: three (3×3)·(3×N) products
-                Rp = np.matmul(Rl.T, Rpar)
-                pp = ppar + np.matmul(tl, Rpar)
-            q = QT[self.iq[k]]
-            a = self.axis[k]
-            if self.kind[k] == 1:                 # prismatic: p += R·a·q
-                R = Rp
-                p = pp + np.matmul(a, Rp) * q
-            elif self.z[k]:                       # revolute about +z: mix columns 0 and 1
-                c, s = np.cos(q), np.sin(q)
-                c0, c1 = Rp[:, 0], Rp[:, 1]
-                R = np.empty_like(Rp)
-                R[:, 0] = c0 * c + c1 * s
-                R[:, 1] = c1 * c - c0 * s
-                R[:, 2] = Rp[:, 2]
-                p = pp
-            else:                                 # revolute about a: Rodrigues, R·Rj
-                c, s = np.cos(q), np.sin(q)
-                K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-                Rj = np.eye(3)[:, :, None] + s * K[:, :, None] + (1.0 - c) * (K @ K)[:, :, None]   # 3×3×N
-                R = np.einsum("ikn,kjn->ijn", Rp, Rj)
-                p = pp
-            Rs[j], ps[j] = R, p
-        return Rs, ps
-
-    def _needed(self, j: int) -> set:
-        need = set()
-        while j > 0:
-            need.add(j)
-            j = self.parents[j - 1]
-        return need
-
-    def frame_poses(self, Q: np.ndarray, frame: int) -> np.ndarray:
-        jid, Rf, tf = self.frames[frame]
-        Rs, ps = self._walk(Q, self._needed(jid))
-        N = len(Q)
-        out = np.zeros((N, 4, 4))
-        out[:, 3, 3] = 1.0
-        if Rs[jid] is None:
-            out[:, :3, :3] = Rf
-            out[:, :3, 3] = tf
-        else:
-            out[:, :3, :3] = np.matmul(Rf.T, Rs[jid]).transpose(2, 0, 1)
-            out[:, :3, 3] = (ps[jid] + np.matmul(tf, Rs[jid])).T
-        return out
-
-    def joint_poses(self, Q: np.ndarray) -> np.ndarray:
-        Rs, ps = self._walk(Q)
-        N = len(Q)
-        out = np.zeros((N, self.njoints, 4, 4))
-        out[:, :, 3, 3] = 1.0
-        out[:, 0, :3, :3] = np.eye(3)
-        for j in range(1, self.njoints):
-            out[:, j, :3, :3] = Rs[j].transpose(2, 0, 1)
-            out[:, j, :3, 3] = ps[j].T
-        return out
-
-
 def _batch_kinematics(robot: Robot) -> _BatchKinematics:
     if robot._batch_chain is None:
         robot._batch_chain = _BatchKinematics(robot.model)

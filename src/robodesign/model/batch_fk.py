@@ -1,0 +1,120 @@
+"""Forward kinematics batched over samples: the pinocchio model's joint tree as arrays, one vectorised numpy pass
+per joint over all samples (for :func:`robodesign.model.robot.fk_batch` and :meth:`Robot.fk_batch
+<robodesign.model.robot.Robot.fk_batch>`)."""
+from __future__ import annotations
+
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+_AXES = {"RX": (0, (1.0, 0.0, 0.0)), "RY": (0, (0.0, 1.0, 0.0)), "RZ": (0, (0.0, 0.0, 1.0)),
+         "PX": (1, (1.0, 0.0, 0.0)), "PY": (1, (0.0, 1.0, 0.0)), "PZ": (1, (0.0, 0.0, 1.0))}
+
+
+class _BatchKinematics:
+    """The pinocchio model's joint tree as arrays (for the current base pose): per joint its parent, the
+    placement in the parent (R, t), its kind (0 revolute, 1 prismatic) and unit axis, its q index."""
+
+    def __init__(self, model: "pin.Model"):
+        self.parents, self.R, self.t, self.kind, self.axis, self.iq, self.z = [], [], [], [], [], [], []
+        for j in range(1, model.njoints):
+            jm = model.joints[j]
+            name = jm.shortname()
+            ax: Tuple[float, ...]
+            if name.startswith("JointModel") and name[10:] in _AXES:
+                kind, ax = _AXES[name[10:]]
+            elif name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+                kind = 0 if "Revolute" in name else 1
+                ax = tuple(float(x) for x in (jm.extract().axis if hasattr(jm, "extract") else jm.axis))
+            else:
+                raise NotImplementedError(f"batched FK does not model {name}")
+            if jm.nq != 1:
+                raise NotImplementedError("multi-DoF joint")
+            M = model.jointPlacements[j]
+            self.parents.append(int(model.parents[j]))
+            self.R.append(np.array(M.rotation, dtype=float))
+            self.t.append(np.array(M.translation, dtype=float))
+            self.kind.append(kind)
+            self.axis.append(np.asarray(ax, dtype=float))
+            self.iq.append(int(jm.idx_q))
+            self.z.append(kind == 0 and np.allclose(ax, (0.0, 0.0, 1.0), atol=0.0))
+        self.frames = {}
+        for f, fr in enumerate(model.frames):
+            self.frames[f] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
+                              np.array(fr.placement.translation, dtype=float))
+        self.njoints = model.njoints
+
+    def _walk(self, Q: np.ndarray, need: Optional[set] = None):
+        """World rotation (3×3×N: entry (i, j) of every sample contiguous) and position (3×N) of every
+        joint in ``need`` (all if None); index 0 = the world (None: identity)."""
+        N = len(Q)
+        Rs: Dict[int, Optional[np.ndarray]] = {0: None}
+        ps: Dict[int, Optional[np.ndarray]] = {0: None}
+        QT = np.ascontiguousarray(Q.T)
+        for j in range(1, self.njoints):
+            if need is not None and j not in need:
+                continue
+            k = j - 1
+            par = self.parents[k]
+            Rl, tl = self.R[k], self.t[k]
+            Rpar, ppar = Rs[par], ps[par]
+            if Rpar is None or ppar is None:  # the world (both None)
+                Rp = np.repeat(Rl[:, :, None], N, axis=2)
+                pp = np.repeat(tl[:, None], N, axis=1)
+            else:   # (R·Rl)[i] = Rlᵀ-combination of the columns of R[i]: three (3×3)·(3×N) products
+                Rp = np.matmul(Rl.T, Rpar)
+                pp = ppar + np.matmul(tl, Rpar)
+            q = QT[self.iq[k]]
+            a = self.axis[k]
+            if self.kind[k] == 1:                 # prismatic: p += R·a·q
+                R = Rp
+                p = pp + np.matmul(a, Rp) * q
+            elif self.z[k]:                       # revolute about +z: mix columns 0 and 1
+                c, s = np.cos(q), np.sin(q)
+                c0, c1 = Rp[:, 0], Rp[:, 1]
+                R = np.empty_like(Rp)
+                R[:, 0] = c0 * c + c1 * s
+                R[:, 1] = c1 * c - c0 * s
+                R[:, 2] = Rp[:, 2]
+                p = pp
+            else:                                 # revolute about a: Rodrigues, R·Rj
+                c, s = np.cos(q), np.sin(q)
+                K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+                Rj = np.eye(3)[:, :, None] + s * K[:, :, None] + (1.0 - c) * (K @ K)[:, :, None]   # 3×3×N
+                R = np.einsum("ikn,kjn->ijn", Rp, Rj)
+                p = pp
+            Rs[j], ps[j] = R, p
+        return Rs, ps
+
+    def _needed(self, j: int) -> set:
+        need = set()
+        while j > 0:
+            need.add(j)
+            j = self.parents[j - 1]
+        return need
+
+    def frame_poses(self, Q: np.ndarray, frame: int) -> np.ndarray:
+        jid, Rf, tf = self.frames[frame]
+        Rs, ps = self._walk(Q, self._needed(jid))
+        N = len(Q)
+        out = np.zeros((N, 4, 4))
+        out[:, 3, 3] = 1.0
+        if Rs[jid] is None:
+            out[:, :3, :3] = Rf
+            out[:, :3, 3] = tf
+        else:
+            out[:, :3, :3] = np.matmul(Rf.T, Rs[jid]).transpose(2, 0, 1)
+            out[:, :3, 3] = (ps[jid] + np.matmul(tf, Rs[jid])).T
+        return out
+
+    def joint_poses(self, Q: np.ndarray) -> np.ndarray:
+        Rs, ps = self._walk(Q)
+        N = len(Q)
+        out = np.zeros((N, self.njoints, 4, 4))
+        out[:, :, 3, 3] = 1.0
+        out[:, 0, :3, :3] = np.eye(3)
+        for j in range(1, self.njoints):
+            out[:, j, :3, :3] = Rs[j].transpose(2, 0, 1)
+            out[:, j, :3, 3] = ps[j].T
+        return out
