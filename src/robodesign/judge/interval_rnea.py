@@ -178,12 +178,25 @@ class IntervalDynamics:
         T = self.link_torques((Qm, Qr), (zero, zero), np.tile(np.eye(n), (P, 1)), gravity=False)
         return (np.abs(T.m) + T.r).reshape(P, n, n).transpose(0, 2, 1)
 
+    def rates_and_mass_bound(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray],
+                             a: Tuple[np.ndarray, np.ndarray]) -> Tuple[DI, np.ndarray]:
+        """``link_torques(Q, V, a)`` (no wrench) and ``mass_matrix_bound(Q)`` in one pass: the rows of both
+        stacked, gravity on the first P only (each row's arithmetic is its own)."""
+        P, n = Q[0].shape
+        z = np.zeros((P * n, n))
+        stack = lambda x, y: np.concatenate([np.asarray(x, dtype=float), y])  # noqa: E731
+        T = self.link_torques((stack(Q[0], np.repeat(Q[0], n, axis=0)), stack(Q[1], np.repeat(Q[1], n, axis=0))),
+                              (stack(V[0], z), stack(V[1], z)), (stack(a[0], np.tile(np.eye(n), (P, 1))), stack(a[1], z)),
+                              gravity=np.r_[np.ones(P, dtype=bool), np.zeros(P * n, dtype=bool)])
+        head = DI(T.m[:P], T.r[:P], T.dm[:P], T.dr[:P])
+        return head, (np.abs(T.m[P:]) + T.r[P:]).reshape(P, n, n).transpose(0, 2, 1)
+
     def link_torques(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray], a,
-                     wrench: Optional[np.ndarray] = None, gravity: bool = True) -> DI:
+                     wrench: Optional[np.ndarray] = None, gravity=True) -> DI:
         """Enclosure (P, dof) of RNEA(q, q̇, a) and of its rate along the arc, for P pieces with q in the
         intervals ``Q`` = (mid, radius), q̇ in ``V`` = (mid, radius) (all (P, dof)), q̈ = ``a`` (P, dof), constant
         along each arc (an array, or (mid, radius): any constant acceleration in that interval), and ``wrench``
-        (P, 6) world wrenches [f; τ] at the TCP (None: none)."""
+        (P, 6) world wrenches [f; τ] at the TCP (None: none). ``gravity``: a bool, or one per row."""
         a_m, a_r = (np.asarray(a[0], float), np.asarray(a[1], float)) if isinstance(a, tuple) else \
             (np.asarray(a, float), np.zeros(np.shape(a)))
         P = a_m.shape[0]
@@ -197,7 +210,9 @@ class IntervalDynamics:
         ang: List[DI] = [zero3] * (n + 1)
         acc: List[DI] = [zero3] * (n + 1)
         alpha: List[DI] = [zero3] * (n + 1)
-        acc[0] = DI.const(-self.gravity if gravity else np.zeros(3), (P, 3))
+        g = np.asarray(gravity)
+        acc[0] = DI.const(np.where(g[:, None], -self.gravity, 0.0) if g.ndim else -self.gravity if gravity else
+                          np.zeros(3), (P, 3))
         trig: Dict[int, Tuple[DI, DI]] = {}  # revolute joint → (cos, sin) of its angle
         f_lin: List[DI] = [zero3] * (n + 1)
         f_ang: List[DI] = [zero3] * (n + 1)

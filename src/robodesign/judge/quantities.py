@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Dict, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -118,6 +118,7 @@ class TrajectoryQuantities:
         self.t = np.asarray(t, dtype=float)
         self.q, self.dq, self.ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
         self.goal2time = dict(goal2time or {})
+        self.judge_cache: Dict[tuple, Any] = {}  # the checker's results shared between rules (judge.checker)
 
     @classmethod
     def from_solution(cls, robot: Robot, solution: Solution, task: Optional[Task] = None) -> "TrajectoryQuantities":

@@ -212,6 +212,20 @@ class SweepChecker:
         self._dreq = self._req.distanceRequests
         self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
 
+    def subset(self, cols: Sequence[int]) -> "SweepChecker":
+        """A checker of the pairs ``cols`` (indices into :attr:`pairs`, in that order) sharing this one's bounds
+        and scratch space: its events are exactly those this checker reports for these pairs (each pair is
+        advanced on its own), without building the bounds again."""
+        out = object.__new__(type(self))
+        out.__dict__.update(self.__dict__)
+        cols = list(cols)
+        out.pairs = [self.pairs[c] for c in cols]
+        out.W = self.W[:, cols]
+        out.margins, out.is_env = self.margins[cols], self.is_env[cols]
+        out.pair_names = [self.pair_names[c] for c in cols]
+        out.queries = 0
+        return out
+
     # ------------------------------------------------------------------------------------------
     def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
         """Exact distances at configuration q of the checked pairs with indices ``cols``."""
