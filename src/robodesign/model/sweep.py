@@ -22,6 +22,7 @@ otherwise be advanced in µm steps (IMPROV: one PTP_3 check 4.8 s → 0.2 s).
 from __future__ import annotations
 
 import heapq
+import math
 from dataclasses import dataclass
 from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
@@ -58,41 +59,123 @@ _ROTATIONAL = ("Cylinder", "Capsule", "Cone")  # bodies of revolution about thei
 def revolute_axis(model, j: int) -> Optional[np.ndarray]:
     """Unit axis of joint ``j`` in its own frame if it is a revolute joint (RX, RY, RZ, unaligned, and their
     unbounded forms), else None."""
-    name = model.joints[j].shortname()
+    return _revolute_axis(model.joints[j])
+
+
+def _revolute_axis(joint) -> Optional[np.ndarray]:
+    name = joint.shortname()
     for suffix, axis in (("RX", (1.0, 0, 0)), ("RY", (0, 1.0, 0)), ("RZ", (0, 0, 1.0))):
         if name in ("JointModel" + suffix, "JointModelRUB" + suffix[1]):
             return np.array(axis, dtype=float)
     if name in ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned"):
-        a = np.asarray(model.joints[j].extract().axis, dtype=float)
+        a = np.asarray(joint.extract().axis, dtype=float)
         return a / np.linalg.norm(a)
     return None
+
+
+def _cross_norm(a, b) -> float:
+    """|a × b| of two 3-vectors, on Python floats (numpy's cross of 3-vectors costs ~20 µs)."""
+    a0, a1, a2 = (float(x) for x in a)
+    b0, b1, b2 = (float(x) for x in b)
+    x, y, z = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+    return math.sqrt(x * x + y * y + z * z)
 
 
 def symmetric_about(obj, point: np.ndarray, direction: np.ndarray, eps: float = SYMMETRY_EPS) -> bool:
     """Whether geometry object ``obj`` (a sphere, cylinder, capsule or cone) is a body of revolution about the
     line through ``point`` along the unit vector ``direction``, both in the frame of its parent joint: a
     rotation about that line then leaves the space it occupies unchanged."""
-    kind = type(obj.geometry).__name__
+    return _symmetric(type(obj.geometry).__name__, obj.placement, point, direction, eps)
+
+
+def _symmetric(kind: str, placement, point, direction, eps: float = SYMMETRY_EPS) -> bool:
     if kind != "Sphere" and kind not in _ROTATIONAL:
         return False
-    centre = np.asarray(obj.placement.translation, dtype=float)
-    if np.linalg.norm(np.cross(centre - point, direction)) > eps:
+    centre = np.asarray(placement.translation, dtype=float)
+    if _cross_norm(centre - point, direction) > eps:
         return False
     if kind == "Sphere":
         return True
-    return float(np.linalg.norm(np.cross(obj.placement.rotation[:, 2], direction))) <= eps
+    return _cross_norm(placement.rotation[:, 2], direction) <= eps
+
+
+class _Tree:
+    """The robot's joints and collision geometries read once from pinocchio (its accessors cost µs each)."""
+
+    def __init__(self, robot: Robot):
+        model, gm = robot.model, robot.geom_model
+        self.nj = model.njoints
+        joints = [model.joints[j] for j in range(self.nj)]
+        self.parents = [int(p) for p in model.parents]
+        self.idx_v = [int(jm.idx_v) for jm in joints]
+        self.names = [jm.shortname() for jm in joints]
+        self.axes = [None] + [_revolute_axis(jm) for jm in joints[1:]]
+        self.placements = [model.jointPlacements[j] for j in range(self.nj)]
+        objs = [gm.geometryObjects[g] for g in range(robot.n_collision_geometries)]
+        self.geom_joint = [int(o.parentJoint) for o in objs]
+        self.geom_kind = [type(o.geometry).__name__ for o in objs]
+        self.geom_placement = [o.placement for o in objs]
+        self.geom_geometry = [o.geometry for o in objs]
+        self.ext = [0.0] * self.nj  # stroke bound of prismatic joints
+        self.prismatic = [False] * self.nj
+        for j in range(1, self.nj):
+            name = self.names[j]
+            if "Prismatic" in name or name.endswith("PZ") or name.endswith("PX") or name.endswith("PY"):
+                self.prismatic[j] = True
+                k = joints[j].idx_q
+                lo, hi = model.lowerPositionLimit[k], model.upperPositionLimit[k]
+                self.ext[j] = max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else 1e3
+
+    def own_axis_symmetric(self) -> List[bool]:
+        out = []
+        for g, j in enumerate(self.geom_joint):
+            axis = self.axes[j] if j > 0 else None
+            out.append(axis is not None and _symmetric(self.geom_kind[g], self.geom_placement[g], np.zeros(3), axis))
+        return out
+
+    def lever_arms(self, symmetry: bool, dof: int) -> np.ndarray:
+        R = np.zeros((dof, len(self.geom_joint)))
+        for g, j in enumerate(self.geom_joint):
+            reach = float(np.linalg.norm(self.geom_placement[g].translation)) + _shape_radius(self.geom_geometry[g])
+            # walk up: reach = distance bound from joint j's origin to any point of g
+            while j > 0:
+                R[self.idx_v[j], g] = 1.0 if self.prismatic[j] else reach
+                reach += float(np.linalg.norm(self.placements[j].translation)) + self.ext[j]
+                j = self.parents[j]
+        for g, sym in enumerate(self.own_axis_symmetric()):
+            if sym and symmetry:
+                R[self.idx_v[self.geom_joint[g]], g] = 0.0
+        return R
+
+    def coaxial_child_joints(self) -> List[set]:
+        out: List[Set[int]] = [set() for _ in self.geom_joint]
+        for j in range(1, self.nj):
+            axis = self.axes[j]
+            if axis is None:
+                continue
+            M = self.placements[j]
+            point, direction = np.asarray(M.translation, dtype=float), np.asarray(M.rotation, dtype=float) @ axis
+            for g, gj in enumerate(self.geom_joint):
+                if gj == self.parents[j] and _symmetric(self.geom_kind[g], self.geom_placement[g], point, direction):
+                    out[g].add(j)
+        return out
+
+    def ancestors(self) -> List[Set[int]]:
+        """Per geometry: the pinocchio joint ids it hangs from."""
+        out = []
+        for j in self.geom_joint:
+            s = set()
+            while j > 0:
+                s.add(j)
+                j = self.parents[j]
+            out.append(s)
+        return out
 
 
 def own_axis_symmetric(robot: Robot) -> List[bool]:
     """Per robot geometry g: a body of revolution about the axis of the revolute joint it hangs from, so that
     this joint's motion does not move the space g occupies."""
-    model, gm = robot.model, robot.geom_model
-    out = []
-    for g in range(robot.n_collision_geometries):
-        obj = gm.geometryObjects[g]
-        axis = revolute_axis(model, obj.parentJoint) if obj.parentJoint > 0 else None
-        out.append(axis is not None and symmetric_about(obj, np.zeros(3), axis))
-    return out
+    return _Tree(robot).own_axis_symmetric()
 
 
 def lever_arms(robot: Robot, symmetry: bool = True) -> np.ndarray:
@@ -101,52 +184,14 @@ def lever_arms(robot: Robot, symmetry: bool = True) -> np.ndarray:
     bound of g's points, except that a geometry that is a body of revolution about the axis of its own
     (revolute) joint gets 0 for that joint: its points move but the space it fills does not, and distances
     depend only on that space (:func:`own_axis_symmetric`). ``symmetry=False``: the plain point bound."""
-    model, gm = robot.model, robot.geom_model
-    nj = model.njoints
-    n_geom = robot.n_collision_geometries
-    R = np.zeros((robot.dof, n_geom))
-    parents = model.parents
-    prismatic = np.zeros(nj, dtype=bool)
-    ext = np.zeros(nj)
-    for j in range(1, nj):
-        name = model.joints[j].shortname()
-        if "Prismatic" in name or name.endswith("PZ") or name.endswith("PX") or name.endswith("PY"):
-            prismatic[j] = True
-            k = model.joints[j].idx_q
-            lo, hi = model.lowerPositionLimit[k], model.upperPositionLimit[k]
-            ext[j] = max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else 1e3
-    for g in range(n_geom):
-        obj = gm.geometryObjects[g]
-        reach = float(np.linalg.norm(obj.placement.translation)) + _shape_radius(obj.geometry)
-        j = obj.parentJoint
-        # walk up: reach = distance bound from joint j's origin to any point of g
-        while j > 0:
-            R[model.joints[j].idx_v, g] = 1.0 if prismatic[j] else reach
-            reach += float(np.linalg.norm(model.jointPlacements[j].translation)) + ext[j]
-            j = parents[j]
-    for g, sym in enumerate(own_axis_symmetric(robot)):
-        if sym and symmetry:
-            R[model.joints[gm.geometryObjects[g].parentJoint].idx_v, g] = 0.0
-    return R
+    return _Tree(robot).lever_arms(symmetry, robot.dof)
 
 
 def coaxial_child_joints(robot: Robot) -> List[set]:
     """Per robot geometry g: the revolute joints hanging directly from g's joint whose axis (fixed in g's
     frame) g is a body of revolution about; the motion of such a joint does not change g's distance to
     anything that hangs below it."""
-    model, gm = robot.model, robot.geom_model
-    out: List[Set[int]] = [set() for _ in range(robot.n_collision_geometries)]
-    for j in range(1, model.njoints):
-        axis = revolute_axis(model, j)
-        if axis is None:
-            continue
-        M = model.jointPlacements[j]
-        point, direction = np.asarray(M.translation, dtype=float), np.asarray(M.rotation, dtype=float) @ axis
-        for g in range(robot.n_collision_geometries):
-            obj = gm.geometryObjects[g]
-            if obj.parentJoint == model.parents[j] and symmetric_about(obj, point, direction):
-                out[g].add(j)
-    return out
+    return _Tree(robot).coaxial_child_joints()
 
 
 class SweepChecker:
@@ -172,25 +217,19 @@ class SweepChecker:
                 env = [k for k in env if gm.collisionPairs[k].second in keep]
             pairs += list(env)
         self.pairs: Sequence[object] = pairs  # what distances() queries: collision pair indices here
-        R = lever_arms(robot, symmetry)
-        model = robot.model
-        ancestors = []  # per geometry: the pinocchio joint ids it hangs from
-        for g in range(robot.n_collision_geometries):
-            s = set()
-            j = gm.geometryObjects[g].parentJoint
-            while j > 0:
-                s.add(j)
-                j = model.parents[j]
-            ancestors.append(s)
-        coaxial = coaxial_child_joints(robot) if symmetry else [set()] * robot.n_collision_geometries
+        tree = _Tree(robot)
+        R = tree.lever_arms(symmetry, robot.dof)
+        ancestors = tree.ancestors()
+        coaxial = tree.coaxial_child_joints() if symmetry else [set()] * robot.n_collision_geometries
+        idx_v = tree.idx_v
         W = np.zeros((robot.dof, len(pairs)))
         self.margins = np.zeros(len(pairs))
         self.is_env = np.zeros(len(pairs), dtype=bool)
         n_robot = robot.n_collision_geometries
         margin = getattr(robot, "safety_margin", 0.0)
+        cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
         for c, k in enumerate(pairs):
-            cp = gm.collisionPairs[k]
-            a, b = cp.first, cp.second
+            a, b = cps[k]
             if b >= n_robot:  # robot–obstacle (static obstacle)
                 W[:, c] = R[:, a]
                 self.is_env[c] = True
@@ -199,15 +238,15 @@ class SweepChecker:
                 only_a = ancestors[a] - ancestors[b]
                 only_b = ancestors[b] - ancestors[a]
                 for j in only_a:
-                    W[model.joints[j].idx_v, c] = R[model.joints[j].idx_v, a]
+                    W[idx_v[j], c] = R[idx_v[j], a]
                 for j in only_b:
-                    W[model.joints[j].idx_v, c] = R[model.joints[j].idx_v, b]
+                    W[idx_v[j], c] = R[idx_v[j], b]
                 # the first joint below the upper body: a body of revolution about its axis sees no motion
                 for j in (coaxial[a] & only_b) | (coaxial[b] & only_a):
-                    W[model.joints[j].idx_v, c] = 0.0
+                    W[idx_v[j], c] = 0.0
         self.W = W
         names = [o.name for o in gm.geometryObjects]
-        self.pair_names = [(names[gm.collisionPairs[k].first], names[gm.collisionPairs[k].second]) for k in pairs]
+        self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests
         self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
