@@ -146,14 +146,17 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
                   np.abs(motion.a2[steps] - motion.a1[steps]), 0.0)
     J = np.zeros_like(dA)
     wr = np.where(same[:, None], wr, 0.0)
-    if np.any(dA) and not np.any(wr):  # the rate and the mass matrix in one interval pass
-        T, Mb = dyn.rates_and_mass_bound(Q, V, ((a_lo + a_hi) / 2, (a_hi - a_lo) / 2))
+    need = np.unique(c[np.any(dA != 0, axis=1)])  # the groups with a switch inside a step: their mass matrix
+    if len(need) and not np.any(wr):  # the rate and the mass matrix in one interval pass
+        T, Mb = dyn.rates_and_mass_bound(Q, V, ((a_lo + a_hi) / 2, (a_hi - a_lo) / 2), need)
         d_lo, d_hi = _with_friction(T, robot, V, a_lo, a_hi)
     else:
         d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, wr)
-        Mb = dyn.mass_matrix_bound(Q) if np.any(dA) else None
+        Mb = dyn.mass_matrix_bound((Q[0][need], Q[1][need])) if len(need) else None
     if Mb is not None:
-        J = np.einsum("sji,si->sj", Mb[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
+        M_all = np.zeros((len(starts),) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
+        M_all[need] = Mb
+        J = np.einsum("sji,si->sj", M_all[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
     ub = _bounds(ta + J, tb + J, d_lo[c], d_hi[c], h)[0]
     lb = _bounds(ta - J, tb - J, d_lo[c], d_hi[c], h)[1]
     return (ub <= lim) & (lb >= -lim) & same[c][:, None]

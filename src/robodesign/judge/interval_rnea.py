@@ -94,11 +94,29 @@ def _icross(am, ar, bm, br):
     return _xm(am, bm), _xr(aa, br) + _xr(ar, ab) + _xr(ar, br)
 
 
+_IJ = _I + _J
+
+
+def _rolled(x):
+    """(x[..., _I], x[..., _J]) in one gather."""
+    t = x[..., _IJ]
+    return t[..., :3], t[..., 3:]
+
+
 def _cross(a: DI, b: DI) -> DI:
-    """a × b with its derivative ȧ × b + a × ḃ (the same as the component products, in fewer array calls)."""
-    m, r = _icross(a.m, a.r, b.m, b.r)
-    m1, r1 = _icross(a.dm, a.dr, b.m, b.r)
-    m2, r2 = _icross(a.m, a.r, b.dm, b.dr)
+    """a × b with its derivative ȧ × b + a × ḃ: the component products of :func:`_icross`, each operand's
+    components gathered once (the same operations in the same order)."""
+    (amI, amJ), (arI, arJ), (admI, admJ), (adrI, adrJ) = (_rolled(x) for x in (a.m, a.r, a.dm, a.dr))
+    (bmI, bmJ), (brI, brJ), (bdmI, bdmJ), (bdrI, bdrJ) = (_rolled(x) for x in (b.m, b.r, b.dm, b.dr))
+    aaI, aaJ, abI, abJ = np.abs(amI), np.abs(amJ), np.abs(bmI), np.abs(bmJ)
+    m = amI * bmJ - amJ * bmI
+    r = (aaI * brJ + aaJ * brI) + (arI * abJ + arJ * abI) + (arI * brJ + arJ * brI)
+    adaI, adaJ = np.abs(admI), np.abs(admJ)
+    m1 = admI * bmJ - admJ * bmI
+    r1 = (adaI * brJ + adaJ * brI) + (adrI * abJ + adrJ * abI) + (adrI * brJ + adrJ * brI)
+    bdaI, bdaJ = np.abs(bdmI), np.abs(bdmJ)
+    m2 = amI * bdmJ - amJ * bdmI
+    r2 = (aaI * bdrJ + aaJ * bdrI) + (arI * bdaJ + arJ * bdaI) + (arI * bdrJ + arJ * bdrI)
     return DI(m, r, m1 + m2, r1 + r2)
 
 
@@ -179,17 +197,19 @@ class IntervalDynamics:
         return (np.abs(T.m) + T.r).reshape(P, n, n).transpose(0, 2, 1)
 
     def rates_and_mass_bound(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray],
-                             a: Tuple[np.ndarray, np.ndarray]) -> Tuple[DI, np.ndarray]:
-        """``link_torques(Q, V, a)`` (no wrench) and ``mass_matrix_bound(Q)`` in one pass: the rows of both
-        stacked, gravity on the first P only (each row's arithmetic is its own)."""
+                             a: Tuple[np.ndarray, np.ndarray], rows: np.ndarray) -> Tuple[DI, np.ndarray]:
+        """``link_torques(Q, V, a)`` (no wrench) and ``mass_matrix_bound`` of the boxes ``Q[rows]`` in one pass:
+        the rows of both stacked, gravity on the first P only (each row's arithmetic is its own)."""
         P, n = Q[0].shape
-        z = np.zeros((P * n, n))
+        G = len(rows)
+        z = np.zeros((G * n, n))
         stack = lambda x, y: np.concatenate([np.asarray(x, dtype=float), y])  # noqa: E731
-        T = self.link_torques((stack(Q[0], np.repeat(Q[0], n, axis=0)), stack(Q[1], np.repeat(Q[1], n, axis=0))),
-                              (stack(V[0], z), stack(V[1], z)), (stack(a[0], np.tile(np.eye(n), (P, 1))), stack(a[1], z)),
-                              gravity=np.r_[np.ones(P, dtype=bool), np.zeros(P * n, dtype=bool)])
+        Qm, Qr = np.repeat(Q[0][rows], n, axis=0), np.repeat(Q[1][rows], n, axis=0)
+        T = self.link_torques((stack(Q[0], Qm), stack(Q[1], Qr)), (stack(V[0], z), stack(V[1], z)),
+                              (stack(a[0], np.tile(np.eye(n), (G, 1))), stack(a[1], z)),
+                              gravity=np.r_[np.ones(P, dtype=bool), np.zeros(G * n, dtype=bool)])
         head = DI(T.m[:P], T.r[:P], T.dm[:P], T.dr[:P])
-        return head, (np.abs(T.m[P:]) + T.r[P:]).reshape(P, n, n).transpose(0, 2, 1)
+        return head, (np.abs(T.m[P:]) + T.r[P:]).reshape(G, n, n).transpose(0, 2, 1)
 
     def link_torques(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray], a,
                      wrench: Optional[np.ndarray] = None, gravity=True) -> DI:

@@ -303,6 +303,8 @@ class SweepChecker:
                                                                            np.abs(np.diff(Q, axis=0)))
         seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
         cum = np.concatenate([np.zeros((1, P)), np.cumsum(seg, axis=0)])  # (n, P)
+        cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        margins = self.margins.tolist()
         events: List[CollisionEvent] = []
         # priority queue of (sample index where the pair must be re-checked, pair)
         heap = [(0, c) for c in range(P)]
@@ -313,10 +315,10 @@ class SweepChecker:
             while heap and heap[0][0] == k:
                 due.append(heapq.heappop(heap)[1])
             d = self.distances(Q[k], due)
-            for c, dist in zip(due, d):
-                free = dist - self.margins[c]
+            for c, dist in zip(due, d.tolist()):
+                free = dist - margins[c]
                 if free <= 0:
-                    events.append(CollisionEvent(k, 0.0, *self.pair_names[c], float(dist), bool(self.is_env[c])))
+                    events.append(CollisionEvent(k, 0.0, *self.pair_names[c], dist, bool(self.is_env[c])))
                     if first_only:
                         return events
                     nxt = self._rearm(Q, k, c, cum)
@@ -324,8 +326,9 @@ class SweepChecker:
                         heapq.heappush(heap, (nxt, c))
                     continue
                 # the pair is certified free until the accumulated bound exceeds `free`
-                target = cum[k, c] + free
-                nxt = int(np.searchsorted(cum[:, c], target, side="right")) - 1  # last sample still certified
+                row = cum_rows[c]
+                target = float(row[k]) + free
+                nxt = int(row.searchsorted(target, side="right")) - 1  # last sample still certified
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
