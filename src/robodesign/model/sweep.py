@@ -194,14 +194,89 @@ def coaxial_child_joints(robot: Robot) -> List[set]:
     return _Tree(robot).coaxial_child_joints()
 
 
+class _PosedArms:
+    """Lever arms of the motion's own poses, per step: a revolute joint j moves a point p of geometry g at most
+    dist(p, axis_j)·|q̇_j|, and dist(p, axis_j) ≤ ρ_jg + r_g, with ρ_jg the distance of g's frame origin from the
+    axis and r_g the radius of g about that origin. ρ_jg does not change with joint j or the joints above it
+    (a rigid motion of both, or a turn about the axis itself); the joints between j and g move g's origin by at
+    most their point lever arms. So over step k, ρ_jg ≤ min(ρ_jg(k), ρ_jg(k + 1)) + Σ_i R⁰[i, g]·|Δq_i| (i
+    strictly below j), computed at the samples by batched forward kinematics. The arm of a step is the smaller
+    of this and the static one (prismatic joints keep theirs)."""
+
+    SLACK = 1e-9  # relative, against rounding of the forward kinematics
+
+    def __init__(self, robot: Robot, tree: "_Tree", R: np.ndarray):
+        self.robot, self.R = robot, R
+        dof, G = R.shape
+        self.plain = tree.lever_arms(False, dof)
+        self.geom_joint = np.array(tree.geom_joint)
+        self.t_g = np.array([np.asarray(p.translation, dtype=float) for p in tree.geom_placement]).reshape(G, 3)
+        self.rad = np.array([_shape_radius(g) for g in tree.geom_geometry])
+        joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
+        self.joints = [joint_of_v[v] for v in range(dof)]  # pinocchio joint id per velocity index
+        self.revolute = np.array([tree.axes[j] is not None for j in self.joints])
+        self.axes = np.array([tree.axes[j] if tree.axes[j] is not None else np.zeros(3) for j in self.joints])
+        below = np.zeros((dof, dof), dtype=bool)  # below[i, j]: joint i strictly below joint j
+        for i, ji in enumerate(self.joints):
+            a = tree.parents[ji]
+            while a > 0:
+                below[i, tree.idx_v[a]] = True
+                a = tree.parents[a]
+        # down[i, (j, g)] = R⁰[i, g] for i strictly below j: the motion of g's origin relative to joint j
+        self.down = (below[:, :, None] * self.plain[:, None, :]).reshape(dof, dof * G)
+        # the (revolute joint, geometry) pairs with an arm to tighten
+        self.jv, self.g = np.nonzero((R > 0) & self.revolute[:, None])
+        self.jid = np.array(self.joints)[self.jv]
+        self.flat = self.jv * G + self.g
+        self._last: Optional[tuple] = None  # (Q, dQ, arms) of the last motion
+
+    def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """(n−1, P) displacement bounds per step and pair (≤ dQ @ W)."""
+        dof, G = self.R.shape
+        last = self._last
+        if last is not None and np.array_equal(last[0], Q) and np.array_equal(last[1], dQ):
+            X = last[2]  # the same motion (the checker's self and obstacle pairs): the same arms
+        else:
+            X = self._arms(Q, dQ)
+            self._last = (Q.copy(), dQ.copy(), X)
+        pick = np.zeros((dof, G, W.shape[1]))
+        jj, cc = np.nonzero(W > 0)
+        pick[jj, owner[jj, cc], cc] = 1.0
+        return X @ pick.reshape(dof * G, -1)
+
+    def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
+        """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step."""
+        dof, G = self.R.shape
+        X = (dQ[:, :, None] * self.R[None]).reshape(len(dQ), dof * G)  # the static arms
+        if len(self.flat):
+            try:
+                J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
+            except NotImplementedError:  # a joint type batched FK does not model: the static arms
+                return X
+            Tg, Tj = J[:, self.geom_joint, :3], J[:, self.joints, :3]  # (n, G, 3, 4), (n, dof, 3, 4)
+            centre = Tg[..., 3] + sum(Tg[..., b] * self.t_g[:, b, None] for b in range(3))  # (n, G, 3)
+            axis = sum(Tj[..., b] * self.axes[:, b, None] for b in range(3))  # (n, dof, 3)
+            rel = centre[:, self.g] - Tj[..., 3][:, self.jv]  # (n, K, 3)
+            u = axis[:, self.jv]
+            rx, ry, rz, ux, uy, uz = rel[..., 0], rel[..., 1], rel[..., 2], u[..., 0], u[..., 1], u[..., 2]
+            rho = np.sqrt((ry * uz - rz * uy) ** 2 + (rz * ux - rx * uz) ** 2 + (rx * uy - ry * ux) ** 2).T  # (K, n)
+            drift = dQ @ self.down[:, self.flat]  # (n−1, K)
+            arm = (np.minimum(rho[:, :-1], rho[:, 1:]).T + drift + self.rad[self.g]) * (1 + self.SLACK) + 1e-12
+            arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
+            X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
+        return X
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
-                 max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True):
+                 max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True,
+                 posed_arms: bool = False):
         """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all).
         ``symmetry``: use bodies of revolution to tighten the bounds (module docstring); False gives the plain
-        lever-arm bounds (same verdicts, more distance queries)."""
+        lever-arm bounds (same verdicts, more distance queries). ``posed_arms``: schedule the distance queries
+        with the lever arms of the motion's own poses (:class:`_PosedArms`; the same events, fewer queries)."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
@@ -228,10 +303,12 @@ class SweepChecker:
         n_robot = robot.n_collision_geometries
         margin = getattr(robot, "safety_margin", 0.0)
         cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
+        owner = np.full((robot.dof, len(pairs)), -1)  # the geometry whose lever arm W[j, c] is
         for c, k in enumerate(pairs):
             a, b = cps[k]
             if b >= n_robot:  # robot–obstacle (static obstacle)
                 W[:, c] = R[:, a]
+                owner[:, c] = a
                 self.is_env[c] = True
                 self.margins[c] = margin
             else:
@@ -239,12 +316,16 @@ class SweepChecker:
                 only_b = ancestors[b] - ancestors[a]
                 for j in only_a:
                     W[idx_v[j], c] = R[idx_v[j], a]
+                    owner[idx_v[j], c] = a
                 for j in only_b:
                     W[idx_v[j], c] = R[idx_v[j], b]
+                    owner[idx_v[j], c] = b
                 # the first joint below the upper body: a body of revolution about its axis sees no motion
                 for j in (coaxial[a] & only_b) | (coaxial[b] & only_a):
                     W[idx_v[j], c] = 0.0
         self.W = W
+        self._owner = owner
+        self._posed = _PosedArms(robot, tree, R) if posed_arms else None
         names = [o.name for o in gm.geometryObjects]
         self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
         self._req = pin.GeometryData(gm)
@@ -260,6 +341,7 @@ class SweepChecker:
         cols = list(cols)
         out.pairs = [self.pairs[c] for c in cols]
         out.W = self.W[:, cols]
+        out._owner = self._owner[:, cols]
         out.margins, out.is_env = self.margins[cols], self.is_env[cols]
         out.pair_names = [self.pair_names[c] for c in cols]
         out.queries = 0
@@ -302,7 +384,11 @@ class SweepChecker:
         dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
                                                                            np.abs(np.diff(Q, axis=0)))
         seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
-        cum = np.concatenate([np.zeros((1, P)), np.cumsum(seg, axis=0)])  # (n, P)
+        posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
+        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
+        # so that every contact is found from the same sample with the same sub-steps (module docstring)
+        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
+        cum = np.concatenate([np.zeros((1, P)), np.cumsum(sched, axis=0)])  # (n, P)
         cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
         margins = self.margins.tolist()
         events: List[CollisionEvent] = []
