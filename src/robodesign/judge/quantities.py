@@ -216,11 +216,11 @@ class TrajectoryQuantities:
         W = self.external_wrenches
         wr = W if np.any(W) else None
         before, after = self.one_sided_accelerations
-        la = self.robot.link_torques(self.q, self.velocities, after, wr)
+        la = self._rnea(self.q, self.velocities, after, wr)
         lb = la.copy()
         differ = np.any(before != after, axis=1)
         if np.any(differ):
-            lb[differ] = self.robot.link_torques(self.q[differ], self.velocities[differ], before[differ],
+            lb[differ] = self._rnea(self.q[differ], self.velocities[differ], before[differ],
                                                  None if wr is None else wr[differ])
         return lb, la
 
@@ -260,7 +260,7 @@ class TrajectoryQuantities:
         out[use_before] = lb[use_before]
         rest = not_after & ~use_before
         if np.any(rest):
-            out[rest] = self.robot.link_torques(self.q[rest], self.velocities[rest], a[rest],
+            out[rest] = self._rnea(self.q[rest], self.velocities[rest], a[rest],
                                                 W[rest] if np.any(W) else None)
         return out
 
@@ -368,10 +368,29 @@ class TrajectoryQuantities:
         return W
 
     @cached_property
+    def _link_model(self):
+        """A copy of the model without armature and its data: what :meth:`Robot.rnea
+        <robodesign.model.robot.Robot.rnea>` calls pinocchio's RNEA on."""
+        m = pin.Model(self.robot.model)
+        m.armature = np.zeros(self.robot.model.nv)
+        return m, m.createData()
+
+    def _rnea(self, Q, V, A, W: Optional[np.ndarray]) -> np.ndarray:
+        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows (the same pinocchio
+        call per row, without its per-row checks); rows under a wrench through it."""
+        if W is not None and np.any(W):
+            return self.robot.link_torques(Q, V, A, W)
+        m, d = self._link_model
+        out = np.empty((len(Q), self.robot.dof))
+        for k, (q, v, a) in enumerate(zip(Q, V, A)):
+            out[k] = pin.rnea(m, d, q, v, a)
+        return out
+
+    @cached_property
     def link_torques(self) -> np.ndarray:
         """(N, dof) link-side torques (no motor inertia, no friction) under :attr:`external_wrenches`."""
         W = self.external_wrenches
-        return self.robot.link_torques(self.q, self.dq, self.ddq, W if np.any(W) else None)
+        return self._rnea(self.q, self.dq, self.ddq, W if np.any(W) else None)
 
     @cached_property
     def torques(self) -> np.ndarray:
