@@ -5,13 +5,13 @@ bound every pair's motion over each step, never exceed the static bounds, and fi
 distance queries."""
 import numpy as np
 import pytest
+from conftest import COBRA as SHARED
+from conftest import ROOT
+from test_sweep import improv_robot, in_cell, pair_distances, random_q
 
 from robodesign.design.problem import Problem
 from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model.sweep import SweepChecker
-
-from conftest import COBRA as SHARED, ROOT
-from test_sweep import improv_robot, in_cell, pair_distances, random_q
 
 IMPROV = SHARED / "modules" / "IMPROV"
 BUILTIN = ROOT / "assets" / "modules" / "robodesign_arm"

@@ -138,7 +138,7 @@ class TrajectoryQuantities:
         self.t = np.asarray(t, dtype=float)
         self.q, self.dq, self.ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
         self.goal2time = dict(goal2time or {})
-        self.judge_cache: Dict[tuple, Any] = {}  # the checker's results shared between rules (judge.checker)
+        self.judge_cache: Dict[Any, Any] = {}  # the checker's results shared between rules (judge.checker)
 
     @classmethod
     def from_solution(cls, robot: Robot, solution: Solution, task: Optional[Task] = None) -> "TrajectoryQuantities":
