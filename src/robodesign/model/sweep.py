@@ -247,10 +247,11 @@ class _PosedArms:
         else:
             X = self._arms(Q, dQ)
             self._last = (Q.copy(), dQ.copy(), X)
-        pick = np.zeros((dof, G, W.shape[1]))
-        jj, cc = np.nonzero(W > 0)
-        pick[jj, owner[jj, cc], cc] = 1.0
-        return X @ pick.reshape(dof * G, -1)
+        # pair c: the sum over joints j of X[:, j, owner[j, c]] where W[j, c] > 0 (a gather, not a matrix product:
+        # numpy hands products this size to a multithreaded BLAS, which on a busy machine costs more than it saves)
+        X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
+        idx = np.where(W > 0, owner, G)
+        return X3[:, np.arange(dof)[:, None], idx].sum(axis=1)
 
     def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
         """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step."""
@@ -268,7 +269,7 @@ class _PosedArms:
             u = axis[:, self.jv]
             rx, ry, rz, ux, uy, uz = rel[..., 0], rel[..., 1], rel[..., 2], u[..., 0], u[..., 1], u[..., 2]
             rho = np.sqrt((ry * uz - rz * uy) ** 2 + (rz * ux - rx * uz) ** 2 + (rx * uy - ry * ux) ** 2).T  # (K, n)
-            drift = dQ @ self.down[:, self.flat]  # (n−1, K)
+            drift = (dQ[:, :, None] * self.down[None, :, self.flat]).sum(axis=1)  # (n−1, K)
             arm = (np.minimum(rho[:, :-1], rho[:, 1:]).T + drift + self.rad[self.g]) * (1 + self.SLACK) + 1e-12
             arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
             X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
