@@ -350,7 +350,8 @@ class SweepChecker:
         cols = list(cols)
         out.pairs = [self.pairs[c] for c in cols]
         out.W = self.W[:, cols]
-        out._owner = self._owner[:, cols]
+        if getattr(self, "_owner", None) is not None:  # (RobotPairSweep has none)
+            out._owner = self._owner[:, cols]
         out.margins, out.is_env = self.margins[cols], self.is_env[cols]
         out.pair_names = [self.pair_names[c] for c in cols]
         out.queries = 0
