@@ -3,6 +3,12 @@ torque, self-collision and obstacle collision *between samples too*, goals, orde
 
     .venv/bin/python experiments/bench_checker.py [--repeat 5]
 
+Two checkouts, alternating in one run (issue 25: the full check of the 350-sample solution against the
+reference's 357 ms): ``--ab SRC_A SRC_B --rounds 5 --samples 350`` solves and stretches the solution once (with
+this process's robodesign), writes it to a temporary file and, round after round, times ``check`` of that file
+in a fresh process per checkout (``PYTHONPATH=<SRC>``, ``--solution FILE --full-only``): median of ``--repeat``
+checks per round, and the median of the rounds per checkout, with the stages' shares and the ratio to 357 ms.
+
 The solution is produced by robodesign solve for an IMPROV arm and then slowed down in time so that
 it has ~1,500 samples (a uniform time stretch keeps it valid). Prints samples per second.
 
@@ -14,6 +20,11 @@ queries.
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -21,7 +32,7 @@ import numpy as np
 
 from robodesign import load_module_set
 from robodesign.judge.checker import CheckSettings, check
-from robodesign.formats.solution import SolutionTrajectory
+from robodesign.formats.solution import SolutionTrajectory, load_solution
 from robodesign.solvers.timing import JointTrajectory
 from robodesign.design.solve import SolveSettings, solve
 from robodesign.formats.task_io import load_task
@@ -42,16 +53,74 @@ def stretched(sol, n_target: int, dt: float):
     return sol.with_(trajectory=SolutionTrajectory(t_new, q, dq / m, ddq / m ** 2, g2t))
 
 
+REFERENCE_MS = 357.0  # the reference (Timor Python) checking the 350-sample PTP_3 solution, issue 25's run
+
+
+def full_check(task, sol, ms, repeat: int) -> None:
+    """One line: the median of ``repeat`` full checks and of each stage (machine-readable for --ab)."""
+    check(task, sol, ms)  # warm-up (meshes, imports)
+    times, cpu, stages = [], [], []
+    for _ in range(repeat):
+        t0, c0 = time.perf_counter(), time.process_time()
+        v = check(task, sol, ms)
+        times.append(time.perf_counter() - t0)
+        cpu.append(time.process_time() - c0)
+        stages.append(v.timings)
+    med = {k: float(np.median([st[k] for st in stages])) * 1e3 for k in stages[0]}
+    print(json.dumps({"median_ms": float(np.median(times)) * 1e3, "min_ms": min(times) * 1e3, "valid": v.valid,
+                      "cpu_median_ms": float(np.median(cpu)) * 1e3, "stages_ms": med, "samples": sol.trajectory.n}),
+          flush=True)
+
+
+def ab(sol_file: Path, srcs, rounds: int, repeat: int) -> None:
+    """Alternate the checkouts ``srcs`` round after round on the solution in ``sol_file``."""
+    runs: dict = {s: [] for s in srcs}
+    for r in range(rounds):
+        for s in srcs:
+            env = dict(os.environ, PYTHONPATH=str(Path(s).resolve()))
+            out = subprocess.run([sys.executable, __file__, "--solution", str(sol_file), "--full-only",
+                                  "--repeat", str(repeat)], env=env, capture_output=True, text=True, check=True)
+            row = json.loads(out.stdout.strip().splitlines()[-1])
+            runs[s].append(row)
+            print(f"round {r + 1} {s}: median {row['median_ms']:.1f} ms (min {row['min_ms']:.1f}, CPU time median "
+                  f"{row['cpu_median_ms']:.1f}, valid {row['valid']})", flush=True)
+    for s, rows in runs.items():
+        med = float(np.median([x["median_ms"] for x in rows]))
+        stages = {k: float(np.median([x["stages_ms"][k] for x in rows])) for k in rows[0]["stages_ms"]}
+        shares = ", ".join(f"{k} {v:.1f} ms ({v / stages['total'] * 100:.0f} %)" for k, v in stages.items()
+                           if k != "total")
+        each = ", ".join(f"{x['median_ms']:.1f}" for x in rows)
+        cpu = float(np.median([x["cpu_median_ms"] for x in rows]))
+        print(f"{s}: full check of {rows[0]['samples']} samples, median of {rounds} rounds {med:.1f} ms "
+              f"(rounds {each}; CPU time {cpu:.1f} ms); stages {shares}; "
+              f"{REFERENCE_MS / med:.1f}x faster than the reference's {REFERENCE_MS:.0f} ms", flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--samples", type=int, default=1500)
+    ap.add_argument("--solution", help="check this solution file instead of solving (PTP_3, IMPROV)")
+    ap.add_argument("--full-only", action="store_true", help="only the full check, one JSON line")
+    ap.add_argument("--ab", nargs="+", metavar="SRC", help="checkouts' src folders to time alternately")
+    ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args()
     task = load_task(SHARED / "tasks" / "simple" / "PTP_3.json")
     ms = load_module_set(SHARED / "modules" / "IMPROV")
-    res = solve(task, ms, ["1", "21", "4", "22", "5", "23", "12"], settings=SolveSettings(seed=1))
-    assert res.feasible, res.message
-    sol = stretched(res.solution, args.samples, task.dt)
+    if args.solution:
+        sol = load_solution(args.solution)
+    else:
+        res = solve(task, ms, ["1", "21", "4", "22", "5", "23", "12"], settings=SolveSettings(seed=1))
+        assert res.feasible, res.message
+        sol = stretched(res.solution, args.samples, task.dt)
+    if args.full_only:
+        full_check(task, sol, ms, args.repeat)
+        return
+    if args.ab:
+        with tempfile.TemporaryDirectory() as tmp:
+            f = sol.write(Path(tmp) / "ptp3.json")
+            ab(f, args.ab, args.rounds, args.repeat)
+        return
     v = check(task, sol, ms)  # warm-up (meshes, imports)
     print(f"solution: {sol.trajectory.n} samples, {sol.trajectory.t[-1]:.2f} s, valid={v.valid} "
           f"{[str(x) for x in v.violations][:3]}")
@@ -64,7 +133,9 @@ def main():
             times.append(time.perf_counter() - t0)
         t = float(np.median(times))
         print(f"check {mode}: median {t * 1e3:.1f} ms -> {sol.trajectory.n / t:,.0f} samples/s "
-              f"(valid={v.valid}; stages {', '.join(f'{k} {x * 1e3:.1f} ms' for k, x in v.timings.items())})")
+              f"(valid={v.valid}; stages {', '.join(f'{k} {x * 1e3:.1f} ms' for k, x in v.timings.items())})"
+              + (f"; {REFERENCE_MS / (t * 1e3):.1f}x faster than the reference's {REFERENCE_MS:.0f} ms"
+                 if mode.startswith("with") and sol.trajectory.n == 351 else ""))
     # the same solution with dq/ddq refilled by numpy.gradient (the reference's way): the judge searches witness
     # velocities within A·h/2 (robodesign.judge.motion.witness_velocities), a loop over the steps
     tr = sol.trajectory

@@ -99,7 +99,11 @@ def _rate_bounds(dyn, robot, Q, V, acc_lo, acc_hi, wr):
     constant q̈ in [acc_lo, acc_hi]: the link-side rate (interval RNEA) plus the friction term's
     (f_v + f_c·σ'(q̇))·q̈, σ'(x) = k / (1 + (kx)²)^1.5 (largest at the q̇ nearest 0); k²I_m·q̈ is constant."""
     am, ar = (acc_lo + acc_hi) / 2, (acc_hi - acc_lo) / 2
-    T = dyn.link_torques(Q, V, (am, ar), wr if np.any(wr) else None)
+    return _with_friction(dyn.link_torques(Q, V, (am, ar), wr if np.any(wr) else None), robot, V, acc_lo, acc_hi)
+
+
+def _with_friction(T, robot, V, acc_lo, acc_hi):
+    """[d_lo, d_hi] of :func:`_rate_bounds` from the link-side rate enclosure ``T``."""
     fv, fc = np.asarray(robot.friction_viscous, dtype=float), np.asarray(robot.friction_coulomb, dtype=float)
     vlo, vhi = V[0] - V[1], V[0] + V[1]
     near = np.clip(0.0, vlo, vhi)
@@ -135,16 +139,24 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
         same[c] = bool(np.all(rows == rows[0]))
         wr[c] = rows[0]
     Q, V = _interval(q_lo, q_hi), _interval(v_lo, v_hi)
-    d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, np.where(same[:, None], wr, 0.0))
     c = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(steps)]))  # each step's group
     h = motion.h[steps]
     tau = motion.tau[steps]
     dA = np.where((tau > 0) & (tau < h) & (motion.a1[steps] != motion.a2[steps]),
                   np.abs(motion.a2[steps] - motion.a1[steps]), 0.0)
     J = np.zeros_like(dA)
-    if np.any(dA):
-        Mb = dyn.mass_matrix_bound(Q)
-        J = np.einsum("sji,si->sj", Mb[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
+    wr = np.where(same[:, None], wr, 0.0)
+    need = np.unique(c[np.any(dA != 0, axis=1)])  # the groups with a switch inside a step: their mass matrix
+    if len(need) and not np.any(wr):  # the rate and the mass matrix in one interval pass
+        T, Mb = dyn.rates_and_mass_bound(Q, V, ((a_lo + a_hi) / 2, (a_hi - a_lo) / 2), need)
+        d_lo, d_hi = _with_friction(T, robot, V, a_lo, a_hi)
+    else:
+        d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, wr)
+        Mb = dyn.mass_matrix_bound((Q[0][need], Q[1][need])) if len(need) else None
+    if Mb is not None:
+        M_all = np.zeros((len(starts),) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
+        M_all[need] = Mb
+        J = np.einsum("sji,si->sj", M_all[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
     ub = _bounds(ta + J, tb + J, d_lo[c], d_hi[c], h)[0]
     lb = _bounds(ta - J, tb - J, d_lo[c], d_hi[c], h)[1]
     return (ub <= lim) & (lb >= -lim) & same[c][:, None]

@@ -429,17 +429,21 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     Q = tq.q[k0:k1 + 1]
     task = tq.task
     moving = moving_obstacle_indices(r, task) if env and task is not None else []  # no task: no moving obstacles
-    # pairs with moving obstacles are checked piecewise (cell.moving_obstacle_events), all others here
-    static = [i for i in range(len(r.obstacles)) if i not in set(moving)] if moving else None
-    checker = SweepChecker(r, check_self=True, check_env=env, obstacles=static)
     path = at = None  # the judged motion between samples (None: the chord)
     if settings.between_samples and settings.one_motion and len(Q) >= 2:
         m = tq.motion
         path, at = m.path_bound()[k0:k1], (lambda k, s: m.at(k + k0, s))
+    # the self pairs' sweep is shared by selfCollisionFree and collisionFree; pairs with moving obstacles are
+    # checked piecewise (cell.moving_obstacle_events), the static ones in the sweep
     if settings.between_samples:
-        events = checker.check(Q, first_only=False, path=path, at=at)
-    else:
-        events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(checker.sample_collisions(Q))[0]]
+        events = _sweep_events(tq, k0, k1, False, path, at)
+        if env:
+            events = sorted(events + _sweep_events(tq, k0, k1, True, path, at), key=lambda e: (e.sample, e.s))
+    else:  # one event per sample in contact
+        hits = _sweep_events(tq, k0, k1, False, None, None, samples_only=True)
+        if env:
+            hits = hits | _sweep_events(tq, k0, k1, True, None, None, samples_only=True)
+        events = [CollisionEvent(int(k), 0.0, "", "", 0.0, env) for k in np.nonzero(hits)[0]]
     if moving and task is not None:
         events = sorted(events + moving_obstacle_events(r, task, moving, tq.t[k0:k1 + 1], Q,
                                                         between_samples=settings.between_samples,
@@ -459,6 +463,29 @@ def _collision_violations(c, tq: TrajectoryQuantities, k0: int, k1: int, setting
     if len(events) > limit:
         out.append(Violation(c.type, f"... and {len(events) - limit} more collisions"))
     return out
+
+
+def _sweep_events(tq: TrajectoryQuantities, k0: int, k1: int, env: bool, path, at, samples_only: bool = False):
+    """Collision events over samples k0 … k1 of the self pairs (``env`` False) or of the pairs with the static
+    obstacles (True), each computed once per trajectory and window; one SweepChecker (its bounds) serves both.
+    Each pair is certified on its own (SweepChecker.check), so the events of the two sets, merged by (sample,
+    s), are those of one sweep over all pairs. ``samples_only``: per sample, in contact (no motion between)."""
+    cache = tq.judge_cache
+    key = ("sweep", k0, k1, env, samples_only, path is None)
+    if key in cache:
+        return cache[key].copy()
+    if "checker" not in cache:
+        r = tq.robot
+        moving = set(moving_obstacle_indices(r, tq.task)) if tq.task is not None else set()
+        static = [i for i in range(len(r.obstacles)) if i not in moving] if moving else None
+        cache["checker"] = SweepChecker(r, check_self=True, check_env=True, obstacles=static, posed_arms=True)
+    full: SweepChecker = cache["checker"]
+    n_self = tq.robot.n_self_collision_pairs
+    checker = full.subset(range(n_self, len(full.pairs)) if env else range(n_self))
+    Q = tq.q[k0:k1 + 1]
+    out = checker.sample_collisions(Q) if samples_only else checker.check(Q, first_only=False, path=path, at=at)
+    cache[key] = out
+    return out.copy()
 
 
 def _check_order(c: GoalsInOrder, g2t: Dict[str, float]) -> List[Violation]:

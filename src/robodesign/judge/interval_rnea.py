@@ -94,11 +94,29 @@ def _icross(am, ar, bm, br):
     return _xm(am, bm), _xr(aa, br) + _xr(ar, ab) + _xr(ar, br)
 
 
+_IJ = _I + _J
+
+
+def _rolled(x):
+    """(x[..., _I], x[..., _J]) in one gather."""
+    t = x[..., _IJ]
+    return t[..., :3], t[..., 3:]
+
+
 def _cross(a: DI, b: DI) -> DI:
-    """a × b with its derivative ȧ × b + a × ḃ (the same as the component products, in fewer array calls)."""
-    m, r = _icross(a.m, a.r, b.m, b.r)
-    m1, r1 = _icross(a.dm, a.dr, b.m, b.r)
-    m2, r2 = _icross(a.m, a.r, b.dm, b.dr)
+    """a × b with its derivative ȧ × b + a × ḃ: the component products of :func:`_icross`, each operand's
+    components gathered once (the same operations in the same order)."""
+    (amI, amJ), (arI, arJ), (admI, admJ), (adrI, adrJ) = (_rolled(x) for x in (a.m, a.r, a.dm, a.dr))
+    (bmI, bmJ), (brI, brJ), (bdmI, bdmJ), (bdrI, bdrJ) = (_rolled(x) for x in (b.m, b.r, b.dm, b.dr))
+    aaI, aaJ, abI, abJ = np.abs(amI), np.abs(amJ), np.abs(bmI), np.abs(bmJ)
+    m = amI * bmJ - amJ * bmI
+    r = (aaI * brJ + aaJ * brI) + (arI * abJ + arJ * abI) + (arI * brJ + arJ * brI)
+    adaI, adaJ = np.abs(admI), np.abs(admJ)
+    m1 = admI * bmJ - admJ * bmI
+    r1 = (adaI * brJ + adaJ * brI) + (adrI * abJ + adrJ * abI) + (adrI * brJ + adrJ * brI)
+    bdaI, bdaJ = np.abs(bdmI), np.abs(bdmJ)
+    m2 = amI * bdmJ - amJ * bdmI
+    r2 = (aaI * bdrJ + aaJ * bdrI) + (arI * bdaJ + arJ * bdaI) + (arI * bdrJ + arJ * bdrI)
     return DI(m, r, m1 + m2, r1 + r2)
 
 
@@ -124,13 +142,19 @@ _SIGN_T = np.array([1.0, -1.0])  # Rz(θ)ᵀ·y = (c·y0 + s·y1, c·y1 − s·y
 _SIGN = np.array([-1.0, 1.0])  # Rz(θ)·y = (c·y0 − s·y1, c·y1 + s·y0, y2)
 
 
-def _rot_z(c: DI, s: DI, y: DI, transpose: bool) -> DI:
-    """Rz(θ)·y (or Rz(θ)ᵀ·y) for vectors y, with c = cos θ and s = sin θ (scalars per row)."""
-    xy = DI(y.m[..., :2], y.r[..., :2], y.dm[..., :2], y.dr[..., :2])
-    sw = DI(y.m[..., _SWAP], y.r[..., _SWAP], y.dm[..., _SWAP], y.dr[..., _SWAP]).scale(_SIGN_T if transpose else _SIGN)
-    c2 = DI(c.m[..., None], c.r[..., None], c.dm[..., None], c.dr[..., None])
-    s2 = DI(s.m[..., None], s.r[..., None], s.dm[..., None], s.dr[..., None])
-    o = c2 * xy + s2 * sw
+def _cs(c: DI, s: DI) -> DI:
+    """cos θ and sin θ stacked, (2, P, 1): the left factor of :func:`_rot_z`."""
+    return DI(*(np.stack([a, b])[..., None] for a, b in ((c.m, s.m), (c.r, s.r), (c.dm, s.dm), (c.dr, s.dr))))
+
+
+def _rot_z(cs: DI, y: DI, transpose: bool) -> DI:
+    """Rz(θ)·y (or Rz(θ)ᵀ·y) for vectors y, with ``cs`` = :func:`_cs` of cos θ and sin θ (scalars per row):
+    c·(y0, y1) + s·(±y1, ∓y0) as one product of the stacked factors, then the sum of its two halves."""
+    sign = _SIGN_T if transpose else _SIGN
+    pair = DI(np.stack([y.m[..., :2], y.m[..., _SWAP] * sign]), np.stack([y.r[..., :2], y.r[..., _SWAP]]),
+              np.stack([y.dm[..., :2], y.dm[..., _SWAP] * sign]), np.stack([y.dr[..., :2], y.dr[..., _SWAP]]))
+    p = cs * pair
+    o = DI(p.m[0], p.r[0], p.dm[0], p.dr[0]) + DI(p.m[1], p.r[1], p.dm[1], p.dr[1])
     return DI(*(np.concatenate([a, b[..., 2:]], axis=-1) for a, b in ((o.m, y.m), (o.r, y.r), (o.dm, y.dm),
                                                                      (o.dr, y.dr))))
 
@@ -178,12 +202,27 @@ class IntervalDynamics:
         T = self.link_torques((Qm, Qr), (zero, zero), np.tile(np.eye(n), (P, 1)), gravity=False)
         return (np.abs(T.m) + T.r).reshape(P, n, n).transpose(0, 2, 1)
 
+    def rates_and_mass_bound(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray],
+                             a: Tuple[np.ndarray, np.ndarray], rows: np.ndarray) -> Tuple[DI, np.ndarray]:
+        """``link_torques(Q, V, a)`` (no wrench) and ``mass_matrix_bound`` of the boxes ``Q[rows]`` in one pass:
+        the rows of both stacked, gravity on the first P only (each row's arithmetic is its own)."""
+        P, n = Q[0].shape
+        G = len(rows)
+        z = np.zeros((G * n, n))
+        stack = lambda x, y: np.concatenate([np.asarray(x, dtype=float), y])  # noqa: E731
+        Qm, Qr = np.repeat(Q[0][rows], n, axis=0), np.repeat(Q[1][rows], n, axis=0)
+        T = self.link_torques((stack(Q[0], Qm), stack(Q[1], Qr)), (stack(V[0], z), stack(V[1], z)),
+                              (stack(a[0], np.tile(np.eye(n), (G, 1))), stack(a[1], z)),
+                              gravity=np.r_[np.ones(P, dtype=bool), np.zeros(G * n, dtype=bool)])
+        head = DI(T.m[:P], T.r[:P], T.dm[:P], T.dr[:P])
+        return head, (np.abs(T.m[P:]) + T.r[P:]).reshape(G, n, n).transpose(0, 2, 1)
+
     def link_torques(self, Q: Tuple[np.ndarray, np.ndarray], V: Tuple[np.ndarray, np.ndarray], a,
-                     wrench: Optional[np.ndarray] = None, gravity: bool = True) -> DI:
+                     wrench: Optional[np.ndarray] = None, gravity=True) -> DI:
         """Enclosure (P, dof) of RNEA(q, q̇, a) and of its rate along the arc, for P pieces with q in the
         intervals ``Q`` = (mid, radius), q̇ in ``V`` = (mid, radius) (all (P, dof)), q̈ = ``a`` (P, dof), constant
         along each arc (an array, or (mid, radius): any constant acceleration in that interval), and ``wrench``
-        (P, 6) world wrenches [f; τ] at the TCP (None: none)."""
+        (P, 6) world wrenches [f; τ] at the TCP (None: none). ``gravity``: a bool, or one per row."""
         a_m, a_r = (np.asarray(a[0], float), np.asarray(a[1], float)) if isinstance(a, tuple) else \
             (np.asarray(a, float), np.zeros(np.shape(a)))
         P = a_m.shape[0]
@@ -197,8 +236,10 @@ class IntervalDynamics:
         ang: List[DI] = [zero3] * (n + 1)
         acc: List[DI] = [zero3] * (n + 1)
         alpha: List[DI] = [zero3] * (n + 1)
-        acc[0] = DI.const(-self.gravity if gravity else np.zeros(3), (P, 3))
-        trig: Dict[int, Tuple[DI, DI]] = {}  # revolute joint → (cos, sin) of its angle
+        g = np.asarray(gravity)
+        acc[0] = DI.const(np.where(g[:, None], -self.gravity, 0.0) if g.ndim else -self.gravity if gravity else
+                          np.zeros(3), (P, 3))
+        trig: Dict[int, DI] = {}  # revolute joint → (cos, sin) of its angle, stacked (_cs)
         f_lin: List[DI] = [zero3] * (n + 1)
         f_ang: List[DI] = [zero3] * (n + 1)
         # world wrench carried down the chain to the TCP's joint (Rᵀ applied joint after joint)
@@ -225,11 +266,11 @@ class IntervalDynamics:
             s_qd, s_qdd = unit_z(qdi.scale(sg)), unit_z(qddi.scale(sg))
             if self.kinds[j] == 0:  # revolute: then rotate by θ = sign·q about z
                 c, s = _cos_sin(qi.scale(sg))
-                trig[i] = (c, s)
-                w_i = _rot_z(c, s, w_par, True) + s_qd
-                v_i = _rot_z(c, s, v_par, True)
-                al_i = _rot_z(c, s, al_par, True) + s_qdd + _cross(w_i, s_qd)
-                a_i = _rot_z(c, s, a_par, True) + _cross(v_i, s_qd)
+                cs = trig[i] = _cs(c, s)
+                w_i = _rot_z(cs, w_par, True) + s_qd
+                v_i = _rot_z(cs, v_par, True)
+                al_i = _rot_z(cs, al_par, True) + s_qdd + _cross(w_i, s_qd)
+                a_i = _rot_z(cs, a_par, True) + _cross(v_i, s_qd)
             else:  # prismatic: translated by sign·q along z
                 d = unit_z(qi.scale(sg))
                 w_i = w_par
@@ -241,7 +282,7 @@ class IntervalDynamics:
             if w_f is not None:
                 wf, wt = w_f[lam].lin(Rp.T), w_t[lam].lin(Rp.T)
                 if self.kinds[j] == 0:
-                    wf, wt = _rot_z(c, s, wf, True), _rot_z(c, s, wt, True)
+                    wf, wt = _rot_z(cs, wf, True), _rot_z(cs, wt, True)
                 w_f[i], w_t[i] = wf, wt
                 if i == self.tcp_joint:  # pinocchio: f_i −= fext_i (force, moment about the joint origin)
                     fl = fl - wf
@@ -262,7 +303,7 @@ class IntervalDynamics:
         fa = g_ang + _cross(w_i, h_ang) + _cross(v_i, h_lin)
         return fl, fa
 
-    def _backward(self, q: DI, f_lin: List[DI], f_ang: List[DI], trig: Dict[int, Tuple[DI, DI]],
+    def _backward(self, q: DI, f_lin: List[DI], f_ang: List[DI], trig: Dict[int, DI],
                   unit_z: Callable[[DI], DI]) -> DI:
         """The backward pass of RNEA: each body's wrench carried to its parent, the joint torques read off from
         the TCP back to the base. → (P, dof) torques."""
@@ -279,8 +320,7 @@ class IntervalDynamics:
             Rp, pp = self.R[j], self.p[j]
             fl, fa = f_lin[i], f_ang[i]
             if self.kinds[j] == 0:
-                c, s = trig[i]
-                fl, fa = _rot_z(c, s, fl, False), _rot_z(c, s, fa, False)
+                fl, fa = _rot_z(trig[i], fl, False), _rot_z(trig[i], fa, False)
             else:
                 fa = fa + _cross(unit_z(q[j].scale(sg)), fl)
             fl_p, fa_p = fl.lin(Rp), fa.lin(Rp)

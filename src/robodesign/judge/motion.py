@@ -91,6 +91,10 @@ class StepMotion:
 
     def velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
         """Per step: (largest |velocity|, time of it within the step)."""
+        return self._velocity_extremes
+
+    @cached_property
+    def _velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
         c = np.stack([np.abs(self.v[:-1]), np.abs(self.v_switch), np.abs(self.v[1:])])
         i = np.argmax(c, axis=0)
         when = np.choose(i, [np.zeros_like(self.tau), self.tau, np.broadcast_to(self.h, self.tau.shape)])
@@ -98,6 +102,10 @@ class StepMotion:
 
     def position_extremes(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Per step: (min q, time of it, max q, time of it) over the step, closed-form."""
+        return self._position_extremes
+
+    @cached_property
+    def _position_extremes(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         q0, v0, a1, a2, tau = self.q[:-1], self.v[:-1], self.a1, self.a2, self.tau
         qs, vs = self.q_switch, self.v_switch
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -117,6 +125,10 @@ class StepMotion:
     def path_bound(self) -> np.ndarray:
         """Per step and joint: a bound on how far the joint moves from any instant of the step to any later one
         (h · max |velocity|; ≥ |Δq|), what the collision sweep advances with."""
+        return self._path_bound
+
+    @cached_property
+    def _path_bound(self) -> np.ndarray:
         return np.maximum(self.h * self.velocity_extremes()[0], np.abs(np.diff(self.q, axis=0)))
 
 

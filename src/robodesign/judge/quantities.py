@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Dict, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -99,6 +99,26 @@ def step_residuals(t, q, dq, ddq) -> StepResiduals:
     return StepResiduals(r_q, q_tol, r_dq, dq_tol, hull, mean_v, mean_a)
 
 
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def _chain_axes(robot: Robot) -> Optional[list]:
+    """(joint id, velocity index, prismatic, unit axis in the joint's frame) of every joint from the world to the
+    TCP, or None when one is not a one-axis revolute or prismatic joint."""
+    out = []
+    for j in robot.tcp_chain():
+        jm = robot.model.joints[j]
+        name = jm.shortname()
+        if name[:11] in ("JointModelR", "JointModelP") and name[11:] in _AXES:
+            out.append((j, int(jm.idx_v), name[10] == "P", np.array(_AXES[name[11:]])))
+        elif name in ("JointModelRevoluteUnaligned", "JointModelPrismaticUnaligned"):
+            a = np.asarray(jm.extract().axis, dtype=float)
+            out.append((j, int(jm.idx_v), "Prismatic" in name, a / np.linalg.norm(a)))
+        else:
+            return None
+    return out
+
+
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
     """The unique sample at ``value`` (numpy.isclose rule of the reference), else None."""
     close = np.nonzero(np.isclose(t, value, rtol=TIME_RTOL, atol=TIME_ATOL))[0]
@@ -118,6 +138,7 @@ class TrajectoryQuantities:
         self.t = np.asarray(t, dtype=float)
         self.q, self.dq, self.ddq = (np.asarray(x, dtype=float) for x in (q, dq, ddq))
         self.goal2time = dict(goal2time or {})
+        self.judge_cache: Dict[Any, Any] = {}  # the checker's results shared between rules (judge.checker)
 
     @classmethod
     def from_solution(cls, robot: Robot, solution: Solution, task: Optional[Task] = None) -> "TrajectoryQuantities":
@@ -189,14 +210,28 @@ class TrajectoryQuantities:
         return np.vstack([after[:1], before]), np.vstack([after, before[-1:]])
 
     @cached_property
+    def _motion_link_sides(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Link-side torques at every sample with the motion's acceleration just before and just after it (one
+        pass of RNEA per row; a row whose two accelerations agree is computed once)."""
+        W = self.external_wrenches
+        wr = W if np.any(W) else None
+        before, after = self.one_sided_accelerations
+        la = self._rnea(self.q, self.velocities, after, wr)
+        lb = la.copy()
+        differ = np.any(before != after, axis=1)
+        if np.any(differ):
+            lb[differ] = self._rnea(self.q[differ], self.velocities[differ], before[differ],
+                                                 None if wr is None else wr[differ])
+        return lb, la
+
+    @cached_property
     def motion_torques(self) -> Tuple[np.ndarray, np.ndarray]:
         """Drivetrain torques at every sample with the motion's acceleration just before and just after it
         (torque is affine in q̈ at fixed q, q̇: these two and the file's ddq bound it at the sample)."""
-        W = self.external_wrenches
-        wrenches = W if np.any(W) else None
         before, after = self.one_sided_accelerations
-        return (self.robot.drivetrain_torques(self.q, self.velocities, before, wrenches),
-                self.robot.drivetrain_torques(self.q, self.velocities, after, wrenches))
+        lb, la = self._motion_link_sides
+        return (self.robot.drivetrain_torques(self.q, self.velocities, before, link_torques=lb),
+                self.robot.drivetrain_torques(self.q, self.velocities, after, link_torques=la))
 
     @cached_property
     def motion_accelerations(self) -> np.ndarray:
@@ -213,9 +248,21 @@ class TrajectoryQuantities:
     @cached_property
     def motion_link_torques(self) -> np.ndarray:
         """(N, dof) link-side torques on the judged motion (q, :attr:`velocities`, :attr:`motion_accelerations`)
-        under :attr:`external_wrenches`: what linkMechEnergy reads."""
+        under :attr:`external_wrenches`: what linkMechEnergy reads. Rows whose acceleration is the one just after
+        (or just before) the sample are those of :attr:`motion_torques`' RNEA pass."""
         W = self.external_wrenches
-        return self.robot.link_torques(self.q, self.velocities, self.motion_accelerations, W if np.any(W) else None)
+        a = self.motion_accelerations
+        before, after = self.one_sided_accelerations
+        lb, la = self._motion_link_sides
+        out = la.copy()
+        not_after = np.any(a != after, axis=1)
+        use_before = not_after & np.all(a == before, axis=1)
+        out[use_before] = lb[use_before]
+        rest = not_after & ~use_before
+        if np.any(rest):
+            out[rest] = self._rnea(self.q[rest], self.velocities[rest], a[rest],
+                                                W[rest] if np.any(W) else None)
+        return out
 
     @cached_property
     def motion_drivetrain_torques(self) -> np.ndarray:
@@ -231,17 +278,36 @@ class TrajectoryQuantities:
     # -- kinematics ---------------------------------------------------------------------------------
     @cached_property
     def tcp_poses(self) -> np.ndarray:
-        """(N, 4, 4) world pose of the TCP at every sample."""
-        r = self.robot
-        out = np.empty((self.n, 4, 4))
-        for k in range(self.n):
-            pin.framesForwardKinematics(r.model, r.data, self.q[k])
-            out[k] = r.data.oMf[r.tcp_frame].homogeneous
-        return out
+        """(N, 4, 4) world pose of the TCP at every sample (:meth:`Robot.fk_batch
+        <robodesign.model.robot.Robot.fk_batch>`: one vectorised pass over the samples)."""
+        if self.n == 0:
+            return np.empty((0, 4, 4))
+        return self.robot.fk_batch(self.q)
 
     @cached_property
     def tcp_twists(self) -> np.ndarray:
-        """(N, 6) TCP twist ``[v; ω]`` in world-aligned axes at the TCP, at every sample."""
+        """(N, 6) TCP twist ``[v; ω]`` in world-aligned axes at the TCP, at every sample: Σ_j over the TCP's chain
+        of ω_j = a_j·q̇_j and v_j = a_j × (p_TCP − o_j)·q̇_j (revolute; a_j·q̇_j prismatic), world axes a_j and
+        origins o_j from :meth:`Robot.joint_poses_batch <robodesign.model.robot.Robot.joint_poses_batch>` (one
+        pass over the samples; pinocchio per sample for a joint type it does not model)."""
+        r = self.robot
+        axes = _chain_axes(r)
+        if axes is None or self.n == 0:
+            return self._tcp_twists_per_sample()
+        J = r.joint_poses_batch(self.q)
+        p = self.tcp_poses[:, :3, 3]
+        v, w = np.zeros((self.n, 3)), np.zeros((self.n, 3))
+        for j, iv, prismatic, ax in axes:
+            z = J[:, j, :3, :3] @ ax
+            qd = self.dq[:, iv, None]
+            if prismatic:
+                v += z * qd
+            else:
+                w += z * qd
+                v += np.cross(z, p - J[:, j, :3, 3]) * qd
+        return np.hstack([v, w])
+
+    def _tcp_twists_per_sample(self) -> np.ndarray:
         r = self.robot
         out = np.empty((self.n, 6))
         for k in range(self.n):
@@ -302,10 +368,29 @@ class TrajectoryQuantities:
         return W
 
     @cached_property
+    def _link_model(self):
+        """A copy of the model without armature and its data: what :meth:`Robot.rnea
+        <robodesign.model.robot.Robot.rnea>` calls pinocchio's RNEA on."""
+        m = pin.Model(self.robot.model)
+        m.armature = np.zeros(self.robot.model.nv)
+        return m, m.createData()
+
+    def _rnea(self, Q, V, A, W: Optional[np.ndarray]) -> np.ndarray:
+        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows (the same pinocchio
+        call per row, without its per-row checks); rows under a wrench through it."""
+        if W is not None and np.any(W):
+            return self.robot.link_torques(Q, V, A, W)
+        m, d = self._link_model
+        out = np.empty((len(Q), self.robot.dof))
+        for k, (q, v, a) in enumerate(zip(Q, V, A)):
+            out[k] = pin.rnea(m, d, q, v, a)
+        return out
+
+    @cached_property
     def link_torques(self) -> np.ndarray:
         """(N, dof) link-side torques (no motor inertia, no friction) under :attr:`external_wrenches`."""
         W = self.external_wrenches
-        return self.robot.link_torques(self.q, self.dq, self.ddq, W if np.any(W) else None)
+        return self._rnea(self.q, self.dq, self.ddq, W if np.any(W) else None)
 
     @cached_property
     def torques(self) -> np.ndarray:
