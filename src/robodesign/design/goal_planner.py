@@ -8,12 +8,14 @@ from typing import TYPE_CHECKING, Any, Dict, List, Optional, Protocol, Sequence,
 
 import numpy as np
 
+from robodesign.core.trajectory import Trajectory
 from robodesign.design.blocked import tool_block
 from robodesign.design.stages import SolveResult, SolveSettings
 from robodesign.formats.costs import CostFunction, cost_term
 from robodesign.formats.task_spec import Goal, Task
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
+from robodesign.solvers.timing import time_parameterize
 
 if TYPE_CHECKING:
     from robodesign.solvers.sequencing import Node
@@ -394,8 +396,7 @@ class GoalPlanner:
                 raise per_move from None
             if n == 0:
                 return traj, g2t
-            from robodesign.solvers.timing import JointTrajectory
-            return (JointTrajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
+            return (Trajectory.at_rest(traj.q[0]).hold(n * dt, dt).concatenate(traj),
                     {k: v + n * dt for k, v in g2t.items()})
 
     def timed_motion(self, cost: Optional[CostFunction] = None, slow: Optional[Dict[str, float]] = None,
@@ -405,9 +406,8 @@ class GoalPlanner:
         whose optimization fails keeps its time-optimal TOPP-RA timing. ``slow`` maps goal IDs to a speed
         factor s < 1 for the motion of that goal (joint speed limits × s, accelerations × s²). Before each
         move the robot waits at rest until the move misses every timed collider of ``colliders``."""
-        from robodesign.solvers.timing import JointTrajectory, time_parameterize
         dt = self.task.dt
-        traj = JointTrajectory.at_rest(self.q0)
+        traj = Trajectory.at_rest(self.q0)
         g2t: Dict[str, float] = {}
         slow = slow or {}
         for (kind, arg, g), path in zip(self.actions, self.paths):
@@ -499,8 +499,7 @@ def _translate(T: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
     """Quintic rest-to-rest moves between consecutive follow poses with exactly the given timing."""
-    from robodesign.solvers.timing import JointTrajectory
-    out = JointTrajectory.at_rest(path[0])
+    out = Trajectory.at_rest(path[0])
     for a, b, T in zip(path, path[1:], np.diff(t_rel)):
         n = max(1, int(round(T / dt)))
         s = np.linspace(0, 1, n + 1)[:, None]
@@ -509,5 +508,5 @@ def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
         dq = d * (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / T
         ddq = d * (60 * s - 180 * s ** 2 + 120 * s ** 3) / T ** 2
         ddq[-1] = 0.0
-        out = out.concatenate(JointTrajectory(np.arange(n + 1) * dt, q, dq, ddq))
+        out = out.concatenate(Trajectory(np.arange(n + 1) * dt, q, dq, ddq))
     return out

@@ -114,7 +114,7 @@ def _finite(x, fallback: float = UNBOUNDED_LIMIT) -> np.ndarray:
     return np.where(np.isfinite(x) & (x > 0), x, fallback)
 
 
-def sample_torques(robot, traj: JointTrajectory) -> np.ndarray:
+def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     """(N, dof) the largest |drivetrain torque| at every sample over the accelerations the judge's motion model
     has there (robodesign.judge.motion): the step's own ddq[k] just after the sample and the previous step's
     ddq[k−1] just before it (the samples are a piecewise-constant acceleration, so these are the motion's
@@ -230,7 +230,7 @@ class _Profile:
 
 def resample_velocity_profile(robot, velocity: Callable[[np.ndarray], np.ndarray], duration: float,
                               q_start, q_goal, dt: float, torque_limits: bool = True,
-                              position: Optional[Callable] = None, max_iter: int = 60) -> JointTrajectory:
+                              position: Optional[Callable] = None, max_iter: int = 60) -> Trajectory:
     """Sample a continuous rest-to-rest velocity profile at ``dt`` (duration rounded up to a multiple
     of dt) obeying the integration rule, and slow it down uniformly until every sample satisfies the
     velocity, acceleration and (optionally) drivetrain-torque limits."""
@@ -238,7 +238,7 @@ def resample_velocity_profile(robot, velocity: Callable[[np.ndarray], np.ndarray
     return _fit_limits(robot, prof, dt, torque_limits, max_iter)
 
 
-def _sample(prof: _Profile, n: int, h: float) -> Tuple[JointTrajectory, float]:
+def _sample(prof: _Profile, n: int, h: float) -> Tuple[Trajectory, float]:
     """n steps of the (stretched) profile after one step of rest (the pre-roll; module docstring)."""
     T_new = n * h
     lam = T_new / prof.duration
@@ -246,7 +246,7 @@ def _sample(prof: _Profile, n: int, h: float) -> Tuple[JointTrajectory, float]:
     V = np.zeros((n + 2, len(prof.q_start)))
     V[1:] = prof.velocity(np.minimum(tp / lam, prof.duration)) / lam
     Q, V, A = _zoh_from_velocity(prof.q_start, prof.q_goal, V, h)
-    return JointTrajectory(h * np.arange(n + 2), Q, V, A), lam
+    return Trajectory(h * np.arange(n + 2), Q, V, A), lam
 
 
 #: :func:`_fit_limits` gives up when STALL_WINDOW slow-downs in a row took less than STALL_GAIN (relative) off the
@@ -259,9 +259,9 @@ STALL_DOUBLINGS = 2
 MAX_STRETCH = 100.0
 
 
-def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> JointTrajectory:
+def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> Trajectory:
     if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
-        tr = JointTrajectory.at_rest(prof.q_goal)
+        tr = Trajectory.at_rest(prof.q_goal)
         tr.info.update(stretch=1.0, max_path_error=0.0)
         return tr
     vmax = np.asarray(robot.dq_max, float)
@@ -720,7 +720,7 @@ def _split(K: int, stops: Sequence[int]) -> List[Tuple[int, int]]:
 def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", torque_limits: bool = True,
                       stop_at: Optional[Sequence[int]] = None, *, blend_radius: float = 0.05,
                       jerk_factor: float = 10.0, grid_step: float = 0.02, torque_passes: int = 3,
-                      fallback: bool = True) -> JointTrajectory:
+                      fallback: bool = True) -> Trajectory:
     """Time-parameterize a joint-space path (K×dof waypoints) from rest to rest, sampled every ``dt``.
 
     * ``method="toppra"``: time-optimal along a blended polyline (``blend_radius``; 0 = stop at every
@@ -731,7 +731,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
     * ``stop_at``: waypoint indices where the robot must be at rest (dq = ddq = 0 exactly at one
       sample, q = the waypoint exactly); the first and last waypoints always are.
 
-    Returns a :class:`JointTrajectory` starting at t = 0 (each rest-to-rest part begins with one rest step,
+    Returns a :class:`Trajectory` starting at t = 0 (each rest-to-rest part begins with one rest step,
     see the module docstring) with ``info`` keys: ``method`` ("toppra", "ruckig" or "toppra+ruckig"
     after a fallback), ``stop_samples`` ({waypoint index: index of the sample where the robot arrives
     there at rest} for every waypoint passed at rest — use ``t[k]`` as the CoBRA goal time),
@@ -771,11 +771,11 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
             if na > 1e-12 and nb > 1e-12 and a @ b < math.cos(REVERSAL_ANGLE) * na * nb:
                 stops.append(i)
     used = method
-    traj: Optional[JointTrajectory] = None
+    traj: Optional[Trajectory] = None
     stop_samples: Dict[int, int] = {0: 0}
     max_dev, max_err, stretch, n_grid, tp_time = 0.0, 0.0, 1.0, 0, 0.0
 
-    def append(part: JointTrajectory, waypoint: int) -> None:
+    def append(part: Trajectory, waypoint: int) -> None:
         nonlocal traj, max_err, stretch
         max_err = max(max_err, part.info.get("max_path_error", 0.0))
         stretch = max(stretch, part.info.get("stretch", 1.0))
@@ -785,7 +785,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
     for a, b in _split(K, stops):
         seg = P[a:b + 1]
         if np.max(np.abs(seg - seg[0])) == 0.0:
-            append(JointTrajectory.at_rest(seg[0]), b)
+            append(Trajectory.at_rest(seg[0]), b)
             continue
         if method == "toppra":
             try:
@@ -807,7 +807,7 @@ def time_parameterize(robot, path, dt: float = 0.01, method: str = "toppra", tor
             prof = _ruckig_profile(seg[i], seg[i + 1], vmax, amax, jmax, dt)
             append(_fit_limits(robot, prof, dt, torque_limits), a + i + 1)
     if traj is None:  # a single waypoint
-        traj = JointTrajectory.at_rest(P[0])
+        traj = Trajectory.at_rest(P[0])
     traj.ddq[-1] = 0.0
     traj.dq[-1] = 0.0
     traj.info.update(method=used, stop_samples=dict(sorted(stop_samples.items())),

@@ -1,4 +1,4 @@
-"""JointTrajectory optimization with CasADi ``Opti`` + ipopt, warm-started from a planned, timed path.
+"""Trajectory optimization with CasADi ``Opti`` + ipopt, warm-started from a planned, timed path.
 
 Transcription (multiple shooting, exact for the project's integration rule)
 ---------------------------------------------------------------------------
@@ -7,7 +7,7 @@ constant::
 
     q_{k+1} = q_k + q̇_k·h + ½·q̈_k·h²,   q̇_{k+1} = q̇_k + q̈_k·h
 
-— the same rule :class:`~robodesign.solvers.timing.JointTrajectory` samples obey, so the optimized
+— the same rule :class:`~robodesign.core.trajectory.Trajectory` samples obey, so the optimized
 trajectory is an exactly integrated C¹ curve. Constraints:
 
 * q_lower + m ≤ q_k ≤ q_upper − m at the interior nodes (m = ``limit_margin``; the fixed end nodes may
@@ -62,10 +62,11 @@ import casadi as ca
 import numpy as np
 
 from robodesign.core.errors import InfeasibleError
+from robodesign.core.trajectory import Trajectory
 from robodesign.formats.costs import CostFunction, cost_terms
 from robodesign.formats.costs import parse_cost as parse_cobra_cost
 from robodesign.solvers.casadi_dynamics import casadi_drivetrain_torque, casadi_fk
-from robodesign.solvers.timing import JointTrajectory, resample_velocity_profile, time_optimal_bound
+from robodesign.solvers.timing import resample_velocity_profile, time_optimal_bound
 
 
 class TrajoptError(InfeasibleError):
@@ -73,7 +74,7 @@ class TrajoptError(InfeasibleError):
 
 
 def trajopt_weights(cost) -> Dict[str, float]:
-    """JointTrajectory-optimization weights {term: weight} from a :class:`CostFunction`, a CoBRA cost (either
+    """Trajectory-optimization weights {term: weight} from a :class:`CostFunction`, a CoBRA cost (either
     notation, compounds such as ``Liu2`` expand) or a dict; only the trajectory-dependent terms ``cyc``,
     ``mechEnergy``, ``effort`` are supported."""
     if isinstance(cost, dict):
@@ -90,7 +91,7 @@ def trajopt_weights(cost) -> Dict[str, float]:
     return out
 
 
-def mechanical_energy(robot, traj: JointTrajectory) -> float:
+def mechanical_energy(robot, traj: Trajectory) -> float:
     """CoBRA ``mechEnergy``: Σ_{k<N} |τ_k·q̇_k|·(t_{k+1} − t_k) with the drivetrain torque."""
     if len(traj) < 2:
         return 0.0
@@ -99,15 +100,15 @@ def mechanical_energy(robot, traj: JointTrajectory) -> float:
     return float(np.sum(p * np.diff(traj.t)))
 
 
-def optimize_trajectory(robot, warm: JointTrajectory, cost="cyc", n_nodes: int = 30, dt_out: float = 0.01,
+def optimize_trajectory(robot, warm: Trajectory, cost="cyc", n_nodes: int = 30, dt_out: float = 0.01,
                         max_iter: int = 500, tube: Optional[float] = 0.05, *, duration: Optional[float] = None,
                         torque_limits: bool = True, torque_margin: float = 1e-3, limit_margin: float = 1e-3,
                         goal_position: Optional[Sequence[float]] = None, goal_tol: float = 1e-3,
                         tol: float = 1e-7, expand: bool = False, ipopt_options: Optional[dict] = None,
-                        verbose: bool = False) -> JointTrajectory:
+                        verbose: bool = False) -> Trajectory:
     """Optimize a rest-to-rest trajectory from ``warm.q[0]`` to ``warm.q[-1]`` (see module docstring).
 
-    Returns a :class:`JointTrajectory` sampled every ``dt_out`` with ``info``: ``solve_time`` (s, whole
+    Returns a :class:`Trajectory` sampled every ``dt_out`` with ``info``: ``solve_time`` (s, whole
     call), ``ipopt_time``, ``iterations``, ``status``, ``T_opt`` (continuous optimum), ``objective``,
     ``stretch`` (uniform slow-down needed by the sample check, 1 if none). Raises :class:`TrajoptError`
     if ipopt fails.
