@@ -236,6 +236,11 @@ class _PosedArms:
         self.jv, self.g = np.nonzero((R > 0) & self.revolute[:, None])
         self.jid = np.array(self.joints)[self.jv]
         self.flat = self.jv * G + self.g
+        # the drift's non-zero terms per joint i (columns of down[:, flat]): summed in the order of i, the same
+        # numbers as the full sum over i (the terms left out are +0.0 for finite |Δq|)
+        D = self.down[:, self.flat]
+        self._drift_terms = [(i, nz, D[i, nz]) for i in range(dof) for nz in [np.nonzero(D[i])[0]] if len(nz)]
+        self._gathers: dict = {}  # (W > 0, owner) → the distinct gather columns and where each pair's is
         self._last: Optional[tuple] = None  # (Q, dQ, arms) of the last motion
 
     def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray) -> np.ndarray:
@@ -249,9 +254,24 @@ class _PosedArms:
             self._last = (Q.copy(), dQ.copy(), X)
         # pair c: the sum over joints j of X[:, j, owner[j, c]] where W[j, c] > 0 (a gather, not a matrix product:
         # numpy hands products this size to a multithreaded BLAS, which on a busy machine costs more than it saves)
-        X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
+        # pairs with the same owners on the same joints (a robot geometry against each obstacle, …) have the same
+        # sum: each distinct column is gathered and summed once
         idx = np.where(W > 0, owner, G)
-        return X3[:, np.arange(dof)[:, None], idx].sum(axis=1)
+        key = idx.tobytes()
+        if key not in self._gathers:
+            self._gathers[key] = np.unique(idx, axis=1, return_inverse=True)
+        uniq, inverse = self._gathers[key]
+        X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
+        return X3[:, np.arange(dof)[:, None], uniq].sum(axis=1)[:, inverse.reshape(-1)]
+
+    def _drift(self, dQ: np.ndarray) -> np.ndarray:
+        """(n−1, K): Σ_i R⁰[i, g]·|Δq_i| over the joints i strictly below j, per step and arm (j, g)."""
+        if not np.isfinite(dQ).all():  # inf·0 is no number: the full sum, as written
+            return (dQ[:, :, None] * self.down[None, :, self.flat]).sum(axis=1)
+        out = np.zeros((len(dQ), len(self.flat)))
+        for i, nz, d in self._drift_terms:
+            out[:, nz] += dQ[:, i, None] * d
+        return out
 
     def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
         """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step."""
@@ -269,7 +289,7 @@ class _PosedArms:
             u = axis[:, self.jv]
             rx, ry, rz, ux, uy, uz = rel[..., 0], rel[..., 1], rel[..., 2], u[..., 0], u[..., 1], u[..., 2]
             rho = np.sqrt((ry * uz - rz * uy) ** 2 + (rz * ux - rx * uz) ** 2 + (rx * uy - ry * ux) ** 2).T  # (K, n)
-            drift = (dQ[:, :, None] * self.down[None, :, self.flat]).sum(axis=1)  # (n−1, K)
+            drift = self._drift(dQ)  # (n−1, K)
             arm = (np.minimum(rho[:, :-1], rho[:, 1:]).T + drift + self.rad[self.g]) * (1 + self.SLACK) + 1e-12
             arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
             X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
