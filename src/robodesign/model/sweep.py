@@ -429,8 +429,7 @@ class SweepChecker:
         sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
         cum = np.concatenate([np.zeros((1, P)), np.cumsum(sched, axis=0)])  # (n, P)
         cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
-        margins = self.margins.tolist()
-        is_env = self.is_env.tolist()
+        margins, is_env = self.margins.tolist(), self.is_env.tolist()
         events: List[CollisionEvent] = []
         # priority queue of (sample index where the pair must be re-checked, pair)
         heap = [(0, c) for c in range(P)]
