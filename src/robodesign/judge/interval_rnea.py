@@ -20,7 +20,9 @@ the TCP's joint, expressed in that joint's frame (as :meth:`Robot.tcp_wrench_for
 """
 from __future__ import annotations
 
-from typing import Callable, Dict, List, Optional, Tuple
+import sys
+from functools import cached_property
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -59,9 +61,12 @@ class DI:
         return DI(self.m * c, self.r * np.abs(c), self.dm * c, self.dr * np.abs(c))
 
     def lin(self, M: np.ndarray) -> "DI":
-        """A constant 3×3 matrix times every vector (last axis)."""
+        """A constant 3×3 matrix times every vector (last axis): (x0·M[i,0] + x1·M[i,1]) + x2·M[i,2], written out
+        (not a matrix product, whose rounding depends on the BLAS: :mod:`~robodesign.judge.interval_kernel` makes
+        the same operations)."""
         A = np.abs(M)
-        return DI(self.m @ M.T, self.r @ A.T, self.dm @ M.T, self.dr @ A.T)
+        return DI(*(((x[..., 0:1] * B[:, 0] + x[..., 1:2] * B[:, 1]) + x[..., 2:3] * B[:, 2])
+                    for x, B in ((self.m, M), (self.r, A), (self.dm, M), (self.dr, A))))
 
     def __getitem__(self, i) -> "DI":
         return DI(self.m[..., i], self.r[..., i], self.dm[..., i], self.dr[..., i])
@@ -159,6 +164,22 @@ def _rot_z(cs: DI, y: DI, transpose: bool) -> DI:
                                                                      (o.dr, y.dr))))
 
 
+_PASSES = [0]  # interval passes made by this process
+NUMPY_PASSES = 4  # passes on the numpy path before a process that has not imported numba imports it
+
+
+def _kernel() -> Any:
+    """The compiled kernel module (:mod:`~robodesign.judge.interval_kernel`) when it runs in this process, else
+    None. Importing numba takes 0.3–1 s, more than the kernel saves a single check: a process that has not
+    imported it (no IK kernel) makes its first :data:`NUMPY_PASSES` passes on the numpy path. Both paths give
+    the same numbers, so which one runs never changes a result."""
+    _PASSES[0] += 1
+    if "numba" not in sys.modules and _PASSES[0] <= NUMPY_PASSES:
+        return None
+    from robodesign.judge import interval_kernel
+    return interval_kernel if interval_kernel.ready() else None
+
+
 class IntervalDynamics:
     """The robot's kinematic tree and inertias, read once from its pinocchio model, for :meth:`link_torques`."""
 
@@ -226,6 +247,9 @@ class IntervalDynamics:
         a_m, a_r = (np.asarray(a[0], float), np.asarray(a[1], float)) if isinstance(a, tuple) else \
             (np.asarray(a, float), np.zeros(np.shape(a)))
         P = a_m.shape[0]
+        kernel = _kernel() if wrench is None or self.tcp_joint <= 0 else None
+        if kernel is not None:
+            return self._compiled(kernel, Q, V, (a_m, a_r), gravity)
         z = np.zeros((P,))
         q = DI(Q[0], Q[1], V[0], V[1])
         qd = DI(V[0], V[1], a_m, a_r)
@@ -289,6 +313,30 @@ class IntervalDynamics:
                     fa = fa - (wt + wf.lin(_skew(self.tcp_offset)))
             f_lin[i], f_ang[i] = fl, fa
         return self._backward(q, f_lin, f_ang, trig, unit_z)
+
+    def _compiled(self, kernel, Q, V, a, gravity) -> DI:
+        """:meth:`link_torques` without a wrench by the compiled kernel (the same operations, bit for bit)."""
+        f = lambda x: np.ascontiguousarray(x, dtype=float)  # noqa: E731
+        Q0, Q1, V0, V1, am, ar = (f(x) for x in (Q[0], Q[1], V[0], V[1], a[0], a[1]))
+        P, n = am.shape
+        g = np.asarray(gravity)
+        acc0 = np.broadcast_to(np.where(g[:, None], -self.gravity, 0.0) if g.ndim else -self.gravity if gravity
+                               else np.zeros(3), (P, 3))
+        C, S = np.zeros((P, n)), np.zeros((P, n))
+        for j in range(n):
+            if self.kinds[j] == 0:  # cos and sin as _cos_sin takes them (numpy's, of the same numbers)
+                th = Q0[..., j] * np.asarray(self.signs[j], dtype=float)
+                C[:, j], S[:, j] = np.cos(th), np.sin(th)
+        k = self._kernel_args
+        out = kernel.link_torques(Q0, Q1, V0, V1, am, ar, f(acc0), C, S, *k)
+        return DI(out[0], out[1], out[2], out[3])
+
+    @cached_property
+    def _kernel_args(self) -> tuple:
+        return (np.array(self.parents, dtype=np.int64), np.array(self.kinds, dtype=np.int64),
+                np.array(self.signs, dtype=float), np.array(self.R, dtype=float),
+                np.array([_skew(p) for p in self.p]), np.array(self.mass, dtype=float),
+                np.array([_skew(c) for c in self.lever]), np.array(self.inertia, dtype=float))
 
     def _body_wrench(self, j: int, v_i: DI, w_i: DI, a_i: DI, al_i: DI) -> Tuple[DI, DI]:
         """Body wrench of joint ``j``'s body: I·a + v ×* I·v, with I (mass m, lever c, rotational inertia Ic about
