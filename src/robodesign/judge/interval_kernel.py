@@ -20,9 +20,11 @@ import os
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any, Optional, cast
+from typing import Optional
 
 import numpy as np
+
+from robodesign.core.jit_cache import KernelCache, background_compile
 
 try:
     from numba import njit
@@ -253,31 +255,17 @@ def available() -> bool:
     return _IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no", "off")
 
 
-def _cache_dir() -> Path:
-    return Path(cast(Any, link_torques)._cache._cache_path)  # numba's dispatcher; its stubs omit the cache
+def _cache() -> KernelCache:
+    return KernelCache("robodesign.judge.interval_kernel", __file__, link_torques, ("link_torques",))
 
 
 def stamp_path() -> Path:
-    return _cache_dir() / "robodesign_interval_kernel.ready"
-
-
-def _stamp_text() -> str:
-    import platform
-
-    import numba
-    from llvmlite import binding
-    src = Path(__file__).stat()
-    return (f"numba {numba.__version__}; python {sys.version.split()[0]} {Path(sys.executable).resolve()}; "
-            f"cpu {platform.machine()} {binding.get_host_cpu_name()}; source {src.st_size} {src.st_mtime_ns}")
+    return _cache().stamp_path()
 
 
 def compiled() -> bool:
     """True when the cache holds the compiled kernel for this numba, Python, CPU and source."""
-    try:
-        stamp = stamp_path()
-        return stamp.read_text() == _stamp_text() and any(stamp.parent.glob("interval_kernel.link_torques-*.nbi"))
-    except (OSError, AttributeError):
-        return False
+    return _cache().compiled()
 
 
 def warm_up() -> bool:
@@ -311,40 +299,13 @@ def ready() -> bool:
 
 
 def _start_compiler() -> Optional[subprocess.Popen]:
-    env = dict(os.environ)
-    src_root = str(Path(__file__).resolve().parents[2])  # the folder holding the robodesign package
-    env["PYTHONPATH"] = src_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    group = {"process_group": 0} if sys.version_info >= (3, 11) else {"preexec_fn": os.setpgrp}
-    try:
-        return subprocess.Popen([sys.executable, "-m", "robodesign.judge.interval_kernel"], env=env,
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                **group)
-    except OSError:
-        return None
+    return _cache().start_compiler()
 
 
 def compile_into_cache() -> int:
     """Compile the kernel into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
-    import fcntl
-    stamp = stamp_path()
-    stamp.parent.mkdir(parents=True, exist_ok=True)
-    with open(stamp.with_suffix(".lock"), "a+") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not compiled():
-            warm_up()
-            tmp = stamp.with_suffix(f".tmp{os.getpid()}")
-            tmp.write_text(_stamp_text())
-            tmp.replace(stamp)
-    return 0
-
-
-def _background_compile() -> int:
-    try:
-        os.nice(int(os.environ.get("ROBODESIGN_COMPILE_NICE", "10")))
-    except (OSError, ValueError):
-        pass
-    return compile_into_cache() if available() else 1
+    return _cache().compile_into_cache(warm_up)
 
 
 if __name__ == "__main__":
-    sys.exit(_background_compile())
+    sys.exit(background_compile(available(), compile_into_cache))

@@ -41,9 +41,11 @@ import subprocess
 import sys
 import weakref
 from pathlib import Path
-from typing import Any, Optional, cast
+from typing import Optional
 
 import numpy as np
+
+from robodesign.core.jit_cache import KernelCache, background_compile
 
 __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacobian", "goal_rows", "lm_descend",
            "lm_batch", "warm_up"]
@@ -613,54 +615,22 @@ _COMPILER: Optional[subprocess.Popen] = None
 _KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are compiled into them)
 
 
-def _cache_dir() -> Path:
-    """Where numba caches this module's kernels (``__pycache__`` beside it, ``NUMBA_CACHE_DIR`` or numba's
-    user-wide fall-back)."""
-    return Path(cast(Any, lm_batch)._cache._cache_path)   # numba's dispatcher; its stubs omit the cache
+def _cache() -> KernelCache:
+    return KernelCache("robodesign.solvers.ik_kernel", __file__, lm_batch, _KERNELS)
 
 
 def stamp_path() -> Path:
-    return _cache_dir() / "robodesign_ik_kernel.ready"
-
-
-def _stamp_text() -> str:
-    import platform
-
-    import numba
-    from llvmlite import binding
-    src = Path(__file__).stat()
-    # the resolved executable: `python` and `python3` of one environment are the same interpreter
-    return (f"numba {numba.__version__}; python {sys.version.split()[0]} {Path(sys.executable).resolve()}; "
-            f"cpu {platform.machine()} {binding.get_host_cpu_name()}; source {src.st_size} {src.st_mtime_ns}")
+    return _cache().stamp_path()
 
 
 def compiled() -> bool:
     """True when the cache holds the compiled kernels for this numba, Python, CPU and source (loading them
     then takes about 0.1 s, no compilation)."""
-    try:
-        stamp = stamp_path()
-        if stamp.read_text() != _stamp_text():
-            return False
-        return all(any(stamp.parent.glob(f"ik_kernel.{k}-*.nbi")) for k in _KERNELS)
-    except (OSError, AttributeError):
-        return False
+    return _cache().compiled()
 
 
 def _start_compiler() -> Optional[subprocess.Popen]:
-    env = dict(os.environ)
-    src_root = str(Path(__file__).resolve().parents[2])   # the folder holding the robodesign package
-    env["PYTHONPATH"] = src_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
-    # its own process group (Ctrl-C on the command does not stop it: it finishes the cache even if the command
-    # ends first) but the command's session: Linux shares the CPU between sessions (autogroup), so a session
-    # of its own would take a whole share from a busy machine, while inside the command's session its nice
-    # value leaves the CPU to the command
-    group = {"process_group": 0} if sys.version_info >= (3, 11) else {"preexec_fn": os.setpgrp}
-    try:
-        return subprocess.Popen([sys.executable, "-m", "robodesign.solvers.ik_kernel"], env=env,
-                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                **group)
-    except OSError:
-        return None
+    return _cache().start_compiler()
 
 
 def ready() -> bool:
@@ -685,26 +655,8 @@ def ready() -> bool:
 def compile_into_cache() -> int:
     """Compile every kernel into numba's cache and write the stamp (once, under a lock shared with
     concurrent compilers); what ``python -m robodesign.solvers.ik_kernel`` does, niced, in the background."""
-    import fcntl
-    stamp = stamp_path()
-    stamp.parent.mkdir(parents=True, exist_ok=True)
-    with open(stamp.with_suffix(".lock"), "a+") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not compiled():
-            _warm_up_kernels()
-            tmp = stamp.with_suffix(f".tmp{os.getpid()}")
-            tmp.write_text(_stamp_text())
-            tmp.replace(stamp)
-    return 0
-
-
-def _background_compile() -> int:
-    try:  # the commands that wait for nothing come first (ROBODESIGN_COMPILE_NICE: tests on a busy machine)
-        os.nice(int(os.environ.get("ROBODESIGN_COMPILE_NICE", "10")))
-    except (OSError, ValueError):
-        pass
-    return compile_into_cache() if available() else 1
+    return _cache().compile_into_cache(_warm_up_kernels)
 
 
 if __name__ == "__main__":
-    sys.exit(_background_compile())
+    sys.exit(background_compile(available(), compile_into_cache))
