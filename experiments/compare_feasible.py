@@ -17,8 +17,9 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
-import sys
 from pathlib import Path
+
+from verdict_runs import ptp, use_checkout
 
 ROOT = Path(__file__).resolve().parents[1]
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
@@ -32,15 +33,11 @@ def main() -> None:
     ap.add_argument("--max", type=int, default=400)
     ap.add_argument("--plans", type=int, default=30)
     args = ap.parse_args()
-    sys.path.insert(0, str(Path(args.src).resolve() / "src"))
+    use_checkout(args.src)
     import numpy as np
 
     from robodesign.design.evaluator import Evaluator, EvaluatorSpec
-    from robodesign.design.problem import Problem
     from robodesign.design.search_space import Candidate
-    from robodesign.solvers import ik_kernel
-    ik_kernel.warm_up()
-    cobra = ROOT.parent / "shared" / "cobra"
 
     def line(name, i, e):
         tr = e.solution["trajectory"] if e.solution else None
@@ -48,8 +45,7 @@ def main() -> None:
         dur = f"{tr['t'][-1]:.2f}" if tr else "-"
         print(name, i, e.stage, e.goals_reached, e.feasible, e.cost, dur, h, flush=True)
 
-    problems = {t: Problem.build(cobra / "tasks" / "simple" / f"{t}.json", cobra / "modules" / "IMPROV", "cyc")
-                for t in ("PTP_1", "PTP_2", "PTP_3")}
+    problems = {t: ptp(t) for t in ("PTP_1", "PTP_2", "PTP_3")}
     for t, p in problems.items():
         for s in range(args.seeds):
             line(f"{t} good", s, Evaluator(EvaluatorSpec(p, seed=s)).evaluate(Candidate(GOOD)))

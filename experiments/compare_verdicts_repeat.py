@@ -12,11 +12,11 @@ that a robot taken back from a cache meets another base pose and other robots ca
 from __future__ import annotations
 
 import argparse
-import glob
 import hashlib
 import json
-import sys
 from pathlib import Path
+
+from verdict_runs import profile_runs, use_checkout
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -27,18 +27,12 @@ def main() -> None:
     ap.add_argument("--orders", type=int, default=12)
     ap.add_argument("--bases", type=int, default=4)
     args = ap.parse_args()
-    sys.path.insert(0, str(Path(args.src).resolve() / "src"))
+    use_checkout(args.src)
     import numpy as np
 
     from robodesign.design.evaluator import Evaluator, EvaluatorSpec
-    from robodesign.design.problem import Problem
     from robodesign.design.search_space import Candidate
-    from robodesign.solvers import ik_kernel
-    ik_kernel.warm_up()
-    cobra = ROOT.parent / "shared" / "cobra"
-    runs = [("PTP_3", Problem.build(cobra / "tasks" / "simple" / "PTP_3.json", cobra / "modules" / "IMPROV", "cyc"))]
-    runs += [(Path(f).name, Problem.build(f, "robodesign_arm", "cyc"))
-             for f in sorted(glob.glob(str(ROOT / "results" / "tasks" / "profile_*" / "*.json")))]
+    runs = profile_runs()
 
     for name, p in runs:
         ev = Evaluator(EvaluatorSpec(p, seed=0))
