@@ -14,6 +14,17 @@ import sys
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, cast
 
+try:
+    from numba import njit
+    NUMBA_IMPORTED = True
+except Exception:  # pragma: no cover - numba is a dependency; without it the kernels' modules run plain Python
+    NUMBA_IMPORTED = False
+
+    def njit(*args, **kwargs):  # type: ignore[no-redef]  # the stand-in for numba's decorator
+        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+
+__all__ = ["KernelCache", "NUMBA_IMPORTED", "background_compile", "njit"]
+
 
 class KernelCache:
     """The cache of the kernels ``kernels`` of module ``module`` (its file ``source``); ``dispatcher`` is one

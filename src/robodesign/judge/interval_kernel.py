@@ -24,16 +24,9 @@ from typing import Optional
 
 import numpy as np
 
-from robodesign.core.jit_cache import KernelCache, background_compile
+from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
 
-try:
-    from numba import njit
-    _IMPORTED = True
-except Exception:  # pragma: no cover - numba is a dependency; without it the numpy path runs
-    _IMPORTED = False
-
-    def njit(*args, **kwargs):  # type: ignore[no-redef]  # the stand-in for numba's decorator
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+_IMPORTED = NUMBA_IMPORTED  # without numba the numpy path runs
 
 
 @njit(cache=True, nogil=True)

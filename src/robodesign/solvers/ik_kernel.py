@@ -45,7 +45,7 @@ from typing import Optional
 
 import numpy as np
 
-from robodesign.core.jit_cache import KernelCache, background_compile
+from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
 
 __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacobian", "goal_rows", "lm_descend",
            "lm_batch", "warm_up"]
@@ -54,14 +54,7 @@ __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacob
 K_P_ROW, K_R_ROW, K_SPH, K_THETA, K_CYL = 0, 1, 2, 3, 4
 _ROWS = {K_P_ROW: 1, K_R_ROW: 1, K_SPH: 3, K_THETA: 3, K_CYL: 2}
 
-try:
-    from numba import njit
-    _IMPORTED = True
-except Exception:  # pragma: no cover - numba is a dependency; without it the Python loop runs
-    _IMPORTED = False
-
-    def njit(*args, **kwargs):  # type: ignore[no-redef]  # the stand-in for numba's decorator
-        return (lambda f: f) if not args or not callable(args[0]) else args[0]
+_IMPORTED = NUMBA_IMPORTED  # without numba the Python loop runs
 
 
 def _jit_mode() -> str:
