@@ -61,6 +61,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 import numpy as np
 
 from robodesign.core.errors import InputError
+from robodesign.solvers.collision_cull import culler_of
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -205,7 +206,6 @@ class _Memoized:
     def culler(self):
         """The robot's CollisionCuller (built on first use), or None where it does not apply."""
         if self._culler is None and self.robot is not None:
-            from robodesign.solvers.collision_cull import culler_of
             try:
                 self._culler = culler_of(self.robot)
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
