@@ -1,6 +1,7 @@
-"""solvers/collision_cull.py on the real PTP_3 cell (IMPROV arm, CNC-machine mesh): the culled collision verdicts
+"""model/collision_cull.py on the real PTP_3 cell (IMPROV arm, CNC-machine mesh): the culled collision verdicts
 equal ``robot.in_collision`` state by state, and the planner's segment checks find the same states."""
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from robodesign.design.solve import SolveSettings, solve
@@ -9,7 +10,7 @@ from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
 from robodesign.solvers import planning
-from robodesign.solvers.collision_cull import SLACK, CollisionCuller, culler_of
+from robodesign.model.collision_cull import SLACK, CollisionCuller, culler_of
 from robodesign.solvers.planning import check_path
 from robodesign.solvers.schedule import static_cell
 
@@ -29,6 +30,11 @@ def cell():
     return robot, np.array(stops)
 
 
+def coal_verdict(robot, q) -> bool:
+    """Every pair asked of coal (pinocchio's own query, no bounds in front): the reference verdict."""
+    return bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
+
+
 def test_verdicts_equal_in_collision(cell):
     robot, stops = cell
     rng = np.random.default_rng(5)
@@ -36,7 +42,7 @@ def test_verdicts_equal_in_collision(cell):
                    stops + rng.normal(0.0, 0.05, stops.shape)])
     c = CollisionCuller(robot)
     S = c.survivors(Q)
-    fresh = np.array([robot.in_collision(q) for q in Q])
+    fresh = np.array([coal_verdict(robot, q) for q in Q])
     culled = np.array([bool(np.any(S[i])) and c.collides(q, np.flatnonzero(S[i])) for i, q in enumerate(Q)])
     assert fresh.any() and not fresh.all()
     assert np.array_equal(culled, fresh)
@@ -67,22 +73,21 @@ def test_segment_finds_the_same_first_colliding_state(cell):
     order and in the planner's coarse-to-fine order) stops at the same state as ``in_collision`` one by one."""
     robot, stops = cell
     rng = np.random.default_rng(11)
-    bad = next(q for q in (robot.random_configuration(rng) for _ in range(1000)) if robot.in_collision(q))
+    bad = next(q for q in (robot.random_configuration(rng) for _ in range(1000)) if coal_verdict(robot, q))
     a = stops[len(stops) // 2]
     n = 200
     Q = np.array([a + (bad - a) * (k / n) for k in range(1, n + 1)])
-    first = next(i for i, q in enumerate(Q) if robot.in_collision(q))
+    first = next(i for i, q in enumerate(Q) if coal_verdict(robot, q))
     assert CollisionCuller(robot).first_collision(Q) == first
     order = planning._bisection_order(n)
     Qo = np.array([a + (bad - a) * (k / n) for k in order])
-    first_o = next(i for i, q in enumerate(Qo) if robot.in_collision(q))
+    first_o = next(i for i, q in enumerate(Qo) if coal_verdict(robot, q))
     assert CollisionCuller(robot).first_collision(Qo) == first_o
     # check_path: the same first bad segment with and without the culled queries
     P = np.vstack([stops[:4], bad, stops[4:6]])
     with_cull = check_path(robot, P, 0.01, static_torque=True)
     counted = []
-    real = robot.in_collision
-    robot.in_collision = lambda q: counted.append(1) or real(q)
+    robot.in_collision = lambda q: counted.append(1) or coal_verdict(robot, q)
     try:
         memo = planning._Memoized(planning._config_validator(robot, True))   # no robot: every state one query
         without = check_path(robot, P, 0.01, static_torque=True, _valid=memo)
@@ -102,7 +107,7 @@ def test_the_culler_is_kept_while_the_geometry_is(cell):
         assert c2 is not c
         q = stops[1]
         S = c2.survivors(q[None])
-        assert (bool(S.any()) and c2.collides(q, np.flatnonzero(S[0]))) == robot.in_collision(q)
+        assert (bool(S.any()) and c2.collides(q, np.flatnonzero(S[0]))) == coal_verdict(robot, q)
     finally:
         robot.set_base_pose(T)
 
@@ -118,12 +123,12 @@ def test_verdicts_equal_in_collision_with_a_safety_margin(cell):
     try:
         robot.set_obstacles(obstacles, safety_margin=0.03)
         c = culler_of(robot)
-        fresh = np.array([robot.in_collision(q) for q in Q])
+        fresh = np.array([coal_verdict(robot, q) for q in Q])
         S = c.survivors(Q)
         culled = np.array([bool(np.any(S[i])) and c.collides(q, np.flatnonzero(S[i])) for i, q in enumerate(Q)])
         assert np.array_equal(culled, fresh)
         robot.set_obstacles(obstacles, safety_margin=0.0)
-        plain = np.array([robot.in_collision(q) for q in Q])
+        plain = np.array([coal_verdict(robot, q) for q in Q])
         assert (fresh & ~plain).any()     # the margin does make some states collide
     finally:
         robot.set_obstacles(obstacles, safety_margin=margin)

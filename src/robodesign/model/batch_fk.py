@@ -1,5 +1,5 @@
 """Forward kinematics batched over samples: the pinocchio model's joint tree as arrays, one vectorised numpy pass
-per joint over all samples (for :func:`robodesign.model.robot.fk_batch` and :meth:`Robot.fk_batch
+per joint over all samples (for :func:`fk_batch` and :meth:`Robot.fk_batch
 <robodesign.model.robot.Robot.fk_batch>`)."""
 from __future__ import annotations
 
@@ -118,3 +118,25 @@ class _BatchKinematics:
             out[:, j, :3, :3] = Rs[j].transpose(2, 0, 1)
             out[:, j, :3, 3] = ps[j].T
         return out
+
+
+def batch_kinematics(robot) -> _BatchKinematics:
+    """The robot's :class:`_BatchKinematics` (kept on the robot, ``_batch_chain``, until its base pose changes)."""
+    if robot._batch_chain is None:
+        robot._batch_chain = _BatchKinematics(robot.model)
+    return robot._batch_chain
+
+
+def fk_batch(robot, Q, frame: Optional[int] = None) -> np.ndarray:
+    """World poses (N×4×4) of ``frame`` (default: the TCP) at every row of ``Q`` (N×dof, or one
+    configuration): one vectorised pass of numpy over the samples per joint of the frame's chain instead
+    of one pinocchio call per sample. Revolute and prismatic joints about any fixed axis (every joint a
+    :class:`~robodesign.model.robot.Robot` builds); another joint type falls back to ``robot.fk`` per row.
+    Equal to ``robot.fk`` to floating-point rounding (tests/test_fk_batch.py)."""
+    Q = robot._Q(Q)
+    f = robot.tcp_frame if frame is None else int(frame)
+    try:
+        bk = batch_kinematics(robot)
+    except NotImplementedError:
+        return np.array([robot.fk(q, f) for q in Q]).reshape(len(Q), 4, 4)
+    return bk.frame_poses(Q, f)

@@ -31,7 +31,8 @@ from robodesign.core.spatial import inv
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.geometry import coal_shapes
 from robodesign.formats.module_spec import Connector, ModuleSet
-from robodesign.model.batch_fk import _BatchKinematics
+from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
+from robodesign.model.batch_fk import fk_batch
 
 COULOMB_SMOOTHING = 100.0
 
@@ -81,6 +82,7 @@ class Robot:
         self.data = self.model.createData()
         self._sync_link_model()
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
+        self._geometry_changed()
         self._base_probe: Optional[tuple] = None  # base_collisions' own pairs before there is a geom_data
         self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
@@ -281,6 +283,12 @@ class Robot:
     @geom_model.setter
     def geom_model(self, geom: "pin.GeometryModel") -> None:
         self._geom_model = geom
+        self._geometry_changed()
+
+    def _geometry_changed(self) -> None:
+        """Forget the collision culler (built for the geometry before the change)."""
+        self._culler: Optional[Any] = None   # model.collision_cull.CollisionCuller of the current geometry
+        self._plain_queries = 0              # in_collision queries asked of every pair since the change
 
     def _geometry_object(self, k: int) -> "pin.GeometryObject":
         """Robot object ``k`` as the geometry holds it (one fixed to the world at the base pose)."""
@@ -322,6 +330,7 @@ class Robot:
         self._base_probe = None
         self._reach = None
         self._batch_chain = None
+        self._geometry_changed()
 
     def set_gravity(self, g: Sequence[float]) -> None:
         self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
@@ -343,6 +352,7 @@ class Robot:
             self._add_obstacles(geom)
         self.safety_margin = float(safety_margin)
         self._geom_data = self._base_probe = None
+        self._geometry_changed()
 
     @property
     def obstacle_geometry_ids(self) -> Tuple[int, ...]:
@@ -352,6 +362,7 @@ class Robot:
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
         self._base_probe = None
+        self._geometry_changed()
 
     def _robot_only_geom(self):
         g = pin.GeometryModel()
@@ -367,6 +378,7 @@ class Robot:
         gd = self._geom_data
         if gd is None:
             gd = self._geom_data = pin.GeometryData(self.geom_model)
+            self._geometry_changed()
             self._apply_margins(gd)
             probe, self._base_probe = self._base_probe, None
             if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
@@ -587,8 +599,28 @@ class Robot:
         return bool(self._check_pairs(0, self._n_self_pairs))
 
     def in_collision(self, q) -> bool:
-        """Self-collision or contact with an obstacle (within the safety margin)."""
-        return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q), True))
+        """Self-collision or contact with an obstacle (within the safety margin). After :data:`_CULL_AFTER`
+        queries on the same geometry, coal is asked only about the pairs that the compiled bounds of
+        :class:`~robodesign.model.collision_cull.CollisionCuller` do not clear (the same verdicts)."""
+        culler = self._culler
+        if culler is None:
+            self._plain_queries += 1
+            if self._plain_queries < _CULL_AFTER or (culler := self._single_culler()) is None:
+                return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q),
+                                                  True))
+        return bool(culler.in_collision(self._q(q)))
+
+    def _single_culler(self):
+        """The culler for :meth:`in_collision`, or None (kernel not compiled yet: asked again later)."""
+        from robodesign.model import collision_cull, collision_kernel
+        if not collision_kernel.ready():
+            self._plain_queries = -_CULL_RETRY   # (ready() reads the cache's stamp: not at every query)
+            return None
+        try:
+            self._culler = collision_cull.culler_of(self)
+        except (AttributeError, NotImplementedError):   # a joint the bounds' kinematics do not model
+            self._plain_queries = -(1 << 62)
+        return self._culler
 
     def collides_with_obstacles(self, q) -> bool:
         self._update_geometry(q)
@@ -704,6 +736,9 @@ class Robot:
         }
 
 
+#: in_collision queries on one geometry before the culled path takes over (its set-up costs ~a few queries)
+_CULL_AFTER = 12
+_CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
 
@@ -735,27 +770,3 @@ def _probe(robot: Robot, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
         req.enable_contact = True
         req.security_margin = robot.safety_margin
     return gm, gd, pairs
-
-
-# ---------------------------------------------------------------------------------------------------------
-# forward kinematics batched over samples (the joint tree as arrays: model/batch_fk.py)
-# ---------------------------------------------------------------------------------------------------------
-def _batch_kinematics(robot: Robot) -> _BatchKinematics:
-    if robot._batch_chain is None:
-        robot._batch_chain = _BatchKinematics(robot.model)
-    return robot._batch_chain
-
-
-def fk_batch(robot: Robot, Q, frame: Optional[int] = None) -> np.ndarray:
-    """World poses (N×4×4) of ``frame`` (default: the TCP) at every row of ``Q`` (N×dof, or one
-    configuration): one vectorised pass of numpy over the samples per joint of the frame's chain instead
-    of one pinocchio call per sample. Revolute and prismatic joints about any fixed axis (every joint a
-    :class:`Robot` builds); another joint type falls back to :meth:`Robot.fk` per row. Equal to
-    :meth:`Robot.fk` to floating-point rounding (tests/test_fk_batch.py)."""
-    Q = robot._Q(Q)
-    f = robot.tcp_frame if frame is None else int(frame)
-    try:
-        bk = _batch_kinematics(robot)
-    except NotImplementedError:
-        return np.array([robot.fk(q, f) for q in Q]).reshape(len(Q), 4, 4)
-    return bk.frame_poses(Q, f)

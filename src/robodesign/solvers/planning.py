@@ -61,7 +61,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 import numpy as np
 
 from robodesign.core.errors import InputError
-from robodesign.solvers.collision_cull import culler_of
+from robodesign.model.collision_cull import culler_of
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -183,7 +183,7 @@ class _Memoized:
     verdicts by state, ``lookups``: the verdicts asked for.
 
     :meth:`first_invalid` decides many states (a segment's) at once with the same verdicts: the torque tests
-    per state, the collision queries through :class:`~robodesign.solvers.collision_cull.CollisionCuller`
+    per state, the collision queries through :class:`~robodesign.model.collision_cull.CollisionCuller`
     (coal asked only about the pairs its bounds do not clear) when ``robot`` is given and ``valid`` came
     from :func:`_config_validator`."""
 

@@ -1,0 +1,370 @@
+"""Exact collision verdicts of many configurations at once (a path's dense states), with a conservative broad
+phase in front of the robot's own narrow phase.
+
+``robot.in_collision(q)`` asks coal about every collision pair (self pairs, then robot–obstacle pairs) until one
+collides. :class:`CollisionCuller` gives the same verdict per state, asking coal (the same
+``pin.computeCollision`` of the same pair on the same placements) only about the pairs that a lower bound of
+their distance does not clear:
+
+* every robot geometry is bounded by a sphere (its local AABB's centre and half diagonal, plus coal's swept-
+  sphere radius); the centres of all states come from one vectorised forward kinematics pass
+  (:meth:`Robot.joint_poses_batch`);
+* a self pair is cleared when its spheres lie farther apart than the pair's security margin;
+* a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin, measured
+  with :class:`DistanceField`: the exact distance (coal) from the centre of the grid cell of the sphere's centre
+  to the obstacle, minus the centre's distance to that cell centre (distance is 1-Lipschitz). Cells are computed
+  on first use and kept per obstacle shape and pose for the process (tasks share shapes between candidates).
+
+Every bound keeps a slack of :data:`SLACK` metres on top of the margin, far above coal's tolerances, so a
+cleared pair is one coal would not report; the verdicts are identical to ``in_collision``
+(tests/test_collision_cull.py compares them state by state).
+"""
+from __future__ import annotations
+
+import weakref
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from robodesign.model.batch_fk import batch_kinematics
+
+#: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
+SLACK = 1e-4
+#: edge length [m] of the distance fields' cells
+CELL = 0.04
+_FIELD_LIMIT = 64  # distance fields kept (obstacle shape × pose); the oldest is dropped beyond
+#: metres around an obstacle's box that its dense grid covers (farther points: the box bound clears them)
+REACH = 0.5
+#: the largest dense grid (cells, 8 bytes each) of one obstacle; a larger one keeps all its cells in the dictionary
+GRID_CELLS_MAX = 1 << 22
+#: the dense grids' cells kept in all (the oldest fields are dropped beyond)
+GRID_CELLS_KEPT = 1 << 24
+
+
+def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
+    """Centre (in the shape's frame) and radius of a sphere containing ``shape`` (its local AABB's)."""
+    shape.computeLocalAABB()
+    box = shape.aabb_local
+    lo, hi = np.array(box.min_, dtype=float), np.array(box.max_, dtype=float)
+    swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
+    return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + swept
+
+
+class DistanceField:
+    """Lower bounds of the distance from points to one obstacle (a coal shape at a world pose): the exact
+    distance from the centre of the point's grid cell (edge :data:`CELL`), computed once per cell, minus the
+    point's distance to that centre.
+
+    The cells within :data:`REACH` of the shape's box are held in a dense array (``values``, NaN until
+    computed; :meth:`grid`, which the compiled single-configuration bound reads), the others in a dictionary;
+    both hold the same numbers for the same cell. A box obstacle has no grid (its box bound is exact)."""
+
+    def __init__(self, shape, pose: np.ndarray, cell: float = CELL):
+        self.shape, self.cell = shape, float(cell)
+        M = np.asarray(pose, dtype=float)
+        self.tf = pin.SE3(M[:3, :3].copy(), M[:3, 3].copy())
+        self.known: Dict[int, float] = {}  # by the cell's packed integer coordinates (cells outside the grid)
+        import coal
+        self._coal = coal
+        self._point = coal.Sphere(0.0)
+        self._req = coal.DistanceRequest()
+        self._res = coal.DistanceResult()
+        # the shape's box (its local AABB grown by coal's swept-sphere radius): in its frame, and the grid around it
+        shape.computeLocalAABB()
+        swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
+        self.box_lo = np.array(shape.aabb_local.min_, dtype=float) - swept
+        self.box_hi = np.array(shape.aabb_local.max_, dtype=float) + swept
+        self.R_inv, self.t = M[:3, :3].T.copy(), M[:3, 3].copy()
+        corners = np.array([[(self.box_lo, self.box_hi)[b >> i & 1][i] for i in range(3)] for b in range(8)])
+        world = corners @ M[:3, :3].T + M[:3, 3]
+        lo = np.floor((world.min(axis=0) - REACH) / self.cell).astype(np.int64)
+        dim = np.floor((world.max(axis=0) + REACH) / self.cell).astype(np.int64) - lo + 1
+        self.is_box = type(shape).__name__ == "Box"   # its box is the shape: the box bound is its exact distance
+        if self.is_box or int(np.prod(dim)) > GRID_CELLS_MAX:
+            lo, dim = np.zeros(3, np.int64), np.zeros(3, np.int64)
+        self.grid_lo, self.grid_dim = lo, dim
+        self.values = np.full(int(np.prod(dim)), np.nan)
+
+    def _exact(self, c: np.ndarray) -> float:
+        coal = self._coal
+        self._res.clear()
+        d = coal.distance(self._point, coal.Transform3s(_EYE, c), self.shape, self.tf, self._req, self._res)
+        return float(d)
+
+    def fill(self, flat: np.ndarray) -> np.ndarray:
+        """The exact distances of the grid cells ``flat`` (indices into ``values``), computed where unknown."""
+        v = self.values
+        dz, dy = int(self.grid_dim[2]), int(self.grid_dim[1])
+        for f in np.unique(flat).tolist():
+            if np.isnan(v[f]):
+                idx = self.grid_lo + np.array([f // (dy * dz), f // dz % dy, f % dz])
+                v[f] = self._exact((idx + 0.5) * self.cell)
+        return v[flat]
+
+    def box_bounds(self, P: np.ndarray) -> np.ndarray:
+        """The distance of every point (row) of ``P`` to the shape's box: a lower bound of its distance to the
+        shape (the exact distance for a box)."""
+        x = (P - self.t) @ self.R_inv.T
+        e = np.maximum(np.maximum(self.box_lo - x, x - self.box_hi), 0.0)
+        return np.sqrt(np.einsum("ij,ij->i", e, e))
+
+    def lower_bounds(self, P: np.ndarray) -> np.ndarray:
+        """A lower bound of the distance to the obstacle of every point (row) of ``P``: the field's (the exact
+        distance of the point's cell minus the point's distance to the cell's centre)."""
+        h = self.cell
+        idx = np.floor(P / h).astype(np.int64)
+        centres = (idx + 0.5) * h
+        D = np.empty(len(P))
+        local = idx - self.grid_lo
+        inside = ((local >= 0) & (local < self.grid_dim)).all(axis=1)
+        if inside.any():
+            li = local[inside]
+            D[inside] = self.fill((li[:, 0] * self.grid_dim[1] + li[:, 1]) * self.grid_dim[2] + li[:, 2])
+        out = ~inside
+        if out.any():
+            io, co = idx[out], centres[out]
+            code = (io[:, 0] << 42) + ((io[:, 1] & _MASK) << 21) + (io[:, 2] & _MASK)  # |index| < 2²⁰ cells
+            keys, first, inverse = np.unique(code, return_index=True, return_inverse=True)
+            known = self.known
+            Dk = np.empty(len(keys))
+            for i, (k, f) in enumerate(zip(keys.tolist(), first.tolist())):
+                d = known.get(k)
+                if d is None:
+                    d = known[k] = self._exact(co[f])
+                Dk[i] = d
+            D[out] = Dk[inverse.reshape(-1)]
+        return D - np.linalg.norm(P - centres, axis=1)
+
+
+_MASK = (1 << 21) - 1
+_EYE = np.eye(3)
+_FIELDS: Dict[Tuple[int, bytes], Tuple[object, DistanceField]] = {}
+
+
+def distance_field(shape, pose: np.ndarray) -> DistanceField:
+    """The process's :class:`DistanceField` of ``shape`` at ``pose`` (shared: task shapes are cached objects)."""
+    key = (id(shape), np.asarray(pose, dtype=float).tobytes())
+    hit = _FIELDS.get(key)
+    if hit is not None and hit[0] is shape:
+        return hit[1]
+    f = DistanceField(shape, pose)
+    while _FIELDS and (len(_FIELDS) >= _FIELD_LIMIT
+                       or sum(len(g.values) for _, g in _FIELDS.values()) + len(f.values) > GRID_CELLS_KEPT):
+        _FIELDS.pop(next(iter(_FIELDS)))
+    _FIELDS[key] = (shape, f)   # the shape is held, so its id is not reused while the entry lives
+    return f
+
+
+class CollisionCuller:
+    """``robot.in_collision`` for many configurations: the pairs a bound clears are not asked (module docstring).
+    Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and
+    ``geom_data`` are the scratch space, as for ``in_collision``."""
+
+    def __init__(self, robot):
+        self.robot = robot
+        robot.joint_poses_batch(np.zeros((1, robot.dof)))   # NotImplementedError now for a joint it cannot batch
+        gm, gd = robot.geom_model, robot.geom_data
+        objs = gm.geometryObjects
+        n_robot = robot.n_collision_geometries
+        self.parent = np.array([int(objs[i].parentJoint) for i in range(n_robot)])
+        centres, radii = [], []
+        for i in range(n_robot):
+            c, r = _bounding_sphere(objs[i].geometry)
+            P = objs[i].placement
+            centres.append(np.asarray(P.rotation) @ c + np.asarray(P.translation))   # in the parent joint's frame
+            radii.append(r)
+        self.local = np.array(centres).reshape(-1, 3)
+        self.radius = np.array(radii)
+        pairs = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
+        margin = np.array([float(gd.collisionRequests[k].security_margin) for k in range(len(pairs))])
+        active = np.array([bool(a) for a in gd.activeCollisionPairs], dtype=bool) if len(pairs) else np.zeros(0, bool)
+        self.n_pairs = len(pairs)
+        self.active = active
+        selfp = [k for k, (a, b) in enumerate(pairs) if a < n_robot and b < n_robot]
+        self.self_k = np.array(selfp, dtype=int)
+        self.self_a = np.array([pairs[k][0] for k in selfp], dtype=int)
+        self.self_b = np.array([pairs[k][1] for k in selfp], dtype=int)
+        self.self_limit = self.radius[self.self_a] + self.radius[self.self_b] + margin[self.self_k] + SLACK
+        # robot–obstacle pairs, grouped by obstacle
+        self.obstacles: List[Tuple[DistanceField, np.ndarray, np.ndarray, np.ndarray]] = []
+        by_ob: Dict[int, List[int]] = {}
+        for k, (a, b) in enumerate(pairs):
+            if a < n_robot <= b:
+                by_ob.setdefault(b, []).append(k)
+            elif b < n_robot <= a:
+                raise NotImplementedError("an obstacle listed first in a collision pair")
+        for ob, ks in by_ob.items():
+            o = objs[ob]
+            field = distance_field(o.geometry, o.placement.homogeneous)
+            kk = np.array(ks, dtype=int)
+            geo = np.array([pairs[k][0] for k in ks], dtype=int)
+            self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
+        self.narrow = 0   # narrow-phase queries asked (statistics)
+        self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
+        self._last_hit = -1                  # the pair in_collision found colliding last
+
+    def centres(self, Q: np.ndarray) -> np.ndarray:
+        """World centres (N × geometries × 3) of the bounding spheres at every row of ``Q``."""
+        J = self.robot.joint_poses_batch(Q)[:, self.parent]          # N × G × 4 × 4
+        return np.einsum("ngij,gj->ngi", J[:, :, :3, :3], self.local) + J[:, :, :3, 3]
+
+    def survivors(self, Q: np.ndarray) -> np.ndarray:
+        """(N × pairs) booleans: the pairs the bounds do not clear at each row of ``Q`` (active pairs only)."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        N = len(Q)
+        out = np.zeros((N, self.n_pairs), dtype=bool)
+        if self.n_pairs == 0 or N == 0:
+            return out
+        C = self.centres(Q)
+        if len(self.self_k):
+            d = np.linalg.norm(C[:, self.self_a] - C[:, self.self_b], axis=2)
+            out[:, self.self_k] = d <= self.self_limit
+        for field, kk, geo, limit in self.obstacles:
+            P = C[:, geo].reshape(-1, 3)
+            lim = np.tile(limit, N)
+            near = field.box_bounds(P) <= lim        # the box bound first (exact for a box)
+            if near.any() and not field.is_box:      # then the field's, where the box does not clear
+                idx = np.flatnonzero(near)
+                near[idx] = field.lower_bounds(P[idx]) <= lim[idx]
+            out[:, kk] = near.reshape(N, len(geo))
+        out &= self.active
+        return out
+
+    def collides(self, q: np.ndarray, pairs: Iterable) -> bool:
+        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it)."""
+        r = self.robot
+        gm, gd = r.geom_model, r.geom_data
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
+        for k in pairs:
+            self.narrow += 1
+            if pin.computeCollision(gm, gd, int(k)):
+                return True
+        return False
+
+    # -- one configuration: the compiled broad phase (model/collision_kernel.py) -------------------------------
+    def _kernel_args(self) -> tuple:
+        """(the kernel's arguments, the grids): the joint tree, the spheres, the self pairs, the robot–obstacle
+        pairs, every obstacle's box and grid (one gridded obstacle's ``values`` themselves, several: a copy of each
+        in one array, :meth:`in_collision` writing the cells it fills to both), scratch space and the outputs
+        (surviving pairs, unknown cells: the last two arguments); the grids: (fields, their offsets in the grid
+        array, the one gridded field or None, the grid array)."""
+        bk = batch_kinematics(self.robot)
+        J = len(bk.parents)
+        tree = (np.array(bk.parents, np.int64), np.array(bk.R).reshape(J, 3, 3), np.array(bk.t).reshape(J, 3),
+                np.array(bk.kind, np.int64), np.array(bk.axis, float).reshape(J, 3), np.array(bk.iq, np.int64))
+        oa, ob, olim, ok = [], [], [], []
+        for o, (field, kk, geo, limit) in enumerate(self.obstacles):
+            oa += geo.tolist()
+            ob += [o] * len(kk)
+            olim += limit.tolist()
+            ok += kk.tolist()
+        fields = [f for f, *_ in self.obstacles]
+        gridded = [f for f in fields if len(f.values)]
+        offsets = np.cumsum([0] + [len(f.values) for f in fields])[:-1].astype(np.int64)
+        if len(gridded) == 1:
+            grid = gridded[0].values
+            offsets = np.zeros(len(fields), np.int64)
+        else:
+            grid = np.concatenate([f.values for f in fields]) if fields else np.zeros(0)
+        grids = (fields, offsets, gridded[0] if len(gridded) == 1 else None, grid)
+        O = len(fields)
+        obs = (np.array(oa, np.int64), np.array(ob, np.int64), np.array(olim, float), np.array(ok, np.int64),
+               np.array([f.R_inv for f in fields]).reshape(O, 3, 3), np.array([f.t for f in fields]).reshape(O, 3),
+               np.array([f.box_lo for f in fields]).reshape(O, 3), np.array([f.box_hi for f in fields]).reshape(O, 3),
+               np.array([f.grid_lo for f in fields], np.int64).reshape(O, 3),
+               np.array([f.grid_dim for f in fields], np.int64).reshape(O, 3), offsets, CELL, grid)
+        for f in fields:
+            assert f.cell == CELL
+        sp = (self.parent.astype(np.int64), np.ascontiguousarray(self.local, dtype=float),
+              self.self_a.astype(np.int64), self.self_b.astype(np.int64), self.self_limit.astype(float),
+              self.self_k.astype(np.int64))
+        work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
+        out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
+        return (*tree, *sp, *obs, self.active.astype(np.bool_), *work, out, unknown), grids
+
+    def in_collision(self, q: np.ndarray) -> bool:
+        """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
+        (:func:`robodesign.model.collision_kernel.survivors`); the grid cells it asked about unknown are computed
+        afterwards, for the next queries."""
+        from robodesign.model import collision_kernel
+        if self._one is None:
+            self._one = self._kernel_args()
+        args, grids = self._one
+        n, nu = collision_kernel.survivors(q, *args)
+        hit = False
+        if n:
+            r = self.robot
+            gm, gd = r.geom_model, r.geom_data
+            pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+            pairs = args[-2][:n].tolist()
+            last = self._last_hit
+            if last in pairs:   # the pair that collided last is asked first (consecutive queries tend to share it)
+                pairs.remove(last)
+                pairs.insert(0, last)
+            for k in pairs:
+                self.narrow += 1
+                if pin.computeCollision(gm, gd, k):
+                    self._last_hit = k
+                    hit = True
+                    break
+        if nu:
+            self._fill(grids, args[-1][:nu].copy())
+        return hit
+
+    @staticmethod
+    def _fill(grids: tuple, flat: np.ndarray) -> None:
+        """Compute the grid cells ``flat`` (indices into the kernel's grid array) in their fields (and the copy)."""
+        fields, offsets, direct, grid = grids
+        if direct is not None:
+            direct.fill(flat)
+            return
+        for o in np.unique(np.searchsorted(offsets, flat, side="right") - 1).tolist():
+            f = fields[o]
+            lo = int(offsets[o])
+            mine = flat[(flat >= lo) & (flat < lo + len(f.values))]
+            grid[mine] = f.fill(mine - lo)
+
+    def first_collision(self, Q: np.ndarray, order: Optional[Sequence[int]] = None) -> int:
+        """The first row of ``Q`` in ``order`` (default: row order) that ``robot.in_collision`` finds in
+        collision, or -1."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        S = self.survivors(Q)
+        rows = range(len(Q)) if order is None else order
+        for i in rows:
+            ks = np.flatnonzero(S[i])
+            if len(ks) and self.collides(Q[i], ks):
+                return int(i)
+        return -1
+
+
+_CULLERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def culler_of(robot) -> CollisionCuller:
+    """The robot's :class:`CollisionCuller`, kept while its geometry stays the same. A
+    :class:`~robodesign.model.robot.Robot` keeps it itself (``_culler``, forgotten at every change of its geometry:
+    base pose, obstacles, safety margin, scratch space). Another robot object: the same geometry model and data
+    objects (held by the entry, so they are the same objects, not a new one at a reused address), base pose, safety
+    margin and obstacle placements (what ``set_base_pose``, ``set_obstacles`` and ``move_obstacle`` change)."""
+    if hasattr(robot, "_culler"):
+        own: Optional[CollisionCuller] = robot._culler
+        if own is None:
+            own = robot._culler = CollisionCuller(robot)
+        return own
+    gm, gd = robot.geom_model, robot.geom_data
+    objs = gm.geometryObjects
+    state = (robot.base_pose.tobytes(), float(getattr(robot, "safety_margin", 0.0)),
+             b"".join(objs[k].placement.homogeneous.tobytes() for k in range(robot.n_collision_geometries, len(objs))))
+    hit = _CULLERS.get(robot)
+    if hit is not None and hit[0] is gm and hit[1] is gd and hit[2] == state:
+        return hit[3]
+    c = CollisionCuller(robot)
+    try:
+        _CULLERS[robot] = (gm, gd, state, c)
+    except TypeError:   # an object without weak references: not kept
+        pass
+    return c
+
+
+__all__ = ["CollisionCuller", "DistanceField", "culler_of", "distance_field", "SLACK", "CELL"]

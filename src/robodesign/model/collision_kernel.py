@@ -1,0 +1,199 @@
+"""The broad phase of one configuration's collision query, compiled (numba): the pairs a bound cannot clear.
+
+:meth:`robodesign.model.collision_cull.CollisionCuller.in_collision` asks coal only about the pairs this kernel
+returns, with the bounds of :mod:`.collision_cull` (a bounding sphere per robot geometry, its centre from the
+joint poses of this configuration):
+
+* a self pair survives when its spheres lie within the pair's limit (radii + security margin + slack);
+* a robot–obstacle pair survives when the sphere's centre lies within the limit of the obstacle's bounding box
+  (the coal shape's local AABB, in the obstacle's frame: it contains the shape, so its distance is a lower
+  bound) and, for an obstacle with a distance grid (:meth:`DistanceField.grid`), within the limit of the
+  grid's lower bound: the exact distance from the centre of the point's cell minus the point's distance to that
+  centre. A cell not computed yet lets the pair survive (coal decides) and is reported, so that the caller can
+  fill it for the next queries.
+
+Every bound is conservative (slack on top of the margin far above coal's tolerances), so the verdict is the
+one ``pin.computeCollisions`` gives (tests/test_collision_cull.py compares them state by state). Without numba
+(or before its background compilation has filled the cache) the robot asks coal about every pair, as before.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
+
+
+@njit(cache=True, nogil=True)
+def _joint_poses(q, parents, Rl, tl, kind, axis, iq, R, p):  # pragma: no cover
+    """The world rotation ``R[j]`` and position ``p[j]`` of every joint frame at ``q`` (index 0: the world)."""
+    J = len(parents)
+    for i in range(3):
+        for j in range(3):
+            R[0, i, j] = 1.0 if i == j else 0.0
+        p[0, i] = 0.0
+    for j in range(1, J + 1):
+        k = j - 1
+        par = parents[k]
+        for r in range(3):           # R_j = R_par · Rl, p_j = p_par + R_par · tl
+            acc = p[par, r]
+            for m in range(3):
+                acc += R[par, r, m] * tl[k, m]
+            p[j, r] = acc
+            for c in range(3):
+                acc = 0.0
+                for m in range(3):
+                    acc += R[par, r, m] * Rl[k, m, c]
+                R[j, r, c] = acc
+        x = q[iq[k]]
+        a0, a1, a2 = axis[k, 0], axis[k, 1], axis[k, 2]
+        if kind[k] == 1:             # prismatic: p += R·a·x
+            for r in range(3):
+                p[j, r] += (R[j, r, 0] * a0 + R[j, r, 1] * a1 + R[j, r, 2] * a2) * x
+        else:                        # revolute: R ← R·(I + s K + (1 − c) K²), K = [a]×
+            cs, sn = np.cos(x), np.sin(x)
+            v = 1.0 - cs
+            m00, m01, m02 = cs + v * a0 * a0, v * a0 * a1 - sn * a2, v * a0 * a2 + sn * a1
+            m10, m11, m12 = v * a0 * a1 + sn * a2, cs + v * a1 * a1, v * a1 * a2 - sn * a0
+            m20, m21, m22 = v * a0 * a2 - sn * a1, v * a1 * a2 + sn * a0, cs + v * a2 * a2
+            for r in range(3):
+                b0, b1, b2 = R[j, r, 0], R[j, r, 1], R[j, r, 2]
+                R[j, r, 0] = b0 * m00 + b1 * m10 + b2 * m20
+                R[j, r, 1] = b0 * m01 + b1 * m11 + b2 * m21
+                R[j, r, 2] = b0 * m02 + b1 * m12 + b2 * m22
+
+
+@njit(cache=True, nogil=True)
+def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
+              oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown):  # pragma: no cover
+    """The pairs (indices: the self pairs' in their order, then the robot–obstacle pairs') that the bounds do not
+    clear at ``q``, written to ``out``; the grid cells (flat indices into ``grid``) asked but not known, written to
+    ``unknown``; ``R``, ``p`` (the joints' world poses) and ``C`` (the spheres' centres) are scratch space.
+    Returns (surviving pairs, unknown cells)."""
+    _joint_poses(q, parents, Rl, tl, kind, axis, iq, R, p)
+    for g in range(len(gpar)):
+        jg = gpar[g]
+        for r in range(3):
+            C[g, r] = p[jg, r] + R[jg, r, 0] * glocal[g, 0] + R[jg, r, 1] * glocal[g, 1] + R[jg, r, 2] * glocal[g, 2]
+    n = 0
+    for i in range(len(sa)):
+        if not active[sk[i]]:
+            continue
+        d0 = C[sa[i], 0] - C[sb[i], 0]
+        d1 = C[sa[i], 1] - C[sb[i], 1]
+        d2 = C[sa[i], 2] - C[sb[i], 2]
+        if d0 * d0 + d1 * d1 + d2 * d2 <= slim[i] * slim[i]:
+            out[n] = sk[i]
+            n += 1
+    nu = 0
+    for i in range(len(oa)):
+        if not active[ok[i]]:
+            continue
+        o = ob[i]
+        lim = olim[i]
+        g = oa[i]
+        dd = 0.0
+        for a in range(3):           # the centre in the obstacle's frame, and its distance to the shape's box
+            xa = (oR[o, a, 0] * (C[g, 0] - ot[o, 0]) + oR[o, a, 1] * (C[g, 1] - ot[o, 1])
+                  + oR[o, a, 2] * (C[g, 2] - ot[o, 2]))
+            e = max(olo[o, a] - xa, xa - ohi[o, a], 0.0)
+            dd += e * e
+        if dd > lim * lim:
+            continue                 # farther from the shape's box than the limit
+        if grid_dim[o, 0] > 0:
+            inside = True
+            flat = 0
+            dc = 0.0
+            for a in range(3):
+                ia = int(np.floor(C[g, a] / h))
+                la = ia - grid_lo[o, a]
+                if la < 0 or la >= grid_dim[o, a]:
+                    inside = False
+                    break
+                flat = flat * grid_dim[o, a] + la
+                e = C[g, a] - (ia + 0.5) * h
+                dc += e * e
+            if inside:
+                v = grid[grid_off[o] + flat]
+                if np.isnan(v):
+                    unknown[nu] = grid_off[o] + flat
+                    nu += 1
+                elif v - np.sqrt(dc) > lim:
+                    continue         # the cell's exact distance clears it
+        out[n] = ok[i]
+        n += 1
+    return n, nu
+
+
+# ---------------------------------------------------------------------------------------------------------
+# readiness: compile in the background, never stall a query on the compilation
+# ---------------------------------------------------------------------------------------------------------
+_STATE: Optional[str] = None  # None (not decided) | "plain" (cold cache: compiling elsewhere) | "ready" | "failed"
+
+
+def available() -> bool:
+    """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
+    return NUMBA_IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def _cache() -> KernelCache:
+    return KernelCache("robodesign.model.collision_kernel", __file__, survivors, ("survivors",))
+
+
+def stamp_path() -> Path:
+    return _cache().stamp_path()
+
+
+def compiled() -> bool:
+    """True when the cache holds the compiled kernel for this numba, Python, CPU and source."""
+    return _cache().compiled()
+
+
+def warm_up() -> bool:
+    """Compile (or load) the kernel in this process now; False when numba is unavailable."""
+    global _STATE
+    if not available():
+        return False
+    i1, f1 = np.zeros(1, np.int64), np.zeros(1)
+    survivors(np.zeros(1), i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1,
+              np.zeros((1, 3)), i1, i1, f1, i1, i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)),
+              np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0,
+              f1, np.ones(1, np.bool_), np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64),
+              np.zeros(2, np.int64))
+    _STATE = "ready"
+    return True
+
+
+def ready() -> bool:
+    """True when the compiled kernel runs in this process. With a cold cache the background compilation starts
+    (once per process) and the robot asks coal about every pair until a later call finds the stamp: both give
+    the same verdicts."""
+    global _STATE
+    if _STATE == "ready" or not available():
+        return _STATE == "ready"
+    if compiled():
+        warm_up()
+    elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
+        compile_into_cache()
+        warm_up()
+    elif _STATE is None:
+        _STATE = "plain" if _start_compiler() is not None else "failed"
+    return _STATE == "ready"
+
+
+def _start_compiler() -> Optional[subprocess.Popen]:
+    return _cache().start_compiler()
+
+
+def compile_into_cache() -> int:
+    """Compile the kernel into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
+    return _cache().compile_into_cache(warm_up)
+
+
+if __name__ == "__main__":
+    sys.exit(background_compile(available(), compile_into_cache))
