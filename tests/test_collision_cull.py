@@ -35,7 +35,18 @@ def coal_verdict(robot, q) -> bool:
     return bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
 
 
-def test_verdicts_equal_in_collision(cell):
+@pytest.fixture(params=["compiled", "numpy"])
+def bounds(request, monkeypatch):
+    """The batch bounds both ways: the compiled kernel row by row, and numpy's pass (the kernel not ready)."""
+    from robodesign.model import collision_kernel
+    if request.param == "numpy":
+        monkeypatch.setattr(collision_kernel, "ready", lambda: False)
+    elif not (collision_kernel.available() and collision_kernel.warm_up()):
+        pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
+    return request.param
+
+
+def test_verdicts_equal_in_collision(cell, bounds):
     robot, stops = cell
     rng = np.random.default_rng(5)
     Q = np.vstack([stops, [robot.random_configuration(rng) for _ in range(600)],
@@ -68,7 +79,7 @@ def test_distance_field_bounds_the_distance(cell):
     assert np.array_equal(field.lower_bounds(P), lb)    # the cells are remembered, the bounds stay
 
 
-def test_segment_finds_the_same_first_colliding_state(cell):
+def test_segment_finds_the_same_first_colliding_state(cell, bounds):
     """A straight move from a solved stop to a colliding configuration: the culled check of its dense states (in
     order and in the planner's coarse-to-fine order) stops at the same state as ``in_collision`` one by one."""
     robot, stops = cell
@@ -112,7 +123,7 @@ def test_the_culler_is_kept_while_the_geometry_is(cell):
         robot.set_base_pose(T)
 
 
-def test_verdicts_equal_in_collision_with_a_safety_margin(cell):
+def test_verdicts_equal_in_collision_with_a_safety_margin(cell, bounds):
     """With a 3 cm safety margin on the robot–obstacle pairs (coal's security margin), the bounds keep the pairs
     that come within it: the same verdicts as ``in_collision`` on states near the machine."""
     robot, stops = cell

@@ -210,11 +210,23 @@ class CollisionCuller:
         return np.einsum("ngij,gj->ngi", J[:, :, :3, :3], self.local) + J[:, :, :3, 3]
 
     def survivors(self, Q: np.ndarray) -> np.ndarray:
-        """(N × pairs) booleans: the pairs the bounds do not clear at each row of ``Q`` (active pairs only)."""
+        """(N × pairs) booleans: the pairs the bounds do not clear at each row of ``Q`` (active pairs only). The
+        compiled bounds of :meth:`in_collision` row by row when the kernel is ready, else numpy's pass over all rows
+        (the sphere–sphere, box and field bounds): either keeps every pair coal would find colliding."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         N = len(Q)
         out = np.zeros((N, self.n_pairs), dtype=bool)
         if self.n_pairs == 0 or N == 0:
+            return out
+        from robodesign.model import collision_kernel
+        if collision_kernel.ready():
+            if self._one is None:
+                self._one = self._kernel_args()
+            args, grids = self._one
+            unknown = np.empty(N * len(args[-1]), np.int64)   # each row's room (every robot–obstacle pair, + 1)
+            nu = collision_kernel.survivors_rows(Q, *args, out, unknown)
+            if nu:
+                self._fill(grids, unknown[:nu])
             return out
         C = self.centres(Q)
         if len(self.self_k):

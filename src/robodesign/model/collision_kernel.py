@@ -130,6 +130,25 @@ def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk
     return n, nu
 
 
+@njit(cache=True, nogil=True)
+def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
+                   oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown,
+                   S, unknown_all):  # pragma: no cover
+    """:func:`survivors` of every row of ``Q``: ``S[i, k]`` set for the pairs ``k`` that survive at row ``i``
+    (``S`` all False on entry); the unknown cells of all rows in ``unknown_all`` (room for ``len(ok)`` per row).
+    Returns the number of unknown cells."""
+    nu_all = 0
+    for i in range(len(Q)):
+        n, nu = survivors(Q[i], parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
+                          oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown)
+        for k in range(n):
+            S[i, out[k]] = True
+        for k in range(nu):
+            unknown_all[nu_all + k] = unknown[k]
+        nu_all += nu
+    return nu_all
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a query on the compilation
 # ---------------------------------------------------------------------------------------------------------
@@ -142,7 +161,7 @@ def available() -> bool:
 
 
 def _cache() -> KernelCache:
-    return KernelCache("robodesign.model.collision_kernel", __file__, survivors, ("survivors",))
+    return KernelCache("robodesign.model.collision_kernel", __file__, survivors, ("survivors", "survivors_rows"))
 
 
 def stamp_path() -> Path:
@@ -160,11 +179,12 @@ def warm_up() -> bool:
     if not available():
         return False
     i1, f1 = np.zeros(1, np.int64), np.zeros(1)
-    survivors(np.zeros(1), i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1,
-              np.zeros((1, 3)), i1, i1, f1, i1, i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)),
-              np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0,
-              f1, np.ones(1, np.bool_), np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64),
-              np.zeros(2, np.int64))
+    args = (i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1, np.zeros((1, 3)), i1, i1, f1, i1,
+            i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)),
+            np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0, f1, np.ones(1, np.bool_),
+            np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
+    survivors(np.zeros(1), *args)
+    survivors_rows(np.zeros((1, 1)), *args, np.zeros((1, 1), np.bool_), np.zeros(2, np.int64))
     _STATE = "ready"
     return True
 
