@@ -22,7 +22,7 @@ cleared pair is one coal would not report; the verdicts are identical to ``in_co
 from __future__ import annotations
 
 import weakref
-from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 import pinocchio as pin
@@ -224,7 +224,7 @@ class CollisionCuller:
                 self._one = self._kernel_args()
             args, grids = self._one
             unknown = np.empty(N * len(args[-1]), np.int64)   # each row's room (every robot–obstacle pair, + 1)
-            nu = collision_kernel.survivors_rows(Q, *args, out, unknown)
+            nu = cast(Any, collision_kernel.survivors_rows)(Q, *args, out, unknown)   # (numba's stub: one argument)
             if nu:
                 self._fill(grids, unknown[:nu])
             return out
