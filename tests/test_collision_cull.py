@@ -38,10 +38,10 @@ def coal_verdict(robot, q) -> bool:
 @pytest.fixture(params=["compiled", "numpy"])
 def bounds(request, monkeypatch):
     """The batch bounds both ways: the compiled kernel row by row, and numpy's pass (the kernel not ready)."""
-    from robodesign.model import collision_kernel
+    from robodesign.model import geometry_kernel
     if request.param == "numpy":
-        monkeypatch.setattr(collision_kernel, "ready", lambda: False)
-    elif not (collision_kernel.available() and collision_kernel.warm_up()):
+        monkeypatch.setattr(geometry_kernel, "ready", lambda: False)
+    elif not (geometry_kernel.available() and geometry_kernel.warm_up()):
         pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
     return request.param
 

@@ -1,5 +1,6 @@
-"""Forward kinematics batched over samples: the pinocchio model's joint tree as arrays, one vectorised numpy pass
-per joint over all samples (for :func:`fk_batch` and :meth:`Robot.fk_batch
+"""Forward kinematics batched over samples: the pinocchio model's joint tree as arrays, and every sample's poses
+from it in compiled loops (:mod:`.geometry_kernel`) or, before numba's cache holds them, in one vectorised numpy
+pass per joint over all samples (for :func:`fk_batch` and :meth:`Robot.fk_batch
 <robodesign.model.robot.Robot.fk_batch>`)."""
 from __future__ import annotations
 
@@ -7,6 +8,8 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
+
+from robodesign.model import geometry_kernel
 
 _AXES = {"RX": (0, (1.0, 0.0, 0.0)), "RY": (0, (0.0, 1.0, 0.0)), "RZ": (0, (0.0, 0.0, 1.0)),
          "PX": (1, (1.0, 0.0, 0.0)), "PY": (1, (0.0, 1.0, 0.0)), "PZ": (1, (0.0, 0.0, 1.0))}
@@ -44,6 +47,7 @@ class _BatchKinematics:
             self.frames[f] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
                               np.array(fr.placement.translation, dtype=float))
         self.njoints = model.njoints
+        self._arrays: Optional[tuple] = None
 
     def _walk(self, Q: np.ndarray, need: Optional[set] = None):
         """World rotation (3×3×N: entry (i, j) of every sample contiguous) and position (3×N) of every
@@ -94,8 +98,24 @@ class _BatchKinematics:
             j = self.parents[j - 1]
         return need
 
+    def arrays(self) -> tuple:
+        """The joint tree as the compiled kernels take it (:mod:`.geometry_kernel`): parents, placements (R, t),
+        kinds, axes, q indices; and scratch space for the joints' world poses."""
+        if self._arrays is None:
+            J = len(self.parents)
+            self._arrays = ((np.array(self.parents, np.int64), np.array(self.R, float).reshape(J, 3, 3),
+                             np.array(self.t, float).reshape(J, 3), np.array(self.kind, np.int64),
+                             np.array(self.axis, float).reshape(J, 3), np.array(self.iq, np.int64)),
+                            (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3))))
+        return self._arrays
+
     def frame_poses(self, Q: np.ndarray, frame: int) -> np.ndarray:
         jid, Rf, tf = self.frames[frame]
+        if geometry_kernel.ready():
+            tree, work = self.arrays()
+            out = np.empty((len(Q), 4, 4))
+            geometry_kernel.frame_poses(np.ascontiguousarray(Q, dtype=float), *tree, jid, Rf, tf, *work, out)
+            return out
         Rs, ps = self._walk(Q, self._needed(jid))
         N = len(Q)
         out = np.zeros((N, 4, 4))
@@ -109,6 +129,11 @@ class _BatchKinematics:
         return out
 
     def joint_poses(self, Q: np.ndarray) -> np.ndarray:
+        if geometry_kernel.ready():
+            tree, work = self.arrays()
+            out = np.empty((len(Q), self.njoints, 4, 4))
+            geometry_kernel.joint_poses(np.ascontiguousarray(Q, dtype=float), *tree, *work, out)
+            return out
         Rs, ps = self._walk(Q)
         N = len(Q)
         out = np.zeros((N, self.njoints, 4, 4))

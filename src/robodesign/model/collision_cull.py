@@ -27,6 +27,7 @@ from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, cast
 import numpy as np
 import pinocchio as pin
 
+from robodesign.model import geometry_kernel
 from robodesign.model.batch_fk import batch_kinematics
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
@@ -218,13 +219,12 @@ class CollisionCuller:
         out = np.zeros((N, self.n_pairs), dtype=bool)
         if self.n_pairs == 0 or N == 0:
             return out
-        from robodesign.model import collision_kernel
-        if collision_kernel.ready():
+        if geometry_kernel.ready():
             if self._one is None:
                 self._one = self._kernel_args()
             args, grids = self._one
             unknown = np.empty(N * len(args[-1]), np.int64)   # each row's room (every robot–obstacle pair, + 1)
-            nu = cast(Any, collision_kernel.survivors_rows)(Q, *args, out, unknown)   # (numba's stub: one argument)
+            nu = cast(Any, geometry_kernel.survivors_rows)(Q, *args, out, unknown)   # (numba's stub: one argument)
             if nu:
                 self._fill(grids, unknown[:nu])
             return out
@@ -254,7 +254,7 @@ class CollisionCuller:
                 return True
         return False
 
-    # -- one configuration: the compiled broad phase (model/collision_kernel.py) -------------------------------
+    # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
     def _kernel_args(self) -> tuple:
         """(the kernel's arguments, the grids): the joint tree, the spheres, the self pairs, the robot–obstacle
         pairs, every obstacle's box and grid (one gridded obstacle's ``values`` themselves, several: a copy of each
@@ -297,13 +297,12 @@ class CollisionCuller:
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
-        (:func:`robodesign.model.collision_kernel.survivors`); the grid cells it asked about unknown are computed
+        (:func:`robodesign.model.geometry_kernel.survivors`); the grid cells it asked about unknown are computed
         afterwards, for the next queries."""
-        from robodesign.model import collision_kernel
         if self._one is None:
             self._one = self._kernel_args()
         args, grids = self._one
-        n, nu = collision_kernel.survivors(q, *args)
+        n, nu = geometry_kernel.survivors(q, *args)
         hit = False
         if n:
             r = self.robot
@@ -311,7 +310,7 @@ class CollisionCuller:
             pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
             pairs = args[-2][:n].tolist()
             last = self._last_hit
-            if last in pairs:   # the pair that collided last is asked first (consecutive queries tend to share it)
+            if last >= 0 and last in pairs:   # the pair that collided last first (consecutive queries tend to share it)
                 pairs.remove(last)
                 pairs.insert(0, last)
             for k in pairs:

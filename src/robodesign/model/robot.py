@@ -612,8 +612,8 @@ class Robot:
 
     def _single_culler(self):
         """The culler for :meth:`in_collision`, or None (kernel not compiled yet: asked again later)."""
-        from robodesign.model import collision_cull, collision_kernel
-        if not collision_kernel.ready():
+        from robodesign.model import collision_cull, geometry_kernel
+        if not geometry_kernel.ready():
             self._plain_queries = -_CULL_RETRY   # (ready() reads the cache's stamp: not at every query)
             return None
         try:

@@ -1,20 +1,26 @@
-"""The broad phase of one configuration's collision query, compiled (numba): the pairs a bound cannot clear.
+"""Compiled (numba) kernels of a robot's geometry: its joint poses at a configuration, forward kinematics batched
+over samples, and the broad phase of a configuration's collision query.
 
-:meth:`robodesign.model.collision_cull.CollisionCuller.in_collision` asks coal only about the pairs this kernel
-returns, with the bounds of :mod:`.collision_cull` (a bounding sphere per robot geometry, its centre from the
-joint poses of this configuration):
+:func:`frame_poses` and :func:`joint_poses` are :class:`robodesign.model.batch_fk._BatchKinematics`'s passes over
+the samples, one sample at a time in compiled loops (the same products of the same placements; equal to the numpy
+path and to pinocchio to rounding, tests/test_fk_batch.py).
+
+:meth:`robodesign.model.collision_cull.CollisionCuller.in_collision` asks coal only about the pairs
+:func:`survivors` returns, with the bounds of :mod:`.collision_cull` (a bounding sphere per robot geometry, its
+centre from the joint poses of this configuration):
 
 * a self pair survives when its spheres lie within the pair's limit (radii + security margin + slack);
 * a robot–obstacle pair survives when the sphere's centre lies within the limit of the obstacle's bounding box
   (the coal shape's local AABB, in the obstacle's frame: it contains the shape, so its distance is a lower
-  bound) and, for an obstacle with a distance grid (:meth:`DistanceField.grid`), within the limit of the
-  grid's lower bound: the exact distance from the centre of the point's cell minus the point's distance to that
-  centre. A cell not computed yet lets the pair survive (coal decides) and is reported, so that the caller can
-  fill it for the next queries.
+  bound) and, for an obstacle with a distance grid (:class:`~.collision_cull.DistanceField`), within the limit
+  of the grid's lower bound: the exact distance from the centre of the point's cell minus the point's distance
+  to that centre. A cell not computed yet lets the pair survive (coal decides) and is reported, so that the
+  caller can fill it for the next queries.
 
 Every bound is conservative (slack on top of the margin far above coal's tolerances), so the verdict is the
-one ``pin.computeCollisions`` gives (tests/test_collision_cull.py compares them state by state). Without numba
-(or before its background compilation has filled the cache) the robot asks coal about every pair, as before.
+one ``pin.computeCollisions`` gives (tests/test_geometry_kernel.py compares them state by state). Without numba
+(or before its background compilation has filled the cache) the numpy paths run and the robot asks coal about
+every pair, as before.
 """
 from __future__ import annotations
 
@@ -66,6 +72,33 @@ def _joint_poses(q, parents, Rl, tl, kind, axis, iq, R, p):  # pragma: no cover
                 R[j, r, 0] = b0 * m00 + b1 * m10 + b2 * m20
                 R[j, r, 1] = b0 * m01 + b1 * m11 + b2 * m21
                 R[j, r, 2] = b0 * m02 + b1 * m12 + b2 * m22
+
+
+@njit(cache=True, nogil=True)
+def frame_poses(Q, parents, Rl, tl, kind, axis, iq, jid, Rf, tf, R, p, out):  # pragma: no cover
+    """``out[n]`` (4×4): the world pose of the frame on joint ``jid`` at placement (Rf, tf) at every row of ``Q``."""
+    for n in range(len(Q)):
+        _joint_poses(Q[n], parents, Rl, tl, kind, axis, iq, R, p)
+        for i in range(3):
+            for j in range(3):
+                out[n, i, j] = R[jid, i, 0] * Rf[0, j] + R[jid, i, 1] * Rf[1, j] + R[jid, i, 2] * Rf[2, j]
+            out[n, i, 3] = p[jid, i] + (R[jid, i, 0] * tf[0] + R[jid, i, 1] * tf[1] + R[jid, i, 2] * tf[2])
+            out[n, 3, i] = 0.0
+        out[n, 3, 3] = 1.0
+
+
+@njit(cache=True, nogil=True)
+def joint_poses(Q, parents, Rl, tl, kind, axis, iq, R, p, out):  # pragma: no cover
+    """``out[n, j]`` (4×4): the world pose of every joint frame ``j`` (0: the world) at every row of ``Q``."""
+    for n in range(len(Q)):
+        _joint_poses(Q[n], parents, Rl, tl, kind, axis, iq, R, p)
+        for j in range(len(parents) + 1):
+            for i in range(3):
+                for c in range(3):
+                    out[n, j, i, c] = R[j, i, c]
+                out[n, j, i, 3] = p[j, i]
+                out[n, j, 3, i] = 0.0
+            out[n, j, 3, 3] = 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -161,7 +194,8 @@ def available() -> bool:
 
 
 def _cache() -> KernelCache:
-    return KernelCache("robodesign.model.collision_kernel", __file__, survivors, ("survivors", "survivors_rows"))
+    return KernelCache("robodesign.model.geometry_kernel", __file__, survivors,
+                       ("survivors", "survivors_rows", "frame_poses", "joint_poses"))
 
 
 def stamp_path() -> Path:
@@ -185,6 +219,10 @@ def warm_up() -> bool:
             np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
     survivors(np.zeros(1), *args)
     survivors_rows(np.zeros((1, 1)), *args, np.zeros((1, 1), np.bool_), np.zeros(2, np.int64))
+    tree = args[:6]
+    frame_poses(np.zeros((1, 1)), *tree, 1, np.eye(3), np.zeros(3), np.zeros((2, 3, 3)), np.zeros((2, 3)),
+                np.zeros((1, 4, 4)))
+    joint_poses(np.zeros((1, 1)), *tree, np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 2, 4, 4)))
     _STATE = "ready"
     return True
 

@@ -1,4 +1,4 @@
-"""The compiled single-configuration broad phase (robodesign.model.collision_kernel) behind ``Robot.in_collision``:
+"""The compiled single-configuration broad phase (robodesign.model.geometry_kernel) behind ``Robot.in_collision``:
 on the real PTP_3 cell (IMPROV arm, the CNC-machine mesh) and in a cell of boxes around it, the culled verdicts
 equal coal's over every pair, every pair coal finds colliding survives the bounds, the robot forgets its culler
 when its geometry changes, and the grid and box bounds are what they claim (checked against coal's distances)."""
@@ -10,7 +10,7 @@ import pytest
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
-from robodesign.model import collision_cull, collision_kernel
+from robodesign.model import collision_cull, geometry_kernel
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CELL, DistanceField, distance_field
 from robodesign.model.robot import _CULL_AFTER, Obstacle
@@ -18,14 +18,14 @@ from robodesign.solvers.schedule import static_cell
 
 from conftest import IMPROV, TASKS
 
-pytestmark = pytest.mark.skipif(not collision_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
+pytestmark = pytest.mark.skipif(not geometry_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
 
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
 
 
 @pytest.fixture(scope="module")
 def robot():
-    assert collision_kernel.warm_up() and collision_kernel.ready()
+    assert geometry_kernel.warm_up() and geometry_kernel.ready()
     task = load_task(TASKS / "simple" / "PTP_3.json")
     ms = load_module_set(IMPROV)
     return build_robot(static_cell(task), ms, Assembly.from_order(ms, GOOD), task.nominal_base_pose)
@@ -64,7 +64,7 @@ def check_cell(robot, Q):
     gm = robot.geom_model
     objs = gm.geometryObjects
     for q in Q[np.flatnonzero(verdicts)[:60]]:
-        n, _ = collision_kernel.survivors(q, *args)
+        n, _ = geometry_kernel.survivors(q, *args)
         kept = {int(k) for k in args[-2][:n]}
         names = {(objs[gm.collisionPairs[k].first].name, objs[gm.collisionPairs[k].second].name) for k in kept}
         assert set(robot.colliding_pairs(q)) <= names
@@ -122,7 +122,7 @@ def test_several_gridded_obstacles_share_one_grid_array(robot):
         for q in Q[:_CULL_AFTER + 1]:
             robot.in_collision(q)
         args2, _ = robot._culler._one
-        assert all(collision_kernel.survivors(q, *args2)[1] == 0 for q in Q[_CULL_AFTER:])   # (the culled ones)
+        assert all(geometry_kernel.survivors(q, *args2)[1] == 0 for q in Q[_CULL_AFTER:])   # (the culled ones)
     finally:
         robot.set_obstacles(obstacles, safety_margin=margin)
 
@@ -202,7 +202,7 @@ def test_unknown_cells_are_filled_for_the_next_queries(robot):
     args, _ = robot._culler._one
     for q in Q:
         robot.in_collision(q)
-        n, nu = collision_kernel.survivors(q, *args)
+        n, nu = geometry_kernel.survivors(q, *args)
         assert nu == 0                            # the cells this state asked about are known now
         assert set(args[-2][:n].tolist()) >= {k for k in range(len(robot.geom_model.collisionPairs))
                                             if pin.computeCollision(robot.geom_model, robot.geom_data, k)}
