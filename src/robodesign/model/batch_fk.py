@@ -4,7 +4,7 @@ pass per joint over all samples (for :func:`fk_batch` and :meth:`Robot.fk_batch
 <robodesign.model.robot.Robot.fk_batch>`)."""
 from __future__ import annotations
 
-from typing import Dict, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -114,7 +114,8 @@ class _BatchKinematics:
         if geometry_kernel.ready():
             tree, work = self.arrays()
             out = np.empty((len(Q), 4, 4))
-            geometry_kernel.frame_poses(np.ascontiguousarray(Q, dtype=float), *tree, jid, Rf, tf, *work, out)
+            kernel: Any = geometry_kernel.frame_poses    # (numba's stub takes one argument)
+            kernel(np.ascontiguousarray(Q, dtype=float), *tree, jid, Rf, tf, *work, out)
             return out
         Rs, ps = self._walk(Q, self._needed(jid))
         N = len(Q)
@@ -132,7 +133,8 @@ class _BatchKinematics:
         if geometry_kernel.ready():
             tree, work = self.arrays()
             out = np.empty((len(Q), self.njoints, 4, 4))
-            geometry_kernel.joint_poses(np.ascontiguousarray(Q, dtype=float), *tree, *work, out)
+            kernel: Any = geometry_kernel.joint_poses    # (numba's stub takes one argument)
+            kernel(np.ascontiguousarray(Q, dtype=float), *tree, *work, out)
             return out
         Rs, ps = self._walk(Q)
         N = len(Q)
