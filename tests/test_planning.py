@@ -180,14 +180,26 @@ def test_a_busy_machine_plans_the_same_path(robot, monkeypatch):
     from robodesign.solvers import planning
     quick = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
     assert quick.success and quick.stats["reason"] == "planned"
-    check = robot.in_collision
+    real = planning._static_validator
 
-    def slow(q):
+    def wait(rows: int) -> None:
         t = _time.perf_counter()
-        while _time.perf_counter() - t < 2e-4:   # busy-wait: ~40x the cost of a check
+        while _time.perf_counter() - t < 2e-4 * rows:   # busy-wait: ~40x the cost of a check, per state
             pass
-        return check(q)
-    monkeypatch.setattr(robot, "in_collision", slow)
+
+    def slowed_validator(*args):   # every state's test slowed, one at a time or a motion's states at once
+        ok = real(*args)
+
+        def slow(q):
+            wait(1)
+            return ok(q)
+
+        def slow_rows(Q):
+            wait(len(Q))
+            return ok.rows(Q)
+        slow.rows = slow_rows
+        return slow
+    monkeypatch.setattr(planning, "_static_validator", slowed_validator)
     slowed = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
     assert slowed.success and slowed.stats["checks"] == quick.stats["checks"]
     assert np.array_equal(slowed.path, quick.path)
@@ -199,15 +211,31 @@ def test_the_work_budget_stops_a_planner_that_cannot_succeed(robot, monkeypatch)
     """A query with no solution (the goal region walled off) spends exactly its check budget in OMPL."""
     from robodesign.solvers import planning
     monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 2000)
-    calls = []
-    check = robot.in_collision
+    real = planning._static_validator
+    wall = 0.5 * (QA[0] + QB[0])
+    asked = []
 
-    def walled(q):   # a wall across joint 0 halfway between the two configurations
-        calls.append(1)
-        return check(q) or abs(q[0] - 0.5 * (QA[0] + QB[0])) < 0.05
-    monkeypatch.setattr(robot, "in_collision", walled)
+    def walled_validator(*args):   # a wall across joint 0 halfway between the two configurations, for every
+        ok = real(*args)           # state: one at a time or a motion's states at once
+
+        def walled(q):
+            asked.append(1)
+            return ok(q) and bool(abs(q[0] - wall) >= 0.05)
+
+        def walled_rows(Q):
+            asked.append(len(Q))
+            return ok.rows(Q) & (np.abs(Q[:, 0] - wall) >= 0.05)
+        walled.rows = walled_rows
+        return walled
+    monkeypatch.setattr(planning, "_static_validator", walled_validator)
+    monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 100_000)   # a budget that plans around the box alone
+    assert plan_path(robot, QA, QB, time_limit=0.25, seed=0, resolution=0.02).stats["reason"] == "no_solution"
+    monkeypatch.setattr(planning, "_static_validator", real)
+    assert plan_path(robot, QA, QB, time_limit=0.25, seed=0, resolution=0.02).success   # (the wall is the obstacle)
+    monkeypatch.setattr(planning, "_static_validator", walled_validator)
+    monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 2000)
     res = plan_path(robot, QA, QB, time_limit=0.25, seed=0)
-    assert not res.success and res.stats["reason"] == "no_solution"
+    assert not res.success and res.stats["reason"] == "no_solution" and sum(asked) > 500
     assert 500 <= res.stats["checks"] <= 500 + 2 + 2000   # 0.25 s x 2000 checks/s, plus the straight-line checks
 
 

@@ -62,6 +62,7 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.model.collision_cull import culler_of
+from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -212,14 +213,18 @@ class _Memoized:
                 self.robot = None
         return self._culler
 
-    def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None) -> int:
+    def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None,
+                      gate: Optional[Callable[[], bool]] = None) -> int:
         """The first row of ``Q`` that is invalid, or -1: the verdicts (and counts) of asking ``self(q)`` row
-        by row until then; ``counter[0]`` grows by the rows asked."""
+        by row until then; ``counter[0]`` grows by the rows asked. ``gate``: asked after each row is counted and
+        before its verdict; False makes that row invalid unasked (the planner's work limit)."""
         culler = self.culler()
         if culler is None:
             for i, q in enumerate(Q):
                 if counter is not None:
                     counter[0] += 1
+                if gate is not None and not gate():
+                    return i
                 if not self(q):
                     return i
             return -1
@@ -231,19 +236,21 @@ class _Memoized:
             keys = [q.tobytes() for q in rows]
             new = [i for i, k in enumerate(keys) if k not in memo]
             S = culler.survivors(rows[new])
+            near = S.any(axis=1)      # rows with a pair the bounds do not clear
             ok = static_ok.rows(rows[new])  # type: ignore[attr-defined]
             at = {i: j for j, i in enumerate(new)}
             for i, key in enumerate(keys):
                 if counter is not None:
                     counter[0] += 1
+                if gate is not None and not gate():
+                    return start + i
                 self.lookups += 1
                 v = memo.get(key)
                 if v is None:
                     j = at[i]
                     v = bool(ok[j])
-                    if v:
-                        ks = np.flatnonzero(S[j])
-                        v = not (len(ks) and culler.collides(rows[i], ks))
+                    if v and near[j]:
+                        v = not culler.collides(rows[i], np.flatnonzero(S[j]))
                     memo[key] = v
                 if not v:
                     return start + i
@@ -521,17 +528,27 @@ def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize
         budget = [math.inf]          # the last check count the planner may reach
         stop: list = []              # the solve's termination condition, ended from the validity checker
 
-        def is_valid(s) -> bool:
-            counter[0] += 1
+        def within_budget() -> bool:
+            """After a state is counted: False (and OMPL told to end the solve) once the work limit is spent."""
             if counter[0] >= budget[0] or time.perf_counter() > hard_deadline[0]:
                 if stop:
                     stop[0].terminate()   # the work limit is spent: OMPL ends the solve
                 return False         # and planners that ignore the condition (FMT) stop soon
+            return True
+
+        def is_valid(s) -> bool:
+            counter[0] += 1
+            if not within_budget():
+                return False
             return valid(np.array([s[i] for i in rng_idx]))   # the same test as the dense checks
 
         ss.setStateValidityChecker(is_valid)
         si = ss.getSpaceInformation()
         si.setStateValidityCheckingResolution(min(1.0, resolution / space.getMaximumExtent()))
+        if name in PLANNERS_TWO_STATE and isinstance(valid, _Memoized) and valid.culler() is not None:
+            # each motion's states at once, in OMPL's order, with the same verdicts and counts (solvers/ompl_motion.py)
+            si.setMotionValidator(motion_validator(ob, space, si, n, lambda Q: valid.first_invalid(Q, counter,
+                                                                                                    within_budget)))
         start = space.allocState()
         for i in range(n):
             start[i] = float(qs[i])
