@@ -36,8 +36,6 @@ BIG_FUNCTIONS = {
                                               "kind, written out without calls for speed"),
     "solvers/planning.py:plan_path": (100, "input checks, the straight line, OMPL, shortcutting and the final "
                                            "check in one pass; not split yet (solvers/ was being worked on elsewhere)"),
-    "solvers/planning.py:_plan_ompl": (81, "OMPL's space, validity checker, goal states and planner set up in "
-                                           "one call; not split yet (solvers/ was being worked on elsewhere)"),
     "solvers/timing.py:_dynamics_constraint_class": (82, "a toppra constraint class made at first use (toppra is "
                                                          "imported lazily), its methods inside the factory"),
     "solvers/timing.py:time_parameterize": (97, "the method choice, blending, TOPP-RA passes and the ruckig "
