@@ -485,12 +485,11 @@ class Robot:
         prismatic ones) and the TCP offset from its joint. Cached until the base pose changes.
         """
         if self._reach is None:
-            m = self.model
+            m, d = self.model, self.data    # (scratch space: the joint poses at the neutral configuration)
             chain = self.tcp_chain()
-            d = m.createData()
-            pin.framesForwardKinematics(m, d, pin.neutral(m))
+            pin.forwardKinematics(m, d, pin.neutral(m))
             if not chain:
-                o, R = d.oMf[self.tcp_frame].translation.copy(), 0.0
+                o, R = pin.updateFramePlacement(m, d, self.tcp_frame).translation.copy(), 0.0
             else:
                 o = d.oMi[chain[0]].translation.copy()
                 R = sum(float(np.linalg.norm(m.jointPlacements[b].translation)) for b in chain[1:])
