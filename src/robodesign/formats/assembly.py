@@ -69,7 +69,7 @@ class Assembly:
         connections: List[Connection] = []
         for i in range(1, len(order)):
             new = ms[order[i]]
-            cands = [(k, c_old, c_new) for k in range(i)
+            cands = [(k, c_old, c_new) for k in range(i) if free[k]    # (a module with no free connector: none)
                      for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
             prev = ms[order[i - 1]]
             if not cands:
@@ -184,10 +184,22 @@ def free_connectors(ms: ModuleSet, module_id: str, used: Sequence[str] = ()) -> 
 def chain_pairs(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> List[Tuple[Connector, Connector]]:
     """The serial-chaining rule: the (connector of ``prev_id``, connector of ``next_id``) pairs that mate, over
     the ``free`` connectors of ``prev_id``. In a module order, a module attaches to the previous one iff
-    exactly one pair mates (and none with an earlier module); its free connectors are then the others."""
+    exactly one pair mates (and none with an earlier module); its free connectors are then the others.
+    Remembered per module set and arguments (a search asks the same few again and again)."""
+    key = (id(ms), prev_id, tuple(free), next_id)
+    hit = _PAIRS.get(key)
+    if hit is not None and hit[0] is ms:
+        return list(hit[1])
     new = ms[next_id]
-    return [(c_old, c_new) for c_old in ms[prev_id].connectors if c_old.id in free and c_old.type != "base"
-            for c_new in new.connectors if c_new.mates_with(c_old)[0]]
+    pairs = [(c_old, c_new) for c_old in ms[prev_id].connectors if c_old.id in free and c_old.type != "base"
+             for c_new in new.connectors if c_new.mates_with(c_old)[0]]
+    if len(_PAIRS) >= 65536:
+        _PAIRS.clear()
+    _PAIRS[key] = (ms, tuple(pairs))   # the module set is held: its id is not reused while the entry lives
+    return pairs
+
+
+_PAIRS: Dict[Tuple[int, str, Tuple[str, ...], str], Tuple[ModuleSet, Tuple[Tuple[Connector, Connector], ...]]] = {}
 
 
 def chain_step(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> Optional[Tuple[str, ...]]:
