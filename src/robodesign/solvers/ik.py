@@ -71,6 +71,7 @@ import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
+from robodesign.solvers.ik_accept import Acceptance
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
            "provably_unreachable"]
@@ -737,6 +738,11 @@ try:  # the gufunc behind np.linalg.solve without its ~4 µs of Python-level che
 except Exception:  # pragma: no cover - other numpy layouts
     _solve = np.linalg.solve
 
+try:  # the ufunc np.clip ends in (numpy._core._methods._clip), without its ~3 µs of Python-level dispatch
+    from numpy._core.umath import clip as _clip  # type: ignore[attr-defined]
+except ImportError:  # pragma: no cover - other numpy layouts
+    _clip = np.clip
+
 
 # ---------------------------------------------------------------------------------------------------------
 # The solver
@@ -860,7 +866,6 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     evaluate, E, JJ = gm.evaluator(n)
     m_rows = len(E)
     valid = goal.valid
-    in_collision = robot.in_collision
     cjj, ufp, gfj = pin.computeJointJacobians, pin.updateFramePlacement, pin.getFrameJacobian
     LOCAL = pin.LOCAL
     deadline = None if time_limit is None else t0 + float(time_limit)
@@ -933,23 +938,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     kernel = _kernel_descend(robot, gm, n, lo, hi, valid, max_iter) if trace is None else None
     descend = py_descend if kernel is None else kernel_descend
 
-    def accept(q: np.ndarray) -> str:
-        """Check limits, collision and distinctness of a converged configuration; add it if it passes."""
-        if not ((q >= lo).all() and (q <= hi).all()):   # guaranteed by the clamping; kept as a guard
-            stats["rejected_limits"] += 1
-            return "limits"
-        if check_collision and in_collision(q):
-            stats["rejected_collision"] += 1
-            return "collision"
-        if canonical:  # whole turns towards the seed (or 0): one sheet of the joint space (Robot.nearest_equivalent)
-            q2 = robot.nearest_equivalent(q, q_seed)
-            if not np.array_equal(q2, q) and valid(robot.fk(q2)):
-                q = q2
-        if any(float(np.linalg.norm(q - s)) <= distinct_tol for s in sols):
-            stats["rejected_duplicate"] += 1
-            return "duplicate"
-        sols.append(q.copy())
-        return "added"
+    accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
 
     # every attempt's start at once: the same numbers as one uniform draw (random_configuration) per attempt
     starts = r_lo + (r_hi - r_lo) * rng.random((max_restarts, n))
@@ -980,7 +969,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             # collisions are the bottleneck: the valid set around this IK branch may hold
             # collision-free configurations (a few 0.01 rad away), so look there before restarting
             for _ in range(_REPAIR_TRIES):
-                q2 = descend(np.clip(found + normal(0.0, _REPAIR_SIGMA, n), lo, hi), _REPAIR_ITER)
+                q2 = descend(_clip(found + normal(0.0, _REPAIR_SIGMA, n), lo, hi), _REPAIR_ITER)
                 if q2 is None:
                     continue
                 stats["repairs"] += 1
