@@ -750,7 +750,7 @@ except ImportError:  # pragma: no cover - other numpy layouts
 class _Kernel:
     """The compiled LM descent (:mod:`.ik_kernel`) bound to one robot, goal and buffers."""
 
-    def __init__(self, ck, prog, n, lo, hi, valid, max_iter, kmod):
+    def __init__(self, ck, prog, n, lo, hi, valid, max_iter, kmod, Ninv):
         tkind, tvec = prog
         m = kmod.rows_of(tkind)
         self.E, self.JJ, self.T = np.zeros(m), np.zeros((m, n)), np.zeros((4, 4))
@@ -758,23 +758,22 @@ class _Kernel:
         self.params = np.array([_LAMBDA_FACTOR, _LAMBDA_BIAS, _MAX_STEP, _STALL_RATIO, _STALL_WINDOW], dtype=float)
         self.lo = np.ascontiguousarray(lo, dtype=float)
         self.hi = np.ascontiguousarray(hi, dtype=float)
-        self.args = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp)
-        self.goal = (prog[0], prog[1])
         self.valid, self.max_iter = valid, int(max_iter)
         self._descend, self._batch = kmod.lm_descend, kmod.lm_batch
-        self.Ninv = None
+        # the kernels' arguments after the start(s), in their order, put together once
+        tail = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp, Ninv, tkind, tvec, self.E, self.JJ, self.T, self.params)
+        self._descend_args = (self.lo, self.hi) + tail
+        self._batch_args = (self.max_iter, self.lo, self.hi) + tail + (self.q,)
 
     def descend(self, q: np.ndarray, iters: int):
         """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result."""
         q = np.array(q, dtype=float)     # the kernel works in place
-        status, its = self._descend(q, iters, self.lo, self.hi, *self.args, self.Ninv, *self.goal, self.E, self.JJ,
-                                    self.T, self.params)
+        status, its = self._descend(q, iters, *self._descend_args)
         return (q if status == 1 and self.valid(self.T) else None), its
 
     def batch(self, starts: np.ndarray, a: int, stop: int):
         """(index, q or None, iterations): descents from starts[a:stop] until one lands in the goal."""
-        idx, its = self._batch(starts, a, stop, self.max_iter, self.lo, self.hi, *self.args, self.Ninv, *self.goal,
-                               self.E, self.JJ, self.T, self.params, self.q)
+        idx, its = self._batch(starts, a, stop, *self._batch_args)
         if idx < stop and self.valid(self.T):
             return idx, self.q.copy(), its
         return idx, None, its
@@ -794,9 +793,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
     ck = ik_kernel.chain_kernel(robot)
     if ck is None:
         return None
-    k = _Kernel(ck, prog, n, lo, hi, valid, max_iter, ik_kernel)
-    k.Ninv = gm.N_inv
-    return k
+    return _Kernel(ck, prog, n, lo, hi, valid, max_iter, ik_kernel, gm.N_inv)
 
 
 def _as_rng(rng) -> np.random.Generator:
