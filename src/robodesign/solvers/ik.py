@@ -618,6 +618,7 @@ class ChainBounds:
     ``circle`` is None when the first joint is not revolute or the chain has fewer than two joints."""
 
     def __init__(self, robot):
+        self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
         self.o, self.R = robot.reach_bound()
         self.circle = None
         m = robot.model
@@ -648,7 +649,16 @@ class ChainBounds:
         self.key = robot.base_pose.tobytes()
 
     def unreachable(self, gm: "GoalModel") -> str:
-        """Why no configuration can put the TCP into the goal ('' when the bounds allow it)."""
+        """Why no configuration can put the TCP into the goal ('' when the bounds allow it); remembered per goal
+        model (the bounds and the goal are fixed: the IK stage asks once per goal, solve_ik again)."""
+        hit = self._verdicts.get(id(gm))
+        if hit is not None and hit[0] is gm:
+            return hit[1]
+        why = self._unreachable(gm)
+        self._verdicts[id(gm)] = (gm, why)
+        return why
+
+    def _unreachable(self, gm: "GoalModel") -> str:
         if gm.unconstrained:
             return ""
         if gm.position_lower_bound(self.o) > self.R + 1e-9:
