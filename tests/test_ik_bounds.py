@@ -177,3 +177,22 @@ def test_ik_stage_unchanged_when_a_later_goal_is_provably_out_of_reach(monkeypat
     assert fast == slow
     st, n, m = fast[0]   # the probed candidate (the other one stops at `reach` on today's easy variant)
     assert st == "ik" and n >= 1 and "out_of_reach" in m, fast
+
+
+def test_the_verdict_is_remembered_per_goal_model(robots):
+    """ChainBounds.unreachable remembers its answer per goal model (the IK stage asks per goal, solve_ik again):
+    the remembered answer is the computed one, for reachable and unreachable goals alike."""
+    from robodesign.solvers.ik import goal_model
+    robot = robots[0]
+    cb = chain_bounds(robot)
+    rng = np.random.default_rng(5)
+    answers = []
+    for k in range(40):
+        N = homogeneous(random_rotation(rng), rng.uniform(-1.5, 1.5, 3))
+        goal = ToleratedPose(N, ("r_sph", "Theta_R"), ((0.0, 0.01), (0.0, [0.01, 3.0][k % 2])))
+        gm = goal_model(goal)
+        first = cb.unreachable(gm)
+        assert first == cb._unreachable(gm) == cb.unreachable(gm) == provably_unreachable(robot, goal)
+        assert cb._verdicts[id(gm)] == (gm, first)
+        answers.append(first)
+    assert {"", "out_of_reach", "out_of_orientation_reach"} <= set(answers)

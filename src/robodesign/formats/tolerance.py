@@ -78,6 +78,7 @@ from robodesign.core.errors import InfeasibleError, InputError, PathPart, descri
 from robodesign.core.spatial import homogeneous, inv, log3, parse_pose, pose_to_list
 from robodesign.core.spatial import matrix_to_rpy as rotation_to_rpy
 from robodesign.core.spatial import rpy_to_matrix as rpy_matrix
+from robodesign.formats.tolerance_check import ValidPlan
 
 FrameResolver = Callable[[str], np.ndarray]
 
@@ -580,6 +581,9 @@ class ToleratedPose:
             self._need.setdefault(c.frame, set()).add(c.info.system)
             names.setdefault(c.frame, set()).add(c.projection)
         self._plain = {f: n <= {"x", "y", "z", "Theta_R"} for f, n in names.items()}
+        # valid()'s fast path: the same values, only those the entries ask for
+        self._plan = ValidPlan(entries, self._Q, self._plain, PROJECTIONS, _DEGENERATE, _arc_contains,
+                               rotation_to_quaternion)
 
     # -- construction from / to JSON ----------------------------------------------------------------------
     @staticmethod
@@ -717,7 +721,12 @@ class ToleratedPose:
         return out
 
     def valid(self, T: np.ndarray, eps: float = EPS) -> bool:
-        return not self.violations(T, eps)
+        """``not violations(T, eps)``, computed by the pose's :class:`~.tolerance_check.ValidPlan` (the same
+        values, only those the entries ask for) where it decides."""
+        if not self._active:
+            return True
+        ok = self._plan.valid(self._nominal_inv @ np.asarray(T, dtype=float), eps)
+        return not self.violations(T, eps) if ok is None else ok
 
     def residual(self, T: np.ndarray) -> np.ndarray:
         """Signed distance outside the allowed set for each merged constraint (``constraint_keys``).

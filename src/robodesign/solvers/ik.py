@@ -71,6 +71,7 @@ import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
+from robodesign.solvers.ik_accept import Acceptance
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
            "provably_unreachable"]
@@ -617,6 +618,7 @@ class ChainBounds:
     ``circle`` is None when the first joint is not revolute or the chain has fewer than two joints."""
 
     def __init__(self, robot):
+        self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
         self.o, self.R = robot.reach_bound()
         self.circle = None
         m = robot.model
@@ -647,7 +649,16 @@ class ChainBounds:
         self.key = robot.base_pose.tobytes()
 
     def unreachable(self, gm: "GoalModel") -> str:
-        """Why no configuration can put the TCP into the goal ('' when the bounds allow it)."""
+        """Why no configuration can put the TCP into the goal ('' when the bounds allow it); remembered per goal
+        model (the bounds and the goal are fixed: the IK stage asks once per goal, solve_ik again)."""
+        hit = self._verdicts.get(id(gm))
+        if hit is not None and hit[0] is gm:
+            return hit[1]
+        why = self._unreachable(gm)
+        self._verdicts[id(gm)] = (gm, why)
+        return why
+
+    def _unreachable(self, gm: "GoalModel") -> str:
         if gm.unconstrained:
             return ""
         if gm.position_lower_bound(self.o) > self.R + 1e-9:
@@ -737,6 +748,11 @@ try:  # the gufunc behind np.linalg.solve without its ~4 µs of Python-level che
 except Exception:  # pragma: no cover - other numpy layouts
     _solve = np.linalg.solve
 
+try:  # the ufunc np.clip ends in (numpy._core._methods._clip), without its ~3 µs of Python-level dispatch
+    from numpy._core.umath import clip as _clip  # type: ignore[attr-defined]
+except ImportError:  # pragma: no cover - other numpy layouts
+    _clip = np.clip
+
 
 # ---------------------------------------------------------------------------------------------------------
 # The solver
@@ -744,7 +760,7 @@ except Exception:  # pragma: no cover - other numpy layouts
 class _Kernel:
     """The compiled LM descent (:mod:`.ik_kernel`) bound to one robot, goal and buffers."""
 
-    def __init__(self, ck, prog, n, lo, hi, valid, max_iter, kmod):
+    def __init__(self, ck, prog, n, lo, hi, valid, max_iter, kmod, Ninv):
         tkind, tvec = prog
         m = kmod.rows_of(tkind)
         self.E, self.JJ, self.T = np.zeros(m), np.zeros((m, n)), np.zeros((4, 4))
@@ -752,23 +768,22 @@ class _Kernel:
         self.params = np.array([_LAMBDA_FACTOR, _LAMBDA_BIAS, _MAX_STEP, _STALL_RATIO, _STALL_WINDOW], dtype=float)
         self.lo = np.ascontiguousarray(lo, dtype=float)
         self.hi = np.ascontiguousarray(hi, dtype=float)
-        self.args = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp)
-        self.goal = (prog[0], prog[1])
         self.valid, self.max_iter = valid, int(max_iter)
         self._descend, self._batch = kmod.lm_descend, kmod.lm_batch
-        self.Ninv = None
+        # the kernels' arguments after the start(s), in their order, put together once
+        tail = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp, Ninv, tkind, tvec, self.E, self.JJ, self.T, self.params)
+        self._descend_args = (self.lo, self.hi) + tail
+        self._batch_args = (self.max_iter, self.lo, self.hi) + tail + (self.q,)
 
     def descend(self, q: np.ndarray, iters: int):
         """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result."""
         q = np.array(q, dtype=float)     # the kernel works in place
-        status, its = self._descend(q, iters, self.lo, self.hi, *self.args, self.Ninv, *self.goal, self.E, self.JJ,
-                                    self.T, self.params)
+        status, its = self._descend(q, iters, *self._descend_args)
         return (q if status == 1 and self.valid(self.T) else None), its
 
     def batch(self, starts: np.ndarray, a: int, stop: int):
         """(index, q or None, iterations): descents from starts[a:stop] until one lands in the goal."""
-        idx, its = self._batch(starts, a, stop, self.max_iter, self.lo, self.hi, *self.args, self.Ninv, *self.goal,
-                               self.E, self.JJ, self.T, self.params, self.q)
+        idx, its = self._batch(starts, a, stop, *self._batch_args)
         if idx < stop and self.valid(self.T):
             return idx, self.q.copy(), its
         return idx, None, its
@@ -788,9 +803,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
     ck = ik_kernel.chain_kernel(robot)
     if ck is None:
         return None
-    k = _Kernel(ck, prog, n, lo, hi, valid, max_iter, ik_kernel)
-    k.Ninv = gm.N_inv
-    return k
+    return _Kernel(ck, prog, n, lo, hi, valid, max_iter, ik_kernel, gm.N_inv)
 
 
 def _as_rng(rng) -> np.random.Generator:
@@ -860,7 +873,6 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     evaluate, E, JJ = gm.evaluator(n)
     m_rows = len(E)
     valid = goal.valid
-    in_collision = robot.in_collision
     cjj, ufp, gfj = pin.computeJointJacobians, pin.updateFramePlacement, pin.getFrameJacobian
     LOCAL = pin.LOCAL
     deadline = None if time_limit is None else t0 + float(time_limit)
@@ -933,23 +945,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     kernel = _kernel_descend(robot, gm, n, lo, hi, valid, max_iter) if trace is None else None
     descend = py_descend if kernel is None else kernel_descend
 
-    def accept(q: np.ndarray) -> str:
-        """Check limits, collision and distinctness of a converged configuration; add it if it passes."""
-        if not ((q >= lo).all() and (q <= hi).all()):   # guaranteed by the clamping; kept as a guard
-            stats["rejected_limits"] += 1
-            return "limits"
-        if check_collision and in_collision(q):
-            stats["rejected_collision"] += 1
-            return "collision"
-        if canonical:  # whole turns towards the seed (or 0): one sheet of the joint space (Robot.nearest_equivalent)
-            q2 = robot.nearest_equivalent(q, q_seed)
-            if not np.array_equal(q2, q) and valid(robot.fk(q2)):
-                q = q2
-        if any(float(np.linalg.norm(q - s)) <= distinct_tol for s in sols):
-            stats["rejected_duplicate"] += 1
-            return "duplicate"
-        sols.append(q.copy())
-        return "added"
+    accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
 
     # every attempt's start at once: the same numbers as one uniform draw (random_configuration) per attempt
     starts = r_lo + (r_hi - r_lo) * rng.random((max_restarts, n))
@@ -980,7 +976,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             # collisions are the bottleneck: the valid set around this IK branch may hold
             # collision-free configurations (a few 0.01 rad away), so look there before restarting
             for _ in range(_REPAIR_TRIES):
-                q2 = descend(np.clip(found + normal(0.0, _REPAIR_SIGMA, n), lo, hi), _REPAIR_ITER)
+                q2 = descend(_clip(found + normal(0.0, _REPAIR_SIGMA, n), lo, hi), _REPAIR_ITER)
                 if q2 is None:
                     continue
                 stats["repairs"] += 1
