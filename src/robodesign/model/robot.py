@@ -542,6 +542,12 @@ class Robot:
         (N, dof). ``fext``: None or (N, 6) world wrenches ``[f; τ]`` applied at the TCP (zero rows: none)."""
         Q, DQ, DDQ = (np.asarray(x, dtype=float).reshape(-1, self.dof) for x in (Q, DQ, DDQ))
         out = np.empty_like(Q)
+        if fext is None and len(Q):   # (rnea's own call per row, without its per-call checks)
+            out[0] = self.rnea(Q[0], DQ[0], DDQ[0])
+            m, d, rnea = self._link_model, self._link_data, pin.rnea
+            for k in range(1, len(Q)):
+                out[k] = rnea(m, d, Q[k], DQ[k], DDQ[k])
+            return out
         for k in range(len(Q)):
             f = None if fext is None or not np.any(fext[k]) else self.tcp_wrench_forces(Q[k], fext[k])
             out[k] = self.rnea(Q[k], DQ[k], DDQ[k], f)
