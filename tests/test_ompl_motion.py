@@ -28,6 +28,22 @@ def test_bisection_order_by_hand():
         assert sorted(bisection_order(nd)) == list(range(1, nd))
 
 
+def test_segment_states_are_the_per_state_formula_bit_for_bit(monkeypatch):
+    """planning._segment_ok builds a segment's states at once: the same floats as a + d·(k/n) one at a time."""
+    rng = np.random.default_rng(8)
+    seen = []
+    monkeypatch.setattr(planning._Memoized, "first_invalid", lambda self, Q, counter=None, gate=None: seen.append(Q) or -1)
+    memo = planning._Memoized(lambda q: True)
+    for trial in range(40):
+        a, b = rng.uniform(-3, 3, 6), rng.uniform(-3, 3, 6)
+        start = bool(trial % 2)
+        assert planning._segment_ok(memo, a, b, 0.013, include_start=start)
+        d = b - a
+        n = max(1, int(np.ceil(float(np.max(np.abs(d))) / 0.013 - 1e-12)))
+        want = ([a] if start else []) + [b] + [a + d * (k / n) for k in planning._bisection_order(n)]
+        assert np.array_equal(seen[-1], np.array(want))
+
+
 def test_states_equal_ompl_interpolation_bit_for_bit():
     n = 7
     space = ob.RealVectorStateSpace(n)

@@ -177,9 +177,9 @@ class CollisionCuller:
             radii.append(r)
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
-        pairs = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
-        margin = np.array([float(gd.collisionRequests[k].security_margin) for k in range(len(pairs))])
-        active = np.array([bool(a) for a in gd.activeCollisionPairs], dtype=bool) if len(pairs) else np.zeros(0, bool)
+        pairs = [(cp.first, cp.second) for cp in gm.collisionPairs]
+        margin = np.array([req.security_margin for req in gd.collisionRequests], dtype=float).reshape(len(pairs))
+        active = np.array(list(gd.activeCollisionPairs), dtype=bool).reshape(len(pairs))
         self.n_pairs = len(pairs)
         self.active = active
         selfp = [k for k, (a, b) in enumerate(pairs) if a < n_robot and b < n_robot]

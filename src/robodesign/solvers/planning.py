@@ -53,15 +53,18 @@ Decisions:
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
+import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.model.collision_cull import culler_of
+from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
@@ -150,7 +153,11 @@ def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
         out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
         if gravity is not None and out.any():
             idx = np.flatnonzero(out)
-            G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
+            if isinstance(robot, Robot):   # (Robot.gravity_torque's pinocchio call, without its per-call checks)
+                m, d, grav = robot.model, robot.data, pin.computeGeneralizedGravity
+                G = np.abs(np.array([grav(m, d, Q[i]).copy() for i in idx]).reshape(len(idx), -1))
+            else:
+                G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
             bad = (G > tau_max).any(axis=1)
             if R is not None:
                 far = np.min(np.max(np.abs(R[None, :, :] - Q[idx][:, None, :]), axis=2), axis=1) > REST_RADIUS
@@ -275,9 +282,10 @@ def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter:
     """
     d = b - a
     n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12))) if d.size else 1
-    states = ([a] if include_start else []) + [b] + [a + d * (k / n) for k in _bisection_order(n)]
+    T = np.array(_bisection_order(n), dtype=float) / n   # (k / n, as Python's float division gives it)
+    states = np.vstack([a[None, :]] * include_start + [b[None, :], a[None, :] + d[None, :] * T[:, None]])
     if isinstance(valid, _Memoized):
-        return valid.first_invalid(np.array(states), counter) < 0
+        return valid.first_invalid(states, counter) < 0
     for q in states:
         if counter is not None:
             counter[0] += 1
@@ -286,8 +294,9 @@ def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter:
     return True
 
 
-def _bisection_order(n: int) -> List[int]:
-    """1..n-1 ordered coarse to fine (midpoints first)."""
+@functools.lru_cache(maxsize=1024)
+def _bisection_order(n: int) -> Tuple[int, ...]:
+    """1..n-1 ordered coarse to fine (midpoints first); remembered."""
     out: List[int] = []
     seen = set()
     step = 1
@@ -299,7 +308,7 @@ def _bisection_order(n: int) -> List[int]:
                 seen.add(k)
                 out.append(k)
         step //= 2
-    return out
+    return tuple(out)
 
 
 def check_path(robot, path, resolution: float = 0.01, static_torque: bool = False,
