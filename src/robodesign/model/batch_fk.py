@@ -42,10 +42,8 @@ class _BatchKinematics:
             self.axis.append(np.asarray(ax, dtype=float))
             self.iq.append(int(jm.idx_q))
             self.z.append(kind == 0 and np.allclose(ax, (0.0, 0.0, 1.0), atol=0.0))
-        self.frames = {}
-        for f, fr in enumerate(model.frames):
-            self.frames[f] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
-                              np.array(fr.placement.translation, dtype=float))
+        self.model = model
+        self.frames: Dict[int, Tuple[int, np.ndarray, np.ndarray]] = {}   # (parent joint, R, t), on first use
         self.njoints = model.njoints
         self._arrays: Optional[tuple] = None
 
@@ -110,7 +108,12 @@ class _BatchKinematics:
         return self._arrays
 
     def frame_poses(self, Q: np.ndarray, frame: int) -> np.ndarray:
-        jid, Rf, tf = self.frames[frame]
+        hit = self.frames.get(frame)
+        if hit is None:
+            fr = self.model.frames[frame]
+            hit = self.frames[frame] = (int(fr.parentJoint), np.array(fr.placement.rotation, dtype=float),
+                                        np.array(fr.placement.translation, dtype=float))
+        jid, Rf, tf = hit
         if geometry_kernel.ready():
             tree, work = self.arrays()
             out = np.empty((len(Q), 4, 4))
