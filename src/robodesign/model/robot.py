@@ -79,7 +79,9 @@ class Robot:
         self._build(convex_meshes)
         self.model.gravity = pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
         self.base_pose = np.eye(4)
-        self.data = self.model.createData()
+        self.data: "pin.Data"
+        if base_pose is None:   # (else set_base_pose below makes it)
+            self.data = self.model.createData()
         self._sync_link_model()
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._geometry_changed()
@@ -751,12 +753,10 @@ _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
 def _fresh_guesses(gd: "pin.GeometryData") -> None:
     """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
     enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
-    for reqs in (gd.collisionRequests, gd.distanceRequests):
-        for r in reqs:
-            r.cached_gjk_guess = _GUESS
-            r.cached_support_func_guess = _SUPPORT_GUESS
-    for r in gd.collisionRequests:
-        r.distance_upper_bound = _NO_BOUND  # (pinocchio sets it at every query)
+    for r in gd.collisionRequests:   # (pinocchio sets distance_upper_bound at every query)
+        r.cached_gjk_guess, r.cached_support_func_guess, r.distance_upper_bound = _GUESS, _SUPPORT_GUESS, _NO_BOUND
+    for r in gd.distanceRequests:
+        r.cached_gjk_guess, r.cached_support_func_guess = _GUESS, _SUPPORT_GUESS
 
 
 def _probe(robot: Robot, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:

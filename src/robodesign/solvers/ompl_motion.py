@@ -1,4 +1,5 @@
-"""OMPL's discrete motion check, one motion at a time instead of one state at a time (issue 25).
+"""The planner's OMPL side: its start and goal states, and OMPL's discrete motion check one motion at a time
+instead of one state at a time (issue 25).
 
 OMPL's default motion validator (``DiscreteMotionValidator::checkMotion(s1, s2)``) asks the state validity checker
 about ``s2`` first, then about the ``nd − 1`` states between (``nd = space.validSegmentCount(s1, s2)``, state ``j``
@@ -67,4 +68,27 @@ def motion_validator(ob, space, si, n: int, first_invalid: Callable[[np.ndarray]
     return BatchedMotionValidator(si)
 
 
-__all__ = ["PLANNERS_TWO_STATE", "bisection_order", "motion_states", "motion_validator"]
+def set_start_and_goals(ob, ss, space, si, qs: np.ndarray, G: np.ndarray, tol: float) -> None:
+    """OMPL's start state ``qs`` and goal (threshold ``tol``): the one row of ``G``, or any of its rows."""
+    n = len(qs)
+    start = space.allocState()
+    for i in range(n):
+        start[i] = float(qs[i])
+    if len(G) == 1:
+        goal = space.allocState()
+        for i in range(n):
+            goal[i] = float(G[0, i])
+        ss.setStartAndGoalStates(start, goal, tol)
+        return
+    goals = ob.GoalStates(si)
+    for row in G:
+        st = space.allocState()
+        for i in range(n):
+            st[i] = float(row[i])
+        goals.addState(st)
+    goals.setThreshold(tol)
+    ss.setStartState(start)
+    ss.setGoal(goals)
+
+
+__all__ = ["PLANNERS_TWO_STATE", "bisection_order", "motion_states", "motion_validator", "set_start_and_goals"]

@@ -65,7 +65,7 @@ import pinocchio as pin
 from robodesign.core.errors import InputError
 from robodesign.model.collision_cull import culler_of
 from robodesign.model.robot import Robot
-from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator
+from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -506,29 +506,6 @@ def plan_path(robot, q_start, q_goal, planner: str = "rrtconnect", time_limit: f
     return done(None, "final_check_failed")
 
 
-def _start_and_goals(ob, ss, space, si, qs: np.ndarray, G: np.ndarray) -> None:
-    """OMPL's start state ``qs`` and goal: the one row of ``G``, or any of its rows (GoalStates)."""
-    n = len(qs)
-    start = space.allocState()
-    for i in range(n):
-        start[i] = float(qs[i])
-    if len(G) == 1:
-        goal = space.allocState()
-        for i in range(n):
-            goal[i] = float(G[0, i])
-        ss.setStartAndGoalStates(start, goal, _GOAL_TOL)
-        return
-    goals = ob.GoalStates(si)
-    for row in G:
-        st = space.allocState()
-        for i in range(n):
-            st[i] = float(row[i])
-        goals.addState(st)
-    goals.setThreshold(_GOAL_TOL)
-    ss.setStartState(start)
-    ss.setGoal(goals)
-
-
 def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize, counter, stats):
     """OMPL's path from ``qs`` to any row of ``G`` (one or more goal configurations), or None."""
     from ompl import base as ob
@@ -581,7 +558,7 @@ def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize
             # each motion's states at once, in OMPL's order, with the same verdicts and counts (solvers/ompl_motion.py)
             si.setMotionValidator(motion_validator(ob, space, si, n, lambda Q: valid.first_invalid(Q, counter,
                                                                                                     within_budget)))
-        _start_and_goals(ob, ss, space, si, qs, G)
+        set_start_and_goals(ob, ss, space, si, qs, G, _GOAL_TOL)
         obj = ob.PathLengthOptimizationObjective(si)
         if not optimize:
             obj.setCostThreshold(obj.infiniteCost())
