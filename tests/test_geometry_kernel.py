@@ -13,7 +13,8 @@ from robodesign.formats.task_io import load_task
 from robodesign.model import collision_cull, geometry_kernel
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CELL, DistanceField, distance_field
-from robodesign.model.robot import _CULL_AFTER, Obstacle
+from robodesign.model.robot import Obstacle
+from robodesign.model.robot_geometry import _CULL_AFTER
 from robodesign.solvers.schedule import static_cell
 
 from conftest import IMPROV, TASKS

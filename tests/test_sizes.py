@@ -16,8 +16,6 @@ BIG_FILES = {
                                     "reach bounds; not split yet (design/ was being worked on elsewhere)"),
     "formats/tolerance.py": (1000, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                    "rotation maths to core/spatial); +13: the plain tolerances' fast values"),
-    "model/robot.py": (777, "the Robot class (model, geometry, limits, dynamics, collisions) and batch kinematics; "
-                            "not split yet (model/ was being worked on elsewhere)"),
     "solvers/ik.py": (992, "the IK loop with its own projection terms (issue 23 §2: they move to ToleratedPose); "
                            "+7 for whole turns (issue 21)"),
     "solvers/ik_kernel.py": (710, "the numba kernels, their goal compilation and the background compile cache in "

@@ -1,0 +1,311 @@
+"""The robot's coal collision geometry and its collision queries (:class:`RobotGeometry`, a part of
+:class:`robodesign.model.robot.Robot`): the robot's objects and the self pairs among them, the cell's obstacles
+and their pairs with every robot object, the scratch space of the queries (``pin.GeometryData``, kept apart as
+pinocchio keeps ``Data``), and the queries themselves — a configuration in collision, the pairs in contact, the
+contacts of the base whatever the joints do, the smallest distances. Everything here is made on first use: a
+design that fails before its first collision query needs none of it.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+if TYPE_CHECKING:
+    from robodesign.formats.module_spec import ModuleSet
+
+
+@dataclass
+class Obstacle:
+    """A collision object of the environment: shape + world pose (world-fixed unless moved)."""
+    name: str
+    shape: object  # coal CollisionGeometry
+    pose: np.ndarray  # 4x4 world
+
+
+
+class RobotGeometry:
+    """The collision part of :class:`~robodesign.model.robot.Robot` (what its ``_build`` sets is declared here)."""
+
+    model: "pin.Model"
+    data: "pin.Data"
+    module_set: "ModuleSet"
+    base_pose: np.ndarray
+    dof: int
+    obstacles: List["Obstacle"]
+    safety_margin: float
+    _geom_model: Optional["pin.GeometryModel"]
+    _geom_data: Optional["pin.GeometryData"]
+    _geom_specs: List[Tuple[str, int, int, np.ndarray, object]]
+    _geom_body: List[Tuple[int, str]]
+    _root_items: List[Tuple[str, int, np.ndarray]]
+    _obstacle_ids: List[int]
+    _base_probe: Optional[tuple]
+    _placed: bool
+    _direct_joint_pairs: set
+    _self_map: Optional[np.ndarray]
+    _n_self: int
+
+    def _q(self, q) -> np.ndarray:
+        """One configuration, checked (Robot's own)."""
+        raise NotImplementedError
+
+    @property
+    def _self_pairs(self) -> np.ndarray:
+        """The self-collision pairs (:meth:`_self_collision_map`), made on first use."""
+        if self._self_map is None:
+            self._self_map = self._self_collision_map(self._direct_joint_pairs)
+            self._n_self = int(self._self_map.sum())
+        return self._self_map
+
+    @property
+    def _n_self_pairs(self) -> int:
+        return self._n_self if self._self_map is not None else int(self._self_pairs.sum())
+
+    def _self_collision_map(self, direct_joint_pairs) -> np.ndarray:
+        """Every pair of robot objects on different joints, but those the module set ignores (a boolean map, set
+        in one call, row-major)."""
+        mode = self.module_set.ignore_collisions
+        parents = np.asarray(self.model.parents, dtype=int)
+        J = np.array([spec[1] for spec in self._geom_specs], dtype=int).reshape(-1)
+        keep = np.triu(J[:, None] != J[None, :], 1)  # rigidly connected: same joint
+        if mode == "rigid_via_joint":
+            keep &= (parents[J][:, None] != J[None, :]) & (parents[J][None, :] != J[:, None])
+        if mode == "via_joint" and direct_joint_pairs:
+            ids = {b: k for k, b in enumerate(dict.fromkeys(self._geom_body))}  # body → index
+            B = np.array([ids[b] for b in self._geom_body], dtype=int)
+            D = np.zeros((len(ids), len(ids)), dtype=bool)  # bodies joined directly by a joint
+            for pair in direct_joint_pairs:
+                ab = [ids[b] for b in pair if b in ids]
+                if len(ab) == 2:
+                    D[ab[0], ab[1]] = D[ab[1], ab[0]] = True
+            keep &= ~D[B[:, None], B[None, :]]
+        return keep
+
+    @property
+    def geom_model(self) -> "pin.GeometryModel":
+        """The coal collision geometry: the robot's objects (pairs among them first), then the obstacles (each with
+        every robot object), made on first use (a design that fails before any collision query needs none)."""
+        geom = self._geom_model
+        if geom is None:
+            geom = self._geom_model = pin.GeometryModel()
+            for k in range(len(self._geom_specs)):
+                geom.addGeometryObject(self._geometry_object(k))
+            geom.setCollisionPairs(self._self_pairs)
+            self._add_obstacles(geom)
+        return geom
+
+    @geom_model.setter
+    def geom_model(self, geom: "pin.GeometryModel") -> None:
+        self._geom_model = geom
+        self._geometry_changed()
+
+    def _geometry_changed(self) -> None:
+        """Forget the collision culler (built for the geometry before the change)."""
+        self._culler: Optional[Any] = None   # model.collision_cull.CollisionCuller of the current geometry
+        self._plain_queries = 0              # in_collision queries asked of every pair since the change
+
+    def _geometry_object(self, k: int) -> "pin.GeometryObject":
+        """Robot object ``k`` as the geometry holds it (one fixed to the world at the base pose)."""
+        name, jid, fid, P, shape = self._geom_specs[k]
+        return pin.GeometryObject(name, jid, fid, pin.SE3(self.base_pose @ P if jid == 0 and self._placed else P),
+                                  shape)
+
+    def _obstacle_object(self, ob: "Obstacle") -> "pin.GeometryObject":
+        return pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape)
+
+    def _add_obstacles(self, geom) -> None:
+        n_robot = len(self._geom_body)
+        for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
+            geom.addGeometryObject(self._obstacle_object(ob))
+        for k in self._obstacle_ids:
+            for a in range(n_robot):
+                geom.addCollisionPair(pin.CollisionPair(a, k))
+
+    def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
+        """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
+        n_robot = len(self._geom_body)
+        self.obstacles = list(obstacles)
+        self._obstacle_ids = list(range(n_robot, n_robot + len(self.obstacles)))  # after the robot's own objects
+        geom = self._geom_model
+        if geom is not None:  # drop the previous obstacles; else geom_model adds these when it is made
+            if len(geom.geometryObjects) > n_robot:
+                self._geom_model = geom = self._robot_only_geom()
+            self._add_obstacles(geom)
+        self.safety_margin = float(safety_margin)
+        self._geom_data = self._base_probe = None
+        self._geometry_changed()
+
+    @property
+    def obstacle_geometry_ids(self) -> Tuple[int, ...]:
+        """Geometry-model index of each obstacle (in the order of :attr:`obstacles`)."""
+        return tuple(self._obstacle_ids)
+
+    def move_obstacle(self, index: int, pose: np.ndarray) -> None:
+        self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
+        self._base_probe = None
+        self._geometry_changed()
+
+    def _robot_only_geom(self):
+        g = pin.GeometryModel()
+        for k in range(len(self._geom_body)):
+            g.addGeometryObject(self.geom_model.geometryObjects[k])
+        for cp in list(self.geom_model.collisionPairs)[: self._n_self_pairs]:
+            g.addCollisionPair(cp)
+        return g
+
+    @property
+    def geom_data(self) -> "pin.GeometryData":
+        """Scratch space of the collision queries (built lazily, after the last change of the geometry)."""
+        gd = self._geom_data
+        if gd is None:
+            gd = self._geom_data = pin.GeometryData(self.geom_model)
+            self._geometry_changed()
+            self._apply_margins(gd)
+            probe, self._base_probe = self._base_probe, None
+            if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
+                for k, req in zip(probe[2], probe[1].collisionRequests):
+                    to = gd.collisionRequests[k]
+                    to.cached_gjk_guess, to.cached_support_func_guess = req.cached_gjk_guess, req.cached_support_func_guess
+                    to.distance_upper_bound = req.distance_upper_bound  # (pinocchio sets it at every query)
+        return gd
+
+    def _apply_margins(self, gd) -> None:
+        # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
+        # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
+        margin = getattr(self, "safety_margin", 0.0)
+        for k, req in enumerate(gd.collisionRequests):
+            req.enable_contact = True
+            if k >= self._n_self_pairs:
+                req.security_margin = margin
+
+    # ------------------------------------------------------------------------------------------
+    # collision
+    @property
+    def n_collision_geometries(self) -> int:
+        return len(self._geom_body)
+
+    @property
+    def n_self_collision_pairs(self) -> int:
+        return self._n_self_pairs
+
+    def _update_geometry(self, q) -> None:
+        pin.updateGeometryPlacements(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+
+    def _check_pairs(self, start: int, stop: int, first: bool = True) -> List[int]:
+        hits = []
+        for k in range(start, stop):
+            if pin.computeCollision(self.geom_model, self.geom_data, k):
+                hits.append(k)
+                if first:
+                    break
+        return hits
+
+    def in_self_collision(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(0, self._n_self_pairs))
+
+    def in_collision(self, q) -> bool:
+        """Self-collision or contact with an obstacle (within the safety margin). After :data:`_CULL_AFTER`
+        queries on the same geometry, coal is asked only about the pairs that the compiled bounds of
+        :class:`~robodesign.model.collision_cull.CollisionCuller` do not clear (the same verdicts)."""
+        culler = self._culler
+        if culler is None:
+            self._plain_queries += 1
+            if self._plain_queries < _CULL_AFTER or (culler := self._single_culler()) is None:
+                return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q),
+                                                  True))
+        return bool(culler.in_collision(self._q(q)))
+
+    def _single_culler(self):
+        """The culler for :meth:`in_collision`, or None (kernel not compiled yet: asked again later)."""
+        from robodesign.model import collision_cull, geometry_kernel
+        if not geometry_kernel.ready():
+            self._plain_queries = -_CULL_RETRY   # (ready() reads the cache's stamp: not at every query)
+            return None
+        try:
+            self._culler = collision_cull.culler_of(self)
+        except (AttributeError, NotImplementedError):   # a joint the bounds' kinematics do not model
+            self._plain_queries = -(1 << 62)
+        return self._culler
+
+    def collides_with_obstacles(self, q) -> bool:
+        self._update_geometry(q)
+        return bool(self._check_pairs(self._n_self_pairs, len(self.geom_model.collisionPairs)))
+
+    def colliding_pairs(self, q) -> List[Tuple[str, str]]:
+        self._update_geometry(q)
+        hits = self._check_pairs(0, len(self.geom_model.collisionPairs), first=False)
+        objs = self.geom_model.geometryObjects
+        out = []
+        for k in hits:
+            cp = self.geom_model.collisionPairs[k]
+            out.append((objs[cp.first].name, objs[cp.second].name))
+        return out
+
+    def base_collisions(self) -> List[Tuple[str, str]]:
+        """The robot–obstacle pairs in contact whatever the joints do: the robot's geometry fixed to the world
+        (the bodies before the first joint) against the obstacles, within the safety margin. A design with one
+        collides at every configuration."""
+        if not self._obstacle_ids:
+            return []
+        n = len(self._geom_body)
+        root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
+        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
+        ab = [(a, ob) for ob in self._obstacle_ids for a in root]
+        pairs = [self._n_self_pairs + j * n + a for j in range(len(self._obstacle_ids)) for a in root]
+        if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
+            gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
+            pin.updateGeometryPlacements(self.model, self.data, gm, gd, np.zeros(self.dof))
+            hit = [pin.computeCollision(gm, gd, i) for i in range(len(pairs))]
+        else:
+            self._update_geometry(np.zeros(self.dof))
+            hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
+        names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
+        return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
+
+    def min_distances(self, q) -> Tuple[float, float]:
+        """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
+        pin.computeDistances(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+        d = [r.min_distance for r in self.geom_data.distanceResults]
+        s = min(d[: self._n_self_pairs], default=math.inf)
+        o = min(d[self._n_self_pairs:], default=math.inf)
+        return float(s), float(o)
+
+
+#: in_collision queries on one geometry before the culled path takes over (its set-up costs ~a few queries)
+_CULL_AFTER = 12
+_CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
+_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
+_NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+def _fresh_guesses(gd: "pin.GeometryData") -> None:
+    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
+    enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
+    for r in gd.collisionRequests:   # (pinocchio sets distance_upper_bound at every query)
+        r.cached_gjk_guess, r.cached_support_func_guess, r.distance_upper_bound = _GUESS, _SUPPORT_GUESS, _NO_BOUND
+    for r in gd.distanceRequests:
+        r.cached_gjk_guess, r.cached_support_func_guess = _GUESS, _SUPPORT_GUESS
+
+
+def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
+    """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
+    the requests of the robot's own scratch space (contacts on, the safety margin)."""
+    gm, n, made = pin.GeometryModel(), len(robot._geom_body), robot._geom_model
+    index: Dict[int, int] = {}
+    for a, ob in ab:
+        for g in (a, ob):
+            if g not in index:  # the objects as the robot's geometry holds (or will hold) them
+                index[g] = gm.addGeometryObject(made.geometryObjects[g] if made is not None else robot._geometry_object(
+                    g) if g < n else robot._obstacle_object(robot.obstacles[g - n]))
+        gm.addCollisionPair(pin.CollisionPair(index[a], index[ob]))
+    gd = pin.GeometryData(gm)
+    for req in gd.collisionRequests:
+        req.enable_contact = True
+        req.security_margin = robot.safety_margin
+    return gm, gd, pairs
