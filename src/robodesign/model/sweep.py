@@ -30,9 +30,10 @@ from __future__ import annotations
 
 import heapq
 import math
+import sys
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
+from typing import Any, Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -249,6 +250,16 @@ class _PosedArms:
         # numbers as the full sum over i (the terms left out are +0.0 for finite |Δq|)
         D = self.down[:, self.flat]
         self._drift_terms = [(i, nz, D[i, nz]) for i in range(dof) for nz in [np.nonzero(D[i])[0]] if len(nz)]
+        # the same terms flat (the kernel's): joint, columns and values per joint in the order of the joints
+        cols = [nz for _, nz, _ in self._drift_terms]
+        self._k_drift = (np.array([i for i, _, _ in self._drift_terms], dtype=np.int64),
+                         np.cumsum([0] + [len(c) for c in cols]).astype(np.int64),
+                         np.concatenate(cols).astype(np.int64) if cols else np.zeros(0, np.int64),
+                         np.concatenate([d for _, _, d in self._drift_terms]) if cols else np.zeros(0))
+        self._k_tree = (self.geom_joint.astype(np.int64), np.array(self.joints, dtype=np.int64),
+                        np.ascontiguousarray(self.t_g), np.ascontiguousarray(self.axes, dtype=float),
+                        self.jv.astype(np.int64), self.g.astype(np.int64), self.jid.astype(np.int64),
+                        np.ascontiguousarray(self.R, dtype=float), np.ascontiguousarray(self.rad, dtype=float))
         self._gathers: dict = {}  # (W > 0, owner) → the distinct gather columns and where each pair's is
         self._last: Optional[tuple] = None  # (Q, dQ, arms) of the last motion
 
@@ -268,10 +279,22 @@ class _PosedArms:
         idx = np.where(W > 0, owner, G)
         key = idx.tobytes()
         if key not in self._gathers:
-            self._gathers[key] = np.unique(idx, axis=1, return_inverse=True)
+            uniq, inverse = np.unique(idx, axis=1, return_inverse=True)
+            self._gathers[key] = (np.ascontiguousarray(uniq, dtype=np.int64), inverse.reshape(-1).astype(np.int64))
         uniq, inverse = self._gathers[key]
+        kernel = _kernel(count=False) if len(X) else None
+        if kernel is not None:
+            return kernel.gather(X, dof, G, uniq, inverse)
+        return self._gather_numpy(X, uniq, inverse)
+
+    def _gather_numpy(self, X: np.ndarray, uniq: np.ndarray, inverse: np.ndarray) -> np.ndarray:
+        """The gather of :meth:`segments`, its terms summed from the first joint on (as the kernel)."""
+        dof, G = self.R.shape
         X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
-        return X3[:, np.arange(dof)[:, None], uniq].sum(axis=1)[:, inverse.reshape(-1)]
+        S = X3[:, 0, uniq[0]]
+        for j in range(1, dof):
+            S = S + X3[:, j, uniq[j]]
+        return S[:, inverse]
 
     def _drift(self, dQ: np.ndarray) -> np.ndarray:
         """(n−1, K): Σ_i R⁰[i, g]·|Δq_i| over the joints i strictly below j, per step and arm (j, g)."""
@@ -283,14 +306,25 @@ class _PosedArms:
         return out
 
     def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
-        """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step."""
-        dof, G = self.R.shape
-        X = (dQ[:, :, None] * self.R[None]).reshape(len(dQ), dof * G)  # the static arms
+        """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step (the kernel's when it runs and
+        every |Δq| is finite: the same numbers)."""
+        J = None
         if len(self.flat):
             try:
                 J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
             except NotImplementedError:  # a joint type batched FK does not model: the static arms
-                return X
+                pass
+        kernel = _kernel() if J is not None and len(dQ) and np.isfinite(dQ).all() else None
+        if kernel is not None:
+            return kernel.posed_arms(J, *self._k_tree, np.ascontiguousarray(dQ),
+                                     *self._k_drift, 1 + self.SLACK)
+        return self._arms_numpy(J, dQ)
+
+    def _arms_numpy(self, J: Optional[np.ndarray], dQ: np.ndarray) -> np.ndarray:
+        """:meth:`_arms` in numpy (J: the joint poses, None: the static arms)."""
+        dof, G = self.R.shape
+        X = (dQ[:, :, None] * self.R[None]).reshape(len(dQ), dof * G)  # the static arms
+        if J is not None:
             Tg, Tj = J[:, self.geom_joint, :3], J[:, self.joints, :3]  # (n, G, 3, 4), (n, dof, 3, 4)
             centre = Tg[..., 3] + sum(Tg[..., b] * self.t_g[:, b, None] for b in range(3))  # (n, G, 3)
             axis = sum(Tj[..., b] * self.axes[:, b, None] for b in range(3))  # (n, dof, 3)
@@ -303,6 +337,21 @@ class _PosedArms:
             arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
             X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
         return X
+
+
+_PASSES = [0]  # posed-arm passes made by this process
+NUMPY_PASSES = 4  # passes on the numpy path before a process that has not imported numba imports it
+
+
+def _kernel(count: bool = True) -> Any:
+    """The compiled kernels (:mod:`~robodesign.model.sweep_kernel`) when they run in this process, else None.
+    Importing numba takes 0.3–1 s: a process that has not imported it makes its first :data:`NUMPY_PASSES` passes
+    (``count``: this call is one) on the numpy path (as judge.interval_rnea). Both paths give the same numbers."""
+    _PASSES[0] += count
+    if "numba" not in sys.modules and _PASSES[0] <= NUMPY_PASSES:
+        return None
+    from robodesign.model import sweep_kernel
+    return sweep_kernel if sweep_kernel.ready() else None
 
 
 class SweepChecker:

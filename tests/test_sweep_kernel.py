@@ -1,0 +1,87 @@
+"""The compiled posed lever arms (robodesign.model.sweep_kernel) against the numpy path they replace: the same
+bounds bit for bit (issue 25), on the judge's motion of a solved IMPROV arm in PTP_3 and on random motions."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import IMPROV, TASKS
+
+from robodesign import load_module_set
+from robodesign.design.solve import SolveSettings, solve
+from robodesign.formats.task_io import load_task
+from robodesign.judge import checker
+from robodesign.judge.quantities import TrajectoryQuantities
+from robodesign.model import sweep, sweep_kernel
+from robodesign.model.cell import solution_robot
+
+pytestmark = pytest.mark.skipif(not sweep_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
+ARM = ["1", "21", "4", "22", "5", "23", "12"]
+
+
+@pytest.fixture(scope="module")
+def ptp3():
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    ms = load_module_set(IMPROV)
+    res = solve(task, ms, ARM, settings=SolveSettings(seed=0))
+    assert res.feasible, res.message
+    robot = solution_robot(task, res.solution, ms)
+    return task, ms, res.solution, robot
+
+
+def _motions(sol, robot, task):
+    """(Q, dQ): the judge's motion of the solution (its path bound, as checker._collision_violations passes it) and
+    random walks, fast and slow, with a step of zero motion."""
+    tq = TrajectoryQuantities.from_solution(robot, sol, task)
+    Q = np.asarray(sol.trajectory.q)
+    yield Q, np.maximum(tq.motion.path_bound(), np.abs(np.diff(Q, axis=0)))
+    rng = np.random.default_rng(5)
+    for scale in (0.002, 0.05, 0.6):
+        Q = np.cumsum(rng.normal(0, scale, (60, robot.dof)), axis=0)
+        Q[30] = Q[29]
+        yield Q, np.abs(np.diff(Q, axis=0))
+
+
+def test_kernel_equals_numpy_path_bit_for_bit(ptp3):
+    task, ms, sol, robot = ptp3
+    assert sweep_kernel.warm_up() and sweep_kernel.ready()
+    chk = sweep.SweepChecker(robot, posed_arms=True)
+    pa = chk._posed
+    dof, G = pa.R.shape
+    assert len(pa.flat) > 0  # arms to tighten: the kernel's path, not only the static arms
+    idx = np.where(chk.W > 0, chk._owner, G)
+    uniq, inverse = np.unique(idx, axis=1, return_inverse=True)
+    uniq, inverse = np.ascontiguousarray(uniq, dtype=np.int64), inverse.reshape(-1).astype(np.int64)
+    for Q, dQ in _motions(sol, robot, task):
+        J = robot.joint_poses_batch(Q)
+        A = pa._arms_numpy(J, dQ)
+        B = sweep_kernel.posed_arms(J, *pa._k_tree, np.ascontiguousarray(dQ), *pa._k_drift, 1 + pa.SLACK)
+        assert np.array_equal(A, B)
+        static = (dQ[:, :, None] * pa.R[None]).reshape(len(dQ), dof * G)
+        assert np.all(A <= static) and np.any(A < 0.9 * static)  # tighter than the static arms, never looser
+        S = pa._gather_numpy(A, uniq, inverse)
+        assert np.array_equal(S, sweep_kernel.gather(A, dof, G, uniq, inverse))
+        # the gather is the sum of the owners' arms (the former numpy expression: the same numbers here)
+        X3 = np.concatenate([A.reshape(len(A), dof, G), np.zeros((len(A), dof, 1))], axis=2)
+        assert np.array_equal(S, X3[:, np.arange(dof)[:, None], uniq].sum(axis=1)[:, inverse])
+        assert np.all(S <= dQ @ chk.W * (1 + 1e-12) + 1e-15)
+
+
+def test_check_is_the_same_with_and_without_the_kernel(ptp3, monkeypatch):
+    """The full judge on the solution: the same verdict, violations and distance queries on either path."""
+    task, ms, sol, _ = ptp3
+    sweep_kernel.warm_up()
+    calls = []
+    real = sweep._kernel
+
+    def counted(count=True):
+        k = real(count)
+        calls.append(k is not None)
+        return k
+    monkeypatch.setattr(sweep, "_kernel", counted)
+    v1 = checker.check(task, sol, ms)
+    assert calls and all(calls)
+    monkeypatch.setattr(sweep, "_kernel", lambda count=True: None)
+    v2 = checker.check(task, sol, ms)
+    assert v1.valid and v2.valid
+    assert [str(x) for x in v1.violations] == [str(x) for x in v2.violations]
+    assert v1.costs == v2.costs
