@@ -1,8 +1,10 @@
-"""The compiled posed lever arms (robodesign.model.sweep_kernel) against the numpy path they replace: the same
-bounds bit for bit (issue 25), on the judge's motion of a solved IMPROV arm in PTP_3 and on random motions."""
+"""The compiled sweep bounds (robodesign.model.sweep_kernel: posed lever arms, geometry poses, displacement
+extensions) against the numpy path they replace: the same numbers bit for bit (issue 25), on the judge's motion of
+a solved IMPROV arm in PTP_3 and on random motions; and the displacement extension against exact distances."""
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from conftest import IMPROV, TASKS
 
@@ -11,7 +13,7 @@ from robodesign.design.solve import SolveSettings, solve
 from robodesign.formats.task_io import load_task
 from robodesign.judge import checker
 from robodesign.judge.quantities import TrajectoryQuantities
-from robodesign.model import sweep, sweep_kernel
+from robodesign.model import sweep, sweep_bounds, sweep_kernel
 from robodesign.model.cell import solution_robot
 
 pytestmark = pytest.mark.skipif(not sweep_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
@@ -71,17 +73,74 @@ def test_check_is_the_same_with_and_without_the_kernel(ptp3, monkeypatch):
     task, ms, sol, _ = ptp3
     sweep_kernel.warm_up()
     calls = []
-    real = sweep._kernel
+    real = sweep_bounds._kernel
 
     def counted(count=True):
         k = real(count)
         calls.append(k is not None)
         return k
-    monkeypatch.setattr(sweep, "_kernel", counted)
+    monkeypatch.setattr(sweep_bounds, "_kernel", counted)
     v1 = checker.check(task, sol, ms)
     assert calls and all(calls)
-    monkeypatch.setattr(sweep, "_kernel", lambda count=True: None)
+    monkeypatch.setattr(sweep_bounds, "_kernel", lambda count=True: None)
     v2 = checker.check(task, sol, ms)
     assert v1.valid and v2.valid
     assert [str(x) for x in v1.violations] == [str(x) for x in v2.violations]
     assert v1.costs == v2.costs
+
+
+def _posed_motion(task, sol, robot):
+    """The judge's checker on the solution's motion, its schedule bounds and geometry poses (kernel path)."""
+    tq = TrajectoryQuantities.from_solution(robot, sol, task)
+    Q = np.asarray(sol.trajectory.q)
+    dQ = np.maximum(tq.motion.path_bound(), np.abs(np.diff(Q, axis=0)))
+    chk = sweep.SweepChecker(robot, posed_arms=True)
+    sched = chk._posed.segments(Q, dQ, chk.W, chk._owner)
+    return tq, Q, chk, sched, chk._posed.poses()
+
+
+def test_geometry_poses_and_extend_equal_numpy_path_bit_for_bit(ptp3):
+    task, ms, sol, robot = ptp3
+    assert sweep_kernel.warm_up()
+    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    pa = chk._posed
+    J = robot.joint_poses_batch(Q)
+    assert np.array_equal(TG, sweep_bounds.geometry_poses_numpy(J, pa.geom_joint, pa.R_g, pa.t_g))
+    # the poses are pinocchio's geometry placements (to rounding)
+    gm, gd = robot.geom_model, pin.GeometryData(robot.geom_model)
+    for k in (0, len(Q) // 2, len(Q) - 1):
+        pin.updateGeometryPlacements(robot.model, robot.data, gm, gd, Q[k])
+        for g in range(TG.shape[1]):
+            np.testing.assert_allclose(TG[k, g], gd.oMg[g].homogeneous[:3], rtol=0, atol=1e-12)
+    n, seen = len(Q), set()
+    rng = np.random.default_rng(2)
+    for c in range(len(chk.pairs)):
+        for _ in range(4):
+            k = int(rng.integers(0, n - 1))
+            start = int(rng.integers(k, n - 1))
+            limit = float(rng.choice([1e-4, 0.02, 0.3, 2.0]))
+            args = (TG, chk._mov[c], chk._ref[c], pa.box_centre, pa.box_radius, k, start, sched, c, limit)
+            a = sweep_bounds.extend_numpy(*args)
+            assert a == sweep_kernel.extend(*args, sweep_bounds.BOUND_SLACK)
+            assert start <= a <= n - 1
+            seen.add((a == start, a == n - 1))
+    assert len(seen) == 3  # stopped at once, in between and at the end
+
+
+def test_extension_is_certified_by_exact_distances(ptp3):
+    """Every robot–obstacle pair, from a query at a sample: over the steps the displacement extension certifies,
+    the exact distance (at the samples and inside each step, on the judge's motion) stays above the clearance at
+    the query less the limit, less GJK's tolerance."""
+    task, ms, sol, robot = ptp3
+    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    n, extended = len(Q), 0
+    for c in np.nonzero(chk.is_env)[0]:
+        for k in (0, n // 3, 2 * n // 3):
+            d = float(chk.distances(Q[k], [c])[0])
+            limit = 0.5 * d
+            end = chk._posed.extend(TG, chk._mov[c], chk._ref[c], k, k, sched, int(c), limit)
+            extended += end - k
+            for i in range(k, min(end, n - 1)):
+                for s in (0.0, 0.25, 0.5, 0.75, 1.0):
+                    assert chk.distances(tq.motion.at(i, s), [c])[0] >= d - limit - 1e-6, (c, k, i, s)
+    assert extended > 300  # the extension certifies real stretches, not only single steps

@@ -20,8 +20,11 @@ way (a joint housing coaxial with its joint), and links sliding past a housing a
 otherwise be advanced in µm steps (IMPROV: one PTP_3 check 4.8 s → 0.2 s).
 
 With ``posed_arms`` (the judge's) the queries at the samples are scheduled with lever arms of the motion's own
-poses (:class:`_PosedArms`: each geometry's distance from each joint axis at the samples, by batched forward
-kinematics, plus what the joints below can move it over the step), never larger than the static ones. Inside a
+poses (:class:`~robodesign.model.sweep_bounds.PosedArms`: each geometry's distance from each joint axis at the
+samples, by batched forward kinematics, plus what the joints below can move it over the step), never larger than
+the static ones, and a robot–obstacle pair's certificate goes on past the end of the summed bounds while the
+displacement of the geometry from its pose at the query (at the samples, plus the step's bound) stays below the
+clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`). Inside a
 step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
 them. Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
 a grazing contact, by about the tolerance over the rate of approach.
@@ -30,15 +33,15 @@ from __future__ import annotations
 
 import heapq
 import math
-import sys
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
+from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 import pinocchio as pin
 
 from robodesign.model.robot import Robot
+from robodesign.model.sweep_bounds import PosedArms
 
 
 @dataclass(frozen=True)
@@ -212,148 +215,6 @@ def coaxial_child_joints(robot: Robot) -> List[set]:
     return _Tree(robot).coaxial_child_joints()
 
 
-class _PosedArms:
-    """Lever arms of the motion's own poses, per step: a revolute joint j moves a point p of geometry g at most
-    dist(p, axis_j)·|q̇_j|, and dist(p, axis_j) ≤ ρ_jg + r_g, with ρ_jg the distance of g's frame origin from the
-    axis and r_g the radius of g about that origin. ρ_jg does not change with joint j or the joints above it
-    (a rigid motion of both, or a turn about the axis itself); the joints between j and g move g's origin by at
-    most their point lever arms. So over step k, ρ_jg ≤ min(ρ_jg(k), ρ_jg(k + 1)) + Σ_i R⁰[i, g]·|Δq_i| (i
-    strictly below j), computed at the samples by batched forward kinematics. The arm of a step is the smaller
-    of this and the static one (prismatic joints keep theirs)."""
-
-    SLACK = 1e-9  # relative, against rounding of the forward kinematics
-
-    def __init__(self, robot: Robot, tree: "_Tree", R: np.ndarray):
-        self.robot, self.R = robot, R
-        dof, G = R.shape
-        self.plain = tree.lever_arms(False, dof)
-        self.geom_joint = np.array(tree.geom_joint)
-        self.t_g = np.array([np.asarray(p.translation, dtype=float) for p in tree.geom_placement]).reshape(G, 3)
-        self.rad = np.array(tree.radii)
-        joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
-        self.joints = [joint_of_v[v] for v in range(dof)]  # pinocchio joint id per velocity index
-        self.revolute = np.array([tree.axes[j] is not None for j in self.joints])
-        self.axes = np.array([tree.axes[j] if tree.axes[j] is not None else np.zeros(3) for j in self.joints])
-        below = np.zeros((dof, dof), dtype=bool)  # below[i, j]: joint i strictly below joint j
-        for i, ji in enumerate(self.joints):
-            a = tree.parents[ji]
-            while a > 0:
-                below[i, tree.idx_v[a]] = True
-                a = tree.parents[a]
-        # down[i, (j, g)] = R⁰[i, g] for i strictly below j: the motion of g's origin relative to joint j
-        self.down = (below[:, :, None] * self.plain[:, None, :]).reshape(dof, dof * G)
-        # the (revolute joint, geometry) pairs with an arm to tighten
-        self.jv, self.g = np.nonzero((R > 0) & self.revolute[:, None])
-        self.jid = np.array(self.joints)[self.jv]
-        self.flat = self.jv * G + self.g
-        # the drift's non-zero terms per joint i (columns of down[:, flat]): summed in the order of i, the same
-        # numbers as the full sum over i (the terms left out are +0.0 for finite |Δq|)
-        D = self.down[:, self.flat]
-        self._drift_terms = [(i, nz, D[i, nz]) for i in range(dof) for nz in [np.nonzero(D[i])[0]] if len(nz)]
-        # the same terms flat (the kernel's): joint, columns and values per joint in the order of the joints
-        cols = [nz for _, nz, _ in self._drift_terms]
-        self._k_drift = (np.array([i for i, _, _ in self._drift_terms], dtype=np.int64),
-                         np.cumsum([0] + [len(c) for c in cols]).astype(np.int64),
-                         np.concatenate(cols).astype(np.int64) if cols else np.zeros(0, np.int64),
-                         np.concatenate([d for _, _, d in self._drift_terms]) if cols else np.zeros(0))
-        self._k_tree = (self.geom_joint.astype(np.int64), np.array(self.joints, dtype=np.int64),
-                        np.ascontiguousarray(self.t_g), np.ascontiguousarray(self.axes, dtype=float),
-                        self.jv.astype(np.int64), self.g.astype(np.int64), self.jid.astype(np.int64),
-                        np.ascontiguousarray(self.R, dtype=float), np.ascontiguousarray(self.rad, dtype=float))
-        self._gathers: dict = {}  # (W > 0, owner) → the distinct gather columns and where each pair's is
-        self._last: Optional[tuple] = None  # (Q, dQ, arms) of the last motion
-
-    def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """(n−1, P) displacement bounds per step and pair (≤ dQ @ W)."""
-        dof, G = self.R.shape
-        last = self._last
-        if last is not None and np.array_equal(last[0], Q) and np.array_equal(last[1], dQ):
-            X = last[2]  # the same motion (the checker's self and obstacle pairs): the same arms
-        else:
-            X = self._arms(Q, dQ)
-            self._last = (Q.copy(), dQ.copy(), X)
-        # pair c: the sum over joints j of X[:, j, owner[j, c]] where W[j, c] > 0 (a gather, not a matrix product:
-        # numpy hands products this size to a multithreaded BLAS, which on a busy machine costs more than it saves)
-        # pairs with the same owners on the same joints (a robot geometry against each obstacle, …) have the same
-        # sum: each distinct column is gathered and summed once
-        idx = np.where(W > 0, owner, G)
-        key = idx.tobytes()
-        if key not in self._gathers:
-            uniq, inverse = np.unique(idx, axis=1, return_inverse=True)
-            self._gathers[key] = (np.ascontiguousarray(uniq, dtype=np.int64), inverse.reshape(-1).astype(np.int64))
-        uniq, inverse = self._gathers[key]
-        kernel = _kernel(count=False) if len(X) else None
-        if kernel is not None:
-            return kernel.gather(X, dof, G, uniq, inverse)
-        return self._gather_numpy(X, uniq, inverse)
-
-    def _gather_numpy(self, X: np.ndarray, uniq: np.ndarray, inverse: np.ndarray) -> np.ndarray:
-        """The gather of :meth:`segments`, its terms summed from the first joint on (as the kernel)."""
-        dof, G = self.R.shape
-        X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
-        S = X3[:, 0, uniq[0]]
-        for j in range(1, dof):
-            S = S + X3[:, j, uniq[j]]
-        return S[:, inverse]
-
-    def _drift(self, dQ: np.ndarray) -> np.ndarray:
-        """(n−1, K): Σ_i R⁰[i, g]·|Δq_i| over the joints i strictly below j, per step and arm (j, g)."""
-        if not np.isfinite(dQ).all():  # inf·0 is no number: the full sum, as written
-            return (dQ[:, :, None] * self.down[None, :, self.flat]).sum(axis=1)
-        out = np.zeros((len(dQ), len(self.flat)))
-        for i, nz, d in self._drift_terms:
-            out[:, nz] += dQ[:, i, None] * d
-        return out
-
-    def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
-        """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step (the kernel's when it runs and
-        every |Δq| is finite: the same numbers)."""
-        J = None
-        if len(self.flat):
-            try:
-                J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
-            except NotImplementedError:  # a joint type batched FK does not model: the static arms
-                pass
-        kernel = _kernel() if J is not None and len(dQ) and np.isfinite(dQ).all() else None
-        if kernel is not None:
-            return kernel.posed_arms(J, *self._k_tree, np.ascontiguousarray(dQ),
-                                     *self._k_drift, 1 + self.SLACK)
-        return self._arms_numpy(J, dQ)
-
-    def _arms_numpy(self, J: Optional[np.ndarray], dQ: np.ndarray) -> np.ndarray:
-        """:meth:`_arms` in numpy (J: the joint poses, None: the static arms)."""
-        dof, G = self.R.shape
-        X = (dQ[:, :, None] * self.R[None]).reshape(len(dQ), dof * G)  # the static arms
-        if J is not None:
-            Tg, Tj = J[:, self.geom_joint, :3], J[:, self.joints, :3]  # (n, G, 3, 4), (n, dof, 3, 4)
-            centre = Tg[..., 3] + sum(Tg[..., b] * self.t_g[:, b, None] for b in range(3))  # (n, G, 3)
-            axis = sum(Tj[..., b] * self.axes[:, b, None] for b in range(3))  # (n, dof, 3)
-            rel = centre[:, self.g] - Tj[..., 3][:, self.jv]  # (n, K, 3)
-            u = axis[:, self.jv]
-            rx, ry, rz, ux, uy, uz = rel[..., 0], rel[..., 1], rel[..., 2], u[..., 0], u[..., 1], u[..., 2]
-            rho = np.sqrt((ry * uz - rz * uy) ** 2 + (rz * ux - rx * uz) ** 2 + (rx * uy - ry * ux) ** 2).T  # (K, n)
-            drift = self._drift(dQ)  # (n−1, K)
-            arm = (np.minimum(rho[:, :-1], rho[:, 1:]).T + drift + self.rad[self.g]) * (1 + self.SLACK) + 1e-12
-            arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
-            X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
-        return X
-
-
-_PASSES = [0]  # posed-arm passes made by this process
-NUMPY_PASSES = 4  # passes on the numpy path before a process that has not imported numba imports it
-
-
-def _kernel(count: bool = True) -> Any:
-    """The compiled kernels (:mod:`~robodesign.model.sweep_kernel`) when they run in this process, else None.
-    Importing numba takes 0.3–1 s: a process that has not imported it makes its first :data:`NUMPY_PASSES` passes
-    (``count``: this call is one) on the numpy path (as judge.interval_rnea). Both paths give the same numbers."""
-    _PASSES[0] += count
-    if "numba" not in sys.modules and _PASSES[0] <= NUMPY_PASSES:
-        return None
-    from robodesign.model import sweep_kernel
-    return sweep_kernel if sweep_kernel.ready() else None
-
-
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
@@ -363,7 +224,8 @@ class SweepChecker:
         """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all).
         ``symmetry``: use bodies of revolution to tighten the bounds (module docstring); False gives the plain
         lever-arm bounds (same verdicts, more distance queries). ``posed_arms``: schedule the distance queries
-        with the lever arms of the motion's own poses (:class:`_PosedArms`; the same events, fewer queries)."""
+        with the lever arms of the motion's own poses (:class:`~robodesign.model.sweep_bounds.PosedArms`; the same
+        events, fewer queries)."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
@@ -412,7 +274,18 @@ class SweepChecker:
                     W[idx_v[j], c] = 0.0
         self.W = W
         self._owner = owner
-        self._posed = _PosedArms(robot, tree, R) if posed_arms else None
+        self._posed = PosedArms(robot, tree, R) if posed_arms else None
+        # per pair for the posed bounds' displacement (PosedArms.extend): the geometry that moves (the smaller box)
+        # in the frame of the other (-1: an obstacle's, the world)
+        self._mov: List[int] = []
+        self._ref: List[int] = []
+        if self._posed is not None:
+            box = self._posed.box_radius
+            for k in pairs:
+                a, b = cps[k]
+                m, r = (a, -1) if b >= n_robot else (a, b) if box[a] <= box[b] else (b, a)
+                self._mov.append(m)
+                self._ref.append(r)
         names = [o.name for o in gm.geometryObjects]
         self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
         self._req = pin.GeometryData(gm)
@@ -432,6 +305,8 @@ class SweepChecker:
             out._owner = self._owner[:, cols]
         out.margins, out.is_env = self.margins[cols], self.is_env[cols]
         out.pair_names = [self.pair_names[c] for c in cols]
+        if getattr(self, "_mov", None):
+            out._mov, out._ref = [self._mov[c] for c in cols], [self._ref[c] for c in cols]
         out.queries = 0
         return out
 
@@ -469,15 +344,9 @@ class SweepChecker:
             d = self.distances(Q[0], range(P))
             return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
                     for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
-        dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
-                                                                           np.abs(np.diff(Q, axis=0)))
-        seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
-        posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
-        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
-        # so that every contact is found from the same sample with the same sub-steps (module docstring)
-        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
-        cum = np.concatenate([np.zeros((1, P)), np.cumsum(sched, axis=0)])  # (n, P)
-        cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        seg, sched, cum, cum_rows, TG = self._bounds(Q, path)
+        posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
+        ext = 4 * self.tolerance
         margins, is_env = self.margins.tolist(), self.is_env.tolist()
         events: List[CollisionEvent] = []
         # priority queue of (sample index where the pair must be re-checked, pair)
@@ -503,6 +372,8 @@ class SweepChecker:
                 row = cum_rows[c]
                 target = float(row[k]) + free
                 nxt = int(row.searchsorted(target, side="right")) - 1  # last sample still certified
+                if TG is not None and posed is not None and nxt < n - 1 and is_env[c]:
+                    nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, c, free - ext)
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
@@ -527,6 +398,25 @@ class SweepChecker:
                 return [min(events, key=lambda e: e.s)]
         events.sort(key=lambda e: (e.sample, e.s))
         return events
+
+    def _bounds(self, Q: np.ndarray, path: Optional[np.ndarray]) -> tuple:
+        """(seg, sched, cum, cum_rows, TG) of :meth:`check`: the step bounds (n−1, P), the schedule's (the posed
+        ones where given), its running sums (n, P) and their rows per pair, and the geometry poses (None: no
+        displacement extension)."""
+        dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
+                                                                           np.abs(np.diff(Q, axis=0)))
+        seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
+        posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
+        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
+        # so that every contact is found from the same sample with the same sub-steps (module docstring)
+        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
+        # with the posed bounds, a robot–obstacle pair's certificate where the path bound ends is extended by the
+        # displacement from the sample's pose (PosedArms.extend) while that stays below the clearance less
+        # 4·tolerance: such steps keep more than the tolerance, so no sub-step query inside them finds a contact
+        TG = posed.poses() if posed is not None and getattr(self, "_mov", None) else None
+        cum = np.concatenate([np.zeros((1, len(self.pairs))), np.cumsum(sched, axis=0)])  # (n, P)
+        cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        return seg, sched, cum, cum_rows, TG
 
     def _ahead(self, Q, k: int, c: int, free: float, row: np.ndarray, nxt: int) -> Optional[int]:
         """Far from contact (pair c free by ``free`` at sample k, certified up to sample ``nxt``): one query at the

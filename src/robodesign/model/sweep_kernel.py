@@ -106,6 +106,78 @@ def gather(X, dof, G, uniq, inverse):  # pragma: no cover - compiled
     return out
 
 
+@njit(cache=True, nogil=True)
+def geometry_poses(J, geom_joint, Rp, tp):  # pragma: no cover - compiled
+    """(n, G, 3, 4) world pose of every robot geometry at every sample, as sweep_bounds.geometry_poses_numpy: the
+    joint's pose J (n, njoints, 4, 4) times the geometry's placement (Rp, tp), each entry a sum from the left."""
+    n, G = J.shape[0], len(geom_joint)
+    out = np.empty((n, G, 3, 4))
+    for k in range(n):
+        for g in range(G):
+            j = geom_joint[g]
+            for a in range(3):
+                j0, j1, j2 = J[k, j, a, 0], J[k, j, a, 1], J[k, j, a, 2]
+                for b in range(3):
+                    out[k, g, a, b] = (j0 * Rp[g, 0, b] + j1 * Rp[g, 1, b]) + j2 * Rp[g, 2, b]
+                out[k, g, a, 3] = ((j0 * tp[g, 0] + j1 * tp[g, 1]) + j2 * tp[g, 2]) + J[k, j, a, 3]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _relative(TG, m, r, i, c, A, x):  # pragma: no cover - compiled
+    """Pose of geometry m in the frame of geometry r (r < 0: the world) at sample i: A (3, 3) and the position x
+    of m's point c, as sweep_bounds._relative_numpy."""
+    if r < 0:
+        for a in range(3):
+            for b in range(3):
+                A[a, b] = TG[i, m, a, b]
+        t0, t1, t2 = TG[i, m, 0, 3], TG[i, m, 1, 3], TG[i, m, 2, 3]
+    else:
+        for a in range(3):
+            for b in range(3):
+                A[a, b] = (TG[i, r, 0, a] * TG[i, m, 0, b] + TG[i, r, 1, a] * TG[i, m, 1, b]) + TG[i, r, 2, a] * TG[
+                    i, m, 2, b]
+        d0, d1, d2 = TG[i, m, 0, 3] - TG[i, r, 0, 3], TG[i, m, 1, 3] - TG[i, r, 1, 3], TG[i, m, 2, 3] - TG[i, r, 2, 3]
+        t0 = (TG[i, r, 0, 0] * d0 + TG[i, r, 1, 0] * d1) + TG[i, r, 2, 0] * d2
+        t1 = (TG[i, r, 0, 1] * d0 + TG[i, r, 1, 1] * d1) + TG[i, r, 2, 1] * d2
+        t2 = (TG[i, r, 0, 2] * d0 + TG[i, r, 1, 2] * d1) + TG[i, r, 2, 2] * d2
+    x[0] = ((A[0, 0] * c[0] + A[0, 1] * c[1]) + A[0, 2] * c[2]) + t0
+    x[1] = ((A[1, 0] * c[0] + A[1, 1] * c[1]) + A[1, 2] * c[2]) + t1
+    x[2] = ((A[2, 0] * c[0] + A[2, 1] * c[1]) + A[2, 2] * c[2]) + t2
+
+
+@njit(cache=True, nogil=True)
+def _moved(A, x, Ak, xk, rad):  # pragma: no cover - compiled
+    """|x − xk| + ‖A − Ak‖_F·rad: how far any point within rad of c moved (sweep_bounds._moved_numpy)."""
+    e0, e1, e2 = x[0] - xk[0], x[1] - xk[1], x[2] - xk[2]
+    f = 0.0
+    for a in range(3):
+        for b in range(3):
+            d = A[a, b] - Ak[a, b]
+            f = f + d * d
+    return np.sqrt((e0 * e0 + e1 * e1) + e2 * e2) + np.sqrt(f) * rad
+
+
+@njit(cache=True, nogil=True)
+def extend(TG, m, r, cen, rad, k, start, sched, col, limit, slack):  # pragma: no cover - compiled
+    """The first step i ≥ start whose bound from sample k is not below limit (n − 1: none), as
+    sweep_bounds.extend_numpy."""
+    n = TG.shape[0]
+    Ak, xk, A, x = np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3)
+    c, rr = cen[m], rad[m]
+    _relative(TG, m, r, k, c, Ak, xk)
+    _relative(TG, m, r, start, c, A, x)
+    d0 = _moved(A, x, Ak, xk, rr)
+    for i in range(start, n - 1):
+        _relative(TG, m, r, i + 1, c, A, x)
+        d1 = _moved(A, x, Ak, xk, rr)
+        b = ((d0 + d1) + sched[i, col]) * 0.5 * slack + 1e-12
+        if not b < limit:
+            return i
+        d0 = d1
+    return n - 1
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a check on the compilation
 # ---------------------------------------------------------------------------------------------------------
@@ -119,7 +191,8 @@ def available() -> bool:
 
 
 def _cache() -> KernelCache:
-    return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms, ("posed_arms", "gather"))
+    return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms,
+                       ("posed_arms", "gather", "geometry_poses", "extend"))
 
 
 def compiled() -> bool:
@@ -136,6 +209,8 @@ def warm_up() -> bool:
     X = posed_arms(np.zeros((2, 2, 4, 4)), i, i, np.zeros((1, 3)), np.zeros((1, 3)), i, i, i, np.zeros((1, 1)), f,
                    np.zeros((1, 1)), i, np.zeros(2, np.int64), i, f, 1.0)
     gather(X, 1, 1, np.zeros((1, 1), np.int64), i)
+    TG = geometry_poses(np.zeros((2, 1, 4, 4)), i, np.zeros((1, 3, 3)), np.zeros((1, 3)))
+    extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), 0, 1.0, 1.0)
     _STATE = "ready"
     return True
 
