@@ -186,3 +186,47 @@ def test_symmetry_needs_the_centre_on_the_axis_and_the_axis_aligned():
         assert not symmetric_about(obj(shape), p0, x)  # its axis is z
     assert not symmetric_about(obj(coal.Box(0.1, 0.1, 0.1)), p0, z)
     assert symmetric_about(obj(coal.Sphere(0.1), (0.2, 0.5, 0.0)), np.array([0.2, 0.5, 7.0]), z)  # line off origin
+
+
+def _pair_arms_per_pair(robot: Robot, pairs, symmetry: bool):
+    """W and owner of SweepChecker, pair by pair from the kinematic tree (the definition the vectorised
+    model.sweep._pair_arms computes)."""
+    from robodesign.model.sweep import _Tree
+    tree = _Tree(robot)
+    R, anc = tree.lever_arms(symmetry, robot.dof), tree.ancestors()
+    cox = tree.coaxial_child_joints() if symmetry else [set()] * robot.n_collision_geometries
+    cps = [(cp.first, cp.second) for cp in robot.geom_model.collisionPairs]
+    W, owner = np.zeros((robot.dof, len(pairs))), np.full((robot.dof, len(pairs)), -1)
+    for c, k in enumerate(pairs):
+        a, b = cps[k]
+        if b >= robot.n_collision_geometries:
+            W[:, c], owner[:, c] = R[:, a], a
+            continue
+        for j in anc[a] - anc[b]:
+            W[tree.idx_v[j], c], owner[tree.idx_v[j], c] = R[tree.idx_v[j], a], a
+        for j in anc[b] - anc[a]:
+            W[tree.idx_v[j], c], owner[tree.idx_v[j], c] = R[tree.idx_v[j], b], b
+        for j in (cox[a] & (anc[b] - anc[a])) | (cox[b] & (anc[a] - anc[b])):
+            W[tree.idx_v[j], c] = 0.0
+    return W, owner
+
+
+@pytest.mark.parametrize("module_set", [IMPROV, BUILTIN, PRIMITIVES])
+def test_pair_arms_are_the_per_pair_definition(module_set):
+    """The pairs' lever arms and owners (self pairs: the joints only one side hangs from, bodies of revolution
+    dropped; robot–obstacle pairs: the robot geometry's) on random robots of real module sets, with and without
+    symmetry and for a subset of the obstacles."""
+    p = Problem.build(str(PTP3), str(module_set), "cyc")
+    rng = np.random.default_rng(4)
+    dropped = 0
+    for _ in range(3):
+        r = in_cell(p, p.space.random_order(rng))
+        for sym in (True, False):
+            for obstacles in (None, [0]):
+                chk = SweepChecker(r, symmetry=sym, obstacles=obstacles, posed_arms=True)
+                W, owner = _pair_arms_per_pair(r, chk.pairs, sym)
+                assert np.array_equal(chk.W, W) and np.array_equal(chk._owner, owner)
+                assert chk.is_env.sum() == len(chk.pairs) - r.n_self_collision_pairs > 0
+                assert np.all(chk.margins[chk.is_env] == r.safety_margin) and np.all(chk.margins[~chk.is_env] == 0)
+                dropped += int(np.sum((W == 0) & (owner >= 0)))
+    assert dropped > 0  # bodies of revolution did drop joints

@@ -114,6 +114,9 @@ def _symmetric(kind: str, placement, point, direction, eps: float = SYMMETRY_EPS
     return _cross_norm(placement.rotation[:, 2], direction) <= eps
 
 
+_RADII: dict = {}  # id(shape) → (shape, _shape_radius(shape)): the shapes are the module sets' (shared)
+
+
 class _Tree:
     """The robot's joints and collision geometries read once from pinocchio (its accessors cost µs each)."""
 
@@ -144,10 +147,29 @@ class _Tree:
 
     @cached_property
     def radii(self) -> List[float]:
-        """Per geometry, its radius about its frame's origin (:func:`_shape_radius`, computed once)."""
-        return [_shape_radius(g) for g in self.geom_geometry]
+        """Per geometry, its radius about its frame's origin (:func:`_shape_radius`, computed once per shape: the
+        module sets' shapes are shared by every robot built of them)."""
+        out = []
+        for geo in self.geom_geometry:
+            hit = _RADII.get(id(geo))
+            if hit is None or hit[0] is not geo:
+                if len(_RADII) >= 4096:
+                    _RADII.clear()
+                hit = _RADII[id(geo)] = (geo, _shape_radius(geo))
+            out.append(hit[1])
+        return out
+
+    @cached_property
+    def _norms(self) -> Tuple[List[float], List[float]]:
+        """|translation| of every joint placement and of every geometry placement."""
+        return ([float(np.linalg.norm(p.translation)) for p in self.placements],
+                [float(np.linalg.norm(p.translation)) for p in self.geom_placement])
 
     def own_axis_symmetric(self) -> List[bool]:
+        return list(self._own_axis_symmetric)
+
+    @cached_property
+    def _own_axis_symmetric(self) -> List[bool]:
         out = []
         for g, j in enumerate(self.geom_joint):
             axis = self.axes[j] if j > 0 else None
@@ -156,14 +178,16 @@ class _Tree:
 
     def lever_arms(self, symmetry: bool, dof: int) -> np.ndarray:
         R = np.zeros((dof, len(self.geom_joint)))
+        joint_norm, geom_norm = self._norms
+        radii = self.radii
         for g, j in enumerate(self.geom_joint):
-            reach = float(np.linalg.norm(self.geom_placement[g].translation)) + self.radii[g]
+            reach = geom_norm[g] + radii[g]
             # walk up: reach = distance bound from joint j's origin to any point of g
             while j > 0:
                 R[self.idx_v[j], g] = 1.0 if self.prismatic[j] else reach
-                reach += float(np.linalg.norm(self.placements[j].translation)) + self.ext[j]
+                reach += joint_norm[j] + self.ext[j]
                 j = self.parents[j]
-        for g, sym in enumerate(self.own_axis_symmetric()):
+        for g, sym in enumerate(self._own_axis_symmetric):
             if sym and symmetry:
                 R[self.idx_v[self.geom_joint[g]], g] = 0.0
         return R
@@ -215,6 +239,34 @@ def coaxial_child_joints(robot: Robot) -> List[set]:
     return _Tree(robot).coaxial_child_joints()
 
 
+def _pair_arms(tree: "_Tree", R: np.ndarray, ab: List[Tuple[int, int]], env: np.ndarray, symmetry: bool,
+               dof: int) -> Tuple[np.ndarray, np.ndarray]:
+    """(W, owner) (dof, P) of the pairs ``ab`` (geometry a, geometry or obstacle b; ``env``: b is an obstacle):
+    a robot–obstacle pair has a's lever arms (owner a on every joint); a self pair the arms of the joints only a
+    hangs from (owner a) and of those only b hangs from (owner b), 0 elsewhere (owner −1), and 0 for the first
+    joint below the upper body when that body is a body of revolution about its axis (``symmetry``)."""
+    G, P = R.shape[1], len(ab)
+    A = np.array([a for a, _ in ab], dtype=int).reshape(P)
+    B = np.array([b for _, b in ab], dtype=int).reshape(P)
+    anc = np.zeros((G, dof), dtype=bool)  # anc[g, v]: g hangs from the joint of velocity index v
+    cox = np.zeros((G, dof), dtype=bool)  # cox[g, v]: coaxial_child_joints of g
+    for g, js in enumerate(tree.ancestors()):
+        anc[g, [tree.idx_v[j] for j in js]] = True
+    if symmetry:
+        for g, js in enumerate(tree.coaxial_child_joints()):
+            cox[g, [tree.idx_v[j] for j in js]] = True
+    W, owner = np.zeros((dof, P)), np.full((dof, P), -1)
+    W[:, env], owner[:, env] = R[:, A[env]], A[env]
+    s = ~env
+    a, b = A[s], B[s]
+    only_a, only_b = (anc[a] & ~anc[b]).T, (anc[b] & ~anc[a]).T  # (dof, self pairs)
+    Ws = np.where(only_a, R[:, a], np.where(only_b, R[:, b], 0.0))
+    # the first joint below the upper body: a body of revolution about its axis sees no motion
+    Ws[(cox[a].T & only_b) | (cox[b].T & only_a)] = 0.0
+    W[:, s], owner[:, s] = Ws, np.where(only_a, a, np.where(only_b, b, -1))
+    return W, owner
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
@@ -231,47 +283,24 @@ class SweepChecker:
         self.max_substeps = max_substeps
         gm = robot.geom_model
         n_self = robot.n_self_collision_pairs
+        cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
         pairs: List[int] = []
         if check_self:
             pairs += list(range(n_self))
         if check_env:
-            env: Sequence[int] = range(n_self, len(gm.collisionPairs))
+            env: Sequence[int] = range(n_self, len(cps))
             if obstacles is not None:
                 keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
-                env = [k for k in env if gm.collisionPairs[k].second in keep]
+                env = [k for k in env if cps[k][1] in keep]
             pairs += list(env)
         self.pairs: Sequence[object] = pairs  # what distances() queries: collision pair indices here
         tree = _Tree(robot)
         R = tree.lever_arms(symmetry, robot.dof)
-        ancestors = tree.ancestors()
-        coaxial = tree.coaxial_child_joints() if symmetry else [set()] * robot.n_collision_geometries
-        idx_v = tree.idx_v
-        W = np.zeros((robot.dof, len(pairs)))
-        self.margins = np.zeros(len(pairs))
-        self.is_env = np.zeros(len(pairs), dtype=bool)
         n_robot = robot.n_collision_geometries
-        margin = getattr(robot, "safety_margin", 0.0)
-        cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
-        owner = np.full((robot.dof, len(pairs)), -1)  # the geometry whose lever arm W[j, c] is
-        for c, k in enumerate(pairs):
-            a, b = cps[k]
-            if b >= n_robot:  # robot–obstacle (static obstacle)
-                W[:, c] = R[:, a]
-                owner[:, c] = a
-                self.is_env[c] = True
-                self.margins[c] = margin
-            else:
-                only_a = ancestors[a] - ancestors[b]
-                only_b = ancestors[b] - ancestors[a]
-                for j in only_a:
-                    W[idx_v[j], c] = R[idx_v[j], a]
-                    owner[idx_v[j], c] = a
-                for j in only_b:
-                    W[idx_v[j], c] = R[idx_v[j], b]
-                    owner[idx_v[j], c] = b
-                # the first joint below the upper body: a body of revolution about its axis sees no motion
-                for j in (coaxial[a] & only_b) | (coaxial[b] & only_a):
-                    W[idx_v[j], c] = 0.0
+        self.margins = np.zeros(len(pairs))
+        self.is_env = np.array([cps[k][1] >= n_robot for k in pairs], dtype=bool)
+        self.margins[self.is_env] = getattr(robot, "safety_margin", 0.0)
+        W, owner = _pair_arms(tree, R, [cps[k] for k in pairs], self.is_env, symmetry, robot.dof)
         self.W = W
         self._owner = owner
         self._posed = PosedArms(robot, tree, R) if posed_arms else None
@@ -288,6 +317,7 @@ class SweepChecker:
                 self._ref.append(r)
         names = [o.name for o in gm.geometryObjects]
         self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
+        self._gm = gm  # (the robot's; its scratch space below)
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests
         self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
@@ -313,12 +343,10 @@ class SweepChecker:
     # ------------------------------------------------------------------------------------------
     def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
         """Exact distances at configuration q of the checked pairs with indices ``cols``."""
-        r = self.robot
-        gd = self._req
-        pin.updateGeometryPlacements(r.model, r.data, r.geom_model, gd, q)
-        out = np.empty(len(cols))
-        for i, c in enumerate(cols):
-            out[i] = pin.computeDistance(r.geom_model, gd, self.pairs[c]).min_distance
+        r, gm, gd, pairs = self.robot, self._gm, self._req, self.pairs
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        distance = pin.computeDistance
+        out = np.array([distance(gm, gd, pairs[c]).min_distance for c in cols], dtype=float)
         self.queries += len(out)
         return out
 
