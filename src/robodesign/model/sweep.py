@@ -351,7 +351,8 @@ class SweepChecker:
         return out
 
     def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
-              at: Optional[Callable[[int, float], np.ndarray]] = None) -> List[CollisionEvent]:
+              at: Optional[Callable[[int, float], np.ndarray]] = None,
+              poses: Optional[np.ndarray] = None) -> List[CollisionEvent]:
         """Collision events along a motion through the rows of Q: by default the piecewise-linear one.
 
         Another motion through the same samples is given by ``at(k, s)`` (q at fraction s ∈ [0, 1] of step k)
@@ -361,7 +362,8 @@ class SweepChecker:
         certifies that motion: from an exact distance at an instant the pair stays free while the accumulated
         path bounds stay below the clearance.
         With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
-        and contact episode (the pair is re-armed once it separates again).
+        and contact episode (the pair is re-armed once it separates again). ``poses``: ``robot.joint_poses_batch(Q)``
+        if the caller has it (the posed bounds read it).
         """
         Q = np.asarray(Q, dtype=float)
         n = len(Q)
@@ -372,7 +374,7 @@ class SweepChecker:
             d = self.distances(Q[0], range(P))
             return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
                     for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
-        seg, sched, cum, cum_rows, TG = self._bounds(Q, path)
+        seg, sched, cum, cum_rows, TG = self._bounds(Q, path, poses)
         posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         ext = 4 * self.tolerance
         margins, is_env = self.margins.tolist(), self.is_env.tolist()
@@ -427,7 +429,7 @@ class SweepChecker:
         events.sort(key=lambda e: (e.sample, e.s))
         return events
 
-    def _bounds(self, Q: np.ndarray, path: Optional[np.ndarray]) -> tuple:
+    def _bounds(self, Q: np.ndarray, path: Optional[np.ndarray], poses: Optional[np.ndarray] = None) -> tuple:
         """(seg, sched, cum, cum_rows, TG) of :meth:`check`: the step bounds (n−1, P), the schedule's (the posed
         ones where given), its running sums (n, P) and their rows per pair, and the geometry poses (None: no
         displacement extension)."""
@@ -437,7 +439,7 @@ class SweepChecker:
         posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
         # so that every contact is found from the same sample with the same sub-steps (module docstring)
-        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
+        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner, poses)
         # with the posed bounds, a robot–obstacle pair's certificate where the path bound ends is extended by the
         # displacement from the sample's pose (PosedArms.extend) while that stays below the clearance less
         # 4·tolerance: such steps keep more than the tolerance, so no sub-step query inside them finds a contact

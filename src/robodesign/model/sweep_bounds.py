@@ -69,14 +69,16 @@ class PosedArms:
         self._last: Optional[tuple] = None  # (Q, dQ, arms, joint poses) of the last motion
         self._poses: Optional[np.ndarray] = None  # the geometries' poses of the last motion (poses())
 
-    def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """(n−1, P) displacement bounds per step and pair (≤ dQ @ W)."""
+    def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray,
+                 J: Optional[np.ndarray] = None) -> np.ndarray:
+        """(n−1, P) displacement bounds per step and pair (≤ dQ @ W); ``J``: the joint poses of Q if known
+        (``robot.joint_poses_batch(Q)``)."""
         dof, G = self.R.shape
         last = self._last
         if last is not None and np.array_equal(last[0], Q) and np.array_equal(last[1], dQ):
             X = last[2]  # the same motion (the checker's self and obstacle pairs): the same arms
         else:
-            X, J = self._arms(Q, dQ)
+            X, J = self._arms(Q, dQ, J)
             self._last, self._poses = (Q.copy(), dQ.copy(), X, J), None
         # pair c: the sum over joints j of X[:, j, owner[j, c]] where W[j, c] > 0 (a gather, not a matrix product:
         # numpy hands products this size to a multithreaded BLAS, which on a busy machine costs more than it saves)
@@ -111,11 +113,13 @@ class PosedArms:
             out[:, nz] += dQ[:, i, None] * d
         return out
 
-    def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> Tuple[np.ndarray, Optional[np.ndarray]]:
+    def _arms(self, Q: np.ndarray, dQ: np.ndarray, J: Optional[np.ndarray] = None) \
+            -> Tuple[np.ndarray, Optional[np.ndarray]]:
         """((n−1, dof·G): |Δq_j| times the arm of joint j for geometry g per step, the joint poses or None): the
         kernel's when it runs and every |Δq| is finite (the same numbers)."""
-        J = None
-        if len(self.flat):
+        if not len(self.flat):
+            J = None  # no arm to tighten: the static arms
+        elif J is None:
             try:
                 J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
             except NotImplementedError:  # a joint type batched FK does not model: the static arms
