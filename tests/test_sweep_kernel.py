@@ -66,6 +66,10 @@ def test_kernel_equals_numpy_path_bit_for_bit(ptp3):
         X3 = np.concatenate([A.reshape(len(A), dof, G), np.zeros((len(A), dof, 1))], axis=2)
         assert np.array_equal(S, X3[:, np.arange(dof)[:, None], uniq].sum(axis=1)[:, inverse])
         assert np.all(S <= dQ @ chk.W * (1 + 1e-12) + 1e-15)
+        # the running sums of the schedule: numpy.cumsum's, with a 0 first, per pair
+        rows = sweep_kernel.running_sums(S)
+        assert np.array_equal(rows, np.concatenate([np.zeros((1, S.shape[1])), np.cumsum(S, axis=0)]).T)
+        assert rows.flags.c_contiguous and np.all(np.diff(rows, axis=1) >= 0)
 
 
 def test_check_is_the_same_with_and_without_the_kernel(ptp3, monkeypatch):

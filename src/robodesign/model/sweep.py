@@ -267,6 +267,23 @@ def _pair_arms(tree: "_Tree", R: np.ndarray, ab: List[Tuple[int, int]], env: np.
     return W, owner
 
 
+class _LazySteps:
+    """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
+    inside a step)."""
+
+    def __init__(self, dQ: np.ndarray, W: np.ndarray):
+        self.dQ, self.W = dQ, W
+        self._a: Optional[np.ndarray] = None
+
+    def array(self) -> np.ndarray:
+        if self._a is None:
+            self._a = self.dQ @ self.W
+        return self._a
+
+    def __getitem__(self, kc):
+        return self.array()[kc]
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
@@ -435,17 +452,21 @@ class SweepChecker:
         displacement extension)."""
         dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
                                                                            np.abs(np.diff(Q, axis=0)))
-        seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
         posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
-        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
-        # so that every contact is found from the same sample with the same sub-steps (module docstring)
-        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner, poses)
+        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg
+        # (dQ @ W), so that every contact is found from the same sample with the same sub-steps (module docstring)
+        seg = _LazySteps(dQ, self.W)
+        if posed is None:
+            sched = seg.array()
+            cum = np.concatenate([np.zeros((1, len(self.pairs))), np.cumsum(sched, axis=0)])  # (n, P)
+            cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        else:
+            sched, cum_rows = posed.schedule(Q, dQ, self.W, self._owner, poses)
+            cum = cum_rows.T
         # with the posed bounds, a robot–obstacle pair's certificate where the path bound ends is extended by the
         # displacement from the sample's pose (PosedArms.extend) while that stays below the clearance less
         # 4·tolerance: such steps keep more than the tolerance, so no sub-step query inside them finds a contact
         TG = posed.poses() if posed is not None and getattr(self, "_mov", None) else None
-        cum = np.concatenate([np.zeros((1, len(self.pairs))), np.cumsum(sched, axis=0)])  # (n, P)
-        cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
         return seg, sched, cum, cum_rows, TG
 
     def _ahead(self, Q, k: int, c: int, free: float, row: np.ndarray, nxt: int) -> Optional[int]:

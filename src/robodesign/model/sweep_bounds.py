@@ -95,6 +95,17 @@ class PosedArms:
             return kernel.gather(X, dof, G, uniq, inverse)
         return self._gather_numpy(X, uniq, inverse)
 
+    def schedule(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray,
+                 J: Optional[np.ndarray] = None) -> Tuple[np.ndarray, np.ndarray]:
+        """(:meth:`segments`, their running sums per pair (P, n): row c is 0 then the cumulative sum of column c,
+        as numpy.cumsum adds)."""
+        sched = self.segments(Q, dQ, W, owner, J)
+        kernel = _kernel(count=False) if len(sched) else None
+        if kernel is not None:
+            return sched, kernel.running_sums(sched)
+        return sched, np.ascontiguousarray(np.concatenate([np.zeros((1, sched.shape[1])),
+                                                           np.cumsum(sched, axis=0)]).T)
+
     def _gather_numpy(self, X: np.ndarray, uniq: np.ndarray, inverse: np.ndarray) -> np.ndarray:
         """The gather of :meth:`segments`, its terms summed from the first joint on (as the kernel)."""
         dof, G = self.R.shape

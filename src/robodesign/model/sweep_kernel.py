@@ -107,6 +107,21 @@ def gather(X, dof, G, uniq, inverse):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def running_sums(S):  # pragma: no cover - compiled
+    """(P, m + 1): per column c of S (m, P) 0, S[0, c], S[0, c] + S[1, c], … added in order (numpy.cumsum's)."""
+    m, P = S.shape
+    out = np.empty((P, m + 1))
+    for c in range(P):
+        out[c, 0] = 0.0
+        if m:
+            out[c, 1] = S[0, c]
+    for k in range(1, m):
+        for c in range(P):
+            out[c, k + 1] = out[c, k] + S[k, c]
+    return out
+
+
+@njit(cache=True, nogil=True)
 def geometry_poses(J, geom_joint, Rp, tp):  # pragma: no cover - compiled
     """(n, G, 3, 4) world pose of every robot geometry at every sample, as sweep_bounds.geometry_poses_numpy: the
     joint's pose J (n, njoints, 4, 4) times the geometry's placement (Rp, tp), each entry a sum from the left."""
@@ -192,7 +207,7 @@ def available() -> bool:
 
 def _cache() -> KernelCache:
     return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms,
-                       ("posed_arms", "gather", "geometry_poses", "extend"))
+                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend"))
 
 
 def compiled() -> bool:
@@ -208,7 +223,7 @@ def warm_up() -> bool:
     i, f = np.zeros(1, np.int64), np.zeros(1)
     X = posed_arms(np.zeros((2, 2, 4, 4)), i, i, np.zeros((1, 3)), np.zeros((1, 3)), i, i, i, np.zeros((1, 1)), f,
                    np.zeros((1, 1)), i, np.zeros(2, np.int64), i, f, 1.0)
-    gather(X, 1, 1, np.zeros((1, 1), np.int64), i)
+    running_sums(gather(X, 1, 1, np.zeros((1, 1), np.int64), i))
     TG = geometry_poses(np.zeros((2, 1, 4, 4)), i, np.zeros((1, 3, 3)), np.zeros((1, 3)))
     extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), 0, 1.0, 1.0)
     _STATE = "ready"
