@@ -132,13 +132,13 @@ def test_geometry_poses_and_extend_equal_numpy_path_bit_for_bit(ptp3):
 
 
 def test_extension_is_certified_by_exact_distances(ptp3):
-    """Every robot–obstacle pair, from a query at a sample: over the steps the displacement extension certifies,
-    the exact distance (at the samples and inside each step, on the judge's motion) stays above the clearance at
-    the query less the limit, less GJK's tolerance."""
+    """Every robot–obstacle pair and every second self pair, from a query at a sample: over the steps the
+    displacement extension certifies, the exact distance (at the samples and inside each step, on the judge's
+    motion) stays above the clearance at the query less the limit, less GJK's tolerance."""
     task, ms, sol, robot = ptp3
     tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
     n, extended = len(Q), 0
-    for c in np.nonzero(chk.is_env)[0]:
+    for c in list(np.nonzero(chk.is_env)[0]) + list(np.nonzero(~chk.is_env)[0][::2]):
         for k in (0, n // 3, 2 * n // 3):
             d = float(chk.distances(Q[k], [c])[0])
             limit = 0.5 * d
@@ -147,4 +147,29 @@ def test_extension_is_certified_by_exact_distances(ptp3):
             for i in range(k, min(end, n - 1)):
                 for s in (0.0, 0.25, 0.5, 0.75, 1.0):
                     assert chk.distances(tq.motion.at(i, s), [c])[0] >= d - limit - 1e-6, (c, k, i, s)
-    assert extended > 300  # the extension certifies real stretches, not only single steps
+    assert extended > 3000  # the extension certifies real stretches, not only single steps
+
+
+def test_certify_equals_numpy_path(ptp3, monkeypatch):
+    """The batch certification (the summed bound's reach, then the extension) of the kernel and of numpy, for
+    every pair queried at several samples with several clearances, contacts and non-finite ones among them."""
+    task, ms, sol, robot = ptp3
+    sweep_kernel.warm_up()
+    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    pa, n = chk._posed, len(Q)
+    rows = sweep_kernel.running_sums(sched)
+    mov, ref = np.array(chk._mov), np.array(chk._ref)
+    due = list(range(len(chk.pairs)))
+    rng = np.random.default_rng(9)
+    kinds = set()
+    for k in (0, 5, n // 2, n - 2):
+        d = rng.choice([-0.01, 0.0, 1e-5, 0.01, 0.05, 0.3, 2.0, np.inf, np.nan], len(due))
+        for self_too in (True, False):
+            args = (due, d, k, chk.margins, chk.is_env, rows, TG, mov, ref, sched, 4e-6, self_too)
+            a = pa.certify(*args)
+            with monkeypatch.context() as m:
+                m.setattr(sweep_bounds, "_kernel", lambda count=True: None)
+                b = pa.certify(*args)
+            assert a == b
+            kinds |= {-1 if x == -1 else -2 if x == -2 else 0 if x == k else 1 if x < n - 1 else 2 for x in a}
+    assert kinds == {-2, -1, 0, 1, 2}

@@ -68,6 +68,7 @@ SYMMETRY_EPS = 1e-9
 #: how far SweepChecker._ahead queries: where the path bound from the last query reaches 1.6× its clearance (on
 #: the 350-sample PTP_3 check: mesh queries 150 → 117; with 1.2: 133, 2: 174, 3: 249; a failed try costs one query)
 _AHEAD = 1.6
+_EXTEND_SELF = True  # extend the certificates of self pairs too (PosedArms.certify)
 _ROTATIONAL = ("Cylinder", "Capsule", "Cone")  # bodies of revolution about their local z axis
 
 
@@ -375,9 +376,8 @@ class SweepChecker:
         Another motion through the same samples is given by ``at(k, s)`` (q at fraction s ∈ [0, 1] of step k)
         and ``path`` (n−1, dof): per step and joint a bound on the joint's speed per unit of s, so that it moves
         at most ``path·|s' − s|`` between any two fractions s, s' of the step (|ΔQ| for the linear motion; the
-        judge's motion: h·max|q̇|). Conservative advancement then
-        certifies that motion: from an exact distance at an instant the pair stays free while the accumulated
-        path bounds stay below the clearance.
+        judge's motion: h·max|q̇|). Conservative advancement then certifies that motion: from an exact distance at
+        an instant the pair stays free while the accumulated path bounds stay below the clearance.
         With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
         and contact episode (the pair is re-armed once it separates again). ``poses``: ``robot.joint_poses_batch(Q)``
         if the caller has it (the posed bounds read it).
@@ -394,6 +394,7 @@ class SweepChecker:
         seg, sched, cum, cum_rows, TG = self._bounds(Q, path, poses)
         posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         ext = 4 * self.tolerance
+        mov, ref = (np.array(getattr(self, a, ()), dtype=np.int64) for a in ("_mov", "_ref"))
         margins, is_env = self.margins.tolist(), self.is_env.tolist()
         events: List[CollisionEvent] = []
         # priority queue of (sample index where the pair must be re-checked, pair)
@@ -405,22 +406,24 @@ class SweepChecker:
             while heap and heap[0][0] == k:
                 due.append(heapq.heappop(heap)[1])
             d = self.distances(Q[k], due)
-            for c, dist in zip(due, d.tolist()):
+            certified = (posed.certify(due, d, k, self.margins, self.is_env, cum_rows, TG, mov, ref, sched, ext,
+                                       _EXTEND_SELF) if posed is not None else [-2] * len(due))
+            for c, dist, nxt in zip(due, d.tolist(), certified):
                 free = dist - margins[c]
                 if free <= 0:
                     events.append(CollisionEvent(k, 0.0, *self.pair_names[c], dist, bool(self.is_env[c])))
                     if first_only:
                         return events
-                    nxt = self._rearm(Q, k, c, cum)
-                    if nxt is not None:
-                        heapq.heappush(heap, (nxt, c))
+                    again = self._rearm(Q, k, c, cum)
+                    if again is not None:
+                        heapq.heappush(heap, (again, c))
                     continue
                 # the pair is certified free until the accumulated bound exceeds `free`
                 row = cum_rows[c]
-                target = float(row[k]) + free
-                nxt = int(row.searchsorted(target, side="right")) - 1  # last sample still certified
-                if TG is not None and posed is not None and nxt < n - 1 and is_env[c]:
-                    nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, c, free - ext)
+                if nxt == -2:  # no posed bounds, or a clearance or bound that is no finite number
+                    nxt = int(row.searchsorted(float(row[k]) + free, side="right")) - 1  # last sample certified
+                    if TG is not None and posed is not None and nxt < n - 1 and (is_env[c] or _EXTEND_SELF):
+                        nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, c, free - ext)
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
@@ -436,9 +439,9 @@ class SweepChecker:
                     events.append(CollisionEvent(k, s, *self.pair_names[c], dist2, bool(self.is_env[c])))
                     if first_only:
                         continue  # another pair of this batch may touch earlier inside the same step
-                    nxt = self._rearm(Q, k + 1, c, cum)
-                    if nxt is not None:
-                        heapq.heappush(heap, (nxt, c))
+                    again = self._rearm(Q, k + 1, c, cum)
+                    if again is not None:
+                        heapq.heappush(heap, (again, c))
                 else:
                     heapq.heappush(heap, (k + 1, c))
             if first_only and events:  # every pair was certified free up to sample k: the earliest is here
@@ -462,7 +465,7 @@ class SweepChecker:
             cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
         else:
             sched, cum_rows = posed.schedule(Q, dQ, self.W, self._owner, poses)
-            cum = cum_rows.T
+            sched, cum = np.ascontiguousarray(sched), cum_rows.T
         # with the posed bounds, a robot–obstacle pair's certificate where the path bound ends is extended by the
         # displacement from the sample's pose (PosedArms.extend) while that stays below the clearance less
         # 4·tolerance: such steps keep more than the tolerance, so no sub-step query inside them finds a contact

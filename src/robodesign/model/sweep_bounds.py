@@ -3,8 +3,9 @@ the poses at the samples (:class:`PosedArms`), with their kernels (:mod:`robodes
 numpy path those replace (the same numbers bit for bit)."""
 from __future__ import annotations
 
+import math
 import sys
-from typing import Any, Optional, Tuple
+from typing import Any, List, Optional, Tuple
 
 import numpy as np
 
@@ -168,6 +169,37 @@ class PosedArms:
             self._poses = (k.geometry_poses(J, self._k_tree[0], self.R_g, self.t_g) if k is not None
                            else geometry_poses_numpy(J, self.geom_joint, self.R_g, self.t_g))
         return self._poses
+
+    def certify(self, due: List[int], d: np.ndarray, k: int, margins: np.ndarray, is_env: np.ndarray,
+                rows: np.ndarray, TG: Optional[np.ndarray], mov: np.ndarray, ref: np.ndarray, sched: np.ndarray,
+                ext: float, self_too: bool) -> List[int]:
+        """Per pair of ``due`` queried at sample k (distances d): −1 in contact, −2 for the caller's own path (a
+        clearance or bound that is no finite number), else the last sample certified: where the running sum
+        ``rows[c]`` of the bounds from k reaches the clearance (numpy's searchsorted), then, with the poses TG,
+        :meth:`extend` for robot–obstacle pairs (and self pairs with ``self_too``) to the clearance less
+        ``ext``. The kernel's when it runs (the same numbers)."""
+        kernel = _kernel(count=False)
+        T = TG if TG is not None else np.zeros((0, 1, 3, 4))
+        if kernel is not None:
+            return kernel.certify(np.array(due, dtype=np.int64), d, k, margins, is_env, rows, T, mov, ref,
+                                  self.box_centre, self.box_radius, sched, ext, BOUND_SLACK, self_too).tolist()
+        n = rows.shape[1]
+        out = []
+        for c, dist in zip(due, d.tolist()):
+            free = dist - float(margins[c])
+            if free <= 0:
+                out.append(-1)
+                continue
+            target = float(rows[c, k]) + free
+            if not (math.isfinite(target) and math.isfinite(rows[c, n - 1])):
+                out.append(-2)
+                continue
+            nxt = int(rows[c].searchsorted(target, side="right")) - 1
+            if nxt < n - 1 and len(T) == n and (is_env[c] or self_too):
+                nxt = extend_numpy(T, int(mov[c]), int(ref[c]), self.box_centre, self.box_radius, k, nxt, sched,
+                                   c, free - ext)
+            out.append(nxt)
+        return out
 
     def extend(self, TG: np.ndarray, m: int, r: int, k: int, start: int, sched: np.ndarray, col: int,
                limit: float) -> int:

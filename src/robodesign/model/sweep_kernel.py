@@ -193,6 +193,32 @@ def extend(TG, m, r, cen, rad, k, start, sched, col, limit, slack):  # pragma: n
     return n - 1
 
 
+@njit(cache=True, nogil=True)
+def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext, slack, self_too):  # pragma: no cover
+    """Per pair c = due[i] queried at sample k (distance d[i]): the last sample its certificate reaches, as
+    sweep_bounds.certify_numpy: −1 in contact (clearance ≤ 0), −2 for the Python path (a non-finite clearance or
+    bound), else the last sample whose summed bound from k stays within the clearance, extended
+    (:func:`extend`, limit clearance − ext) for robot–obstacle pairs (and self pairs with ``self_too``) when
+    TG has the motion's poses."""
+    n = rows.shape[1]
+    out = np.empty(len(due), np.int64)
+    for i in range(len(due)):
+        c = due[i]
+        free = d[i] - margins[c]
+        if free <= 0:
+            out[i] = -1
+            continue
+        target = rows[c, k] + free
+        if not (np.isfinite(target) and np.isfinite(rows[c, n - 1])):
+            out[i] = -2
+            continue
+        nxt = np.searchsorted(rows[c], target, side="right") - 1
+        if nxt < n - 1 and TG.shape[0] == n and (is_env[c] or self_too):
+            nxt = extend(TG, mov[c], ref[c], cen, rad, k, nxt, sched, c, free - ext, slack)
+        out[i] = nxt
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a check on the compilation
 # ---------------------------------------------------------------------------------------------------------
@@ -207,7 +233,8 @@ def available() -> bool:
 
 def _cache() -> KernelCache:
     return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms,
-                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend"))
+                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend",
+                        "certify"))
 
 
 def compiled() -> bool:
@@ -226,6 +253,8 @@ def warm_up() -> bool:
     running_sums(gather(X, 1, 1, np.zeros((1, 1), np.int64), i))
     TG = geometry_poses(np.zeros((2, 1, 4, 4)), i, np.zeros((1, 3, 3)), np.zeros((1, 3)))
     extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), 0, 1.0, 1.0)
+    certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
+            1e-6, 1.0, False)
     _STATE = "ready"
     return True
 
