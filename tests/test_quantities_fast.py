@@ -51,3 +51,12 @@ def test_joint_poses_feed_the_twists():
         v = pin.getFrameVelocity(robot.model, robot.data, robot.tcp_frame, pin.LOCAL_WORLD_ALIGNED).vector
         np.testing.assert_allclose(tq.tcp_twists[k], v, rtol=0, atol=1e-10)
         np.testing.assert_allclose(tq.joint_poses[k, 3], robot.data.oMi[3].homogeneous, rtol=0, atol=1e-12)
+
+
+def test_cross_is_numpys():
+    from robodesign.judge.quantities import _cross
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=(500, 3)) * 10 ** rng.uniform(-8, 8, (500, 1)), rng.normal(size=(500, 3))
+    a[0], b[1] = np.inf, np.nan
+    with np.errstate(invalid="ignore"):
+        assert np.array_equal(_cross(a, b), np.cross(a, b), equal_nan=True)

@@ -230,3 +230,32 @@ def test_pair_arms_are_the_per_pair_definition(module_set):
                 assert np.all(chk.margins[chk.is_env] == r.safety_margin) and np.all(chk.margins[~chk.is_env] == 0)
                 dropped += int(np.sum((W == 0) & (owner >= 0)))
     assert dropped > 0  # bodies of revolution did drop joints
+
+
+def test_setup_shared_by_robots_built_alike():
+    """A second robot built alike (same assembly, base pose and cell) takes the first one's checker set-up: the
+    same bounds and names, its own robot and scratch space, the same events and queries; a robot at another base
+    pose gets its own set-up."""
+    from robodesign.model import sweep
+    from robodesign.model.cell import build_robot
+    from robodesign.formats.assembly import Assembly
+    p = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    build = lambda T: build_robot(p.task, p.module_set, Assembly.from_order(p.module_set, ORDER), T)  # noqa: E731
+    sweep._SETUPS.clear()
+    a, b = build(np.eye(4)), build(np.eye(4))
+    ca, cb = SweepChecker(a, posed_arms=True), SweepChecker(b, posed_arms=True)
+    assert len(sweep._SETUPS) == 1 and cb.W is ca.W and cb.pair_names == ca.pair_names
+    assert cb.robot is b and cb._posed.robot is b and ca._posed.robot is a and cb._req is not ca._req
+    sweep._SETUPS.clear()
+    fresh = SweepChecker(b, posed_arms=True)
+    for attr in ("W", "_owner", "margins", "is_env"):
+        assert np.array_equal(getattr(fresh, attr), getattr(cb, attr))
+    assert (fresh.pairs, fresh._mov, fresh._ref) == (cb.pairs, cb._mov, cb._ref)
+    rng = np.random.default_rng(12)
+    Q = random_q(b, rng, 1)[0] + np.outer(np.linspace(0, 1, 40), 2.0 * rng.normal(size=b.dof))
+    e1, e2 = cb.check(Q, first_only=False), fresh.check(Q, first_only=False)
+    assert e1 == e2 and e1 and cb.queries == fresh.queries
+    T = np.eye(4)
+    T[:3, 3] = (0.1, -0.2, 0.0)
+    moved = SweepChecker(build(T), posed_arms=True)
+    assert len(sweep._SETUPS) == 2 and moved.W is not cb.W

@@ -120,6 +120,12 @@ def _chain_axes(robot: Robot) -> Optional[list]:
     return out
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """numpy.cross of rows of 3-vectors (N, 3), the same products and differences, without its axis handling."""
+    a0, a1, a2, b0, b1, b2 = a[:, 0], a[:, 1], a[:, 2], b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
     """The unique sample at ``value`` (numpy.isclose rule of the reference), else None. numpy.isclose's own test
     written out for a float ``value`` (the same result, without its argument checks)."""
@@ -319,7 +325,7 @@ class TrajectoryQuantities:
                 v += z * qd
             else:
                 w += z * qd
-                v += np.cross(z, p - J[:, j, :3, 3]) * qd
+                v += _cross(z, p - J[:, j, :3, 3]) * qd
         return np.hstack([v, w])
 
     def _tcp_twists_per_sample(self) -> np.ndarray:

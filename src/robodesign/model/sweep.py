@@ -285,8 +285,76 @@ class _LazySteps:
         return self.array()[kc]
 
 
+_SETUPS: dict = {}  # _setup_key → (module set, _setup's attributes): the set-up of robots built alike
+
+
+def _setup_key(robot: Robot, flags: tuple) -> Optional[tuple]:
+    """What the checker's set-up of ``robot`` depends on: its module set and assembly, base pose, safety margin
+    and obstacles (their names; not their poses, which only the queries read), and the checker's flags. Robots
+    built from the same of these are the same model and geometry (model.cell.build_robot, RobotPool). None: a
+    robot without module set or assembly."""
+    ms, assembly = getattr(robot, "module_set", None), getattr(robot, "assembly", None)
+    if ms is None or assembly is None:
+        return None
+    return (id(ms), assembly.key(), np.asarray(robot.base_pose, dtype=float).tobytes(),
+            float(getattr(robot, "safety_margin", 0.0)), tuple(o.name for o in getattr(robot, "obstacles", ())),
+            robot.dof, robot.n_collision_geometries, len(robot.geom_model.collisionPairs), flags)
+
+
+def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[Collection[int]], symmetry: bool,
+           posed_arms: bool) -> dict:
+    """The checker's pairs, their bounds and names (SweepChecker.__init__), as attributes."""
+    gm = robot.geom_model
+    n_self = robot.n_self_collision_pairs
+    cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
+    pairs: List[int] = []
+    if check_self:
+        pairs += list(range(n_self))
+    if check_env:
+        env: Sequence[int] = range(n_self, len(cps))
+        if obstacles is not None:
+            keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
+            env = [k for k in env if cps[k][1] in keep]
+        pairs += list(env)
+    tree = _Tree(robot)
+    R = tree.lever_arms(symmetry, robot.dof)
+    n_robot = robot.n_collision_geometries
+    margins = np.zeros(len(pairs))
+    is_env = np.array([cps[k][1] >= n_robot for k in pairs], dtype=bool)
+    margins[is_env] = getattr(robot, "safety_margin", 0.0)
+    W, owner = _pair_arms(tree, R, [cps[k] for k in pairs], is_env, symmetry, robot.dof)
+    posed = PosedArms(robot, tree, R) if posed_arms else None
+    # per pair for the posed bounds' displacement (PosedArms.extend): the geometry that moves (the smaller box)
+    # in the frame of the other (-1: an obstacle's, the world)
+    mov: List[int] = []
+    ref: List[int] = []
+    if posed is not None:
+        box = posed.box_radius
+        for k in pairs:
+            a, b = cps[k]
+            m, r = (a, -1) if b >= n_robot else (a, b) if box[a] <= box[b] else (b, a)
+            mov.append(m)
+            ref.append(r)
+        posed = posed.bound_to(None)  # (the template holds no robot)
+    names = [o.name for o in gm.geometryObjects]
+    return {"pairs": pairs,  # what distances() queries: collision pair indices here
+            "margins": margins, "is_env": is_env, "W": W, "_owner": owner, "_posed": posed, "_mov": mov,
+            "_ref": ref, "pair_names": [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]}
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
+
+    # the set-up (_setup, shared by robots built alike)
+    pairs: Sequence[object]  # what distances() queries: collision pair indices here
+    margins: np.ndarray
+    is_env: np.ndarray
+    W: np.ndarray
+    _owner: np.ndarray
+    _posed: Optional[PosedArms]
+    _mov: List[int]
+    _ref: List[int]
+    pair_names: List[Tuple[str, str]]
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
                  max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True,
@@ -300,41 +368,19 @@ class SweepChecker:
         self.tolerance = tolerance
         self.max_substeps = max_substeps
         gm = robot.geom_model
-        n_self = robot.n_self_collision_pairs
-        cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
-        pairs: List[int] = []
-        if check_self:
-            pairs += list(range(n_self))
-        if check_env:
-            env: Sequence[int] = range(n_self, len(cps))
-            if obstacles is not None:
-                keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
-                env = [k for k in env if cps[k][1] in keep]
-            pairs += list(env)
-        self.pairs: Sequence[object] = pairs  # what distances() queries: collision pair indices here
-        tree = _Tree(robot)
-        R = tree.lever_arms(symmetry, robot.dof)
-        n_robot = robot.n_collision_geometries
-        self.margins = np.zeros(len(pairs))
-        self.is_env = np.array([cps[k][1] >= n_robot for k in pairs], dtype=bool)
-        self.margins[self.is_env] = getattr(robot, "safety_margin", 0.0)
-        W, owner = _pair_arms(tree, R, [cps[k] for k in pairs], self.is_env, symmetry, robot.dof)
-        self.W = W
-        self._owner = owner
-        self._posed = PosedArms(robot, tree, R) if posed_arms else None
-        # per pair for the posed bounds' displacement (PosedArms.extend): the geometry that moves (the smaller box)
-        # in the frame of the other (-1: an obstacle's, the world)
-        self._mov: List[int] = []
-        self._ref: List[int] = []
-        if self._posed is not None:
-            box = self._posed.box_radius
-            for k in pairs:
-                a, b = cps[k]
-                m, r = (a, -1) if b >= n_robot else (a, b) if box[a] <= box[b] else (b, a)
-                self._mov.append(m)
-                self._ref.append(r)
-        names = [o.name for o in gm.geometryObjects]
-        self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
+        key = _setup_key(robot, (check_self, check_env, None if obstacles is None else tuple(obstacles), symmetry,
+                                 posed_arms))
+        hit = _SETUPS.get(key) if key is not None else None
+        if hit is None or hit[0] is not robot.module_set:
+            hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
+                                                              posed_arms))
+            if key is not None:
+                _SETUPS[key] = hit
+                while len(_SETUPS) > 64:
+                    _SETUPS.pop(next(iter(_SETUPS)))
+        self.__dict__.update(hit[1])
+        if self._posed is not None:  # the template's, bound to this robot (its motion caches empty)
+            self._posed = self._posed.bound_to(robot)
         self._gm = gm  # (the robot's; its scratch space below)
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests

@@ -3,6 +3,7 @@ the poses at the samples (:class:`PosedArms`), with their kernels (:mod:`robodes
 numpy path those replace (the same numbers bit for bit)."""
 from __future__ import annotations
 
+import copy
 import math
 import sys
 from typing import Any, List, Optional, Tuple
@@ -23,7 +24,7 @@ class PosedArms:
 
     SLACK = 1e-9  # relative, against rounding of the forward kinematics
 
-    def __init__(self, robot: Robot, tree: Any, R: np.ndarray):
+    def __init__(self, robot: Optional[Robot], tree: Any, R: np.ndarray):
         self.robot, self.R = robot, R
         dof, G = R.shape
         self.plain = tree.lever_arms(False, dof)
@@ -69,6 +70,12 @@ class PosedArms:
         self._gathers: dict = {}  # (W > 0, owner) → the distinct gather columns and where each pair's is
         self._last: Optional[tuple] = None  # (Q, dQ, arms, joint poses) of the last motion
         self._poses: Optional[np.ndarray] = None  # the geometries' poses of the last motion (poses())
+
+    def bound_to(self, robot: Optional[Robot]) -> "PosedArms":
+        """These arms for ``robot`` (one built alike: model.sweep._setup_key), without the last motion's."""
+        out = copy.copy(self)
+        out.robot, out._last, out._poses = robot, None, None
+        return out
 
     def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray,
                  J: Optional[np.ndarray] = None) -> np.ndarray:
@@ -132,6 +139,7 @@ class PosedArms:
         if not len(self.flat):
             J = None  # no arm to tighten: the static arms
         elif J is None:
+            assert self.robot is not None  # (a template's arms are bound to a robot before use: bound_to)
             try:
                 J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
             except NotImplementedError:  # a joint type batched FK does not model: the static arms
