@@ -282,14 +282,20 @@ def extend_numpy(TG: np.ndarray, m: int, r: int, cen: np.ndarray, rad: np.ndarra
 
 _PASSES = [0]  # posed-arm passes made by this process
 NUMPY_PASSES = 4  # passes on the numpy path before a process that has not imported numba imports it
+_READY: List[Any] = []  # the kernels' module once they run in this process
 
 
 def _kernel(count: bool = True) -> Any:
     """The compiled kernels (:mod:`~robodesign.model.sweep_kernel`) when they run in this process, else None.
     Importing numba takes 0.3–1 s: a process that has not imported it makes its first :data:`NUMPY_PASSES` passes
     (``count``: this call is one) on the numpy path (as judge.interval_rnea). Both paths give the same numbers."""
+    if _READY:
+        return _READY[0]
     _PASSES[0] += count
     if "numba" not in sys.modules and _PASSES[0] <= NUMPY_PASSES:
         return None
     from robodesign.model import sweep_kernel
-    return sweep_kernel if sweep_kernel.ready() else None
+    if not sweep_kernel.ready():
+        return None
+    _READY.append(sweep_kernel)  # (once ready, always: as sweep_kernel.ready)
+    return sweep_kernel
