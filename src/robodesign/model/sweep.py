@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import heapq
 import math
+import threading
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
@@ -286,6 +287,7 @@ class _LazySteps:
 
 
 _SETUPS: dict = {}  # _setup_key → (module set, _setup's attributes): the set-up of robots built alike
+_SETUPS_LOCK = threading.Lock()
 
 
 def _setup_key(robot: Robot, flags: tuple) -> Optional[tuple]:
@@ -375,9 +377,10 @@ class SweepChecker:
             hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
                                                               posed_arms))
             if key is not None:
-                _SETUPS[key] = hit
-                while len(_SETUPS) > 64:
-                    _SETUPS.pop(next(iter(_SETUPS)))
+                with _SETUPS_LOCK:
+                    _SETUPS[key] = hit
+                    while len(_SETUPS) > 64:
+                        _SETUPS.pop(next(iter(_SETUPS)))
         self.__dict__.update(hit[1])
         if self._posed is not None:  # the template's, bound to this robot (its motion caches empty)
             self._posed = self._posed.bound_to(robot)
