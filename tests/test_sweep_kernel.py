@@ -100,13 +100,13 @@ def _posed_motion(task, sol, robot):
     dQ = np.maximum(tq.motion.path_bound(), np.abs(np.diff(Q, axis=0)))
     chk = sweep.SweepChecker(robot, posed_arms=True)
     sched = chk._posed.segments(Q, dQ, chk.W, chk._owner)
-    return tq, Q, chk, sched, chk._posed.poses()
+    return tq, Q, chk, sched, chk._posed.poses(), sweep_kernel.running_sums(sched)
 
 
 def test_geometry_poses_and_extend_equal_numpy_path_bit_for_bit(ptp3):
     task, ms, sol, robot = ptp3
     assert sweep_kernel.warm_up()
-    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    tq, Q, chk, sched, TG, rows = _posed_motion(task, sol, robot)
     pa = chk._posed
     J = robot.joint_poses_batch(Q)
     assert np.array_equal(TG, sweep_bounds.geometry_poses_numpy(J, pa.geom_joint, pa.R_g, pa.t_g))
@@ -123,7 +123,7 @@ def test_geometry_poses_and_extend_equal_numpy_path_bit_for_bit(ptp3):
             k = int(rng.integers(0, n - 1))
             start = int(rng.integers(k, n - 1))
             limit = float(rng.choice([1e-4, 0.02, 0.3, 2.0]))
-            args = (TG, chk._mov[c], chk._ref[c], pa.box_centre, pa.box_radius, k, start, sched, c, limit)
+            args = (TG, chk._mov[c], chk._ref[c], pa.box_centre, pa.box_radius, k, start, sched, rows, c, limit)
             a = sweep_bounds.extend_numpy(*args)
             assert a == sweep_kernel.extend(*args, sweep_bounds.BOUND_SLACK)
             assert start <= a <= n - 1
@@ -136,13 +136,13 @@ def test_extension_is_certified_by_exact_distances(ptp3):
     displacement extension certifies, the exact distance (at the samples and inside each step, on the judge's
     motion) stays above the clearance at the query less the limit, less GJK's tolerance."""
     task, ms, sol, robot = ptp3
-    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    tq, Q, chk, sched, TG, rows = _posed_motion(task, sol, robot)
     n, extended = len(Q), 0
     for c in list(np.nonzero(chk.is_env)[0]) + list(np.nonzero(~chk.is_env)[0][::2]):
         for k in (0, n // 3, 2 * n // 3):
             d = float(chk.distances(Q[k], [c])[0])
             limit = 0.5 * d
-            end = chk._posed.extend(TG, chk._mov[c], chk._ref[c], k, k, sched, int(c), limit)
+            end = chk._posed.extend(TG, chk._mov[c], chk._ref[c], k, k, sched, rows, int(c), limit)
             extended += end - k
             for i in range(k, min(end, n - 1)):
                 for s in (0.0, 0.25, 0.5, 0.75, 1.0):
@@ -155,9 +155,8 @@ def test_certify_equals_numpy_path(ptp3, monkeypatch):
     every pair queried at several samples with several clearances, contacts and non-finite ones among them."""
     task, ms, sol, robot = ptp3
     sweep_kernel.warm_up()
-    tq, Q, chk, sched, TG = _posed_motion(task, sol, robot)
+    tq, Q, chk, sched, TG, rows = _posed_motion(task, sol, robot)
     pa, n = chk._posed, len(Q)
-    rows = sweep_kernel.running_sums(sched)
     mov, ref = np.array(chk._mov), np.array(chk._ref)
     due = list(range(len(chk.pairs)))
     rng = np.random.default_rng(9)

@@ -472,7 +472,7 @@ class SweepChecker:
                 if nxt == -2:  # no posed bounds, or a clearance or bound that is no finite number
                     nxt = int(row.searchsorted(float(row[k]) + free, side="right")) - 1  # last sample certified
                     if TG is not None and posed is not None and nxt < n - 1 and (is_env[c] or _EXTEND_SELF):
-                        nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, c, free - ext)
+                        nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, cum_rows, c, free - ext)
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:

@@ -205,12 +205,12 @@ class PosedArms:
             nxt = int(rows[c].searchsorted(target, side="right")) - 1
             if nxt < n - 1 and len(T) == n and (is_env[c] or self_too):
                 nxt = extend_numpy(T, int(mov[c]), int(ref[c]), self.box_centre, self.box_radius, k, nxt, sched,
-                                   c, free - ext)
+                                   rows, c, free - ext)
             out.append(nxt)
         return out
 
-    def extend(self, TG: np.ndarray, m: int, r: int, k: int, start: int, sched: np.ndarray, col: int,
-               limit: float) -> int:
+    def extend(self, TG: np.ndarray, m: int, r: int, k: int, start: int, sched: np.ndarray, rows: np.ndarray,
+               col: int, limit: float) -> int:
         """The first step i ≥ ``start`` (of the motion whose geometry poses are TG) over which geometry m may come
         ``limit`` closer to geometry r (r < 0: to the world) than at sample k (n − 1: none). Over step i a point of
         m moves, relative to r, at most d_i = |x_i − x_k| + ‖A_i − A_k‖_F·ρ from where it was at sample k (A, x:
@@ -219,9 +219,9 @@ class PosedArms:
         1e-9 and 1e-12 m for rounding. Only the sample poses enter: the bound does not add up the path."""
         kernel = _kernel(count=False)
         if kernel is not None:
-            return int(kernel.extend(TG, m, r, self.box_centre, self.box_radius, k, start, sched, col, limit,
+            return int(kernel.extend(TG, m, r, self.box_centre, self.box_radius, k, start, sched, rows, col, limit,
                                      BOUND_SLACK))
-        return extend_numpy(TG, m, r, self.box_centre, self.box_radius, k, start, sched, col, limit)
+        return extend_numpy(TG, m, r, self.box_centre, self.box_radius, k, start, sched, rows, col, limit)
 
 
 BOUND_SLACK = 1.0 + 1e-9  # relative slack of PosedArms.extend's bounds (the forward kinematics' rounding)
@@ -258,26 +258,35 @@ def _relative_numpy(TG: np.ndarray, m: int, r: int, rows, c: np.ndarray):
 
 
 def extend_numpy(TG: np.ndarray, m: int, r: int, cen: np.ndarray, rad: np.ndarray, k: int, start: int,
-                 sched: np.ndarray, col: int, limit: float) -> int:
-    """sweep_kernel.extend in numpy (the same numbers), in growing chunks of steps."""
+                 sched: np.ndarray, rows: np.ndarray, col: int, limit: float) -> int:
+    """sweep_kernel.extend in numpy (the same numbers and steps): a block of EXTEND_BLOCK steps passes on its end
+    samples' displacement and its summed bound (a point is within the summed bound of the block's ends along
+    the way), a block that does not, step by step."""
     n = len(TG)
     Ak, xk = _relative_numpy(TG, m, r, [k], cen[m])
-    i0, size = start, 16
-    while i0 < n - 1:
-        i1 = min(i0 + size, n - 1)
-        A, x = _relative_numpy(TG, m, r, np.arange(i0, i1 + 1), cen[m])
-        e, f = x - xk, np.zeros(len(A))
-        for a in range(3):
-            for b in range(3):
-                d = A[:, a, b] - Ak[0, a, b]
-                f = f + d * d
-        moved = np.sqrt((e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1]) + e[:, 2] * e[:, 2]) + np.sqrt(f) * rad[m]
-        b_ = ((moved[:-1] + moved[1:]) + sched[i0:i1, col]) * 0.5 * BOUND_SLACK + 1e-12
-        bad = np.nonzero(~(b_ < limit))[0]
-        if len(bad):
-            return int(i0 + bad[0])
-        i0, size = i1, size * 4
+    A, x = _relative_numpy(TG, m, r, np.arange(start, n), cen[m])
+    e, f = x - xk, np.zeros(len(A))
+    for a in range(3):
+        for b in range(3):
+            d = A[:, a, b] - Ak[0, a, b]
+            f = f + d * d
+    moved = (np.sqrt((e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1]) + e[:, 2] * e[:, 2]) + np.sqrt(f) * rad[m]).tolist()
+    i = start
+    while i < n - 1:
+        j = min(i + EXTEND_BLOCK, n - 1)
+        da, db = moved[i - start], moved[j - start]
+        if ((da + db) + (float(rows[col, j]) - float(rows[col, i]))) * 0.5 * BOUND_SLACK + 1e-12 < limit:
+            i = j
+            continue
+        for t in range(i, j):
+            d0, d1 = moved[t - start], moved[t + 1 - start]
+            if not ((d0 + d1) + float(sched[t, col])) * 0.5 * BOUND_SLACK + 1e-12 < limit:
+                return t
+        i = j
     return n - 1
+
+
+EXTEND_BLOCK = 8  # as sweep_kernel.EXTEND_BLOCK
 
 
 _PASSES = [0]  # posed-arm passes made by this process

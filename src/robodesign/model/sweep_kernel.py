@@ -174,23 +174,39 @@ def _moved(A, x, Ak, xk, rad):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def extend(TG, m, r, cen, rad, k, start, sched, col, limit, slack):  # pragma: no cover - compiled
+def extend(TG, m, r, cen, rad, k, start, sched, rows, col, limit, slack):  # pragma: no cover - compiled
     """The first step i ≥ start whose bound from sample k is not below limit (n − 1: none), as
-    sweep_bounds.extend_numpy."""
+    sweep_bounds.extend_numpy: blocks of EXTEND_BLOCK steps by their end samples and summed bounds (rows), the
+    steps of a block that fails one by one."""
     n = TG.shape[0]
     Ak, xk, A, x = np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3)
     c, rr = cen[m], rad[m]
     _relative(TG, m, r, k, c, Ak, xk)
     _relative(TG, m, r, start, c, A, x)
-    d0 = _moved(A, x, Ak, xk, rr)
-    for i in range(start, n - 1):
-        _relative(TG, m, r, i + 1, c, A, x)
-        d1 = _moved(A, x, Ak, xk, rr)
-        b = ((d0 + d1) + sched[i, col]) * 0.5 * slack + 1e-12
-        if not b < limit:
-            return i
-        d0 = d1
+    da = _moved(A, x, Ak, xk, rr)
+    i = start
+    while i < n - 1:
+        j = min(i + EXTEND_BLOCK, n - 1)
+        _relative(TG, m, r, j, c, A, x)
+        db = _moved(A, x, Ak, xk, rr)
+        if ((da + db) + (rows[col, j] - rows[col, i])) * 0.5 * slack + 1e-12 < limit:
+            i, da = j, db
+            continue
+        d0 = da
+        for t in range(i, j):
+            if t + 1 == j:
+                d1 = db
+            else:
+                _relative(TG, m, r, t + 1, c, A, x)
+                d1 = _moved(A, x, Ak, xk, rr)
+            if not ((d0 + d1) + sched[t, col]) * 0.5 * slack + 1e-12 < limit:
+                return t
+            d0 = d1
+        i, da = j, db
     return n - 1
+
+
+EXTEND_BLOCK = 8  # steps per block of extend (a block's bound: its end samples' and its summed bound)
 
 
 @njit(cache=True, nogil=True)
@@ -214,7 +230,7 @@ def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext
             continue
         nxt = np.searchsorted(rows[c], target, side="right") - 1
         if nxt < n - 1 and TG.shape[0] == n and (is_env[c] or self_too):
-            nxt = extend(TG, mov[c], ref[c], cen, rad, k, nxt, sched, c, free - ext, slack)
+            nxt = extend(TG, mov[c], ref[c], cen, rad, k, nxt, sched, rows, c, free - ext, slack)
         out[i] = nxt
     return out
 
@@ -252,7 +268,7 @@ def warm_up() -> bool:
                    np.zeros((1, 1)), i, np.zeros(2, np.int64), i, f, 1.0)
     running_sums(gather(X, 1, 1, np.zeros((1, 1), np.int64), i))
     TG = geometry_poses(np.zeros((2, 1, 4, 4)), i, np.zeros((1, 3, 3)), np.zeros((1, 3)))
-    extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), 0, 1.0, 1.0)
+    extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), np.zeros((1, 2)), 0, 1.0, 1.0)
     certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
             1e-6, 1.0, False)
     _STATE = "ready"
