@@ -22,10 +22,10 @@ otherwise be advanced in µm steps (IMPROV: one PTP_3 check 4.8 s → 0.2 s).
 With ``posed_arms`` (the judge's) the queries at the samples are scheduled with lever arms of the motion's own
 poses (:class:`~robodesign.model.sweep_bounds.PosedArms`: each geometry's distance from each joint axis at the
 samples, by batched forward kinematics, plus what the joints below can move it over the step), never larger than
-the static ones, and a robot–obstacle pair's certificate goes on past the end of the summed bounds while the
-displacement of the geometry from its pose at the query (at the samples, plus the step's bound) stays below the
-clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`). Inside a
-step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
+the static ones, and a pair's certificate goes on past the end of the summed bounds while one geometry's
+displacement from its pose at the query, relative to the other (at the samples, plus the step's bound), stays
+below the clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`).
+Inside a step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
 them. Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
 a grazing contact, by about the tolerance over the rate of approach.
 """
@@ -515,9 +515,9 @@ class SweepChecker:
         else:
             sched, cum_rows = posed.schedule(Q, dQ, self.W, self._owner, poses)
             sched, cum = np.ascontiguousarray(sched), cum_rows.T
-        # with the posed bounds, a robot–obstacle pair's certificate where the path bound ends is extended by the
-        # displacement from the sample's pose (PosedArms.extend) while that stays below the clearance less
-        # 4·tolerance: such steps keep more than the tolerance, so no sub-step query inside them finds a contact
+        # with the posed bounds, a pair's certificate where the path bound ends is extended by the displacement from
+        # the sample's pose (PosedArms.extend) while that stays below the clearance less 4·tolerance: such steps
+        # keep more than the tolerance, so no sub-step query inside them finds a contact
         TG = posed.poses() if posed is not None and getattr(self, "_mov", None) else None
         return seg, sched, cum, cum_rows, TG
 
