@@ -172,3 +172,36 @@ def test_certify_equals_numpy_path(ptp3, monkeypatch):
             assert a == b
             kinds |= {-1 if x == -1 else -2 if x == -2 else 0 if x == k else 1 if x < n - 1 else 2 for x in a}
     assert kinds == {-2, -1, 0, 1, 2}
+
+
+def test_turn_reach_bounds_every_point(ptp3):
+    """The turn bound of each IMPROV geometry (PosedArms.box_radius) covers every point of it from the box centre
+    (the convex pieces' points, points of the cylinders' rims; a sphere's centre is the box centre: 0), and is
+    tighter than the box's half diagonal for the primitives; primitives with an offset centre and a swept radius."""
+    import coal
+    from robodesign.model.sweep_bounds import _reach
+    task, ms, sol, robot = ptp3
+    chk = sweep.SweepChecker(robot, posed_arms=True)
+    pa = chk._posed
+    kinds = set()
+    for g, geo in enumerate(sweep._Tree(robot).geom_geometry):
+        c, rho, kind = pa.box_centre[g], pa.box_radius[g], type(geo).__name__
+        kinds.add(kind)
+        if kind == "Convex":
+            P = np.asarray(geo.points()).reshape(-1, 3)
+            assert np.max(np.linalg.norm(P - c, axis=1)) <= rho <= pa.box_half_diagonal[g]
+        elif kind == "Sphere":
+            assert rho < 1e-12
+        elif kind == "Cylinder":
+            a = np.linspace(0, 2 * np.pi, 64)
+            rim = np.stack([geo.radius * np.cos(a), geo.radius * np.sin(a), np.full_like(a, geo.halfLength)], axis=1)
+            assert np.max(np.linalg.norm(rim - c, axis=1)) <= rho < pa.box_half_diagonal[g]
+    assert kinds == {"Convex", "Sphere", "Cylinder"}
+    c = np.array([0.01, -0.02, 0.03])
+    for shape, far in ((coal.Cylinder(0.1, 0.4), [0.1 * np.cos(2.03), 0.1 * np.sin(2.03), -0.2]),
+                       (coal.Cone(0.1, 0.4), [0.1 * np.cos(2.03), 0.1 * np.sin(2.03), -0.2]),
+                       (coal.Capsule(0.1, 0.4), [0.0, 0.0, -0.3]), (coal.Sphere(0.1), [0.0, 0.0, 0.0])):
+        shape.setSweptSphereRadius(0.01)
+        rho = _reach(shape, c)
+        assert np.linalg.norm(np.array(far) - c) + (0.01 if type(shape).__name__ != "Sphere" else 0.0) <= rho
+    assert _reach(coal.Box(0.1, 0.2, 0.3), c) == np.inf

@@ -331,7 +331,7 @@ def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[
     mov: List[int] = []
     ref: List[int] = []
     if posed is not None:
-        box = posed.box_radius
+        box = posed.box_half_diagonal
         for k in pairs:
             a, b = cps[k]
             m, r = (a, -1) if b >= n_robot else (a, b) if box[a] <= box[b] else (b, a)

@@ -36,7 +36,11 @@ class PosedArms:
         boxes = [(np.asarray(b.min_, dtype=float), np.asarray(b.max_, dtype=float))
                  for b in (geo.aabb_local for geo in tree.geom_geometry)]  # (set by tree.radii)
         self.box_centre = np.array([(lo + hi) / 2 for lo, hi in boxes]).reshape(G, 3)
-        self.box_radius = np.array([float(np.linalg.norm(hi - lo)) / 2 for lo, hi in boxes])
+        # how far a point of g can be from the box centre once g turns (the half diagonal, or the shape's own
+        # bound where tighter: 0 for a sphere centred there, whose occupied space turns into itself)
+        self.box_half_diagonal = np.array([float(np.linalg.norm(hi - lo)) / 2 for lo, hi in boxes])
+        self.box_radius = np.array([min(d, _reach(geo, c)) for d, geo, c in
+                                    zip(self.box_half_diagonal, tree.geom_geometry, self.box_centre)])
         joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
         self.joints = [joint_of_v[v] for v in range(dof)]  # pinocchio joint id per velocity index
         self.revolute = np.array([tree.axes[j] is not None for j in self.joints])
@@ -222,6 +226,28 @@ class PosedArms:
             return int(kernel.extend(TG, m, r, self.box_centre, self.box_radius, k, start, sched, rows, col, limit,
                                      BOUND_SLACK))
         return extend_numpy(TG, m, r, self.box_centre, self.box_radius, k, start, sched, rows, col, limit)
+
+
+def _reach(geo: Any, c: np.ndarray) -> float:
+    """A bound on how far a point of the space shape ``geo`` occupies moves, per radian of turn of the shape,
+    once its point c has been moved with it: the largest distance from c of a point of a cylinder, cone, capsule
+    or convex hull (its points), |c| for a sphere (centred at its origin; a turn about its centre moves none of
+    the space), each plus the swept-sphere radius and a relative 1e-12; inf for another shape."""
+    kind = type(geo).__name__
+    sw = float(geo.getSweptSphereRadius()) if hasattr(geo, "getSweptSphereRadius") else math.inf
+    cxy, cz = math.hypot(float(c[0]), float(c[1])), abs(float(c[2]))
+    if kind == "Sphere":
+        out = math.sqrt(cxy * cxy + cz * cz) + sw
+    elif kind in ("Cylinder", "Cone"):
+        out = math.hypot(float(geo.radius) + cxy, float(geo.halfLength) + cz) + sw
+    elif kind == "Capsule":
+        out = float(geo.halfLength) + float(geo.radius) + math.sqrt(cxy * cxy + cz * cz) + sw
+    elif kind == "Convex" and int(geo.num_points) > 0:
+        P = np.asarray(geo.points(), dtype=float).reshape(-1, 3)
+        out = float(np.max(np.sqrt(((P - c) ** 2).sum(axis=1)))) + sw
+    else:
+        return math.inf
+    return out * (1 + 1e-12) + 1e-15
 
 
 BOUND_SLACK = 1.0 + 1e-9  # relative slack of PosedArms.extend's bounds (the forward kinematics' rounding)
