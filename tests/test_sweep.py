@@ -186,3 +186,76 @@ def test_symmetry_needs_the_centre_on_the_axis_and_the_axis_aligned():
         assert not symmetric_about(obj(shape), p0, x)  # its axis is z
     assert not symmetric_about(obj(coal.Box(0.1, 0.1, 0.1)), p0, z)
     assert symmetric_about(obj(coal.Sphere(0.1), (0.2, 0.5, 0.0)), np.array([0.2, 0.5, 7.0]), z)  # line off origin
+
+
+def _pair_arms_per_pair(robot: Robot, pairs, symmetry: bool):
+    """W and owner of SweepChecker, pair by pair from the kinematic tree (the definition the vectorised
+    model.sweep._pair_arms computes)."""
+    from robodesign.model.sweep import _Tree
+    tree = _Tree(robot)
+    R, anc = tree.lever_arms(symmetry, robot.dof), tree.ancestors()
+    cox = tree.coaxial_child_joints() if symmetry else [set()] * robot.n_collision_geometries
+    cps = [(cp.first, cp.second) for cp in robot.geom_model.collisionPairs]
+    W, owner = np.zeros((robot.dof, len(pairs))), np.full((robot.dof, len(pairs)), -1)
+    for c, k in enumerate(pairs):
+        a, b = cps[k]
+        if b >= robot.n_collision_geometries:
+            W[:, c], owner[:, c] = R[:, a], a
+            continue
+        for j in anc[a] - anc[b]:
+            W[tree.idx_v[j], c], owner[tree.idx_v[j], c] = R[tree.idx_v[j], a], a
+        for j in anc[b] - anc[a]:
+            W[tree.idx_v[j], c], owner[tree.idx_v[j], c] = R[tree.idx_v[j], b], b
+        for j in (cox[a] & (anc[b] - anc[a])) | (cox[b] & (anc[a] - anc[b])):
+            W[tree.idx_v[j], c] = 0.0
+    return W, owner
+
+
+@pytest.mark.parametrize("module_set", [IMPROV, BUILTIN, PRIMITIVES])
+def test_pair_arms_are_the_per_pair_definition(module_set):
+    """The pairs' lever arms and owners (self pairs: the joints only one side hangs from, bodies of revolution
+    dropped; robot–obstacle pairs: the robot geometry's) on random robots of real module sets, with and without
+    symmetry and for a subset of the obstacles."""
+    p = Problem.build(str(PTP3), str(module_set), "cyc")
+    rng = np.random.default_rng(4)
+    dropped = 0
+    for _ in range(3):
+        r = in_cell(p, p.space.random_order(rng))
+        for sym in (True, False):
+            for obstacles in (None, [0]):
+                chk = SweepChecker(r, symmetry=sym, obstacles=obstacles, posed_arms=True)
+                W, owner = _pair_arms_per_pair(r, chk.pairs, sym)
+                assert np.array_equal(chk.W, W) and np.array_equal(chk._owner, owner)
+                assert chk.is_env.sum() == len(chk.pairs) - r.n_self_collision_pairs > 0
+                assert np.all(chk.margins[chk.is_env] == r.safety_margin) and np.all(chk.margins[~chk.is_env] == 0)
+                dropped += int(np.sum((W == 0) & (owner >= 0)))
+    assert dropped > 0  # bodies of revolution did drop joints
+
+
+def test_setup_shared_by_robots_built_alike():
+    """A second robot built alike (same assembly, base pose and cell) takes the first one's checker set-up: the
+    same bounds and names, its own robot and scratch space, the same events and queries; a robot at another base
+    pose gets its own set-up."""
+    from robodesign.model import sweep
+    from robodesign.model.cell import build_robot
+    from robodesign.formats.assembly import Assembly
+    p = Problem.build(str(PTP3), str(IMPROV), "cyc")
+    build = lambda T: build_robot(p.task, p.module_set, Assembly.from_order(p.module_set, ORDER), T)  # noqa: E731
+    sweep._SETUPS.clear()
+    a, b = build(np.eye(4)), build(np.eye(4))
+    ca, cb = SweepChecker(a, posed_arms=True), SweepChecker(b, posed_arms=True)
+    assert len(sweep._SETUPS) == 1 and cb.W is ca.W and cb.pair_names == ca.pair_names
+    assert cb.robot is b and cb._posed.robot is b and ca._posed.robot is a and cb._req is not ca._req
+    sweep._SETUPS.clear()
+    fresh = SweepChecker(b, posed_arms=True)
+    for attr in ("W", "_owner", "margins", "is_env"):
+        assert np.array_equal(getattr(fresh, attr), getattr(cb, attr))
+    assert (fresh.pairs, fresh._mov, fresh._ref) == (cb.pairs, cb._mov, cb._ref)
+    rng = np.random.default_rng(12)
+    Q = random_q(b, rng, 1)[0] + np.outer(np.linspace(0, 1, 40), 2.0 * rng.normal(size=b.dof))
+    e1, e2 = cb.check(Q, first_only=False), fresh.check(Q, first_only=False)
+    assert e1 == e2 and e1 and cb.queries == fresh.queries
+    T = np.eye(4)
+    T[:3, 3] = (0.1, -0.2, 0.0)
+    moved = SweepChecker(build(T), posed_arms=True)
+    assert len(sweep._SETUPS) == 2 and moved.W is not cb.W

@@ -134,7 +134,7 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
     ends = np.r_[starts[1:], len(steps)]
     wr = np.zeros((len(starts), 6))
     same = np.ones(len(starts), dtype=bool)
-    for c, (i0, i1) in enumerate(zip(starts, ends)):
+    for c, (i0, i1) in enumerate(zip(starts, ends)) if np.any(W) else ():  # (no wrench: all the same, zero)
         rows = W[steps[i0]:steps[i1 - 1] + 2]
         same[c] = bool(np.all(rows == rows[0]))
         wr[c] = rows[0]

@@ -483,7 +483,9 @@ def _sweep_events(tq: TrajectoryQuantities, k0: int, k1: int, env: bool, path, a
     n_self = tq.robot.n_self_collision_pairs
     checker = full.subset(range(n_self, len(full.pairs)) if env else range(n_self))
     Q = tq.q[k0:k1 + 1]
-    out = checker.sample_collisions(Q) if samples_only else checker.check(Q, first_only=False, path=path, at=at)
+    poses = tq.joint_poses if (k0, k1) == (0, tq.n - 1) else None  # (a window's: the sweep's own pass over it)
+    out = checker.sample_collisions(Q) if samples_only else checker.check(Q, first_only=False, path=path, at=at,
+                                                                          poses=poses)
     cache[key] = out
     return out.copy()
 

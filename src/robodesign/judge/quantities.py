@@ -29,6 +29,7 @@ Timed follow poses read q interpolated linearly between samples (:meth:`~Traject
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Dict, Optional, Tuple
@@ -119,9 +120,18 @@ def _chain_axes(robot: Robot) -> Optional[list]:
     return out
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """numpy.cross of rows of 3-vectors (N, 3), the same products and differences, without its axis handling."""
+    a0, a1, a2, b0, b1, b2 = a[:, 0], a[:, 1], a[:, 2], b[:, 0], b[:, 1], b[:, 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
-    """The unique sample at ``value`` (numpy.isclose rule of the reference), else None."""
-    close = np.nonzero(np.isclose(t, value, rtol=TIME_RTOL, atol=TIME_ATOL))[0]
+    """The unique sample at ``value`` (numpy.isclose rule of the reference), else None. numpy.isclose's own test
+    written out for a float ``value`` (the same result, without its argument checks)."""
+    v = float(value)
+    with np.errstate(invalid="ignore"):
+        close = np.nonzero((np.abs(t - v) <= TIME_ATOL + TIME_RTOL * abs(v)) & math.isfinite(v) | (t == v))[0]
     return int(close[0]) if len(close) == 1 else None
 
 
@@ -285,6 +295,15 @@ class TrajectoryQuantities:
         return self.robot.fk_batch(self.q)
 
     @cached_property
+    def joint_poses(self) -> Optional[np.ndarray]:
+        """(N, njoints, 4, 4) :meth:`Robot.joint_poses_batch <robodesign.model.robot.Robot.joint_poses_batch>` of
+        q (None: a joint type batched FK does not model): what :attr:`tcp_twists` and the judge's sweep read."""
+        try:
+            return self.robot.joint_poses_batch(self.q)
+        except NotImplementedError:
+            return None
+
+    @cached_property
     def tcp_twists(self) -> np.ndarray:
         """(N, 6) TCP twist ``[v; ω]`` in world-aligned axes at the TCP, at every sample: Σ_j over the TCP's chain
         of ω_j = a_j·q̇_j and v_j = a_j × (p_TCP − o_j)·q̇_j (revolute; a_j·q̇_j prismatic), world axes a_j and
@@ -294,7 +313,9 @@ class TrajectoryQuantities:
         axes = _chain_axes(r)
         if axes is None or self.n == 0:
             return self._tcp_twists_per_sample()
-        J = r.joint_poses_batch(self.q)
+        J = self.joint_poses
+        if J is None:
+            J = r.joint_poses_batch(self.q)
         p = self.tcp_poses[:, :3, 3]
         v, w = np.zeros((self.n, 3)), np.zeros((self.n, 3))
         for j, iv, prismatic, ax in axes:
@@ -304,7 +325,7 @@ class TrajectoryQuantities:
                 v += z * qd
             else:
                 w += z * qd
-                v += np.cross(z, p - J[:, j, :3, 3]) * qd
+                v += _cross(z, p - J[:, j, :3, 3]) * qd
         return np.hstack([v, w])
 
     def _tcp_twists_per_sample(self) -> np.ndarray:

@@ -20,9 +20,12 @@ way (a joint housing coaxial with its joint), and links sliding past a housing a
 otherwise be advanced in µm steps (IMPROV: one PTP_3 check 4.8 s → 0.2 s).
 
 With ``posed_arms`` (the judge's) the queries at the samples are scheduled with lever arms of the motion's own
-poses (:class:`_PosedArms`: each geometry's distance from each joint axis at the samples, by batched forward
-kinematics, plus what the joints below can move it over the step), never larger than the static ones. Inside a
-step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
+poses (:class:`~robodesign.model.sweep_bounds.PosedArms`: each geometry's distance from each joint axis at the
+samples, by batched forward kinematics, plus what the joints below can move it over the step), never larger than
+the static ones, and a pair's certificate goes on past the end of the summed bounds while one geometry's
+displacement from its pose at the query, relative to the other (at the samples, plus the step's bound), stays
+below the clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`).
+Inside a step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
 them. Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
 a grazing contact, by about the tolerance over the rate of approach.
 """
@@ -30,6 +33,7 @@ from __future__ import annotations
 
 import heapq
 import math
+import threading
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
@@ -38,6 +42,7 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign.model.robot import Robot
+from robodesign.model.sweep_bounds import PosedArms
 
 
 @dataclass(frozen=True)
@@ -64,6 +69,7 @@ SYMMETRY_EPS = 1e-9
 #: how far SweepChecker._ahead queries: where the path bound from the last query reaches 1.6× its clearance (on
 #: the 350-sample PTP_3 check: mesh queries 150 → 117; with 1.2: 133, 2: 174, 3: 249; a failed try costs one query)
 _AHEAD = 1.6
+_EXTEND_SELF = True  # extend the certificates of self pairs too (PosedArms.certify)
 _ROTATIONAL = ("Cylinder", "Capsule", "Cone")  # bodies of revolution about their local z axis
 
 
@@ -110,6 +116,9 @@ def _symmetric(kind: str, placement, point, direction, eps: float = SYMMETRY_EPS
     return _cross_norm(placement.rotation[:, 2], direction) <= eps
 
 
+_RADII: dict = {}  # id(shape) → (shape, _shape_radius(shape)): the shapes are the module sets' (shared)
+
+
 class _Tree:
     """The robot's joints and collision geometries read once from pinocchio (its accessors cost µs each)."""
 
@@ -140,10 +149,29 @@ class _Tree:
 
     @cached_property
     def radii(self) -> List[float]:
-        """Per geometry, its radius about its frame's origin (:func:`_shape_radius`, computed once)."""
-        return [_shape_radius(g) for g in self.geom_geometry]
+        """Per geometry, its radius about its frame's origin (:func:`_shape_radius`, computed once per shape: the
+        module sets' shapes are shared by every robot built of them)."""
+        out = []
+        for geo in self.geom_geometry:
+            hit = _RADII.get(id(geo))
+            if hit is None or hit[0] is not geo:
+                if len(_RADII) >= 4096:
+                    _RADII.clear()
+                hit = _RADII[id(geo)] = (geo, _shape_radius(geo))
+            out.append(hit[1])
+        return out
+
+    @cached_property
+    def _norms(self) -> Tuple[List[float], List[float]]:
+        """|translation| of every joint placement and of every geometry placement."""
+        return ([float(np.linalg.norm(p.translation)) for p in self.placements],
+                [float(np.linalg.norm(p.translation)) for p in self.geom_placement])
 
     def own_axis_symmetric(self) -> List[bool]:
+        return list(self._own_axis_symmetric)
+
+    @cached_property
+    def _own_axis_symmetric(self) -> List[bool]:
         out = []
         for g, j in enumerate(self.geom_joint):
             axis = self.axes[j] if j > 0 else None
@@ -152,14 +180,16 @@ class _Tree:
 
     def lever_arms(self, symmetry: bool, dof: int) -> np.ndarray:
         R = np.zeros((dof, len(self.geom_joint)))
+        joint_norm, geom_norm = self._norms
+        radii = self.radii
         for g, j in enumerate(self.geom_joint):
-            reach = float(np.linalg.norm(self.geom_placement[g].translation)) + self.radii[g]
+            reach = geom_norm[g] + radii[g]
             # walk up: reach = distance bound from joint j's origin to any point of g
             while j > 0:
                 R[self.idx_v[j], g] = 1.0 if self.prismatic[j] else reach
-                reach += float(np.linalg.norm(self.placements[j].translation)) + self.ext[j]
+                reach += joint_norm[j] + self.ext[j]
                 j = self.parents[j]
-        for g, sym in enumerate(self.own_axis_symmetric()):
+        for g, sym in enumerate(self._own_axis_symmetric):
             if sym and symmetry:
                 R[self.idx_v[self.geom_joint[g]], g] = 0.0
         return R
@@ -211,102 +241,122 @@ def coaxial_child_joints(robot: Robot) -> List[set]:
     return _Tree(robot).coaxial_child_joints()
 
 
-class _PosedArms:
-    """Lever arms of the motion's own poses, per step: a revolute joint j moves a point p of geometry g at most
-    dist(p, axis_j)·|q̇_j|, and dist(p, axis_j) ≤ ρ_jg + r_g, with ρ_jg the distance of g's frame origin from the
-    axis and r_g the radius of g about that origin. ρ_jg does not change with joint j or the joints above it
-    (a rigid motion of both, or a turn about the axis itself); the joints between j and g move g's origin by at
-    most their point lever arms. So over step k, ρ_jg ≤ min(ρ_jg(k), ρ_jg(k + 1)) + Σ_i R⁰[i, g]·|Δq_i| (i
-    strictly below j), computed at the samples by batched forward kinematics. The arm of a step is the smaller
-    of this and the static one (prismatic joints keep theirs)."""
+def _pair_arms(tree: "_Tree", R: np.ndarray, ab: List[Tuple[int, int]], env: np.ndarray, symmetry: bool,
+               dof: int) -> Tuple[np.ndarray, np.ndarray]:
+    """(W, owner) (dof, P) of the pairs ``ab`` (geometry a, geometry or obstacle b; ``env``: b is an obstacle):
+    a robot–obstacle pair has a's lever arms (owner a on every joint); a self pair the arms of the joints only a
+    hangs from (owner a) and of those only b hangs from (owner b), 0 elsewhere (owner −1), and 0 for the first
+    joint below the upper body when that body is a body of revolution about its axis (``symmetry``)."""
+    G, P = R.shape[1], len(ab)
+    A = np.array([a for a, _ in ab], dtype=int).reshape(P)
+    B = np.array([b for _, b in ab], dtype=int).reshape(P)
+    anc = np.zeros((G, dof), dtype=bool)  # anc[g, v]: g hangs from the joint of velocity index v
+    cox = np.zeros((G, dof), dtype=bool)  # cox[g, v]: coaxial_child_joints of g
+    for g, js in enumerate(tree.ancestors()):
+        anc[g, [tree.idx_v[j] for j in js]] = True
+    if symmetry:
+        for g, js in enumerate(tree.coaxial_child_joints()):
+            cox[g, [tree.idx_v[j] for j in js]] = True
+    W, owner = np.zeros((dof, P)), np.full((dof, P), -1)
+    W[:, env], owner[:, env] = R[:, A[env]], A[env]
+    s = ~env
+    a, b = A[s], B[s]
+    only_a, only_b = (anc[a] & ~anc[b]).T, (anc[b] & ~anc[a]).T  # (dof, self pairs)
+    Ws = np.where(only_a, R[:, a], np.where(only_b, R[:, b], 0.0))
+    # the first joint below the upper body: a body of revolution about its axis sees no motion
+    Ws[(cox[a].T & only_b) | (cox[b].T & only_a)] = 0.0
+    W[:, s], owner[:, s] = Ws, np.where(only_a, a, np.where(only_b, b, -1))
+    return W, owner
 
-    SLACK = 1e-9  # relative, against rounding of the forward kinematics
 
-    def __init__(self, robot: Robot, tree: "_Tree", R: np.ndarray):
-        self.robot, self.R = robot, R
-        dof, G = R.shape
-        self.plain = tree.lever_arms(False, dof)
-        self.geom_joint = np.array(tree.geom_joint)
-        self.t_g = np.array([np.asarray(p.translation, dtype=float) for p in tree.geom_placement]).reshape(G, 3)
-        self.rad = np.array(tree.radii)
-        joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
-        self.joints = [joint_of_v[v] for v in range(dof)]  # pinocchio joint id per velocity index
-        self.revolute = np.array([tree.axes[j] is not None for j in self.joints])
-        self.axes = np.array([tree.axes[j] if tree.axes[j] is not None else np.zeros(3) for j in self.joints])
-        below = np.zeros((dof, dof), dtype=bool)  # below[i, j]: joint i strictly below joint j
-        for i, ji in enumerate(self.joints):
-            a = tree.parents[ji]
-            while a > 0:
-                below[i, tree.idx_v[a]] = True
-                a = tree.parents[a]
-        # down[i, (j, g)] = R⁰[i, g] for i strictly below j: the motion of g's origin relative to joint j
-        self.down = (below[:, :, None] * self.plain[:, None, :]).reshape(dof, dof * G)
-        # the (revolute joint, geometry) pairs with an arm to tighten
-        self.jv, self.g = np.nonzero((R > 0) & self.revolute[:, None])
-        self.jid = np.array(self.joints)[self.jv]
-        self.flat = self.jv * G + self.g
-        # the drift's non-zero terms per joint i (columns of down[:, flat]): summed in the order of i, the same
-        # numbers as the full sum over i (the terms left out are +0.0 for finite |Δq|)
-        D = self.down[:, self.flat]
-        self._drift_terms = [(i, nz, D[i, nz]) for i in range(dof) for nz in [np.nonzero(D[i])[0]] if len(nz)]
-        self._gathers: dict = {}  # (W > 0, owner) → the distinct gather columns and where each pair's is
-        self._last: Optional[tuple] = None  # (Q, dQ, arms) of the last motion
+class _LazySteps:
+    """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
+    inside a step)."""
 
-    def segments(self, Q: np.ndarray, dQ: np.ndarray, W: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """(n−1, P) displacement bounds per step and pair (≤ dQ @ W)."""
-        dof, G = self.R.shape
-        last = self._last
-        if last is not None and np.array_equal(last[0], Q) and np.array_equal(last[1], dQ):
-            X = last[2]  # the same motion (the checker's self and obstacle pairs): the same arms
-        else:
-            X = self._arms(Q, dQ)
-            self._last = (Q.copy(), dQ.copy(), X)
-        # pair c: the sum over joints j of X[:, j, owner[j, c]] where W[j, c] > 0 (a gather, not a matrix product:
-        # numpy hands products this size to a multithreaded BLAS, which on a busy machine costs more than it saves)
-        # pairs with the same owners on the same joints (a robot geometry against each obstacle, …) have the same
-        # sum: each distinct column is gathered and summed once
-        idx = np.where(W > 0, owner, G)
-        key = idx.tobytes()
-        if key not in self._gathers:
-            self._gathers[key] = np.unique(idx, axis=1, return_inverse=True)
-        uniq, inverse = self._gathers[key]
-        X3 = np.concatenate([X.reshape(len(X), dof, G), np.zeros((len(X), dof, 1))], axis=2)
-        return X3[:, np.arange(dof)[:, None], uniq].sum(axis=1)[:, inverse.reshape(-1)]
+    def __init__(self, dQ: np.ndarray, W: np.ndarray):
+        self.dQ, self.W = dQ, W
+        self._a: Optional[np.ndarray] = None
 
-    def _drift(self, dQ: np.ndarray) -> np.ndarray:
-        """(n−1, K): Σ_i R⁰[i, g]·|Δq_i| over the joints i strictly below j, per step and arm (j, g)."""
-        if not np.isfinite(dQ).all():  # inf·0 is no number: the full sum, as written
-            return (dQ[:, :, None] * self.down[None, :, self.flat]).sum(axis=1)
-        out = np.zeros((len(dQ), len(self.flat)))
-        for i, nz, d in self._drift_terms:
-            out[:, nz] += dQ[:, i, None] * d
-        return out
+    def array(self) -> np.ndarray:
+        if self._a is None:
+            self._a = self.dQ @ self.W
+        return self._a
 
-    def _arms(self, Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
-        """(n−1, dof·G): |Δq_j| times the arm of joint j for geometry g, per step."""
-        dof, G = self.R.shape
-        X = (dQ[:, :, None] * self.R[None]).reshape(len(dQ), dof * G)  # the static arms
-        if len(self.flat):
-            try:
-                J = self.robot.joint_poses_batch(Q)  # (n, njoints, 4, 4)
-            except NotImplementedError:  # a joint type batched FK does not model: the static arms
-                return X
-            Tg, Tj = J[:, self.geom_joint, :3], J[:, self.joints, :3]  # (n, G, 3, 4), (n, dof, 3, 4)
-            centre = Tg[..., 3] + sum(Tg[..., b] * self.t_g[:, b, None] for b in range(3))  # (n, G, 3)
-            axis = sum(Tj[..., b] * self.axes[:, b, None] for b in range(3))  # (n, dof, 3)
-            rel = centre[:, self.g] - Tj[..., 3][:, self.jv]  # (n, K, 3)
-            u = axis[:, self.jv]
-            rx, ry, rz, ux, uy, uz = rel[..., 0], rel[..., 1], rel[..., 2], u[..., 0], u[..., 1], u[..., 2]
-            rho = np.sqrt((ry * uz - rz * uy) ** 2 + (rz * ux - rx * uz) ** 2 + (rx * uy - ry * ux) ** 2).T  # (K, n)
-            drift = self._drift(dQ)  # (n−1, K)
-            arm = (np.minimum(rho[:, :-1], rho[:, 1:]).T + drift + self.rad[self.g]) * (1 + self.SLACK) + 1e-12
-            arm = np.where(np.isfinite(arm), arm, np.inf)  # no number (huge q): the static arm
-            X[:, self.flat] = dQ[:, self.jv] * np.minimum(self.R[self.jv, self.g], arm)
-        return X
+    def __getitem__(self, kc):
+        return self.array()[kc]
+
+
+_SETUPS: dict = {}  # _setup_key → (module set, _setup's attributes): the set-up of robots built alike
+_SETUPS_LOCK = threading.Lock()
+
+
+def _setup_key(robot: Robot, flags: tuple) -> Optional[tuple]:
+    """What the checker's set-up of ``robot`` depends on: its module set and assembly, base pose, safety margin
+    and obstacles (their names; not their poses, which only the queries read), and the checker's flags. Robots
+    built from the same of these are the same model and geometry (model.cell.build_robot, RobotPool). None: a
+    robot without module set or assembly."""
+    ms, assembly = getattr(robot, "module_set", None), getattr(robot, "assembly", None)
+    if ms is None or assembly is None:
+        return None
+    return (id(ms), assembly.key(), np.asarray(robot.base_pose, dtype=float).tobytes(),
+            float(getattr(robot, "safety_margin", 0.0)), tuple(o.name for o in getattr(robot, "obstacles", ())),
+            robot.dof, robot.n_collision_geometries, len(robot.geom_model.collisionPairs), flags)
+
+
+def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[Collection[int]], symmetry: bool,
+           posed_arms: bool) -> dict:
+    """The checker's pairs, their bounds and names (SweepChecker.__init__), as attributes."""
+    gm = robot.geom_model
+    n_self = robot.n_self_collision_pairs
+    cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
+    pairs: List[int] = []
+    if check_self:
+        pairs += list(range(n_self))
+    if check_env:
+        env: Sequence[int] = range(n_self, len(cps))
+        if obstacles is not None:
+            keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
+            env = [k for k in env if cps[k][1] in keep]
+        pairs += list(env)
+    tree = _Tree(robot)
+    R = tree.lever_arms(symmetry, robot.dof)
+    n_robot = robot.n_collision_geometries
+    margins = np.zeros(len(pairs))
+    is_env = np.array([cps[k][1] >= n_robot for k in pairs], dtype=bool)
+    margins[is_env] = getattr(robot, "safety_margin", 0.0)
+    W, owner = _pair_arms(tree, R, [cps[k] for k in pairs], is_env, symmetry, robot.dof)
+    posed = PosedArms(robot, tree, R) if posed_arms else None
+    # per pair for the posed bounds' displacement (PosedArms.extend): the geometry that moves (the smaller box)
+    # in the frame of the other (-1: an obstacle's, the world)
+    mov: List[int] = []
+    ref: List[int] = []
+    if posed is not None:
+        box = posed.box_half_diagonal
+        for k in pairs:
+            a, b = cps[k]
+            m, r = (a, -1) if b >= n_robot else (a, b) if box[a] <= box[b] else (b, a)
+            mov.append(m)
+            ref.append(r)
+        posed = posed.bound_to(None)  # (the template holds no robot)
+    names = [o.name for o in gm.geometryObjects]
+    return {"pairs": pairs,  # what distances() queries: collision pair indices here
+            "margins": margins, "is_env": is_env, "W": W, "_owner": owner, "_posed": posed, "_mov": mov,
+            "_ref": ref, "pair_names": [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]}
 
 
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
+
+    # the set-up (_setup, shared by robots built alike)
+    pairs: Sequence[object]  # what distances() queries: collision pair indices here
+    margins: np.ndarray
+    is_env: np.ndarray
+    W: np.ndarray
+    _owner: np.ndarray
+    _posed: Optional[PosedArms]
+    _mov: List[int]
+    _ref: List[int]
+    pair_names: List[Tuple[str, str]]
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
                  max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True,
@@ -314,58 +364,27 @@ class SweepChecker:
         """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all).
         ``symmetry``: use bodies of revolution to tighten the bounds (module docstring); False gives the plain
         lever-arm bounds (same verdicts, more distance queries). ``posed_arms``: schedule the distance queries
-        with the lever arms of the motion's own poses (:class:`_PosedArms`; the same events, fewer queries)."""
+        with the lever arms of the motion's own poses (:class:`~robodesign.model.sweep_bounds.PosedArms`; the same
+        events, fewer queries)."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
         gm = robot.geom_model
-        n_self = robot.n_self_collision_pairs
-        pairs: List[int] = []
-        if check_self:
-            pairs += list(range(n_self))
-        if check_env:
-            env: Sequence[int] = range(n_self, len(gm.collisionPairs))
-            if obstacles is not None:
-                keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
-                env = [k for k in env if gm.collisionPairs[k].second in keep]
-            pairs += list(env)
-        self.pairs: Sequence[object] = pairs  # what distances() queries: collision pair indices here
-        tree = _Tree(robot)
-        R = tree.lever_arms(symmetry, robot.dof)
-        ancestors = tree.ancestors()
-        coaxial = tree.coaxial_child_joints() if symmetry else [set()] * robot.n_collision_geometries
-        idx_v = tree.idx_v
-        W = np.zeros((robot.dof, len(pairs)))
-        self.margins = np.zeros(len(pairs))
-        self.is_env = np.zeros(len(pairs), dtype=bool)
-        n_robot = robot.n_collision_geometries
-        margin = getattr(robot, "safety_margin", 0.0)
-        cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
-        owner = np.full((robot.dof, len(pairs)), -1)  # the geometry whose lever arm W[j, c] is
-        for c, k in enumerate(pairs):
-            a, b = cps[k]
-            if b >= n_robot:  # robot–obstacle (static obstacle)
-                W[:, c] = R[:, a]
-                owner[:, c] = a
-                self.is_env[c] = True
-                self.margins[c] = margin
-            else:
-                only_a = ancestors[a] - ancestors[b]
-                only_b = ancestors[b] - ancestors[a]
-                for j in only_a:
-                    W[idx_v[j], c] = R[idx_v[j], a]
-                    owner[idx_v[j], c] = a
-                for j in only_b:
-                    W[idx_v[j], c] = R[idx_v[j], b]
-                    owner[idx_v[j], c] = b
-                # the first joint below the upper body: a body of revolution about its axis sees no motion
-                for j in (coaxial[a] & only_b) | (coaxial[b] & only_a):
-                    W[idx_v[j], c] = 0.0
-        self.W = W
-        self._owner = owner
-        self._posed = _PosedArms(robot, tree, R) if posed_arms else None
-        names = [o.name for o in gm.geometryObjects]
-        self.pair_names = [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]
+        key = _setup_key(robot, (check_self, check_env, None if obstacles is None else tuple(obstacles), symmetry,
+                                 posed_arms))
+        hit = _SETUPS.get(key) if key is not None else None
+        if hit is None or hit[0] is not robot.module_set:
+            hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
+                                                              posed_arms))
+            if key is not None:
+                with _SETUPS_LOCK:
+                    _SETUPS[key] = hit
+                    while len(_SETUPS) > 64:
+                        _SETUPS.pop(next(iter(_SETUPS)))
+        self.__dict__.update(hit[1])
+        if self._posed is not None:  # the template's, bound to this robot (its motion caches empty)
+            self._posed = self._posed.bound_to(robot)
+        self._gm = gm  # (the robot's; its scratch space below)
         self._req = pin.GeometryData(gm)
         self._dreq = self._req.distanceRequests
         self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
@@ -383,33 +402,34 @@ class SweepChecker:
             out._owner = self._owner[:, cols]
         out.margins, out.is_env = self.margins[cols], self.is_env[cols]
         out.pair_names = [self.pair_names[c] for c in cols]
+        if getattr(self, "_mov", None):
+            out._mov, out._ref = [self._mov[c] for c in cols], [self._ref[c] for c in cols]
         out.queries = 0
         return out
 
     # ------------------------------------------------------------------------------------------
     def distances(self, q: np.ndarray, cols: Sequence[int]) -> np.ndarray:
         """Exact distances at configuration q of the checked pairs with indices ``cols``."""
-        r = self.robot
-        gd = self._req
-        pin.updateGeometryPlacements(r.model, r.data, r.geom_model, gd, q)
-        out = np.empty(len(cols))
-        for i, c in enumerate(cols):
-            out[i] = pin.computeDistance(r.geom_model, gd, self.pairs[c]).min_distance
+        r, gm, gd, pairs = self.robot, self._gm, self._req, self.pairs
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        distance = pin.computeDistance
+        out = np.array([distance(gm, gd, pairs[c]).min_distance for c in cols], dtype=float)
         self.queries += len(out)
         return out
 
     def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
-              at: Optional[Callable[[int, float], np.ndarray]] = None) -> List[CollisionEvent]:
+              at: Optional[Callable[[int, float], np.ndarray]] = None,
+              poses: Optional[np.ndarray] = None) -> List[CollisionEvent]:
         """Collision events along a motion through the rows of Q: by default the piecewise-linear one.
 
         Another motion through the same samples is given by ``at(k, s)`` (q at fraction s ∈ [0, 1] of step k)
         and ``path`` (n−1, dof): per step and joint a bound on the joint's speed per unit of s, so that it moves
         at most ``path·|s' − s|`` between any two fractions s, s' of the step (|ΔQ| for the linear motion; the
-        judge's motion: h·max|q̇|). Conservative advancement then
-        certifies that motion: from an exact distance at an instant the pair stays free while the accumulated
-        path bounds stay below the clearance.
+        judge's motion: h·max|q̇|). Conservative advancement then certifies that motion: from an exact distance at
+        an instant the pair stays free while the accumulated path bounds stay below the clearance.
         With ``first_only`` the search stops at the earliest event; otherwise one event is reported per pair
-        and contact episode (the pair is re-armed once it separates again).
+        and contact episode (the pair is re-armed once it separates again). ``poses``: ``robot.joint_poses_batch(Q)``
+        if the caller has it (the posed bounds read it).
         """
         Q = np.asarray(Q, dtype=float)
         n = len(Q)
@@ -420,15 +440,10 @@ class SweepChecker:
             d = self.distances(Q[0], range(P))
             return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
                     for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
-        dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
-                                                                           np.abs(np.diff(Q, axis=0)))
-        seg = dQ @ self.W  # (n-1, P): displacement bound per segment and pair
-        posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
-        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg,
-        # so that every contact is found from the same sample with the same sub-steps (module docstring)
-        sched = seg if posed is None else posed.segments(Q, dQ, self.W, self._owner)
-        cum = np.concatenate([np.zeros((1, P)), np.cumsum(sched, axis=0)])  # (n, P)
-        cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        seg, sched, cum, cum_rows, TG = self._bounds(Q, path, poses)
+        posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
+        ext = 4 * self.tolerance
+        mov, ref = (np.array(getattr(self, a, ()), dtype=np.int64) for a in ("_mov", "_ref"))
         margins, is_env = self.margins.tolist(), self.is_env.tolist()
         events: List[CollisionEvent] = []
         # priority queue of (sample index where the pair must be re-checked, pair)
@@ -440,20 +455,24 @@ class SweepChecker:
             while heap and heap[0][0] == k:
                 due.append(heapq.heappop(heap)[1])
             d = self.distances(Q[k], due)
-            for c, dist in zip(due, d.tolist()):
+            certified = (posed.certify(due, d, k, self.margins, self.is_env, cum_rows, TG, mov, ref, sched, ext,
+                                       _EXTEND_SELF) if posed is not None else [-2] * len(due))
+            for c, dist, nxt in zip(due, d.tolist(), certified):
                 free = dist - margins[c]
                 if free <= 0:
                     events.append(CollisionEvent(k, 0.0, *self.pair_names[c], dist, bool(self.is_env[c])))
                     if first_only:
                         return events
-                    nxt = self._rearm(Q, k, c, cum)
-                    if nxt is not None:
-                        heapq.heappush(heap, (nxt, c))
+                    again = self._rearm(Q, k, c, cum)
+                    if again is not None:
+                        heapq.heappush(heap, (again, c))
                     continue
                 # the pair is certified free until the accumulated bound exceeds `free`
                 row = cum_rows[c]
-                target = float(row[k]) + free
-                nxt = int(row.searchsorted(target, side="right")) - 1  # last sample still certified
+                if nxt == -2:  # no posed bounds, or a clearance or bound that is no finite number
+                    nxt = int(row.searchsorted(float(row[k]) + free, side="right")) - 1  # last sample certified
+                    if TG is not None and posed is not None and nxt < n - 1 and (is_env[c] or _EXTEND_SELF):
+                        nxt = posed.extend(TG, self._mov[c], self._ref[c], k, nxt, sched, cum_rows, c, free - ext)
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
@@ -469,15 +488,38 @@ class SweepChecker:
                     events.append(CollisionEvent(k, s, *self.pair_names[c], dist2, bool(self.is_env[c])))
                     if first_only:
                         continue  # another pair of this batch may touch earlier inside the same step
-                    nxt = self._rearm(Q, k + 1, c, cum)
-                    if nxt is not None:
-                        heapq.heappush(heap, (nxt, c))
+                    again = self._rearm(Q, k + 1, c, cum)
+                    if again is not None:
+                        heapq.heappush(heap, (again, c))
                 else:
                     heapq.heappush(heap, (k + 1, c))
             if first_only and events:  # every pair was certified free up to sample k: the earliest is here
                 return [min(events, key=lambda e: e.s)]
         events.sort(key=lambda e: (e.sample, e.s))
         return events
+
+    def _bounds(self, Q: np.ndarray, path: Optional[np.ndarray], poses: Optional[np.ndarray] = None) -> tuple:
+        """(seg, sched, cum, cum_rows, TG) of :meth:`check`: the step bounds (n−1, P), the schedule's (the posed
+        ones where given), its running sums (n, P) and their rows per pair, and the geometry poses (None: no
+        displacement extension)."""
+        dQ = np.abs(np.diff(Q, axis=0)) if path is None else np.maximum(np.asarray(path, dtype=float),
+                                                                           np.abs(np.diff(Q, axis=0)))
+        posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
+        # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg
+        # (dQ @ W), so that every contact is found from the same sample with the same sub-steps (module docstring)
+        seg = _LazySteps(dQ, self.W)
+        if posed is None:
+            sched = seg.array()
+            cum = np.concatenate([np.zeros((1, len(self.pairs))), np.cumsum(sched, axis=0)])  # (n, P)
+            cum_rows = np.ascontiguousarray(cum.T)  # per pair, contiguous (the same numbers): a fast searchsorted
+        else:
+            sched, cum_rows = posed.schedule(Q, dQ, self.W, self._owner, poses)
+            sched, cum = np.ascontiguousarray(sched), cum_rows.T
+        # with the posed bounds, a pair's certificate where the path bound ends is extended by the displacement from
+        # the sample's pose (PosedArms.extend) while that stays below the clearance less 4·tolerance: such steps
+        # keep more than the tolerance, so no sub-step query inside them finds a contact
+        TG = posed.poses() if posed is not None and getattr(self, "_mov", None) else None
+        return seg, sched, cum, cum_rows, TG
 
     def _ahead(self, Q, k: int, c: int, free: float, row: np.ndarray, nxt: int) -> Optional[int]:
         """Far from contact (pair c free by ``free`` at sample k, certified up to sample ``nxt``): one query at the

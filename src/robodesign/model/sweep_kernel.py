@@ -1,0 +1,300 @@
+"""The posed lever arms of :class:`robodesign.model.sweep._PosedArms`, compiled (numba): two loops over the steps
+instead of a few dozen numpy passes over (samples × arms × 3) arrays (issue 25: 5–6 ms of a 350-sample check).
+
+The kernels make **the same floating-point operations in the same order** as the numpy path they replace
+(``_PosedArms._arms_numpy`` and ``_PosedArms._gather_numpy``: the frame sums ((0 + a₀) + a₁) + a₂, the cross
+product's squares summed left to right, the drift's terms in the order of the joints, the gather's per-joint
+terms summed from the first joint on), so both give the same bounds **bit for bit** (tests/test_sweep_kernel.py)
+and a schedule never depends on which one ran. Covered: finite joint steps (a step with an infinite or undefined
+|Δq| keeps the numpy path).
+
+Readiness as :mod:`robodesign.judge.interval_kernel`: a process that finds no stamp of a finished compilation
+starts one background process (``python -m robodesign.model.sweep_kernel``) that compiles into numba's on-disk
+cache, and runs the numpy path meanwhile. ``ROBODESIGN_JIT=0`` switches the kernels off, ``ROBODESIGN_JIT=wait``
+compiles at first use.
+"""
+from __future__ import annotations
+
+import os
+import sys
+from typing import Optional
+
+import numpy as np
+
+from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
+
+
+@njit(cache=True, nogil=True)
+def posed_arms(J, geom_joint, joints, t_g, axes, jv, g, jid, R, rad, dQ, d_row, d_ptr, d_col, d_val,
+               slack):  # pragma: no cover - compiled
+    """(n−1, dof·G) |Δq_j| times the arm of joint j for geometry g per step, as _PosedArms._arms_numpy: J (n,
+    njoints, 4, 4) joint poses; (jv, g, jid) the arms to tighten (velocity index, geometry, pinocchio joint);
+    the drift's terms per joint d_row[t] (columns d_col, values d_val of d_ptr[t]:d_ptr[t + 1])."""
+    n = J.shape[0]
+    dof, G = R.shape
+    K = len(g)
+    X = np.empty((n - 1, dof * G))
+    for k in range(n - 1):
+        for j in range(dof):
+            for gg in range(G):
+                X[k, j * G + gg] = dQ[k, j] * R[j, gg]
+    if K == 0:
+        return X
+    centre = np.empty((n, G, 3))
+    axis = np.empty((n, dof, 3))
+    for k in range(n):
+        for gg in range(G):
+            T = J[k, geom_joint[gg]]
+            for i in range(3):
+                s = 0.0 + T[i, 0] * t_g[gg, 0]
+                s = s + T[i, 1] * t_g[gg, 1]
+                s = s + T[i, 2] * t_g[gg, 2]
+                centre[k, gg, i] = T[i, 3] + s
+        for j in range(dof):
+            T = J[k, joints[j]]
+            for i in range(3):
+                s = 0.0 + T[i, 0] * axes[j, 0]
+                s = s + T[i, 1] * axes[j, 1]
+                axis[k, j, i] = s + T[i, 2] * axes[j, 2]
+    rho = np.empty((n, K))
+    for k in range(n):
+        for c in range(K):
+            jj, gc, vc = jid[c], g[c], jv[c]
+            rx, ry, rz = (centre[k, gc, 0] - J[k, jj, 0, 3], centre[k, gc, 1] - J[k, jj, 1, 3],
+                          centre[k, gc, 2] - J[k, jj, 2, 3])
+            ux, uy, uz = axis[k, vc, 0], axis[k, vc, 1], axis[k, vc, 2]
+            a, b, e = ry * uz - rz * uy, rz * ux - rx * uz, rx * uy - ry * ux
+            rho[k, c] = np.sqrt((a * a + b * b) + e * e)
+    drift = np.zeros((n - 1, K))
+    for t in range(len(d_row)):
+        i = d_row[t]
+        for p in range(d_ptr[t], d_ptr[t + 1]):
+            col, v = d_col[p], d_val[p]
+            for k in range(n - 1):
+                drift[k, col] += dQ[k, i] * v
+    for k in range(n - 1):
+        for c in range(K):
+            r0, r1 = rho[k, c], rho[k + 1, c]
+            m = r0 if (r0 != r0 or r0 <= r1) and r1 == r1 else r1  # numpy.minimum: nan if either is nan
+            arm = ((m + drift[k, c]) + rad[g[c]]) * slack + 1e-12
+            if not np.isfinite(arm):
+                arm = np.inf
+            st = R[jv[c], g[c]]
+            X[k, jv[c] * G + g[c]] = dQ[k, jv[c]] * (st if st <= arm else arm)
+    return X
+
+
+@njit(cache=True, nogil=True)
+def gather(X, dof, G, uniq, inverse):  # pragma: no cover - compiled
+    """(n−1, P): per pair c the sum over joints j of X[:, j·G + uniq[j, inverse[c]]] (G: no term, +0.0), summed
+    from j = 0 on, as _PosedArms._gather_numpy."""
+    m = X.shape[0]
+    U = uniq.shape[1]
+    P = len(inverse)
+    S = np.empty(U)
+    out = np.empty((m, P))
+    for k in range(m):
+        for u in range(U):
+            col = uniq[0, u]
+            s = X[k, col] if col < G else 0.0
+            for j in range(1, dof):
+                col = uniq[j, u]
+                s = s + (X[k, j * G + col] if col < G else 0.0)
+            S[u] = s
+        for c in range(P):
+            out[k, c] = S[inverse[c]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def running_sums(S):  # pragma: no cover - compiled
+    """(P, m + 1): per column c of S (m, P) 0, S[0, c], S[0, c] + S[1, c], … added in order (numpy.cumsum's)."""
+    m, P = S.shape
+    out = np.empty((P, m + 1))
+    for c in range(P):
+        out[c, 0] = 0.0
+        if m:
+            out[c, 1] = S[0, c]
+    for k in range(1, m):
+        for c in range(P):
+            out[c, k + 1] = out[c, k] + S[k, c]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def geometry_poses(J, geom_joint, Rp, tp):  # pragma: no cover - compiled
+    """(n, G, 3, 4) world pose of every robot geometry at every sample, as sweep_bounds.geometry_poses_numpy: the
+    joint's pose J (n, njoints, 4, 4) times the geometry's placement (Rp, tp), each entry a sum from the left."""
+    n, G = J.shape[0], len(geom_joint)
+    out = np.empty((n, G, 3, 4))
+    for k in range(n):
+        for g in range(G):
+            j = geom_joint[g]
+            for a in range(3):
+                j0, j1, j2 = J[k, j, a, 0], J[k, j, a, 1], J[k, j, a, 2]
+                for b in range(3):
+                    out[k, g, a, b] = (j0 * Rp[g, 0, b] + j1 * Rp[g, 1, b]) + j2 * Rp[g, 2, b]
+                out[k, g, a, 3] = ((j0 * tp[g, 0] + j1 * tp[g, 1]) + j2 * tp[g, 2]) + J[k, j, a, 3]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _relative(TG, m, r, i, c, A, x):  # pragma: no cover - compiled
+    """Pose of geometry m in the frame of geometry r (r < 0: the world) at sample i: A (3, 3) and the position x
+    of m's point c, as sweep_bounds._relative_numpy."""
+    if r < 0:
+        for a in range(3):
+            for b in range(3):
+                A[a, b] = TG[i, m, a, b]
+        t0, t1, t2 = TG[i, m, 0, 3], TG[i, m, 1, 3], TG[i, m, 2, 3]
+    else:
+        for a in range(3):
+            for b in range(3):
+                A[a, b] = (TG[i, r, 0, a] * TG[i, m, 0, b] + TG[i, r, 1, a] * TG[i, m, 1, b]) + TG[i, r, 2, a] * TG[
+                    i, m, 2, b]
+        d0, d1, d2 = TG[i, m, 0, 3] - TG[i, r, 0, 3], TG[i, m, 1, 3] - TG[i, r, 1, 3], TG[i, m, 2, 3] - TG[i, r, 2, 3]
+        t0 = (TG[i, r, 0, 0] * d0 + TG[i, r, 1, 0] * d1) + TG[i, r, 2, 0] * d2
+        t1 = (TG[i, r, 0, 1] * d0 + TG[i, r, 1, 1] * d1) + TG[i, r, 2, 1] * d2
+        t2 = (TG[i, r, 0, 2] * d0 + TG[i, r, 1, 2] * d1) + TG[i, r, 2, 2] * d2
+    x[0] = ((A[0, 0] * c[0] + A[0, 1] * c[1]) + A[0, 2] * c[2]) + t0
+    x[1] = ((A[1, 0] * c[0] + A[1, 1] * c[1]) + A[1, 2] * c[2]) + t1
+    x[2] = ((A[2, 0] * c[0] + A[2, 1] * c[1]) + A[2, 2] * c[2]) + t2
+
+
+@njit(cache=True, nogil=True)
+def _moved(A, x, Ak, xk, rad):  # pragma: no cover - compiled
+    """|x − xk| + ‖A − Ak‖_F·rad: how far any point within rad of c moved (sweep_bounds._moved_numpy)."""
+    e0, e1, e2 = x[0] - xk[0], x[1] - xk[1], x[2] - xk[2]
+    f = 0.0
+    for a in range(3):
+        for b in range(3):
+            d = A[a, b] - Ak[a, b]
+            f = f + d * d
+    return np.sqrt((e0 * e0 + e1 * e1) + e2 * e2) + np.sqrt(f) * rad
+
+
+@njit(cache=True, nogil=True)
+def extend(TG, m, r, cen, rad, k, start, sched, rows, col, limit, slack):  # pragma: no cover - compiled
+    """The first step i ≥ start whose bound from sample k is not below limit (n − 1: none), as
+    sweep_bounds.extend_numpy: blocks of EXTEND_BLOCK steps by their end samples and summed bounds (rows), the
+    steps of a block that fails one by one."""
+    n = TG.shape[0]
+    Ak, xk, A, x = np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3)
+    c, rr = cen[m], rad[m]
+    _relative(TG, m, r, k, c, Ak, xk)
+    _relative(TG, m, r, start, c, A, x)
+    da = _moved(A, x, Ak, xk, rr)
+    i = start
+    while i < n - 1:
+        j = min(i + EXTEND_BLOCK, n - 1)
+        _relative(TG, m, r, j, c, A, x)
+        db = _moved(A, x, Ak, xk, rr)
+        if ((da + db) + (rows[col, j] - rows[col, i])) * 0.5 * slack + 1e-12 < limit:
+            i, da = j, db
+            continue
+        d0 = da
+        for t in range(i, j):
+            if t + 1 == j:
+                d1 = db
+            else:
+                _relative(TG, m, r, t + 1, c, A, x)
+                d1 = _moved(A, x, Ak, xk, rr)
+            if not ((d0 + d1) + sched[t, col]) * 0.5 * slack + 1e-12 < limit:
+                return t
+            d0 = d1
+        i, da = j, db
+    return n - 1
+
+
+EXTEND_BLOCK = 8  # steps per block of extend (a block's bound: its end samples' and its summed bound)
+
+
+@njit(cache=True, nogil=True)
+def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext, slack, self_too):  # pragma: no cover
+    """Per pair c = due[i] queried at sample k (distance d[i]): the last sample its certificate reaches, as
+    sweep_bounds.certify_numpy: −1 in contact (clearance ≤ 0), −2 for the Python path (a non-finite clearance or
+    bound), else the last sample whose summed bound from k stays within the clearance, extended
+    (:func:`extend`, limit clearance − ext) for robot–obstacle pairs (and self pairs with ``self_too``) when
+    TG has the motion's poses."""
+    n = rows.shape[1]
+    out = np.empty(len(due), np.int64)
+    for i in range(len(due)):
+        c = due[i]
+        free = d[i] - margins[c]
+        if free <= 0:
+            out[i] = -1
+            continue
+        target = rows[c, k] + free
+        if not (np.isfinite(target) and np.isfinite(rows[c, n - 1])):
+            out[i] = -2
+            continue
+        nxt = np.searchsorted(rows[c], target, side="right") - 1
+        if nxt < n - 1 and TG.shape[0] == n and (is_env[c] or self_too):
+            nxt = extend(TG, mov[c], ref[c], cen, rad, k, nxt, sched, rows, c, free - ext, slack)
+        out[i] = nxt
+    return out
+
+
+# ---------------------------------------------------------------------------------------------------------
+# readiness: compile in the background, never stall a check on the compilation
+# ---------------------------------------------------------------------------------------------------------
+_STATE: Optional[str] = None  # None (not decided) | "numpy" (cold cache: compiling elsewhere) | "ready" | "failed"
+
+
+def available() -> bool:
+    """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
+    return NUMBA_IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no",
+                                                                                             "off")
+
+
+def _cache() -> KernelCache:
+    return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms,
+                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend",
+                        "certify"))
+
+
+def compiled() -> bool:
+    """True when the cache holds the compiled kernels for this numba, Python, CPU and source."""
+    return _cache().compiled()
+
+
+def warm_up() -> bool:
+    """Compile (or load) the kernels in this process now; False when numba is unavailable."""
+    global _STATE
+    if not available():
+        return False
+    i, f = np.zeros(1, np.int64), np.zeros(1)
+    X = posed_arms(np.zeros((2, 2, 4, 4)), i, i, np.zeros((1, 3)), np.zeros((1, 3)), i, i, i, np.zeros((1, 1)), f,
+                   np.zeros((1, 1)), i, np.zeros(2, np.int64), i, f, 1.0)
+    running_sums(gather(X, 1, 1, np.zeros((1, 1), np.int64), i))
+    TG = geometry_poses(np.zeros((2, 1, 4, 4)), i, np.zeros((1, 3, 3)), np.zeros((1, 3)))
+    extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), np.zeros((1, 2)), 0, 1.0, 1.0)
+    certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
+            1e-6, 1.0, False)
+    _STATE = "ready"
+    return True
+
+
+def ready() -> bool:
+    """True when the compiled kernels run in this process. With a cold cache the background compilation starts
+    (once per process) and the numpy path runs until a later call finds the stamp: both give the same numbers."""
+    global _STATE
+    if _STATE == "ready" or not available():
+        return _STATE == "ready"
+    if compiled():
+        warm_up()
+    elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
+        compile_into_cache()
+        warm_up()
+    elif _STATE is None:
+        _STATE = "numpy" if _cache().start_compiler() is not None else "failed"
+    return _STATE == "ready"
+
+
+def compile_into_cache() -> int:
+    """Compile the kernels into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
+    return _cache().compile_into_cache(warm_up)
+
+
+if __name__ == "__main__":
+    sys.exit(background_compile(available(), compile_into_cache))
