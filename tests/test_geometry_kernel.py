@@ -223,3 +223,31 @@ def test_grids_are_dropped_beyond_the_budget(monkeypatch):
     assert len(collision_cull._FIELDS) == 2     # two grids fit the budget: the oldest were dropped
     assert distance_field(shape, poses[-1]) is distance_field(shape, poses[-1])
     assert first is not distance_field(shape, np.eye(4))
+
+
+def test_a_cold_cache_starts_one_compiler_and_looks_for_the_stamp_once_a_second(monkeypatch):
+    clock, looks, started = [100.0], [], []
+    monkeypatch.setattr(geometry_kernel, "_STATE", None)
+    monkeypatch.setattr(geometry_kernel, "_LOOKED", -1.0)
+    monkeypatch.setattr(geometry_kernel.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(geometry_kernel, "compiled", lambda: looks.append(clock[0]) or clock[0] >= 103.0)
+    monkeypatch.setattr(geometry_kernel, "_start_compiler", lambda: started.append(1) or object())
+    monkeypatch.setattr(geometry_kernel, "warm_up", lambda: setattr(geometry_kernel, "_STATE", "ready") or True)
+    assert not geometry_kernel.ready() and started == [1] and looks == [100.0]   # the compiler starts, numpy runs
+    for t in (100.3, 100.9):
+        clock[0] = t
+        assert not geometry_kernel.ready()
+    assert looks == [100.0] and started == [1]              # not looked for again within the second
+    clock[0] = 101.2
+    assert not geometry_kernel.ready() and looks == [100.0, 101.2] and started == [1]
+    clock[0] = 103.5
+    assert geometry_kernel.ready() and geometry_kernel._STATE == "ready"   # the stamp is there: compiled from now on
+    clock[0] = 103.6
+    assert geometry_kernel.ready() and looks == [100.0, 101.2, 103.5]
+
+
+def test_no_compiler_when_the_kernels_are_off(monkeypatch):
+    monkeypatch.setenv("ROBODESIGN_JIT", "0")
+    monkeypatch.setattr(geometry_kernel, "_STATE", None)
+    monkeypatch.setattr(geometry_kernel, "_start_compiler", lambda: pytest.fail("no compiler with ROBODESIGN_JIT=0"))
+    assert not geometry_kernel.ready() and geometry_kernel._STATE is None

@@ -39,8 +39,8 @@ _FIELD_LIMIT = 64  # distance fields kept (obstacle shape × pose); the oldest i
 REACH = 0.5
 #: the largest dense grid (cells, 8 bytes each) of one obstacle; a larger one keeps all its cells in the dictionary
 GRID_CELLS_MAX = 1 << 22
-#: the dense grids' cells kept in all (the oldest fields are dropped beyond)
-GRID_CELLS_KEPT = 1 << 24
+#: the dense grids' cells kept in all (64 MB; the oldest fields are dropped beyond)
+GRID_CELLS_KEPT = 1 << 23
 
 
 def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:

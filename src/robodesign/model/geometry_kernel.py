@@ -27,6 +27,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Optional
 
@@ -186,6 +187,7 @@ def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, sli
 # readiness: compile in the background, never stall a query on the compilation
 # ---------------------------------------------------------------------------------------------------------
 _STATE: Optional[str] = None  # None (not decided) | "plain" (cold cache: compiling elsewhere) | "ready" | "failed"
+_LOOKED = -1.0   # time.monotonic() of the last look for the stamp
 
 
 def available() -> bool:
@@ -230,10 +232,14 @@ def warm_up() -> bool:
 def ready() -> bool:
     """True when the compiled kernel runs in this process. With a cold cache the background compilation starts
     (once per process) and the robot asks coal about every pair until a later call finds the stamp: both give
-    the same verdicts."""
-    global _STATE
+    the same verdicts. Meanwhile the stamp is looked for at most once a second (the callers ask often)."""
+    global _STATE, _LOOKED
     if _STATE == "ready" or not available():
         return _STATE == "ready"
+    now = time.monotonic()
+    if _STATE is not None and now - _LOOKED < 1.0:
+        return False
+    _LOOKED = now
     if compiled():
         warm_up()
     elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
