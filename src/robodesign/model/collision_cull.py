@@ -1,23 +1,26 @@
-"""Exact collision verdicts of many configurations at once (a path's dense states), with a conservative broad
-phase in front of the robot's own narrow phase.
+"""Exact collision verdicts with a conservative broad phase in front of coal: for one configuration
+(:meth:`CollisionCuller.in_collision`, which ``Robot.in_collision`` uses once a geometry has been asked a few
+times) and for many at once (:meth:`CollisionCuller.survivors`, a path's dense states).
 
-``robot.in_collision(q)`` asks coal about every collision pair (self pairs, then robot–obstacle pairs) until one
+``pin.computeCollisions`` asks coal about every collision pair (self pairs, then robot–obstacle pairs) until one
 collides. :class:`CollisionCuller` gives the same verdict per state, asking coal (the same
 ``pin.computeCollision`` of the same pair on the same placements) only about the pairs that a lower bound of
 their distance does not clear:
 
 * every robot geometry is bounded by a sphere (its local AABB's centre and half diagonal, plus coal's swept-
-  sphere radius); the centres of all states come from one vectorised forward kinematics pass
-  (:meth:`Robot.joint_poses_batch`);
+  sphere radius), its centre from the joint poses of the state;
 * a self pair is cleared when its spheres lie farther apart than the pair's security margin;
-* a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin, measured
-  with :class:`DistanceField`: the exact distance (coal) from the centre of the grid cell of the sphere's centre
-  to the obstacle, minus the centre's distance to that cell centre (distance is 1-Lipschitz). Cells are computed
-  on first use and kept per obstacle shape and pose for the process (tasks share shapes between candidates).
+* a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin: first by the
+  distance to the obstacle's box (its local AABB in its frame, which contains it: the exact distance for a box),
+  then, for another shape, by :class:`DistanceField`: the exact distance (coal) from the centre of the grid cell
+  of the sphere's centre to the obstacle, minus the centre's distance to that cell centre (distance is
+  1-Lipschitz). Cells are computed on first use and kept per obstacle shape and pose for the process (tasks share
+  shapes between candidates), in a dense grid around the obstacle's box and a dictionary beyond.
 
-Every bound keeps a slack of :data:`SLACK` metres on top of the margin, far above coal's tolerances, so a
-cleared pair is one coal would not report; the verdicts are identical to ``in_collision``
-(tests/test_collision_cull.py compares them state by state).
+The compiled kernels of :mod:`.geometry_kernel` evaluate these bounds (numpy's pass for many states until they
+are compiled). Every bound keeps a slack of :data:`SLACK` metres on top of the margin, far above coal's
+tolerances, so a cleared pair is one coal would not report; the verdicts are those of asking coal about every pair
+(tests/test_collision_cull.py and tests/test_geometry_kernel.py compare them state by state).
 """
 from __future__ import annotations
 
