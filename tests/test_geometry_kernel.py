@@ -97,9 +97,10 @@ def test_culled_verdicts_equal_coal_among_boxes_and_with_a_margin(robot):
         robot.set_obstacles(obstacles, safety_margin=margin)
 
 
-def test_several_gridded_obstacles_share_one_grid_array(robot):
+def test_several_gridded_obstacles_share_one_grid_array(robot, monkeypatch):
     """The machine's mesh, a sphere and a cylinder: three grids, copied into one array for the kernel; the cells
     the kernel fills reach both the copy and the fields (a later culler finds them known)."""
+    monkeypatch.setattr(collision_cull, "_FIELDS", {})   # (no field of an earlier test dropped beyond the budget)
     obstacles, margin = list(robot.obstacles), robot.safety_margin
     rng = np.random.default_rng(21)
     extra = []
