@@ -227,28 +227,33 @@ def test_grids_are_dropped_beyond_the_budget(monkeypatch):
 
 
 def test_a_cold_cache_starts_one_compiler_and_looks_for_the_stamp_once_a_second(monkeypatch):
-    clock, looks, started = [100.0], [], []
-    monkeypatch.setattr(geometry_kernel, "_STATE", None)
-    monkeypatch.setattr(geometry_kernel, "_LOOKED", -1.0)
-    monkeypatch.setattr(geometry_kernel.time, "monotonic", lambda: clock[0])
-    monkeypatch.setattr(geometry_kernel, "compiled", lambda: looks.append(clock[0]) or clock[0] >= 103.0)
-    monkeypatch.setattr(geometry_kernel, "_start_compiler", lambda: started.append(1) or object())
-    monkeypatch.setattr(geometry_kernel, "warm_up", lambda: setattr(geometry_kernel, "_STATE", "ready") or True)
-    assert not geometry_kernel.ready() and started == [1] and looks == [100.0]   # the compiler starts, numpy runs
+    """core.jit_cache.KernelModule as the geometry kernels use it (every=1.0): one background compiler, the stamp
+    looked for at most once a second, the compiled kernels from the first look that finds it."""
+    from robodesign.core import jit_cache
+    assert geometry_kernel.KERNELS.every == 1.0
+    clock, looks, started, warmed = [100.0], [], [], []
+    km = jit_cache.KernelModule("robodesign.model.geometry_kernel", geometry_kernel.__file__,
+                                geometry_kernel.survivors, ("survivors",), lambda: warmed.append(clock[0]), every=1.0)
+    monkeypatch.setattr(jit_cache.time, "monotonic", lambda: clock[0])
+    monkeypatch.setattr(km, "compiled", lambda: looks.append(clock[0]) or clock[0] >= 103.0)
+    monkeypatch.setattr(km.cache, "start_compiler", lambda: started.append(1) or object())
+    assert not km.ready() and started == [1] and looks == [100.0]   # the compiler starts, the numpy path runs
     for t in (100.3, 100.9):
         clock[0] = t
-        assert not geometry_kernel.ready()
-    assert looks == [100.0] and started == [1]              # not looked for again within the second
+        assert not km.ready()
+    assert looks == [100.0] and started == [1] and not warmed     # not looked for again within the second
     clock[0] = 101.2
-    assert not geometry_kernel.ready() and looks == [100.0, 101.2] and started == [1]
+    assert not km.ready() and looks == [100.0, 101.2] and started == [1]
     clock[0] = 103.5
-    assert geometry_kernel.ready() and geometry_kernel._STATE == "ready"   # the stamp is there: compiled from now on
+    assert km.ready() and km.state == "ready" and warmed == [103.5]   # the stamp is there: compiled from now on
     clock[0] = 103.6
-    assert geometry_kernel.ready() and looks == [100.0, 101.2, 103.5]
+    assert km.ready() and looks == [100.0, 101.2, 103.5] and warmed == [103.5]
 
 
 def test_no_compiler_when_the_kernels_are_off(monkeypatch):
+    from robodesign.core import jit_cache
     monkeypatch.setenv("ROBODESIGN_JIT", "0")
-    monkeypatch.setattr(geometry_kernel, "_STATE", None)
-    monkeypatch.setattr(geometry_kernel, "_start_compiler", lambda: pytest.fail("no compiler with ROBODESIGN_JIT=0"))
-    assert not geometry_kernel.ready() and geometry_kernel._STATE is None
+    km = jit_cache.KernelModule("robodesign.model.geometry_kernel", geometry_kernel.__file__,
+                                geometry_kernel.survivors, ("survivors",), lambda: pytest.fail("no warm-up"), every=1.0)
+    monkeypatch.setattr(km.cache, "start_compiler", lambda: pytest.fail("no compiler with ROBODESIGN_JIT=0"))
+    assert not km.available() and not km.ready() and km.state is None and not km.warm_up()

@@ -1,16 +1,20 @@
 """The on-disk numba cache of a module's compiled kernels: its readiness stamp and its background compiler.
 
-A module with numba kernels (``solvers.ik_kernel``, ``judge.interval_kernel``) never stalls a command on their
-compilation: with a cold cache it starts ``python -m <module>`` in the background (niced, its own process group)
-and runs its numpy/Python path meanwhile; the compiler writes a stamp beside numba's cache files once every
-kernel is there, so a later process loads them instead. The stamp names numba, Python, the CPU and the source
-file's size and time: any change means a new compilation.
+A module with numba kernels (``solvers.ik_kernel``, ``judge.interval_kernel``, ``model.geometry_kernel``,
+``model.sweep_kernel``) never stalls a command on their compilation: with a cold cache it starts
+``python -m <module>`` in the background (niced, its own process group) and runs its numpy/Python path meanwhile;
+the compiler writes a stamp beside numba's cache files once every kernel is there, so a later process loads them
+instead. The stamp names numba, Python, the CPU and the source file's size and time: any change means a new
+compilation. :class:`KernelCache` is the cache and its stamp; :class:`KernelModule` the readiness the modules
+share (``available``, ``ready``, ``warm_up``, the background compiler's entry point).
 """
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, cast
 
@@ -23,7 +27,7 @@ except Exception:  # pragma: no cover - numba is a dependency; without it the ke
     def njit(*args, **kwargs):  # type: ignore[no-redef]  # the stand-in for numba's decorator
         return (lambda f: f) if not args or not callable(args[0]) else args[0]
 
-__all__ = ["KernelCache", "NUMBA_IMPORTED", "background_compile", "njit"]
+__all__ = ["KernelCache", "KernelModule", "NUMBA_IMPORTED", "background_compile", "njit"]
 
 
 class KernelCache:
@@ -101,3 +105,63 @@ def background_compile(available: bool, compile_into_cache: Callable[[], int]) -
     except (OSError, ValueError):
         pass
     return compile_into_cache() if available else 1
+
+
+class KernelModule:
+    """The readiness of one module's compiled kernels (``judge.interval_kernel``, ``model.geometry_kernel``,
+    ``model.sweep_kernel``): :meth:`available` (numba imports and ``ROBODESIGN_JIT`` is not 0), :meth:`ready`
+    (compiled in this process; with a cold cache the background compilation starts once and the module's
+    numpy/Python path runs until a later call finds the stamp, looked for at most every ``every`` seconds),
+    :meth:`warm_up` (compile or load them now: ``warm`` calls each kernel), :meth:`compile_into_cache` and
+    :meth:`main` (what ``python -m <module>`` runs). Both paths of a module give the same results."""
+
+    def __init__(self, module: str, source: str, dispatcher: Any, kernels: Sequence[str], warm: Callable[[], Any],
+                 every: float = 0.0) -> None:
+        self.cache = KernelCache(module, source, dispatcher, kernels)
+        self.warm, self.every = warm, float(every)
+        self.state: Optional[str] = None  # None (not decided) | "plain" (compiling elsewhere) | "ready" | "failed"
+        self.looked = -math.inf           # time.monotonic() of the last look for the stamp
+
+    def available(self) -> bool:
+        """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
+        return NUMBA_IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no",
+                                                                                                "off")
+
+    def compiled(self) -> bool:
+        """True when the cache holds every kernel for this numba, Python, CPU and source."""
+        return self.cache.compiled()
+
+    def warm_up(self) -> bool:
+        """Compile (or load) the kernels in this process now; False when numba is unavailable."""
+        if not self.available():
+            return False
+        self.warm()
+        self.state = "ready"
+        return True
+
+    def ready(self) -> bool:
+        """True when the compiled kernels run in this process (``ROBODESIGN_JIT=wait``: compiled here at the
+        first call)."""
+        if self.state == "ready" or not self.available():
+            return self.state == "ready"
+        now = time.monotonic()
+        if self.state is not None and now - self.looked < self.every:
+            return False
+        self.looked = now
+        if self.compiled():
+            self.warm_up()
+        elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
+            self.compile_into_cache()
+            self.warm_up()
+        elif self.state is None:
+            self.state = "plain" if self.cache.start_compiler() is not None else "failed"
+        return self.state == "ready"
+
+    def compile_into_cache(self) -> int:
+        """Compile the kernels into numba's cache and write the stamp (under a lock shared with concurrent
+        compilers)."""
+        return self.cache.compile_into_cache(self.warm_up)
+
+    def main(self) -> int:
+        """``python -m <module>``: the background compilation (niced)."""
+        return background_compile(self.available(), self.compile_into_cache)

@@ -16,17 +16,11 @@ path meanwhile. ``ROBODESIGN_JIT=0`` switches the kernel off, ``ROBODESIGN_JIT=w
 """
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
-from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
-from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
-
-_IMPORTED = NUMBA_IMPORTED  # without numba the numpy path runs
+from robodesign.core.jit_cache import KernelModule, njit
 
 
 @njit(cache=True, nogil=True)
@@ -238,67 +232,21 @@ def link_torques(Q0, Q1, V0, V1, am, ar, acc0, C, S, parents, kinds, signs, R, S
 
 
 # ---------------------------------------------------------------------------------------------------------
-# readiness: compile in the background, never stall a check on the compilation
+# readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
-_STATE: Optional[str] = None  # None (not decided) | "numpy" (cold cache: compiling elsewhere) | "ready" | "failed"
-
-
-def available() -> bool:
-    """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
-    return _IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no", "off")
-
-
-def _cache() -> KernelCache:
-    return KernelCache("robodesign.judge.interval_kernel", __file__, link_torques, ("link_torques",))
-
-
-def stamp_path() -> Path:
-    return _cache().stamp_path()
-
-
-def compiled() -> bool:
-    """True when the cache holds the compiled kernel for this numba, Python, CPU and source."""
-    return _cache().compiled()
-
-
-def warm_up() -> bool:
-    """Compile (or load) the kernel in this process now; False when numba is unavailable."""
-    global _STATE
-    if not available():
-        return False
+def _warm() -> None:
+    """The kernel called once on tiny arguments (compiles or loads it)."""
     n = 2
     z = np.zeros((1, n))
     m3 = np.zeros((n, 3, 3))
     link_torques(z, z, z, z, z, z, np.zeros((1, 3)), z, z, np.zeros(n, np.int64), np.array([0, 1], np.int64),
                  np.ones(n), m3, m3, np.ones(n), m3, m3)
-    _STATE = "ready"
-    return True
 
 
-def ready() -> bool:
-    """True when the compiled kernel runs in this process. With a cold cache the background compilation starts
-    (once per process) and the numpy path runs until a later call finds the stamp: both give the same numbers."""
-    global _STATE
-    if _STATE == "ready" or not available():
-        return _STATE == "ready"
-    if compiled():
-        warm_up()
-    elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
-        compile_into_cache()
-        warm_up()
-    elif _STATE is None:
-        _STATE = "numpy" if _start_compiler() is not None else "failed"
-    return _STATE == "ready"
-
-
-def _start_compiler() -> Optional[subprocess.Popen]:
-    return _cache().start_compiler()
-
-
-def compile_into_cache() -> int:
-    """Compile the kernel into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
-    return _cache().compile_into_cache(warm_up)
-
+KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
+                       ("link_torques",), _warm)
+available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
+compile_into_cache = KERNELS.compile_into_cache
 
 if __name__ == "__main__":
-    sys.exit(background_compile(available(), compile_into_cache))
+    sys.exit(KERNELS.main())

@@ -24,16 +24,11 @@ every pair, as before.
 """
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
-import time
-from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
-from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
+from robodesign.core.jit_cache import KernelModule, njit
 
 
 @njit(cache=True, nogil=True)
@@ -184,36 +179,11 @@ def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, sli
 
 
 # ---------------------------------------------------------------------------------------------------------
-# readiness: compile in the background, never stall a query on the compilation
+# readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
-_STATE: Optional[str] = None  # None (not decided) | "plain" (cold cache: compiling elsewhere) | "ready" | "failed"
-_LOOKED = -1.0   # time.monotonic() of the last look for the stamp
-
-
-def available() -> bool:
-    """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
-    return NUMBA_IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no", "off")
-
-
-def _cache() -> KernelCache:
-    return KernelCache("robodesign.model.geometry_kernel", __file__, survivors,
-                       ("survivors", "survivors_rows", "frame_poses", "joint_poses"))
-
-
-def stamp_path() -> Path:
-    return _cache().stamp_path()
-
-
-def compiled() -> bool:
-    """True when the cache holds the compiled kernel for this numba, Python, CPU and source."""
-    return _cache().compiled()
-
-
-def warm_up() -> bool:
-    """Compile (or load) the kernel in this process now; False when numba is unavailable."""
-    global _STATE
-    if not available():
-        return False
+def _warm() -> None:
+    """Every kernel called once on tiny arguments (compiles or loads them). The stamp is looked for at most once a
+    second while the cache is cold: the culler and batched FK ask often."""
     i1, f1 = np.zeros(1, np.int64), np.zeros(1)
     args = (i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1, np.zeros((1, 3)), i1, i1, f1, i1,
             i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)),
@@ -225,39 +195,12 @@ def warm_up() -> bool:
     frame_poses(np.zeros((1, 1)), *tree, 1, np.eye(3), np.zeros(3), np.zeros((2, 3, 3)), np.zeros((2, 3)),
                 np.zeros((1, 4, 4)))
     joint_poses(np.zeros((1, 1)), *tree, np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 2, 4, 4)))
-    _STATE = "ready"
-    return True
 
 
-def ready() -> bool:
-    """True when the compiled kernel runs in this process. With a cold cache the background compilation starts
-    (once per process) and the robot asks coal about every pair until a later call finds the stamp: both give
-    the same verdicts. Meanwhile the stamp is looked for at most once a second (the callers ask often)."""
-    global _STATE, _LOOKED
-    if _STATE == "ready" or not available():
-        return _STATE == "ready"
-    now = time.monotonic()
-    if _STATE is not None and now - _LOOKED < 1.0:
-        return False
-    _LOOKED = now
-    if compiled():
-        warm_up()
-    elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
-        compile_into_cache()
-        warm_up()
-    elif _STATE is None:
-        _STATE = "plain" if _start_compiler() is not None else "failed"
-    return _STATE == "ready"
-
-
-def _start_compiler() -> Optional[subprocess.Popen]:
-    return _cache().start_compiler()
-
-
-def compile_into_cache() -> int:
-    """Compile the kernel into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
-    return _cache().compile_into_cache(warm_up)
-
+KERNELS = KernelModule("robodesign.model.geometry_kernel", __file__, survivors,
+                       ("survivors", "survivors_rows", "frame_poses", "joint_poses"), _warm, every=1.0)
+available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
+compile_into_cache = KERNELS.compile_into_cache
 
 if __name__ == "__main__":
-    sys.exit(background_compile(available(), compile_into_cache))
+    sys.exit(KERNELS.main())

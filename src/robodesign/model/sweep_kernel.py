@@ -15,13 +15,11 @@ compiles at first use.
 """
 from __future__ import annotations
 
-import os
 import sys
-from typing import Optional
 
 import numpy as np
 
-from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
+from robodesign.core.jit_cache import KernelModule, njit
 
 
 @njit(cache=True, nogil=True)
@@ -236,33 +234,10 @@ def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext
 
 
 # ---------------------------------------------------------------------------------------------------------
-# readiness: compile in the background, never stall a check on the compilation
+# readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
-_STATE: Optional[str] = None  # None (not decided) | "numpy" (cold cache: compiling elsewhere) | "ready" | "failed"
-
-
-def available() -> bool:
-    """True when numba imports and ``ROBODESIGN_JIT`` is not ``0``."""
-    return NUMBA_IMPORTED and os.environ.get("ROBODESIGN_JIT", "1").strip().lower() not in ("0", "false", "no",
-                                                                                             "off")
-
-
-def _cache() -> KernelCache:
-    return KernelCache("robodesign.model.sweep_kernel", __file__, posed_arms,
-                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend",
-                        "certify"))
-
-
-def compiled() -> bool:
-    """True when the cache holds the compiled kernels for this numba, Python, CPU and source."""
-    return _cache().compiled()
-
-
-def warm_up() -> bool:
-    """Compile (or load) the kernels in this process now; False when numba is unavailable."""
-    global _STATE
-    if not available():
-        return False
+def _warm() -> None:
+    """Every kernel called once on tiny arguments (compiles or loads them)."""
     i, f = np.zeros(1, np.int64), np.zeros(1)
     X = posed_arms(np.zeros((2, 2, 4, 4)), i, i, np.zeros((1, 3)), np.zeros((1, 3)), i, i, i, np.zeros((1, 1)), f,
                    np.zeros((1, 1)), i, np.zeros(2, np.int64), i, f, 1.0)
@@ -271,30 +246,12 @@ def warm_up() -> bool:
     extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), np.zeros((1, 2)), 0, 1.0, 1.0)
     certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
             1e-6, 1.0, False)
-    _STATE = "ready"
-    return True
 
 
-def ready() -> bool:
-    """True when the compiled kernels run in this process. With a cold cache the background compilation starts
-    (once per process) and the numpy path runs until a later call finds the stamp: both give the same numbers."""
-    global _STATE
-    if _STATE == "ready" or not available():
-        return _STATE == "ready"
-    if compiled():
-        warm_up()
-    elif os.environ.get("ROBODESIGN_JIT", "").strip().lower() == "wait":
-        compile_into_cache()
-        warm_up()
-    elif _STATE is None:
-        _STATE = "numpy" if _cache().start_compiler() is not None else "failed"
-    return _STATE == "ready"
-
-
-def compile_into_cache() -> int:
-    """Compile the kernels into numba's cache and write the stamp (under a lock shared with concurrent compilers)."""
-    return _cache().compile_into_cache(warm_up)
-
+KERNELS = KernelModule("robodesign.model.sweep_kernel", __file__, posed_arms,
+                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend", "certify"), _warm)
+available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
+compile_into_cache = KERNELS.compile_into_cache
 
 if __name__ == "__main__":
-    sys.exit(background_compile(available(), compile_into_cache))
+    sys.exit(KERNELS.main())
