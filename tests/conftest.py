@@ -111,3 +111,15 @@ def assert_within_limits(robot, tr):
             assert np.all(np.abs(tau) <= robot.tau_max * (1 + 1e-9)), f"sample {k}: tau {tau} over {robot.tau_max}"
             worst = max(worst, float(np.max(np.abs(tau) / robot.tau_max)))
     return worst
+
+
+@pytest.fixture(params=["compiled", "numpy"])
+def geometry_paths(request, monkeypatch):
+    """A test of the robot's geometry both ways: the compiled kernels (robodesign.model.geometry_kernel), and
+    numpy's passes with every pair asked of coal (the kernels not ready, as before their first compilation)."""
+    from robodesign.model import geometry_kernel
+    if request.param == "numpy":
+        monkeypatch.setattr(geometry_kernel, "ready", lambda: False)
+    elif not (geometry_kernel.available() and geometry_kernel.warm_up()):
+        pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
+    return request.param

@@ -3,18 +3,17 @@ equal ``robot.in_collision`` state by state, and the planner's segment checks fi
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import IMPROV, TASKS
 
 from robodesign.design.solve import SolveSettings, solve
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
-from robodesign.solvers import planning
 from robodesign.model.collision_cull import SLACK, CollisionCuller, culler_of
+from robodesign.solvers import planning
 from robodesign.solvers.planning import check_path
 from robodesign.solvers.schedule import static_cell
-
-from conftest import IMPROV, TASKS
 
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
 
@@ -35,18 +34,9 @@ def coal_verdict(robot, q) -> bool:
     return bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
 
 
-@pytest.fixture(params=["compiled", "numpy"])
-def bounds(request, monkeypatch):
-    """The batch bounds both ways: the compiled kernel row by row, and numpy's pass (the kernel not ready)."""
-    from robodesign.model import geometry_kernel
-    if request.param == "numpy":
-        monkeypatch.setattr(geometry_kernel, "ready", lambda: False)
-    elif not (geometry_kernel.available() and geometry_kernel.warm_up()):
-        pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
-    return request.param
 
 
-def test_verdicts_equal_in_collision(cell, bounds):
+def test_verdicts_equal_in_collision(cell, geometry_paths):
     robot, stops = cell
     rng = np.random.default_rng(5)
     Q = np.vstack([stops, [robot.random_configuration(rng) for _ in range(600)],
@@ -79,7 +69,7 @@ def test_distance_field_bounds_the_distance(cell):
     assert np.array_equal(field.lower_bounds(P), lb)    # the cells are remembered, the bounds stay
 
 
-def test_segment_finds_the_same_first_colliding_state(cell, bounds):
+def test_segment_finds_the_same_first_colliding_state(cell, geometry_paths):
     """A straight move from a solved stop to a colliding configuration: the culled check of its dense states (in
     order and in the planner's coarse-to-fine order) stops at the same state as ``in_collision`` one by one."""
     robot, stops = cell
@@ -123,7 +113,7 @@ def test_the_culler_is_kept_while_the_geometry_is(cell):
         robot.set_base_pose(T)
 
 
-def test_verdicts_equal_in_collision_with_a_safety_margin(cell, bounds):
+def test_verdicts_equal_in_collision_with_a_safety_margin(cell, geometry_paths):
     """With a 3 cm safety margin on the robot–obstacle pairs (coal's security margin), the bounds keep the pairs
     that come within it: the same verdicts as ``in_collision`` on states near the machine."""
     robot, stops = cell

@@ -7,26 +7,20 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import IMPROV, PRIMITIVES
 
 from robodesign.core.errors import InputError
 from robodesign.core.spatial import homogeneous, rpy_to_matrix
 from robodesign.formats.module_io import load_module_set
-from robodesign.model import geometry_kernel
 from robodesign.model.robot import Robot, fk_batch
-
-from conftest import IMPROV, PRIMITIVES
 
 BASE = homogeneous(rpy_to_matrix(0.3, -0.2, 1.0), [1.0, 2.0, 0.5])
 
 
-@pytest.fixture(params=["compiled", "numpy"], autouse=True)
-def path(request, monkeypatch):
-    """Every test both ways: the compiled kernels, and numpy's pass (the kernels not ready)."""
-    if request.param == "numpy":
-        monkeypatch.setattr(geometry_kernel, "ready", lambda: False)
-    elif not (geometry_kernel.available() and geometry_kernel.warm_up()):
-        pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
-    return request.param
+@pytest.fixture(autouse=True)
+def both_ways(geometry_paths):
+    """Every test both ways (conftest.geometry_paths: the compiled kernels, and numpy's pass)."""
+    return geometry_paths
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import IMPROV, TASKS
 
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
@@ -16,8 +17,6 @@ from robodesign.model.collision_cull import CELL, DistanceField, distance_field
 from robodesign.model.robot import Obstacle
 from robodesign.model.robot_geometry import _CULL_AFTER
 from robodesign.solvers.schedule import static_cell
-
-from conftest import IMPROV, TASKS
 
 pytestmark = pytest.mark.skipif(not geometry_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
 

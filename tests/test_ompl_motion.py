@@ -4,6 +4,7 @@ as with OMPL's validator: on the real PTP_3 cell (IMPROV arm, CNC-machine mesh),
 that spend their whole work limit give the same paths, counts and verdicts."""
 import numpy as np
 import pytest
+from conftest import IMPROV, TASKS
 from ompl import base as ob
 
 from robodesign.formats.assembly import Assembly
@@ -13,8 +14,6 @@ from robodesign.model.cell import build_robot
 from robodesign.solvers import planning
 from robodesign.solvers.ompl_motion import bisection_order, motion_states
 from robodesign.solvers.schedule import static_cell
-
-from conftest import IMPROV, TASKS
 
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
 
