@@ -123,3 +123,17 @@ def geometry_paths(request, monkeypatch):
     elif not (geometry_kernel.available() and geometry_kernel.warm_up()):
         pytest.skip("numba unavailable or ROBODESIGN_JIT=0")
     return request.param
+
+
+@pytest.fixture(scope="session")
+def ptp3_solved():
+    """(task, module set, solution): PTP_3 solved with the known-good IMPROV arm 1,21,4,22,5,23,12, seed 0 (once
+    per test process; the tests of the judge's motion model read it)."""
+    from robodesign.design.solve import SolveSettings, solve
+    from robodesign.formats.module_io import load_module_set
+    from robodesign.formats.task_io import load_task
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    ms = load_module_set(IMPROV)
+    res = solve(task, ms, ["1", "21", "4", "22", "5", "23", "12"], settings=SolveSettings(seed=0))
+    assert res.feasible, res.message
+    return task, ms, res.solution

@@ -9,14 +9,12 @@ with active torque limits stay certified.
 """
 import numpy as np
 import pytest
-from conftest import IMPROV, PRIMITIVES, TASKS
+from conftest import IMPROV, PRIMITIVES
 from scipy.optimize import minimize_scalar
 
 import robodesign.judge.checker as checker
 from robodesign import Robot, load_module_set
-from robodesign.design.solve import SolveSettings, solve
 from robodesign.formats.solution import SolutionTrajectory
-from robodesign.formats.task_io import load_task
 from robodesign.judge.arc_torques import certify_arc_torques
 from robodesign.judge.interval_rnea import IntervalDynamics
 from robodesign.judge.motion import StepMotion
@@ -119,12 +117,8 @@ def test_certification_decides_both_ways(robots):
 
 
 @pytest.fixture(scope="module")
-def ptp3():
-    task = load_task(TASKS / "simple" / "PTP_3.json")
-    ms = load_module_set(IMPROV)
-    res = solve(task, ms, ARM, settings=SolveSettings(seed=0))
-    assert res.feasible, res.message
-    return task, ms, res.solution
+def ptp3(ptp3_solved):
+    return ptp3_solved
 
 
 def _swing(task, ms, sol, frac):

@@ -15,10 +15,7 @@ from conftest import IMPROV, TASKS
 from reference_trajectories import mstraj_like
 
 from robodesign.cli.entry import main
-from robodesign.design.solve import SolveSettings, solve
-from robodesign.formats.module_io import load_module_set
 from robodesign.formats.solution import SolutionTrajectory
-from robodesign.formats.task_io import load_task
 from robodesign.judge.checker import check
 from robodesign.judge.motion import StepMotion, least_acceleration, witness_velocities
 from robodesign.judge.quantities import TrajectoryQuantities
@@ -28,12 +25,8 @@ ORDER = ["1", "21", "4", "22", "5", "23", "12"]
 
 
 @pytest.fixture(scope="module")
-def ptp3():
-    task = load_task(TASKS / "simple" / "PTP_3.json")
-    ms = load_module_set(IMPROV)
-    res = solve(task, ms, ORDER, settings=SolveSettings(seed=0))
-    assert res.feasible, res.message
-    return task, ms, res.solution
+def ptp3(ptp3_solved):
+    return ptp3_solved
 
 
 def with_arrays(sol, **kw):

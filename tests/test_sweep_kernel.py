@@ -6,11 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import IMPROV, TASKS
 
-from robodesign import load_module_set
-from robodesign.design.solve import SolveSettings, solve
-from robodesign.formats.task_io import load_task
 from robodesign.judge import checker
 from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model import sweep, sweep_bounds, sweep_kernel
@@ -21,13 +17,9 @@ ARM = ["1", "21", "4", "22", "5", "23", "12"]
 
 
 @pytest.fixture(scope="module")
-def ptp3():
-    task = load_task(TASKS / "simple" / "PTP_3.json")
-    ms = load_module_set(IMPROV)
-    res = solve(task, ms, ARM, settings=SolveSettings(seed=0))
-    assert res.feasible, res.message
-    robot = solution_robot(task, res.solution, ms)
-    return task, ms, res.solution, robot
+def ptp3(ptp3_solved):
+    task, ms, solution = ptp3_solved
+    return task, ms, solution, solution_robot(task, solution, ms)
 
 
 def _motions(sol, robot, task):
