@@ -27,7 +27,6 @@ class Obstacle:
     pose: np.ndarray  # 4x4 world
 
 
-
 class RobotGeometry:
     """The collision part of :class:`~robodesign.model.robot.Robot` (what its ``_build`` sets is declared here)."""
 
