@@ -206,7 +206,7 @@ class CollisionCuller:
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
-        self._last_hit = -1                  # the pair in_collision found colliding last
+        self._last_hit = -1                  # the pair collides found colliding last
 
     def centres(self, Q: np.ndarray) -> np.ndarray:
         """World centres (N × geometries × 3) of the bounding spheres at every row of ``Q``."""
@@ -247,13 +247,20 @@ class CollisionCuller:
         return out
 
     def collides(self, q: np.ndarray, pairs: Iterable) -> bool:
-        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it)."""
+        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it; the pair that collided
+        last is asked first: consecutive queries tend to share it)."""
         r = self.robot
         gm, gd = r.geom_model, r.geom_data
         pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
-        for k in pairs:
+        ks = [int(k) for k in pairs]
+        last = self._last_hit
+        if last >= 0 and last in ks:
+            ks.remove(last)
+            ks.insert(0, last)
+        for k in ks:
             self.narrow += 1
-            if pin.computeCollision(gm, gd, int(k)):
+            if pin.computeCollision(gm, gd, k):
+                self._last_hit = k
                 return True
         return False
 
@@ -306,22 +313,7 @@ class CollisionCuller:
             self._one = self._kernel_args()
         args, grids = self._one
         n, nu = geometry_kernel.survivors(q, *args)
-        hit = False
-        if n:
-            r = self.robot
-            gm, gd = r.geom_model, r.geom_data
-            pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
-            pairs = args[-2][:n].tolist()
-            last = self._last_hit
-            if last >= 0 and last in pairs:   # the pair that collided last first (consecutive queries tend to share it)
-                pairs.remove(last)
-                pairs.insert(0, last)
-            for k in pairs:
-                self.narrow += 1
-                if pin.computeCollision(gm, gd, k):
-                    self._last_hit = k
-                    hit = True
-                    break
+        hit = bool(n) and self.collides(q, args[-2][:n].tolist())
         if nu:
             self._fill(grids, args[-1][:nu].copy())
         return hit
