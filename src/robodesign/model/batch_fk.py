@@ -159,9 +159,10 @@ def batch_kinematics(robot) -> _BatchKinematics:
 
 def fk_batch(robot, Q, frame: Optional[int] = None) -> np.ndarray:
     """World poses (N×4×4) of ``frame`` (default: the TCP) at every row of ``Q`` (N×dof, or one
-    configuration): one vectorised pass of numpy over the samples per joint of the frame's chain instead
-    of one pinocchio call per sample. Revolute and prismatic joints about any fixed axis (every joint a
-    :class:`~robodesign.model.robot.Robot` builds); another joint type falls back to ``robot.fk`` per row.
+    configuration): the compiled loop over the samples (or, before it is compiled, one vectorised pass of
+    numpy per joint of the frame's chain) instead of one pinocchio call per sample. Revolute and prismatic joints
+    about any fixed axis (every joint a :class:`~robodesign.model.robot.Robot` builds); another joint type falls
+    back to ``robot.fk`` per row.
     Equal to ``robot.fk`` to floating-point rounding (tests/test_fk_batch.py)."""
     Q = robot._Q(Q)
     f = robot.tcp_frame if frame is None else int(frame)

@@ -271,10 +271,8 @@ class CollisionCuller:
         in one array, :meth:`in_collision` writing the cells it fills to both), scratch space and the outputs
         (surviving pairs, unknown cells: the last two arguments); the grids: (fields, their offsets in the grid
         array, the one gridded field or None, the grid array)."""
-        bk = batch_kinematics(self.robot)
-        J = len(bk.parents)
-        tree = (np.array(bk.parents, np.int64), np.array(bk.R).reshape(J, 3, 3), np.array(bk.t).reshape(J, 3),
-                np.array(bk.kind, np.int64), np.array(bk.axis, float).reshape(J, 3), np.array(bk.iq, np.int64))
+        tree, _ = batch_kinematics(self.robot).arrays()   # (the culler keeps scratch space of its own below)
+        J = len(tree[0])
         oa, ob, olim, ok = [], [], [], []
         for o, (field, kk, geo, limit) in enumerate(self.obstacles):
             oa += geo.tolist()
