@@ -369,6 +369,31 @@ def test_one_client_holds_at_most_per_client_places(make_site):
     assert c.post("/api/solutions?async=1", json={"solution": sol_json(2.0), "author": "A"}).status_code == 202
 
 
+def test_bodies_one_client_may_be_sending_at_once():
+    # by default as many as its places in the line, at least 16; the 17th (25th) at once is refused (Busy = 429)
+    from robodesign.web.throttle import Busy, CheckQueue
+    for per_client, allowed in ((2, 16), (24, 24)):
+        q = CheckQueue(1, 8, per_client)
+        try:
+            for _ in range(allowed):
+                q.start_receiving("10.0.0.1")
+            with pytest.raises(Busy, match=f"already sending {allowed} uploads"):
+                q.start_receiving("10.0.0.1")
+            q.start_receiving("10.0.0.2")  # another client is not affected
+            q.done_receiving("10.0.0.1")
+            q.start_receiving("10.0.0.1")  # a body has arrived: room for one more
+        finally:
+            q.close()
+    q = CheckQueue(1, 8, 24, per_client_receiving=3)
+    try:
+        for _ in range(3):
+            q.start_receiving("10.0.0.1")
+        with pytest.raises(Busy):
+            q.start_receiving("10.0.0.1")
+    finally:
+        q.close()
+
+
 def test_small_upload_is_not_stuck_behind_big_checks(make_site):
     small_sol = sol_json(3.0)
     for key in ("q", "dq", "ddq"):  # one joint only: smaller (and invalid for the 2-joint robot)

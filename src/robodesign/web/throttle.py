@@ -5,7 +5,7 @@
 * :class:`CheckQueue`: the checker threads and the line in front of them. An upload takes a place only once its
   body has arrived completely (:meth:`CheckQueue.reserve` after reading it): a client that sends its body slowly
   holds no place, only one of the ``max_receiving`` bodies being received (at most ``per_client_receiving`` per
-  client, each with its deadline); each client holds at most ``per_client`` places. Big checks (many trajectory values) run on at most
+  client, by default as many as its places but at least 16, each with its deadline); each client holds at most ``per_client`` places. Big checks (many trajectory values) run on at most
   ``big_slots`` of the threads, so a small upload never waits behind two slow ones. Every job has a random ID
   whose status (place in the line, result) the uploader can ask for.
 """
@@ -78,12 +78,15 @@ class CheckQueue:
 
     def __init__(self, workers: int, max_waiting: int, per_client: int, big_slots: Optional[int] = None,
                  keep_done: int = 1000, keep_seconds: float = 3600.0, max_receiving: int = 64,
-                 per_client_receiving: int = 16):
+                 per_client_receiving: Optional[int] = None):
         self.workers = max(1, int(workers))
         self.max_waiting, self.per_client = max(0, int(max_waiting)), max(1, int(per_client))
         self.big_slots = max(1, self.workers - 1) if big_slots is None else max(1, int(big_slots))
         self.keep_done, self.keep_seconds = keep_done, keep_seconds
-        self.max_receiving, self.per_client_receiving = max(1, int(max_receiving)), max(1, int(per_client_receiving))
+        # a client may be sending as many bodies as it may hold places in the line (at least 16)
+        self.max_receiving = max(1, int(max_receiving))
+        self.per_client_receiving = max(16, self.per_client) if per_client_receiving is None \
+            else max(1, int(per_client_receiving))
         self._receiving: Dict[str, int] = {}
         self._cond = threading.Condition()
         self._jobs: "OrderedDict[str, Job]" = OrderedDict()  # every job still known, oldest first
