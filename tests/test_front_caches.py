@@ -193,6 +193,58 @@ def test_base_contacts_are_those_of_the_pair_by_pair_loop(whitman):
     assert hits > 0
 
 
+@pytest.mark.parametrize("which", ["whitman", "ptp3"])
+def test_base_pairs_the_bounds_clear_are_farther_than_the_margin(which, whitman, ptp3):
+    """The base stage asks coal only about the pairs the culler's bounds keep: every pair it clears is farther
+    from its obstacle than the margin (coal's distance), every pair in contact is kept, and the answer is the
+    pair-by-pair loop's, among boxes (whitman) and near the CNC machine's mesh (PTP_3), with obstacles moved to
+    the base and margins up to 5 cm."""
+    import coal
+    from robodesign.model.robot import Obstacle
+    problem = whitman if which == "whitman" else ptp3
+    ms, cell = problem.module_set, static_cell(problem.task)
+    rng = np.random.default_rng(11)
+    cleared = kept = hits = 0
+    for i in range(30):
+        c = problem.space.random_candidate(rng)
+        T = problem.base_pose(c)
+        robot = build_robot(cell, ms, Assembly.from_order(ms, c.order), T)
+        # every obstacle shape once more, its box's centre moved to within 40 cm of the base
+        extra = []
+        for k, o in enumerate(robot.obstacles):
+            o.shape.computeLocalAABB()
+            centre = 0.5 * (np.asarray(o.shape.aabb_local.min_) + np.asarray(o.shape.aabb_local.max_))
+            P = np.array(o.pose, dtype=float)
+            P[:3, 3] = T[:3, 3] + rng.uniform([-0.4, -0.4, -0.2], [0.4, 0.4, 0.3]) - P[:3, :3] @ centre
+            extra.append(Obstacle(f"near{k}", o.shape, P))
+        margin = [0.0, 0.01, 0.05][i % 3]
+        robot.set_obstacles(robot.obstacles + extra, safety_margin=margin)
+        if i % 5 == 4:   # an obstacle moved onto the base after the geometry was made
+            robot.geom_model
+            robot.move_obstacle(0, T)
+        near = set(robot._base_pairs_near())
+        n = robot.n_collision_geometries
+        objs = robot.geom_model.geometryObjects
+        root = [k for k in range(n) if objs[k].parentJoint == 0]
+        for j, ob in enumerate(robot.obstacle_geometry_ids):
+            for a in root:
+                A, B = objs[a], objs[ob]
+                d = coal.distance(A.geometry, coal.Transform3s(A.placement.rotation, A.placement.translation),
+                                  B.geometry, coal.Transform3s(B.placement.rotation, B.placement.translation),
+                                  coal.DistanceRequest(), coal.DistanceResult())
+                if (j, a) in near:
+                    kept += 1
+                else:
+                    cleared += 1
+                    assert d > margin, (i, j, a, d, margin)
+        got = robot.base_collisions()
+        robot._geom_data = None  # the reference on a fresh scratch space
+        assert got == _base_collisions_pair_by_pair(robot)
+        assert {(objs[a].name, objs[ob].name) for j, a in near for ob in [robot.obstacle_geometry_ids[j]]} >= set(got)
+        hits += bool(got)
+    assert hits > 0 and cleared > kept > 0, (hits, cleared, kept)
+
+
 def test_a_pool_adopts_the_robot_a_search_space_built_for_its_kinematics(whitman):
     from robodesign.model import cell as cell_mod
     ms, cell = whitman.module_set, static_cell(whitman.task)
@@ -298,7 +350,7 @@ def test_base_contacts_on_a_probe_leave_the_state_a_full_scratch_space_would(whi
         full.geom_data  # the full scratch space first: no probe
         a = full.base_collisions()
         b = probed.base_collisions()
-        assert probed._geom_data is None and probed._base_probe is not None
+        assert probed._geom_data is None and (probed._base_probe is not None) == bool(probed._base_pairs_near())
         assert a == b
         hits += bool(a)
         for ra, rb in zip(full.geom_data.collisionRequests, probed.geom_data.collisionRequests):

@@ -55,6 +55,46 @@ def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + swept
 
 
+_SPHERES: Dict[int, Tuple[object, np.ndarray, float]] = {}   # id(shape) → (shape, centre, radius)
+
+
+def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
+    """:func:`_bounding_sphere` of a robot shape, kept per shape object (robots share their coal shapes, which are
+    never changed: ``robodesign.model.robot._coal_shapes``)."""
+    hit = _SPHERES.get(id(shape))
+    if hit is None or hit[0] is not shape:
+        hit = _SPHERES[id(shape)] = (shape, *_bounding_sphere(shape))   # (the shape is held: its id is not reused)
+    return hit[1], hit[2]
+
+
+class ObstacleBounds:
+    """The bounds of :class:`CollisionCuller` for several obstacles at once (each one's :class:`DistanceField`): which
+    spheres each obstacle's box, then its distance field, does not clear."""
+
+    def __init__(self, fields: Sequence["DistanceField"]):
+        self.fields = list(fields)
+        O = len(self.fields)
+        self.R_inv = np.array([f.R_inv for f in self.fields]).reshape(O, 3, 3)
+        self.t = np.array([f.t for f in self.fields]).reshape(O, 1, 3)
+        self.lo = np.array([f.box_lo for f in self.fields]).reshape(O, 1, 3)
+        self.hi = np.array([f.box_hi for f in self.fields]).reshape(O, 1, 3)
+
+    def near(self, centres: np.ndarray, radii: np.ndarray, margin: float) -> np.ndarray:
+        """(obstacles × spheres) booleans: the spheres (rows of ``centres``, ``radii``) that the bounds do not clear
+        of each obstacle at ``margin`` (+ :data:`SLACK`). Coal reports no collision of an obstacle, at that margin,
+        with a geometry inside a sphere that is not kept."""
+        limit = np.asarray(radii, dtype=float) + (float(margin) + SLACK)
+        x = np.einsum("oij,omj->omi", self.R_inv, np.asarray(centres, dtype=float)[None] - self.t)   # box frames
+        e = np.maximum(np.maximum(self.lo - x, x - self.hi), 0.0)
+        near = np.sqrt(np.einsum("omi,omi->om", e, e)) <= limit                                     # the box bound
+        for o in np.flatnonzero(near.any(axis=1)).tolist():
+            f = self.fields[o]
+            if not f.is_box:   # then the field's, where the box does not clear
+                idx = np.flatnonzero(near[o])
+                near[o, idx] = f.lower_bounds(np.asarray(centres, dtype=float)[idx]) <= limit[idx]
+        return near
+
+
 class DistanceField:
     """Lower bounds of the distance from points to one obstacle (a coal shape at a world pose): the exact
     distance from the centre of the point's grid cell (edge :data:`CELL`), computed once per cell, minus the
@@ -174,7 +214,7 @@ class CollisionCuller:
         self.parent = np.array([int(objs[i].parentJoint) for i in range(n_robot)])
         centres, radii = [], []
         for i in range(n_robot):
-            c, r = _bounding_sphere(objs[i].geometry)
+            c, r = bounding_sphere(objs[i].geometry)
             P = objs[i].placement
             centres.append(np.asarray(P.rotation) @ c + np.asarray(P.translation))   # in the parent joint's frame
             radii.append(r)
@@ -371,4 +411,5 @@ def culler_of(robot) -> CollisionCuller:
     return c
 
 
-__all__ = ["CollisionCuller", "DistanceField", "culler_of", "distance_field", "SLACK", "CELL"]
+__all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
+           "SLACK", "CELL"]

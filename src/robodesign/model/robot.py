@@ -88,6 +88,8 @@ class Robot(RobotGeometry):
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._geometry_changed()
         self._base_probe: Optional[tuple] = None  # base_collisions' own pairs before there is a geom_data
+        self._root_spheres: Optional[tuple] = None   # base_collisions' bounds of the objects fixed to the world
+        self._obstacle_bounds = None                 # and of the obstacles (collision_cull.ObstacleBounds)
         self._reach: Optional[Tuple[np.ndarray, float]] = None
         self._generic_rank: Optional[int] = None
         self._batch_chain: Optional[Any] = None  # batch_fk._BatchKinematics, built on first use

@@ -44,6 +44,8 @@ class RobotGeometry:
     _root_items: List[Tuple[str, int, np.ndarray]]
     _obstacle_ids: List[int]
     _base_probe: Optional[tuple]
+    _root_spheres: Optional[tuple]
+    _obstacle_bounds: Optional[Any]
     _placed: bool
     _direct_joint_pairs: set
     _self_map: Optional[np.ndarray]
@@ -136,7 +138,7 @@ class RobotGeometry:
                 self._geom_model = geom = self._robot_only_geom()
             self._add_obstacles(geom)
         self.safety_margin = float(safety_margin)
-        self._geom_data = self._base_probe = None
+        self._geom_data = self._base_probe = self._obstacle_bounds = None
         self._geometry_changed()
 
     @property
@@ -146,7 +148,7 @@ class RobotGeometry:
 
     def move_obstacle(self, index: int, pose: np.ndarray) -> None:
         self.geom_model.geometryObjects[self._obstacle_ids[index]].placement = pin.SE3(np.asarray(pose, float))
-        self._base_probe = None
+        self._base_probe = self._obstacle_bounds = None
         self._geometry_changed()
 
     def _robot_only_geom(self):
@@ -253,10 +255,13 @@ class RobotGeometry:
         if not self._obstacle_ids:
             return []
         n = len(self._geom_body)
-        root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
-        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a
-        ab = [(a, ob) for ob in self._obstacle_ids for a in root]
-        pairs = [self._n_self_pairs + j * n + a for j in range(len(self._obstacle_ids)) for a in root]
+        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a; those that a certified bound
+        # clears are not asked (their answer is no)
+        near = self._base_pairs_near()
+        if not near:
+            return []
+        ab = [(a, self._obstacle_ids[j]) for j, a in near]
+        pairs = [self._n_self_pairs + j * n + a for j, a in near]
         if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
             gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
             pin.updateGeometryPlacements(self.model, self.data, gm, gd, np.zeros(self.dof))
@@ -266,6 +271,32 @@ class RobotGeometry:
             hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
         names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
         return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
+
+    def _base_pairs_near(self) -> List[Tuple[int, int]]:
+        """(obstacle j, robot object a), obstacle by obstacle, of every pair of an obstacle and an object fixed to
+        the world (the bodies before the first joint) that the bounds of the collision culler do not clear: the
+        object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
+        field; :class:`robodesign.model.collision_cull.ObstacleBounds`)."""
+        from robodesign.model.collision_cull import ObstacleBounds, bounding_sphere, distance_field
+        if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
+            root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
+            C, r = np.zeros((len(root), 3)), np.zeros(len(root))
+            for i, a in enumerate(root):
+                _, _, _, P, shape = self._geom_specs[a]
+                c, r[i] = bounding_sphere(shape)
+                C[i] = P[:3, :3] @ c + P[:3, 3]
+            self._root_spheres = (root, C, r)
+        root, C, r = self._root_spheres
+        if not root:
+            return []
+        if self._obstacle_bounds is None:   # the obstacles where they are (move_obstacle too)
+            made = self._geom_model
+            poses = [ob.pose if made is None else made.geometryObjects[k].placement.homogeneous
+                     for ob, k in zip(self.obstacles, self._obstacle_ids)]
+            self._obstacle_bounds = ObstacleBounds([distance_field(ob.shape, T) for ob, T in zip(self.obstacles, poses)])
+        T = self.base_pose
+        near = self._obstacle_bounds.near(C @ T[:3, :3].T + T[:3, 3], r, self.safety_margin)
+        return [(j, root[i]) for j, i in zip(*(x.tolist() for x in np.nonzero(near)))]
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
