@@ -54,6 +54,7 @@ def test_tcp_poses_equal_pinocchio(robots):
 
 def test_any_frame_and_every_joint(robots):
     robot = robots[1]
+    robot.add_frames()   # every body and connector frame too
     Q = samples(robot, 16, 7)
     J = robot.joint_poses_batch(Q)
     assert J.shape == (16, robot.model.njoints, 4, 4)

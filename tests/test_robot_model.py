@@ -208,3 +208,52 @@ def test_mated_frames_have_aligned_x_and_antiparallel_z():
         np.testing.assert_allclose(Fa[:3, 3], Fb[:3, 3], atol=1e-12)
         np.testing.assert_allclose(Fa[:3, 0], Fb[:3, 0], atol=1e-12)
         np.testing.assert_allclose(Fa[:3, 2], -Fb[:3, 2], atol=1e-12)
+
+
+def test_frames_of_bodies_and_connectors_are_added_when_asked_for():
+    """A new robot's model has the joints' frames and the TCP; add_frames (frame_id, fk_all) adds one frame per
+    body and per connector, the same poses whether the base pose was set before or after, with a new data."""
+    ms = load_module_set(IMPROV)
+    order = ["1", "21", "4", "22", "5", "23", "12"]
+    T = np.array([[0.0, -1, 0, 0.3], [1, 0, 0, -0.2], [0, 0, 1, 0.1], [0, 0, 0, 1]])
+    early, late = Robot.from_order(ms, order, base_pose=T), Robot.from_order(ms, order)
+    assert early.model.nframes == early.model.njoints + 1          # universe, one per joint, TCP
+    q = np.random.default_rng(5).uniform(-1, 1, early.dof)
+    tcp = early.fk(q)
+    data = early.data
+    early.add_frames()
+    late.add_frames()
+    late.set_base_pose(T)
+    assert early.data is not data and len(early.data.oMf) == early.model.nframes
+    bodies = sum(len(ms[m].bodies) for m in early.assembly.module_ids)
+    connectors = sum(len(b.connectors) for m in early.assembly.module_ids for b in ms[m].bodies)
+    assert early.model.nframes == early.model.njoints + 1 + bodies + connectors
+    a, b = early.fk_all(q), late.fk_all(q)
+    assert list(a) == list(b) and all(np.array_equal(a[k], b[k]) for k in a)
+    assert np.array_equal(early.fk(q), tcp) and np.array_equal(a["TCP"], tcp)
+    # a body frame is its joint's pose times the body's placement; the root body follows the base pose
+    base_body = f"{early.instance_labels[0]}.{ms[order[0]].bodies[0].id}"
+    assert np.allclose(a[base_body], T @ Robot.from_order(ms, order).fk_all(q)[base_body], atol=1e-14)
+    assert early.add_frames() is early.model and early.model.nframes == late.model.nframes   # once
+
+
+@pytest.mark.parametrize("mass", [0.0, 0.244, 0.333903, 1.0, 2.5, 2.844885, 49.0, 3.7])   # 1.0, 2.5: m·(1/m) = 1
+def test_zero_inertias_of_deferred_frames_are_pinocchios(mass):
+    """What adding k frames (with pinocchio's default: the frame's zero inertia appended) does to a joint's inertia,
+    as robot._zero_inertias makes it without the frames: bit for bit, for masses whose m·(1/m) is not 1 too."""
+    from robodesign.model import robot as robot_mod
+    rng = np.random.default_rng(int(mass * 1000))
+    for _ in range(50):
+        ref = pin.Model()
+        j = ref.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "j")
+        if mass > 0:
+            ref.appendBodyToJoint(j, pin.Inertia(mass, rng.normal(size=3) * 0.2, np.diag(rng.uniform(0.01, 0.1, 3))),
+                                  pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)))
+        lean = pin.Model(ref)
+        k = int(rng.integers(1, 5))
+        for i in range(k):
+            ref.addFrame(pin.Frame(f"f{i}", j, 0, pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)),
+                                   pin.FrameType.OP_FRAME))
+        robot_mod._zero_inertias(lean, {j: k}, {j: mass}, j)
+        Y, Z = ref.inertias[j], lean.inertias[j]
+        assert Y.mass == Z.mass and np.array_equal(Y.lever, Z.lever) and np.array_equal(Y.inertia, Z.inertia)

@@ -194,6 +194,7 @@ def export_urdf(robot, path: Union[str, Path], mesh_dir_mode: str = "absolute") 
     path.parent.mkdir(parents=True, exist_ok=True)
     path = path.resolve()
     meshes = _MeshWriter(path, mesh_dir_mode)
+    robot.add_frames()   # the body frames (the visuals are placed at them)
     rel = _relative_placer(robot)
 
     root = _robot_element(robot)

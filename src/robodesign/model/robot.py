@@ -54,13 +54,44 @@ def _memo(spec, make):
     return hit[1]
 
 
+_SHAPES: Dict[Tuple[int, bool], Tuple[object, Tuple[object, ...]]] = {}   # (id(spec), flag) → (spec, its shapes)
+
+
 def _coal_shapes(spec, convex_meshes: bool) -> Tuple[object, ...]:
     """:func:`coal_shapes` of a geometry spec, made once per spec and flag (shared by every robot: coal shapes are
     never mutated)."""
-    shapes = _memo(spec, lambda s: {})
-    if convex_meshes not in shapes:
-        shapes[convex_meshes] = coal_shapes(spec, convex_meshes)
-    return shapes[convex_meshes]
+    hit = _SHAPES.get((id(spec), convex_meshes))
+    if hit is None or hit[0] is not spec:   # (the spec is held: its id is not reused while the entry lives)
+        hit = _SHAPES[(id(spec), convex_meshes)] = (spec, coal_shapes(spec, convex_meshes))
+    return hit[1]
+
+
+def _inertia(body) -> "pin.Inertia":
+    """The body's inertia (made once per body spec)."""
+    hit = _MEMO.get(id(body))
+    if hit is None or hit[0] is not body:
+        Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+        hit = _MEMO[id(body)] = (body, Y)
+    return hit[1]
+
+
+_ZERO_INERTIA = pin.Inertia.Zero()
+_EPS = float(np.finfo(float).eps)   # Eigen's epsilon, as in pinocchio's sum of inertias
+
+
+def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, float], j: int) -> None:
+    """The zero inertias that adding ``pending[j]`` frames to joint ``j`` adds to it (``addFrame`` adds each frame's
+    inertia, zero, at the frame). pinocchio's sum (``InertiaTpl::__pequ__``) then multiplies the joint's centre of
+    mass by ``m·(1/m)`` (m: the joint's mass, ``mass[j]``) and changes nothing else: nothing at all where that
+    factor is 1, the usual case; else the same operation is made here on pinocchio's zero inertia. The frames
+    themselves are added later without it (``Robot.add_frames``)."""
+    k = pending.pop(j, 0)
+    m = mass.get(j, 0.0)
+    if k and m * (1.0 / max(m, _EPS)) != 1.0:
+        Y = model.inertias[j]
+        for _ in range(k):
+            Y += _ZERO_INERTIA
+        model.inertias[j] = Y
 
 
 @dataclass(frozen=True)
@@ -127,52 +158,55 @@ class Robot(RobotGeometry):
         start = (bi, base_con.body_id, 0, base_con.entry_pose)
         visited = set()
         queue = deque([start])
-        first: Dict[str, int] = {"universe": 0}  # frame name → its first frame id; joint id → joint name
-        joint_names: Dict[int, str] = {}
+        joint_frame: Dict[int, int] = {0: 0}  # joint id → its frame's id
+        # the body and connector frames, added by add_frames: (name, joint, parent frame id or ~index in this list,
+        # the body's placement in the joint's frame, the connector's in the body's or None, type); each adds a zero
+        # inertia to its joint, which changes the joint's inertia by rounding alone: those additions are made here
+        # in the order of the frames (_zero_inertias)
+        frames: List[Tuple[str, int, int, np.ndarray, Optional[np.ndarray], Any]] = []
+        pending: Dict[int, int] = {}  # joint → zero-inertia additions of frames not made yet
+        masses: Dict[int, float] = {}  # joint → its mass so far (pinocchio's sum of the masses of its bodies)
         self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
         self.joint_infos: List[JointInfo] = []
-        columns: List[List[float]] = [[] for _ in range(9)]
-        lower, upper, vel, acc, eff, gear, im, fc, fv = columns
-        free_connectors: List[Tuple[int, Connector, int]] = []  # (instance, connector, frame id)
+        columns: List[List[float]] = [[] for _ in range(9)]  # the joints' limits (_set_joint_limits)
+        free_connectors: List[Tuple[int, Connector, Tuple[int, np.ndarray]]] = []  # (instance, connector, (joint, M))
         total_mass = 0.0
         geom_body: List[Tuple[int, str]] = []
         direct_joint_pairs = set()
+        mods = [ms[mid] for mid in asm.module_ids]
         while queue:
             i, body_id, jid, M = queue.popleft()
             if (i, body_id) in visited:
                 continue
             visited.add((i, body_id))
-            mod = ms[asm.module_ids[i]]
+            mod = mods[i]
             body = mod.body(body_id)
             label = labels[i]
             total_mass += body.mass
             if body.mass > 0:
-                Y = _memo(body, lambda b: pin.Inertia(b.mass, np.asarray(b.com, float), np.asarray(b.inertia, float)))
-                model.appendBodyToJoint(jid, Y, pin.SE3(M))
-            parent_frame = first[joint_names[jid]] if jid > 0 else 0  # getFrameId: the first frame of the name
-            fid = model.addFrame(pin.Frame(f"{label}.{body_id}", jid, parent_frame, pin.SE3(M), pin.FrameType.BODY))
-            first.setdefault(f"{label}.{body_id}", fid)
-            if jid == 0:
-                self._root_items.append(("frame", fid, M.copy()))
-            for ci, c in enumerate(body.connectors):
-                Mc = M @ c.pose
-                cf = model.addFrame(pin.Frame(f"{label}.{body_id}.{c.id}", jid, fid, pin.SE3(Mc), pin.FrameType.OP_FRAME))
-                first.setdefault(f"{label}.{body_id}.{c.id}", cf)
-                if jid == 0:
-                    self._root_items.append(("frame", cf, Mc.copy()))
+                if jid in pending:
+                    _zero_inertias(model, pending, masses, jid)
+                model.appendBodyToJoint(jid, _inertia(body), pin.SE3(M))
+                masses[jid] = masses.get(jid, 0.0) + body.mass
+            name = f"{label}.{body_id}"
+            body_frame = ~len(frames)
+            frames.append((name, jid, joint_frame[jid], M, None, pin.FrameType.BODY))
+            pending[jid] = pending.get(jid, 0) + 1 + len(body.connectors)
+            for c in body.connectors:
+                frames.append((f"{name}.{c.id}", jid, body_frame, M, c.pose, pin.FrameType.OP_FRAME))
                 other = conn.get((i, c.id))
                 if other is not None:
                     j2, c2id = other
-                    c2 = ms[asm.module_ids[j2]].connector(c2id)
+                    c2 = mods[j2].connector(c2id)
                     if (j2, c2.body_id) not in visited:
-                        queue.append((j2, c2.body_id, jid, Mc @ c2.entry_pose))
+                        queue.append((j2, c2.body_id, jid, (M @ c.pose) @ c2.entry_pose))
                 elif (i, c.id) != asm.base:
-                    free_connectors.append((i, c, cf))
+                    free_connectors.append((i, c, (jid, M)))
             for gi, g in enumerate(body.collision):
                 P = M @ g.pose
                 for si, shape in enumerate(_coal_shapes(g, convex_meshes)):
                     k = len(geom_specs)
-                    geom_specs.append((f"{label}.{body_id}.c{gi}" + (f".{si}" if si else ""), jid, fid, P, shape))
+                    geom_specs.append((f"{name}.c{gi}" + (f".{si}" if si else ""), jid, joint_frame[jid], P, shape))
                     geom_body.append((i, body_id))
                     if jid == 0:
                         self._root_items.append(("geom", k, P.copy()))
@@ -198,8 +232,7 @@ class Robot(RobotGeometry):
                     jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
                 name = f"{label}.{jt.id}"
                 new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
-                first.setdefault(name, model.addJointFrame(new_jid, -1))
-                joint_names[new_jid] = name
+                joint_frame[new_jid] = model.addJointFrame(new_jid, -1)
                 if jid == 0:
                     self._root_items.append(("joint", new_jid, placement.copy()))
                 self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
@@ -217,20 +250,7 @@ class Robot(RobotGeometry):
             raise AssemblyError("only 1-DoF joints are supported")
         self.dof = nq
         self.mass = total_mass
-        model.lowerPositionLimit = np.array(lower, dtype=float)
-        model.upperPositionLimit = np.array(upper, dtype=float)
-        model.velocityLimit = np.array(vel, dtype=float)
-        model.effortLimit = np.array(eff, dtype=float)
-        self.q_lower = np.array(lower, dtype=float)
-        self.q_upper = np.array(upper, dtype=float)
-        self.dq_max = np.array(vel, dtype=float)
-        self.ddq_max = np.array(acc, dtype=float)
-        self.tau_max = np.array(eff, dtype=float)
-        self.gear_ratio = np.array(gear, dtype=float)
-        self.motor_inertia = np.array(im, dtype=float)
-        self.friction_coulomb = np.array(fc, dtype=float)
-        self.friction_viscous = np.array(fv, dtype=float)
-        model.armature = self.gear_ratio ** 2 * self.motor_inertia
+        self._set_joint_limits(model, columns)
         # TCP: the free eef connector; else the last free connector in BFS order
         eefs = [f for f in free_connectors if f[1].type == "eef"]
         if len(eefs) == 1:
@@ -239,18 +259,31 @@ class Robot(RobotGeometry):
             tcp = free_connectors[-1]
         else:
             tcp = None
+        for j in list(pending):
+            _zero_inertias(model, pending, masses, j)
         if tcp is not None:
-            fr = model.frames[tcp[2]]
-            self.tcp_frame = model.addFrame(pin.Frame("TCP", fr.parentJoint, tcp[2], fr.placement, pin.FrameType.OP_FRAME))
-            if fr.parentJoint == 0:
-                self._root_items.append(("frame", self.tcp_frame, fr.placement.homogeneous.copy()))
+            tj, Mc = tcp[2][0], tcp[2][1] @ tcp[1].pose
+            self.tcp_frame = model.addFrame(pin.Frame("TCP", tj, joint_frame[tj], pin.SE3(Mc), pin.FrameType.OP_FRAME))
+            if tj == 0:
+                self._root_items.append(("frame", self.tcp_frame, Mc.copy()))
         else:
             self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
             self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
         self.model = model
+        self._frames: Optional[list] = frames   # (None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
         self._geom_specs, self._geom_body, self._placed = geom_specs, geom_body, False
         self._direct_joint_pairs, self._self_map = direct_joint_pairs, None   # (the map: on first use)
+
+    def _set_joint_limits(self, model: "pin.Model", columns: List[List[float]]) -> None:
+        """The joints' limits and drivetrains (columns in joint order: lower, upper, velocity, acceleration, torque,
+        gear ratio, motor inertia, Coulomb and viscous friction) on the robot and its model (armature)."""
+        lower, upper, vel, acc, eff, gear, im, fc, fv = (np.array(c, dtype=float) for c in columns)
+        self.q_lower, self.q_upper, self.dq_max, self.ddq_max, self.tau_max = lower, upper, vel, acc, eff
+        self.gear_ratio, self.motor_inertia, self.friction_coulomb, self.friction_viscous = gear, im, fc, fv
+        # (pinocchio keeps copies)
+        model.lowerPositionLimit, model.upperPositionLimit, model.velocityLimit, model.effortLimit = lower, upper, vel, eff
+        model.armature = gear ** 2 * im
 
     # ------------------------------------------------------------------------------------------
     # configuration of the robot in its cell
@@ -328,11 +361,34 @@ class Robot(RobotGeometry):
             raise InputError(f"expected N×{self.dof} joint values, got shape {Q.shape}")
         return Q
 
+    def add_frames(self) -> "pin.Model":
+        """The model with every frame: a new robot's model has its joints' frames and the TCP; the frames of its
+        bodies (``<instance>.<body>``) and connectors (``<instance>.<body>.<connector>``) are added by the first
+        call of this (which :meth:`frame_id`, :meth:`fk_all` and the URDF export and viewer make), with a new
+        :attr:`data` (a ``Data`` made before has no room for them). Most designs of a search never need them."""
+        frames, self._frames = self._frames, None
+        if frames:
+            model = self.model
+            ids: List[int] = []
+            for name, jid, parent, M, pose, kind in frames:
+                if pose is not None:   # a connector's frame
+                    M = M @ pose
+                placement = pin.SE3(self.base_pose @ M if jid == 0 and self._placed else M)
+                fid = model.addFrame(pin.Frame(name, jid, parent if parent >= 0 else ids[~parent], placement, kind),
+                                     False)   # (their zero inertias were added when the robot was built)
+                ids.append(fid)
+                if jid == 0:
+                    self._root_items.append(("frame", fid, M.copy()))
+            self.data = model.createData()
+        return self.model
+
     def fk_all(self, q) -> Dict[str, np.ndarray]:
-        pin.framesForwardKinematics(self.model, self.data, self._q(q))
-        return {f.name: self.data.oMf[i].homogeneous for i, f in enumerate(self.model.frames)}
+        model = self.add_frames()
+        pin.framesForwardKinematics(model, self.data, self._q(q))
+        return {f.name: self.data.oMf[i].homogeneous for i, f in enumerate(model.frames)}
 
     def frame_id(self, name: str) -> int:
+        self.add_frames()
         if not self.model.existFrame(name):
             raise KeyError(name)
         return self.model.getFrameId(name)

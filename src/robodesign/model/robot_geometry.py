@@ -293,7 +293,8 @@ class RobotGeometry:
             made = self._geom_model
             poses = [ob.pose if made is None else made.geometryObjects[k].placement.homogeneous
                      for ob, k in zip(self.obstacles, self._obstacle_ids)]
-            self._obstacle_bounds = ObstacleBounds([distance_field(ob.shape, T) for ob, T in zip(self.obstacles, poses)])
+            fields = [distance_field(ob.shape, T) for ob, T in zip(self.obstacles, poses)]
+            self._obstacle_bounds = ObstacleBounds(fields)
         T = self.base_pose
         near = self._obstacle_bounds.near(C @ T[:3, :3].T + T[:3, 3], r, self.safety_margin)
         return [(j, root[i]) for j, i in zip(*(x.tolist() for x in np.nonzero(near)))]

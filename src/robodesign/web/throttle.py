@@ -5,9 +5,10 @@
 * :class:`CheckQueue`: the checker threads and the line in front of them. An upload takes a place only once its
   body has arrived completely (:meth:`CheckQueue.reserve` after reading it): a client that sends its body slowly
   holds no place, only one of the ``max_receiving`` bodies being received (at most ``per_client_receiving`` per
-  client, by default as many as its places but at least 16, each with its deadline); each client holds at most ``per_client`` places. Big checks (many trajectory values) run on at most
-  ``big_slots`` of the threads, so a small upload never waits behind two slow ones. Every job has a random ID
-  whose status (place in the line, result) the uploader can ask for.
+  client, by default as many as its places but at least 16, each with its deadline); each client holds at most
+  ``per_client`` places. Big checks (many trajectory values) run on at most ``big_slots`` of the threads, so a small
+  upload never waits behind two slow ones. Every job has a random ID whose status (place in the line, result) the
+  uploader can ask for.
 """
 from __future__ import annotations
 
