@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import TYPE_CHECKING, FrozenSet, Iterator, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
@@ -78,8 +78,9 @@ class BaseBounds:
     upper: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     tolerance: Optional[ToleratedPose] = None  # that a base pose must satisfy (None: any)
 
-    @property
+    @cached_property
     def free(self) -> Tuple[int, ...]:
+        """The free parameters' indices (those with lower < upper)."""
         return tuple(i for i in range(4) if self.upper[i] > self.lower[i])
 
     def pose(self, params: Sequence[float]) -> np.ndarray:
@@ -88,14 +89,16 @@ class BaseBounds:
             full[i] = float(v)
         return self.nominal @ homogeneous(rot_z(full[3]), full[:3])
 
-    def valid(self, params: Sequence[float]) -> bool:
+    def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:
+        """Whether ``params`` lie in the bounds and their pose (``pose`` when given: ``self.pose(params)``) in the
+        tolerance."""
         free = self.free
         if len(params) != len(free):
             return False
         for i, v in zip(free, params):
             if not (self.lower[i] - 1e-12 <= v <= self.upper[i] + 1e-12):
                 return False
-        return self.tolerance is None or self.tolerance.valid(self.pose(params))
+        return self.tolerance is None or self.tolerance.valid(self.pose(params) if pose is None else pose)
 
     def sample(self, rng, max_tries: int = 1000) -> Tuple[float, ...]:
         free = self.free
@@ -480,11 +483,12 @@ class SearchSpace:
     def _goal_array(self) -> np.ndarray:
         return np.asarray(self.goals, dtype=float).reshape(-1, 4)
 
-    def _shortfall(self, order: Tuple[str, ...], params: Sequence[float]) -> float:
+    def _shortfall(self, order: Tuple[str, ...], params: Sequence[float], pose: Optional[np.ndarray] = None) -> float:
+        """reach_shortfall of ``order`` at the base ``params`` (``pose``: their base pose, when made already)."""
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
-        o = (self.base_bounds.pose(params) @ np.append(o_local, 1.0))[:3]
+        o = ((self.base_bounds.pose(params) if pose is None else pose) @ np.append(o_local, 1.0))[:3]
         G = self._goal_array()
         d = np.linalg.norm(G[:, :3] - o, axis=1) - G[:, 3] - R
         return float(max(0.0, d.max()))
@@ -504,13 +508,13 @@ class SearchSpace:
             return 0.0
         return float(sum(max(0.0, b - a) for i, a in enumerate(taus) for b in taus[i + 1:]) / top)
 
-    def _clear(self, params: Sequence[float]) -> bool:
-        """Whether the base position of ``params`` lies outside every primitive obstacle (meshes are left to
-        the pipeline's collision checks)."""
+    def _clear(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:
+        """Whether the base position of ``params`` (``pose``: their base pose, when made already) lies outside every
+        primitive obstacle (meshes are left to the pipeline's collision checks)."""
         if not self.obstacles:
             return True
         from robodesign.formats.geometry import contains_point
-        p = self.base_bounds.pose(params)[:3, 3]
+        p = (self.base_bounds.pose(params) if pose is None else pose)[:3, 3]
         return not any(g.kind != "mesh" and contains_point(g, p) for g in self.obstacles)
 
     def sample_base(self, rng, order: Sequence[str], tries: int = 64) -> Tuple[float, ...]:
@@ -546,8 +550,9 @@ class SearchSpace:
                 params = tuple(full[i] for i in free)
             else:
                 params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-            s = self._shortfall(order, params) if bb.valid(params) else None
-            if s is None or s != 0.0 and s >= best_s or not self._clear(params):
+            T = bb.pose(params) if len(params) == len(free) else None   # (made once per proposal)
+            s = self._shortfall(order, params, T) if bb.valid(params, T) else None
+            if s is None or s != 0.0 and s >= best_s or not self._clear(params, T):
                 continue  # invalid, or neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
                 return params
