@@ -1,7 +1,8 @@
 """The robot–obstacle clearance bounds of the judge's sweep (robodesign.model.sweep_clearance) against coal's exact
 distances, on the judged motion of a solved IMPROV arm in PTP_3 (the CNC mesh), on random configurations and on
 configurations nudged into the mesh; the steps they certify against exact distances inside each step; and the
-sweep with and without them: the same collision events (between the samples too), fewer mesh queries."""
+sweep with and without them: the same collision events (between the samples too), fewer queries. The self pairs'
+bounds (their spheres) likewise."""
 from __future__ import annotations
 
 import numpy as np
@@ -42,15 +43,17 @@ def _exact(robot, chk, Q, cols):
 
 def _bounds(robot, chk, Q, cols):
     """(len(Q), len(cols)) the clearance bounds of the pairs at the rows of Q (their geometries' poses from batched
-    FK, as the sweep has them)."""
+    FK, as the sweep has them): robot–obstacle pairs' from the distance fields, self pairs' from the spheres."""
     chk._posed.segments(Q, np.abs(np.diff(Q, axis=0)), chk.W, chk._owner)
     TG = chk._posed.poses()
     obst = np.array([chk._obst[c] for c in cols])
     geo = np.array([chk._mov[c] for c in cols], dtype=np.int64)
+    other = np.array([chk._ref[c] for c in cols], dtype=np.int64)
     out = np.empty((len(Q), len(cols)))
     for ob in np.unique(obst):
         mine = obst == ob
-        out[:, mine] = sweep_clearance.clearance_bounds(robot, TG, geo[mine], int(ob), chk._spheres)
+        out[:, mine] = (sweep_clearance.clearance_bounds(robot, TG, geo[mine], int(ob), chk._spheres) if ob >= 0
+                        else sweep_clearance.self_bounds(TG, geo[mine], other[mine], chk._spheres))
     return out
 
 
@@ -95,6 +98,18 @@ def test_bounds_are_below_exact_distances(ptp3):
     assert np.median(lb[: len(near)] / near) > 0.7
 
 
+def test_self_bounds_are_below_exact_distances(ptp3):
+    task, ms, sol, robot = ptp3
+    chk = sweep.SweepChecker(robot, posed_arms=True)
+    cols = [c for c in range(len(chk.pairs)) if not chk.is_env[c]]
+    rng = np.random.default_rng(4)
+    Q = np.vstack([sol.trajectory.q[::5], random_q(robot, rng, 100)])
+    lb, d = _bounds(robot, chk, Q, cols), _exact(robot, chk, Q, cols)
+    assert np.all(lb <= d - SLACK + 1e-9)
+    assert np.any(d <= 0) and np.all(lb[d <= 0] < 0)
+    assert np.mean(lb > 0) > 0.5  # most pairs of the arm are cleared by their spheres
+
+
 def test_bounds_of_poses_that_are_no_numbers(ptp3):
     """A pose that is no number gives −inf (never a cell of the grid); one a googol metres away its box distance."""
     task, ms, sol, robot = ptp3
@@ -123,16 +138,18 @@ def test_certified_steps_are_free_inside(ptp3):
     sched = chk._posed.segments(Q, dQ, chk.W, chk._owner)
     ext = 4 * chk.tolerance
     skip = sweep_clearance.open_steps(chk, chk._posed.poses(), sched, dQ, ext)
-    cols = _env_pairs(chk)
-    assert sorted(skip) == cols
+    P = len(chk.pairs)
+    assert skip.shape == (P, len(Q) - 1) and np.all(skip >= np.arange(len(Q) - 1))
     certified = 0
     for k in range(0, len(Q) - 1, 7):
-        steps = [c for c in cols if skip[c][k] > k]
+        steps = [c for c in range(P) if skip[c, k] > k]
         certified += len(steps)
         pts = [tq.motion.at(k, s) for s in np.linspace(0, 1, 9)]
         d = _exact(robot, chk, pts, steps)
         assert np.all(d - chk.margins[steps] > ext)
-    assert certified > 0.9 * len(cols) * len(range(0, len(Q) - 1, 7))  # nearly every step here
+    env = _env_pairs(chk)
+    assert np.all(skip[env, 0] == len(Q) - 1)  # the mesh pairs: certified from the first sample to the end
+    assert certified > 0.8 * P * len(range(0, len(Q) - 1, 7))
 
 
 def _events(chk, Q, **kw):
@@ -140,11 +157,12 @@ def _events(chk, Q, **kw):
 
 
 def _both_ways(robot, monkeypatch, Q, **kw):
-    """(events, mesh queries) of the judge's sweep with the clearance bounds, and without (every step to coal)."""
+    """(events, mesh queries, all queries) of the judge's sweep with the clearance bounds, and without (every step
+    to coal)."""
     out = []
     for use in (True, False):
         if not use:
-            monkeypatch.setattr(sweep, "open_steps", lambda *a, **k: {})
+            monkeypatch.setattr(sweep, "open_steps", lambda *a, **k: None)
         chk = sweep.SweepChecker(robot, posed_arms=True)
         env = [0]
         real = chk.distances
@@ -153,7 +171,7 @@ def _both_ways(robot, monkeypatch, Q, **kw):
             env[0] += sum(bool(chk.is_env[c]) for c in cols)
             return real(q, cols)
         chk.distances = counted
-        out.append((_events(chk, Q, **kw), env[0]))
+        out.append((_events(chk, Q, **kw), env[0], chk.queries))
     monkeypatch.undo()
     return out
 
@@ -163,18 +181,18 @@ def test_same_events_fewer_mesh_queries(ptp3, monkeypatch):
     tq = TrajectoryQuantities.from_solution(robot, sol, task)
     Q = np.asarray(sol.trajectory.q)
     m = tq.motion
-    (a, na), (b, nb) = _both_ways(robot, monkeypatch, Q, path=m.path_bound(), at=m.at)
-    assert a == b == [] and na < nb / 4
+    (a, na, qa), (b, nb, qb) = _both_ways(robot, monkeypatch, Q, path=m.path_bound(), at=m.at)
+    assert a == b == [] and na < nb / 4 and qa < 0.6 * qb
     # a sample nudged into the mesh: contacts on the way into it (found inside the step before) and out of it
     hit = _into_obstacle(robot, Q, len(Q) // 2)
     Qn = Q.copy()
     Qn[len(Q) // 2] = hit[0]
-    (a, na), (b, nb) = _both_ways(robot, monkeypatch, Qn)
+    (a, na, qa), (b, nb, qb) = _both_ways(robot, monkeypatch, Qn)
     assert a == b and any(e[5] and e[1] > 0 for e in a)
-    assert na < nb
+    assert na < nb and qa < qb
     # two free samples with the mesh between them: a contact found between the samples only
     Q2 = np.array([hit[1], hit[2]])
-    (a, _), (b, _) = _both_ways(robot, monkeypatch, Q2)
+    (a, *_), (b, *_) = _both_ways(robot, monkeypatch, Q2)
     assert a == b and any(e[5] and 0 < e[1] < 1 for e in a) and not any(e[1] == 0 and e[5] for e in a)
 
 
@@ -189,7 +207,7 @@ def test_judge_verdicts_with_and_without_the_bounds(ptp3, monkeypatch):
               sol.with_(trajectory=SolutionTrajectory(tr.t, q, tr.dq, tr.ddq, dict(tr.goal2time)))):
         v1 = checker.check(task, s, ms)
         with monkeypatch.context() as mp:
-            mp.setattr(sweep, "open_steps", lambda *a, **k: {})
+            mp.setattr(sweep, "open_steps", lambda *a, **k: None)
             v2 = checker.check(task, s, ms)
         assert v1.valid == v2.valid and v1.costs == v2.costs
         assert [x.to_json() for x in v1.violations] == [x.to_json() for x in v2.violations]

@@ -26,9 +26,10 @@ the static ones, and a pair's certificate goes on past the end of the summed bou
 displacement from its pose at the query, relative to the other (at the samples, plus the step's bound), stays
 below the clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`).
 Inside a step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
-them. Robot–obstacle pairs are not queried over the steps that lower bounds of their clearance (the obstacles'
-distance fields) certify (:mod:`~robodesign.model.sweep_clearance`). Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
-a grazing contact, by about the tolerance over the rate of approach.
+them. Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
+a grazing contact, by about the tolerance over the rate of approach. No pair is queried over the steps that lower
+bounds of its clearance certify (:mod:`~robodesign.model.sweep_clearance`: the obstacles' distance fields, the
+geometries' bounding spheres).
 """
 from __future__ import annotations
 
@@ -343,6 +344,8 @@ class SweepChecker:
     _posed: Optional[PosedArms]
     _mov: List[int]
     _ref: List[int]
+    _obst: List[int]  # the obstacle geometry of a robot–obstacle pair, −1 for a self pair
+    _spheres: Optional[Tuple[np.ndarray, np.ndarray]]  # the robot geometries' spheres (sweep_clearance)
     pair_names: List[Tuple[str, str]]
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
@@ -434,7 +437,7 @@ class SweepChecker:
         # priority queue of (sample index where the pair must be re-checked, pair)
         heap = [(0, c) for c in range(P)]
         heapq.heapify(heap)
-        skip = open_steps(self, TG, sched, seg.dQ, ext) if not first_only else {}  # (robot–obstacle pairs' bounds)
+        skip = open_steps(self, TG, sched, seg.dQ, ext) if not first_only else None  # (sweep_clearance)
         while heap:
             k = heap[0][0]
             due = due_pairs(heap, k, n, skip)
@@ -462,7 +465,7 @@ class SweepChecker:
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
-                    ahead = is_env[c] and (c not in skip or skip[c][nxt] == nxt)  # (not where the bounds go on)
+                    ahead = is_env[c] and (skip is None or skip[c, nxt] == nxt)  # (not where the bounds go on)
                     nxt2 = self._ahead(Q, k, c, free, row, nxt) if ahead else nxt
                     if nxt2 is not None:
                         heapq.heappush(heap, (nxt2, c))

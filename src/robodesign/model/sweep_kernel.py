@@ -284,6 +284,38 @@ def obstacle_bounds(TG, geo, cen, rad, oR, ot, lo, hi, grid_lo, grid_dim, h, gri
     return nu
 
 
+@njit(cache=True, nogil=True)
+def sphere_gaps(TG, cen, a, b, rad_sum, out):  # pragma: no cover - compiled
+    """out[k, i]: the distance between the centres of the spheres of robot geometries a[i] and b[i] (centres cen in
+    the geometries' frames) at sample k (TG: the geometries' poses), less rad_sum[i]."""
+    n, G = TG.shape[0], TG.shape[1]
+    C = np.empty((n, G, 3))
+    for k in range(n):
+        for g in range(G):
+            for r in range(3):
+                C[k, g, r] = TG[k, g, r, 0] * cen[g, 0] + TG[k, g, r, 1] * cen[g, 1] + TG[k, g, r, 2] * cen[g, 2] \
+                    + TG[k, g, r, 3]
+    for i in range(len(a)):
+        for k in range(n):
+            d0, d1, d2 = C[k, a[i], 0] - C[k, b[i], 0], C[k, a[i], 1] - C[k, b[i], 1], C[k, a[i], 2] - C[k, b[i], 2]
+            out[k, i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - rad_sum[i]
+
+
+@njit(cache=True, nogil=True)
+def open_steps(F, sched, fastest, wsum, ext, slack, share, out):  # pragma: no cover - compiled
+    """out[c, k]: the first step ≥ k (n − 1: none) that the clearances F (n, P) at the samples do not certify, step
+    i certified when ((F[i, c] + F[i + 1, c]) − sched[i, c]·slack)·0.5 − 1e-12 exceeds
+    max(ext, fastest[i]·(wsum[c] / share)) (model.sweep_clearance.open_steps)."""
+    n, P = F.shape
+    for c in range(P):
+        nxt = n - 1
+        for k in range(n - 2, -1, -1):
+            keep = max(ext, fastest[k] * (wsum[c] / share))
+            if not (((F[k, c] + F[k + 1, c]) - sched[k, c] * slack) * 0.5 - 1e-12 > keep):
+                nxt = k
+            out[c, k] = nxt
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -299,11 +331,13 @@ def _warm() -> None:
             1e-6, 1.0, False)
     obstacle_bounds(TG, i, np.zeros((1, 3)), f, np.eye(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3, np.int64),
                     np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64))
+    sphere_gaps(TG, np.zeros((1, 3)), i, i, f, np.zeros((2, 1)))
+    open_steps(np.zeros((2, 1)), np.zeros((1, 1)), f, f, 1e-6, 1.0, 500.0, np.zeros((1, 1), np.int64))
 
 
 KERNELS = KernelModule("robodesign.model.sweep_kernel", __file__, posed_arms,
                        ("posed_arms", "gather", "running_sums", "geometry_poses", "extend", "certify",
-                        "obstacle_bounds"), _warm)
+                        "obstacle_bounds", "sphere_gaps", "open_steps"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 
