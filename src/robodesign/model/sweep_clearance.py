@@ -88,13 +88,17 @@ def open_steps(checker, TG: Optional[np.ndarray], sched: np.ndarray, dQ: np.ndar
     n, P = len(TG), len(checker.pairs)
     obstacles = np.array(checker._obst, dtype=np.int64)
     mov, ref = (np.array(x, dtype=np.int64) for x in (checker._mov, checker._ref))
-    F = np.empty((n, P))
-    for ob in np.unique(obstacles[obstacles >= 0]).tolist():
-        c = np.flatnonzero(obstacles == ob)
-        F[:, c] = clearance_bounds(checker.robot, TG, mov[c], ob, spheres)
+    groups = [(c, clearance_bounds(checker.robot, TG, mov[c], ob, spheres))
+              for ob in np.unique(obstacles[obstacles >= 0]).tolist() for c in [np.flatnonzero(obstacles == ob)]]
     c = np.flatnonzero(obstacles < 0)
     if len(c):
-        F[:, c] = self_bounds(TG, mov[c], ref[c], spheres)
+        groups.append((c, self_bounds(TG, mov[c], ref[c], spheres)))
+    if len(groups) == 1:  # (the judge's: the self pairs, or the pairs with its one obstacle)
+        F = groups[0][1]
+    else:
+        F = np.empty((n, P))
+        for c, lb in groups:
+            F[:, c] = lb
     F -= checker.margins
     fastest = dQ.max(axis=1) * (1 + 1e-9)  # static bound dQ @ W ≤ max_j |Δq_j| · Σ_j W[j]
     out = np.empty((P, n - 1), np.int64)
