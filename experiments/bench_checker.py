@@ -12,6 +12,10 @@ checks per round, and the median of the rounds per checkout, with the stages' sh
 The solution is produced by robodesign solve for an IMPROV arm and then slowed down in time so that
 it has ~1,500 samples (a uniform time stretch keeps it valid). Prints samples per second.
 
+``--stages`` (with ``--solution FILE`` or alone): the CPU time of ``check``'s stages (the model build, the goals,
+the collision rules, the torques between samples, the costs and the rest, by wrapping the judge's functions),
+median over ``--repeat`` checks after 6 warm-up checks, and the distance queries per check; one line.
+
 Then a near-contact motion: the IMPROV arm 1,22,5,23,5,29,14,16 that `robodesign optimize --optimizer
 random --seed 3` evaluates 6th on PTP_3, whose link slides past a joint housing at 3–18 µm. Its certified
 collision check (robodesign.model.sweep) with and without the bodies-of-revolution bounds: time and distance
@@ -77,6 +81,47 @@ def full_check(task, sol, ms, repeat: int) -> None:
           flush=True)
 
 
+def stage_times(task, sol, ms, repeat: int) -> None:
+    """One line: the median CPU time of each stage of ``check`` (the judge's functions wrapped) and the distance
+    queries of one check."""
+    import collections
+
+    from robodesign.judge import checker as judge
+    from robodesign.model.sweep import SweepChecker
+    acc: dict = collections.defaultdict(float)
+    stages = {"solution_robot": "model build", "check_goal": "goals", "_collision_violations": "collision rules",
+              "_arc_torque_violations": "torques between samples", "_costs": "costs"}
+    for name, key in stages.items():
+        def timed(*a, _f=getattr(judge, name), _k=key, **k):
+            t0 = time.process_time()
+            try:
+                return _f(*a, **k)
+            finally:
+                acc[_k] += time.process_time() - t0
+        setattr(judge, name, timed)
+    queries = [0]
+    distances = SweepChecker.distances
+
+    def counted(self, q, cols):
+        cols = list(cols)
+        queries[0] += len(cols)
+        return distances(self, q, cols)
+    SweepChecker.distances = counted  # type: ignore[method-assign]
+    for _ in range(6):
+        check(task, sol, ms)
+    rows = []
+    for _ in range(repeat):
+        acc.clear()
+        queries[0] = 0
+        t0 = time.process_time()
+        check(task, sol, ms)
+        rows.append(dict(acc, total=time.process_time() - t0))
+    med = {k: float(np.median([r.get(k, 0.0) for r in rows])) * 1e3 for k in [*stages.values(), "total"]}
+    rest = med["total"] - sum(med[k] for k in stages.values())
+    print("; ".join(f"{k} {v:.2f} ms" for k, v in med.items()) + f"; the rest (limits at the samples, RNEA rows, "
+          f"the motion, ...) {rest:.2f} ms; distance queries {queries[0]}", flush=True)
+
+
 def ab(sol_file: Path, srcs, rounds: int, repeat: int) -> None:
     """Alternate the checkouts ``srcs`` round after round on the solution in ``sol_file``."""
     runs: dict = {s: [] for s in srcs}
@@ -109,6 +154,7 @@ def main():
     ap.add_argument("--full-only", action="store_true", help="only the full check, one JSON line")
     ap.add_argument("--ab", nargs="+", metavar="SRC", help="checkouts' src folders to time alternately")
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--stages", action="store_true", help="CPU time of check's stages, one line")
     args = ap.parse_args()
     task = load_task(SHARED / "tasks" / "simple" / "PTP_3.json")
     ms = load_module_set(SHARED / "modules" / "IMPROV")
@@ -120,6 +166,9 @@ def main():
         sol = stretched(res.solution, args.samples, task.dt)
     if args.full_only:
         full_check(task, sol, ms, args.repeat)
+        return
+    if args.stages:
+        stage_times(task, sol, ms, args.repeat)
         return
     if args.ab:
         with tempfile.TemporaryDirectory() as tmp:

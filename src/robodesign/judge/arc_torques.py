@@ -83,15 +83,25 @@ def _interval(lo, hi):
 
 def _bounds(ta, tb, d_lo, d_hi, delta):
     """Upper and lower bound of τ over [0, δ] from its end values and the interval of its rate (arrays)."""
+    return _upper(ta, tb, d_lo, d_hi, delta), _lower(ta, tb, d_lo, d_hi, delta)
+
+
+def _upper(ta, tb, d_lo, d_hi, delta):
+    """The upper bound of :func:`_bounds`."""
     with np.errstate(divide="ignore", invalid="ignore"):
         ts = np.clip(np.nan_to_num((tb - ta - d_lo * delta) / (d_hi - d_lo)), 0.0, delta)
-        tl = np.clip(np.nan_to_num((tb - ta - d_hi * delta) / (d_lo - d_hi)), 0.0, delta)
     up = lambda t: np.minimum(ta + d_hi * t, tb - d_lo * (delta - t))  # noqa: E731
+    z = np.zeros_like(ta)
+    return np.maximum(np.maximum(up(z), up(delta + z)), up(ts))
+
+
+def _lower(ta, tb, d_lo, d_hi, delta):
+    """The lower bound of :func:`_bounds`."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tl = np.clip(np.nan_to_num((tb - ta - d_hi * delta) / (d_lo - d_hi)), 0.0, delta)
     lo = lambda t: np.maximum(ta + d_lo * t, tb - d_hi * (delta - t))  # noqa: E731
     z = np.zeros_like(ta)
-    ub = np.maximum(np.maximum(up(z), up(delta + z)), up(ts))
-    lb = np.minimum(np.minimum(lo(z), lo(delta + z)), lo(tl))
-    return ub, lb
+    return np.minimum(np.minimum(lo(z), lo(delta + z)), lo(tl))
 
 
 def _rate_bounds(dyn, robot, Q, V, acc_lo, acc_hi, wr):
@@ -157,8 +167,8 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
         M_all = np.zeros((len(starts),) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
         M_all[need] = Mb
         J = np.einsum("sji,si->sj", M_all[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
-    ub = _bounds(ta + J, tb + J, d_lo[c], d_hi[c], h)[0]
-    lb = _bounds(ta - J, tb - J, d_lo[c], d_hi[c], h)[1]
+    lo_c, hi_c = d_lo[c], d_hi[c]
+    ub, lb = _upper(ta + J, tb + J, lo_c, hi_c, h), _lower(ta - J, tb - J, lo_c, hi_c, h)
     return (ub <= lim) & (lb >= -lim) & same[c][:, None]
 
 

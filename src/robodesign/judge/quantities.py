@@ -135,6 +135,27 @@ def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
     return int(close[0]) if len(close) == 1 else None
 
 
+_RNEA_ROWS = getattr(pin, "rneaInParallel", None)  # pinocchio built with OpenMP
+
+
+def rnea_rows(pool, Q, V, A) -> np.ndarray:
+    """(N, nv) pinocchio's RNEA of every row of Q, V, A (N, nq / nv) on the model and data of ``pool`` (a
+    ``pin.ModelPool`` of size 1): one ``pin.rneaInParallel`` call on one thread, the same ``rnea`` per row as
+    ``pin.rnea`` (the same numbers, bit for bit: tests/test_judge_rnea_rows.py) without a Python call per row;
+    a loop of ``pin.rnea`` where pinocchio was built without OpenMP. (``rneaInParallel`` sets OpenMP's thread
+    count of the calling thread to 1.)"""
+    Q, V, A = (np.asarray(x, dtype=float) for x in (Q, V, A))
+    m = pool.getModel(0)
+    if _RNEA_ROWS is not None and len(Q):
+        # (nv, N); eigenpy hands a matrix with one row or column back as a vector
+        return np.ascontiguousarray(np.reshape(_RNEA_ROWS(1, pool, Q.T, V.T, A.T), (m.nv, len(Q))).T)
+    d = pool.getData(0)
+    out = np.empty((len(Q), m.nv))
+    for k, (q, v, a) in enumerate(zip(Q, V, A)):
+        out[k] = pin.rnea(m, d, q, v, a)
+    return out
+
+
 class TrajectoryQuantities:
     """Lazily computed quantities of one trajectory of ``robot`` in ``task`` (see the module docstring).
 
@@ -389,23 +410,19 @@ class TrajectoryQuantities:
         return W
 
     @cached_property
-    def _link_model(self):
-        """A copy of the model without armature and its data: what :meth:`Robot.rnea
+    def _link_pool(self):
+        """pinocchio's ModelPool of one copy of the model without armature (and its data): what :meth:`Robot.rnea
         <robodesign.model.robot.Robot.rnea>` calls pinocchio's RNEA on."""
-        m = pin.Model(self.robot.model)
-        m.armature = np.zeros(self.robot.model.nv)
-        return m, m.createData()
+        pool = pin.ModelPool(self.robot.model, 1)
+        pool.getModel(0).armature = np.zeros(self.robot.model.nv)
+        return pool
 
     def _rnea(self, Q, V, A, W: Optional[np.ndarray]) -> np.ndarray:
-        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows (the same pinocchio
-        call per row, without its per-row checks); rows under a wrench through it."""
+        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows: pinocchio's RNEA of
+        every row in one call (:func:`rnea_rows`); rows under a wrench through ``Robot.link_torques``."""
         if W is not None and np.any(W):
             return self.robot.link_torques(Q, V, A, W)
-        m, d = self._link_model
-        out = np.empty((len(Q), self.robot.dof))
-        for k, (q, v, a) in enumerate(zip(Q, V, A)):
-            out[k] = pin.rnea(m, d, q, v, a)
-        return out
+        return rnea_rows(self._link_pool, Q, V, A)
 
     @cached_property
     def link_torques(self) -> np.ndarray:

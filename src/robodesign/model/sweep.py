@@ -27,7 +27,9 @@ displacement from its pose at the query, relative to the other (at the samples, 
 below the clearance less 4·tolerance (:meth:`PosedArms.extend <robodesign.model.sweep_bounds.PosedArms.extend>`).
 Inside a step the static bound stays: a contact is found in the same step, from a query at the same sample, as without
 them. Only GJK's warm start (it follows the queries made before on the pair) can move the instant found inside
-a grazing contact, by about the tolerance over the rate of approach.
+a grazing contact, by about the tolerance over the rate of approach. No pair is queried over the steps that lower
+bounds of its clearance certify (:mod:`~robodesign.model.sweep_clearance`: the obstacles' distance fields, the
+geometries' bounding spheres).
 """
 from __future__ import annotations
 
@@ -42,7 +44,8 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign.model.robot import Robot
-from robodesign.model.sweep_bounds import PosedArms
+from robodesign.model.sweep_bounds import PosedArms, StaticSteps
+from robodesign.model.sweep_clearance import due_pairs, open_steps, robot_spheres
 
 
 @dataclass(frozen=True)
@@ -269,23 +272,6 @@ def _pair_arms(tree: "_Tree", R: np.ndarray, ab: List[Tuple[int, int]], env: np.
     return W, owner
 
 
-class _LazySteps:
-    """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
-    inside a step)."""
-
-    def __init__(self, dQ: np.ndarray, W: np.ndarray):
-        self.dQ, self.W = dQ, W
-        self._a: Optional[np.ndarray] = None
-
-    def array(self) -> np.ndarray:
-        if self._a is None:
-            self._a = self.dQ @ self.W
-        return self._a
-
-    def __getitem__(self, kc):
-        return self.array()[kc]
-
-
 _SETUPS: dict = {}  # _setup_key → (module set, _setup's attributes): the set-up of robots built alike
 _SETUPS_LOCK = threading.Lock()
 
@@ -330,6 +316,7 @@ def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[
     # in the frame of the other (-1: an obstacle's, the world)
     mov: List[int] = []
     ref: List[int] = []
+    obst = [cps[k][1] if b else -1 for k, b in zip(pairs, is_env)]  # the obstacle of a robot–obstacle pair
     if posed is not None:
         box = posed.box_half_diagonal
         for k in pairs:
@@ -341,7 +328,8 @@ def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[
     names = [o.name for o in gm.geometryObjects]
     return {"pairs": pairs,  # what distances() queries: collision pair indices here
             "margins": margins, "is_env": is_env, "W": W, "_owner": owner, "_posed": posed, "_mov": mov,
-            "_ref": ref, "pair_names": [(names[cps[k][0]], names[cps[k][1]]) for k in pairs]}
+            "_ref": ref, "pair_names": [(names[cps[k][0]], names[cps[k][1]]) for k in pairs], "_obst": obst,
+            "_spheres": robot_spheres(tree.geom_geometry) if posed is not None else None}
 
 
 class SweepChecker:
@@ -356,6 +344,8 @@ class SweepChecker:
     _posed: Optional[PosedArms]
     _mov: List[int]
     _ref: List[int]
+    _obst: List[int]  # the obstacle geometry of a robot–obstacle pair, −1 for a self pair
+    _spheres: Optional[Tuple[np.ndarray, np.ndarray]]  # the robot geometries' spheres (sweep_clearance)
     pair_names: List[Tuple[str, str]]
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
@@ -403,7 +393,7 @@ class SweepChecker:
         out.margins, out.is_env = self.margins[cols], self.is_env[cols]
         out.pair_names = [self.pair_names[c] for c in cols]
         if getattr(self, "_mov", None):
-            out._mov, out._ref = [self._mov[c] for c in cols], [self._ref[c] for c in cols]
+            out._mov, out._ref, out._obst = ([x[c] for c in cols] for x in (self._mov, self._ref, self._obst))
         out.queries = 0
         return out
 
@@ -437,9 +427,7 @@ class SweepChecker:
         if P == 0 or n == 0:
             return []
         if n == 1:
-            d = self.distances(Q[0], range(P))
-            return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
-                    for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
+            return self._at_one_sample(Q[0], first_only)
         seg, sched, cum, cum_rows, TG = self._bounds(Q, path, poses)
         posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         ext = 4 * self.tolerance
@@ -449,11 +437,12 @@ class SweepChecker:
         # priority queue of (sample index where the pair must be re-checked, pair)
         heap = [(0, c) for c in range(P)]
         heapq.heapify(heap)
+        skip = open_steps(self, TG, sched, seg.dQ, ext) if not first_only else None  # (sweep_clearance)
         while heap:
             k = heap[0][0]
-            due = []
-            while heap and heap[0][0] == k:
-                due.append(heapq.heappop(heap)[1])
+            due = due_pairs(heap, k, n, skip)
+            if not due:
+                continue
             d = self.distances(Q[k], due)
             certified = (posed.certify(due, d, k, self.margins, self.is_env, cum_rows, TG, mov, ref, sched, ext,
                                        _EXTEND_SELF) if posed is not None else [-2] * len(due))
@@ -476,7 +465,8 @@ class SweepChecker:
                 if nxt >= n - 1:
                     continue  # certified to the end
                 if nxt > k:
-                    nxt2 = self._ahead(Q, k, c, free, row, nxt) if is_env[c] else nxt
+                    ahead = is_env[c] and (skip is None or skip[c, nxt] == nxt)  # (not where the bounds go on)
+                    nxt2 = self._ahead(Q, k, c, free, row, nxt) if ahead else nxt
                     if nxt2 is not None:
                         heapq.heappush(heap, (nxt2, c))
                     continue
@@ -498,6 +488,12 @@ class SweepChecker:
         events.sort(key=lambda e: (e.sample, e.s))
         return events
 
+    def _at_one_sample(self, q: np.ndarray, first_only: bool) -> List[CollisionEvent]:
+        """:meth:`check` of a motion of one sample: the pairs in contact there."""
+        d = self.distances(q, range(len(self.pairs)))
+        return [CollisionEvent(0, 0.0, *self.pair_names[c], float(d[c]), bool(self.is_env[c]))
+                for c in np.nonzero(d <= self.margins)[0]][: 1 if first_only else None]
+
     def _bounds(self, Q: np.ndarray, path: Optional[np.ndarray], poses: Optional[np.ndarray] = None) -> tuple:
         """(seg, sched, cum, cum_rows, TG) of :meth:`check`: the step bounds (n−1, P), the schedule's (the posed
         ones where given), its running sums (n, P) and their rows per pair, and the geometry poses (None: no
@@ -507,7 +503,7 @@ class SweepChecker:
         posed = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         # the schedule of the sample queries: the posed bounds where given; inside a step (_advance) always seg
         # (dQ @ W), so that every contact is found from the same sample with the same sub-steps (module docstring)
-        seg = _LazySteps(dQ, self.W)
+        seg = StaticSteps(dQ, self.W)
         if posed is None:
             sched = seg.array()
             cum = np.concatenate([np.zeros((1, len(self.pairs))), np.cumsum(sched, axis=0)])  # (n, P)

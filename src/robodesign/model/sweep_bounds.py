@@ -13,6 +13,23 @@ import numpy as np
 from robodesign.model.robot import Robot
 
 
+class StaticSteps:
+    """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
+    inside a step)."""
+
+    def __init__(self, dQ: np.ndarray, W: np.ndarray):
+        self.dQ, self.W = dQ, W
+        self._a: Optional[np.ndarray] = None
+
+    def array(self) -> np.ndarray:
+        if self._a is None:
+            self._a = self.dQ @ self.W
+        return self._a
+
+    def __getitem__(self, kc):
+        return self.array()[kc]
+
+
 class PosedArms:
     """Lever arms of the motion's own poses, per step: a revolute joint j moves a point p of geometry g at most
     dist(p, axis_j)·|q̇_j|, and dist(p, axis_j) ≤ ρ_jg + r_g, with ρ_jg the distance of g's frame origin from the

@@ -233,6 +233,89 @@ def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext
     return out
 
 
+@njit(cache=True, nogil=True)
+def obstacle_bounds(TG, geo, cen, rad, oR, ot, lo, hi, grid_lo, grid_dim, h, grid, out, unknown):  # pragma: no cover
+    """Lower bounds out[k, i] of the distance from robot geometry geo[i] (a sphere around it: centre cen[i] in the
+    geometry's frame, radius rad[i]) at sample k (TG: the geometries' poses) to one obstacle: the sphere centre's
+    distance to the obstacle's box (oR, ot: world → obstacle frame; lo, hi: the box there) or, where larger, its
+    grid cell's exact distance (grid: the obstacle's distance field, cells of edge h from grid_lo, NaN unknown)
+    minus the centre's distance to the cell's centre (distance is 1-Lipschitz), less rad[i] (model.collision_cull's
+    bounds, as geometry_kernel.survivors reads them); −inf for a centre that is no finite point. The unknown cells met
+    are written to ``unknown`` (flat indices into grid, with repeats); returns how many."""
+    nu = 0
+    for i in range(len(geo)):
+        g = geo[i]
+        for k in range(TG.shape[0]):
+            c0 = TG[k, g, 0, 0] * cen[i, 0] + TG[k, g, 0, 1] * cen[i, 1] + TG[k, g, 0, 2] * cen[i, 2] + TG[k, g, 0, 3]
+            c1 = TG[k, g, 1, 0] * cen[i, 0] + TG[k, g, 1, 1] * cen[i, 1] + TG[k, g, 1, 2] * cen[i, 2] + TG[k, g, 1, 3]
+            c2 = TG[k, g, 2, 0] * cen[i, 0] + TG[k, g, 2, 1] * cen[i, 1] + TG[k, g, 2, 2] * cen[i, 2] + TG[k, g, 2, 3]
+            if not (np.isfinite(c0) and np.isfinite(c1) and np.isfinite(c2)):
+                out[k, i] = -np.inf  # (no cell of a point that is no number or infinitely far)
+                continue
+            dd = 0.0
+            for a in range(3):
+                xa = oR[a, 0] * (c0 - ot[0]) + oR[a, 1] * (c1 - ot[1]) + oR[a, 2] * (c2 - ot[2])
+                e = max(lo[a] - xa, xa - hi[a], 0.0)
+                dd += e * e
+            b = np.sqrt(dd)
+            if grid_dim[0] > 0:
+                inside = True
+                flat = 0
+                dc = 0.0
+                for a in range(3):
+                    ca = c0 if a == 0 else c1 if a == 1 else c2
+                    fa = np.floor(ca / h)
+                    if not (grid_lo[a] <= fa < grid_lo[a] + grid_dim[a]):  # (compared as floats: no overflow)
+                        inside = False
+                        break
+                    ia = int(fa)
+                    la = ia - grid_lo[a]
+                    flat = flat * grid_dim[a] + la
+                    e = ca - (ia + 0.5) * h
+                    dc += e * e
+                if inside:
+                    v = grid[flat]
+                    if np.isnan(v):
+                        unknown[nu] = flat
+                        nu += 1
+                    elif v - np.sqrt(dc) > b:
+                        b = v - np.sqrt(dc)
+            out[k, i] = b - rad[i]
+    return nu
+
+
+@njit(cache=True, nogil=True)
+def sphere_gaps(TG, cen, a, b, rad_sum, out):  # pragma: no cover - compiled
+    """out[k, i]: the distance between the centres of the spheres of robot geometries a[i] and b[i] (centres cen in
+    the geometries' frames) at sample k (TG: the geometries' poses), less rad_sum[i]."""
+    n, G = TG.shape[0], TG.shape[1]
+    C = np.empty((n, G, 3))
+    for k in range(n):
+        for g in range(G):
+            for r in range(3):
+                C[k, g, r] = TG[k, g, r, 0] * cen[g, 0] + TG[k, g, r, 1] * cen[g, 1] + TG[k, g, r, 2] * cen[g, 2] \
+                    + TG[k, g, r, 3]
+    for i in range(len(a)):
+        for k in range(n):
+            d0, d1, d2 = C[k, a[i], 0] - C[k, b[i], 0], C[k, a[i], 1] - C[k, b[i], 1], C[k, a[i], 2] - C[k, b[i], 2]
+            out[k, i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - rad_sum[i]
+
+
+@njit(cache=True, nogil=True)
+def open_steps(F, sched, fastest, wsum, ext, slack, share, out):  # pragma: no cover - compiled
+    """out[c, k]: the first step ≥ k (n − 1: none) that the clearances F (n, P) at the samples do not certify, step
+    i certified when ((F[i, c] + F[i + 1, c]) − sched[i, c]·slack)·0.5 − 1e-12 exceeds
+    max(ext, fastest[i]·(wsum[c] / share)) (model.sweep_clearance.open_steps)."""
+    n, P = F.shape
+    for c in range(P):
+        nxt = n - 1
+        for k in range(n - 2, -1, -1):
+            keep = max(ext, fastest[k] * (wsum[c] / share))
+            if not (((F[k, c] + F[k + 1, c]) - sched[k, c] * slack) * 0.5 - 1e-12 > keep):
+                nxt = k
+            out[c, k] = nxt
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -246,10 +329,15 @@ def _warm() -> None:
     extend(TG, 0, -1, np.zeros((1, 3)), f, 0, 0, np.zeros((1, 1)), np.zeros((1, 2)), 0, 1.0, 1.0)
     certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
             1e-6, 1.0, False)
+    obstacle_bounds(TG, i, np.zeros((1, 3)), f, np.eye(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3, np.int64),
+                    np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64))
+    sphere_gaps(TG, np.zeros((1, 3)), i, i, f, np.zeros((2, 1)))
+    open_steps(np.zeros((2, 1)), np.zeros((1, 1)), f, f, 1e-6, 1.0, 500.0, np.zeros((1, 1), np.int64))
 
 
 KERNELS = KernelModule("robodesign.model.sweep_kernel", __file__, posed_arms,
-                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend", "certify"), _warm)
+                       ("posed_arms", "gather", "running_sums", "geometry_poses", "extend", "certify",
+                        "obstacle_bounds", "sphere_gaps", "open_steps"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 
