@@ -80,7 +80,6 @@ class BaseBounds:
 
     @cached_property
     def free(self) -> Tuple[int, ...]:
-        """The free parameters' indices (those with lower < upper)."""
         return tuple(i for i in range(4) if self.upper[i] > self.lower[i])
 
     def pose(self, params: Sequence[float]) -> np.ndarray:
@@ -89,9 +88,7 @@ class BaseBounds:
             full[i] = float(v)
         return self.nominal @ homogeneous(rot_z(full[3]), full[:3])
 
-    def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:
-        """Whether ``params`` lie in the bounds and their pose (``pose`` when given: ``self.pose(params)``) in the
-        tolerance."""
+    def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:   # (pose: made already)
         free = self.free
         if len(params) != len(free):
             return False
@@ -484,7 +481,6 @@ class SearchSpace:
         return np.asarray(self.goals, dtype=float).reshape(-1, 4)
 
     def _shortfall(self, order: Tuple[str, ...], params: Sequence[float], pose: Optional[np.ndarray] = None) -> float:
-        """reach_shortfall of ``order`` at the base ``params`` (``pose``: their base pose, when made already)."""
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
@@ -509,8 +505,8 @@ class SearchSpace:
         return float(sum(max(0.0, b - a) for i, a in enumerate(taus) for b in taus[i + 1:]) / top)
 
     def _clear(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:
-        """Whether the base position of ``params`` (``pose``: their base pose, when made already) lies outside every
-        primitive obstacle (meshes are left to the pipeline's collision checks)."""
+        """Whether the base position of ``params`` (``pose``: made already) lies outside every primitive obstacle
+        (meshes are left to the pipeline's collision checks)."""
         if not self.obstacles:
             return True
         from robodesign.formats.geometry import contains_point
@@ -550,8 +546,7 @@ class SearchSpace:
                 params = tuple(full[i] for i in free)
             else:
                 params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-            T = bb.pose(params) if len(params) == len(free) else None   # (made once per proposal)
-            s = self._shortfall(order, params, T) if bb.valid(params, T) else None
+            s = self._shortfall(order, params, T) if bb.valid(params, T := bb.pose(params)) else None  # (one pose)
             if s is None or s != 0.0 and s >= best_s or not self._clear(params, T):
                 continue  # invalid, or neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
