@@ -95,7 +95,7 @@ import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
-from robodesign.solvers.toppra_loop import rest_to_rest
+from robodesign.solvers.toppra_loop import pass_velocities
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
@@ -620,22 +620,17 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     x0 = x_vel / 4.0
     terms = _PathTerms(robot, path, grid, use_torque)   # RNEA along the path once, not once per pass
     p = 0
+    xbound = vel.compute_constraint_params(path, grid)[-1]   # the velocity constraint's x bounds, once per path
     while p < passes:
-        dyn = _DYN_CLS(robot, amax, tau, x0, use_torque, terms)
-        algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
-        sd_vec = rest_to_rest(algo)
-        if sd_vec is None:   # a branch of toppra's own loop (numerical trouble, uncontrollable): toppra decides
-            algo.compute_parameterization(0.0, 0.0)
-            pd = algo.problem_data
-            ok = pd.return_code == tp.algorithm.ParameterizationReturnCode.Ok and pd.sd_vec is not None
-            sd_vec = pd.sd_vec if ok else None
+        sd_vec, code = pass_velocities(tp, vel, _DYN_CLS(robot, amax, tau, x0, use_torque, terms), path, grid,
+                                        xbound)
         if sd_vec is None:
             if sd is not None:
                 break  # keep the previous (feasible) pass
             if use_torque and np.max(x0 / x_vel) > 1e-4:
                 x0 = x0 / 16.0
                 continue
-            raise TimingError(f"toppra failed: {pd.return_code}")
+            raise TimingError(f"toppra failed: {code}")
         sd = np.maximum(np.asarray(sd_vec, float), 0.0)
         x_next = np.maximum(sd ** 2, 1e-4 * x_vel)
         p += 1
