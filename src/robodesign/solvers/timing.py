@@ -95,6 +95,7 @@ import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
+from robodesign.solvers.rnea_batch import link_model, rnea_rows
 from robodesign.solvers.toppra_loop import pass_velocities
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
@@ -119,12 +120,16 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     has there (robodesign.judge.motion): the step's own ddq[k] just after the sample and the previous step's
     ddq[k−1] just before it (the samples are a piecewise-constant acceleration, so these are the motion's
     one-sided accelerations; the checker's ``joint.tau`` rule tests both)."""
-    after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq)
-    if len(traj.t) < 2:
+    n = len(traj.t)
+    before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]]) if n >= 2 else traj.ddq[:0]
+    # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
+    # the link-side RNEA of both in one batched call (the same numbers as Robot.link_torques' call per sample)
+    link = rnea_rows(link_model(robot), np.vstack([traj.q, traj.q[:len(before_acc)]]),
+                     np.vstack([traj.dq, traj.dq[:len(before_acc)]]), np.vstack([traj.ddq, before_acc]))
+    after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
+    if n < 2:
         return np.abs(after)
-    before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]])
-    # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly
-    before = robot.drivetrain_torques(traj.q, traj.dq, before_acc)
+    before = robot.drivetrain_torques(traj.q, traj.dq, before_acc, link_torques=link[n:])
     return np.maximum(np.abs(after), np.abs(before))
 
 
@@ -486,25 +491,22 @@ class _PathTerms:
         self.g = self.a = self.bR = self.bL = None
         if not use_torque:
             return
-        import pinocchio as pin
-        model = robot.model
-        data = model.createData()
         q = path(grid, 0)
         qs, qss_r, qss_l = self.qs, self.qss_r, self.qss_l
-        N1, dof = q.shape
-        G, A, BR = np.empty((N1, dof)), np.empty((N1, dof)), np.empty((N1, dof))
-        BL = BR if qss_l is qss_r else np.empty((N1, dof))
-        same = np.all(qss_l == qss_r, axis=1)     # where the left and right limits of q'' agree
-        zero = np.zeros(dof)
-        rnea = pin.rnea
-        for i in range(N1):
-            g = rnea(model, data, q[i], zero, zero).copy()
-            G[i] = g
-            A[i] = rnea(model, data, q[i], zero, qs[i]) - g
-            BR[i] = rnea(model, data, q[i], qs[i], qss_r[i]) - g
-            if BL is not BR:
-                BL[i] = BR[i] if same[i] else rnea(model, data, q[i], qs[i], qss_l[i]) - g
-        self.g, self.a, self.bR, self.bL = G, A, BR, BL
+        N1 = len(q)
+        left = ~np.all(qss_l == qss_r, axis=1) if qss_l is not qss_r else np.zeros(N1, bool)  # own left limits
+        zero = np.zeros_like(q)
+        # per grid point rnea(q, 0, 0), rnea(q, 0, q'), rnea(q, q', q''⁺) and where it differs rnea(q, q', q''⁻):
+        # one batched call (rnea_batch: the same numbers as a call each)
+        T = rnea_rows(robot.model, np.vstack([q, q, q, q[left]]), np.vstack([zero, zero, qs, qs[left]]),
+                      np.vstack([zero, qs, qss_r, qss_l[left]]))
+        G = T[:N1]
+        BR = T[2 * N1:3 * N1] - G
+        BL = BR
+        if qss_l is not qss_r:
+            BL = BR.copy()
+            BL[left] = T[3 * N1:] - G[left]
+        self.g, self.a, self.bR, self.bL = G, T[N1:2 * N1] - G, BR, BL
 
 
 def _dynamics_constraint_class():
