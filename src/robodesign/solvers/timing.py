@@ -611,7 +611,8 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     vel = _velocity_constraint(vmax)
     tau = np.asarray(robot.tau_max, float)
     use_torque = bool(torque_limits and np.any(np.isfinite(tau)))
-    qs = np.abs(path(grid, 1))
+    terms = _PathTerms(robot, path, grid, use_torque)   # RNEA along the path once, not once per pass
+    qs = np.abs(terms.qs)
     with np.errstate(divide="ignore", over="ignore"):  # tiny path derivatives: the bound is +inf anyway
         x_vel = np.min(np.where(qs > 1e-12, (vmax / np.maximum(qs, 1e-300)) ** 2, np.inf), axis=1)
     x_vel = np.minimum(x_vel, 1e6)
@@ -620,7 +621,6 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     # viscous tangent points: pass 1 at a quarter of the velocity-limit curve (halving it on failure),
     # later passes at the previous solution (which stays feasible, so they never get slower)
     x0 = x_vel / 4.0
-    terms = _PathTerms(robot, path, grid, use_torque)   # RNEA along the path once, not once per pass
     p = 0
     xbound = vel.compute_constraint_params(path, grid)[-1]   # the velocity constraint's x bounds, once per path
     while p < passes:

@@ -81,12 +81,13 @@ def seidel_rows(A: np.ndarray, B: np.ndarray, C: np.ndarray, F: np.ndarray, h: n
     (``xbound`` (N+1, 2)), or None unless every row of F picks one column with ±1 and every coefficient is finite.
     seidelWrapper computes A·Fᵀ, B·Fᵀ and C·Fᵀ − h with BLAS, whose sums start at +0: for such an F that is the
     picked column times ±1, plus 0 (−0 becomes +0), the same numbers bit for bit (tests/test_topp_kernel.py)."""
-    nz = F != 0
-    if not (np.all(nz.sum(axis=1) == 1) and np.all(np.abs(F[nz]) == 1.0)):
-        return None
-    col = np.argmax(nz, axis=1)
-    sign = F[np.arange(len(F)), col]
+    row, col = np.nonzero(F)
     N1, k = len(A), len(F)
+    if not (len(row) == k and np.array_equal(row, np.arange(k))):
+        return None
+    sign = F[row, col]
+    if not np.all(np.abs(sign) == 1.0):
+        return None
     a, b, c = np.zeros((N1, 2 + k)), np.zeros((N1, 2 + k)), np.zeros((N1, 2 + k))
     a[:, 2:] = A[:, col] * sign + 0.0
     b[:, 2:] = B[:, col] * sign + 0.0
