@@ -73,8 +73,11 @@ def _compare(robot, waypoints, x0_value, use_torque=True):
     dyn = timing._dynamics_constraint_class()(robot, amax, np.asarray(robot.tau_max, float),
                                                np.full(len(grid), x0_value), use_torque, terms)
     vel = timing._velocity_constraint(vmax)
-    fast = toppra_loop.compiled_rest_to_rest(dyn.compute_constraint_params(path, grid),
-                                             vel.compute_constraint_params(path, grid)[-1], grid)
+    xbound = vel.compute_constraint_params(path, grid)[-1]
+    fast = toppra_loop.compiled_rest_to_rest(dyn, path, grid, xbound)
+    dyn.terms = None    # seidelWrapper's coefficients by compute_constraint_params and seidel_rows instead
+    generic = toppra_loop.compiled_rest_to_rest(dyn, path, grid, xbound)
+    assert (fast is None) == (generic is None) and (fast is None or fast.tobytes() == generic.tobytes())
     algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
     algo.compute_parameterization(0.0, 0.0)
     pd = algo.problem_data
@@ -166,3 +169,37 @@ def test_time_parameterize_is_the_same_without_the_kernel(kernel, ptp3_paths, mo
             assert _timed(r, path) == fast
         timed += not isinstance(fast, str)
     assert timed >= len(ptp3_paths) // 2
+
+
+def _rows_both_ways(robot, waypoints, x0, use_torque=True):
+    path = timing.BlendedPolyline(waypoints, 0.05)
+    grid = path.gridpoints(0.02)
+    terms = timing._PathTerms(robot, path, grid, use_torque)
+    dyn = timing._dynamics_constraint_class()(robot, timing._finite(robot.ddq_max), np.asarray(robot.tau_max, float),
+                                               x0(len(grid)), use_torque, terms)
+    xbound = timing._velocity_constraint(timing._finite(robot.dq_max)).compute_constraint_params(path, grid)[-1]
+    numpy_rows = toppra_loop.seidel_rows(*dyn.compute_constraint_params(path, grid)[:5], xbound)
+    compiled = toppra_loop._compiled_rows(dyn, terms, np.diff(grid), xbound)
+    assert (numpy_rows is None) == (compiled is None)
+    if compiled is not None:
+        for x, y in zip(compiled, numpy_rows):
+            assert x.tobytes() == y.tobytes()
+    return compiled is not None
+
+
+def test_compiled_constraint_rows_are_the_numpy_ones(kernel, ptp3_paths):
+    """topp_kernel.constraint_rows against DynamicsConstraint.compute_constraint_params + seidel_rows: torque rows on
+    and off, limits scaled, a joint without a torque limit, viscous tangent points below the 1e-8 floor, NaN."""
+    robot, path = ptp3_paths[0]
+    unlimited = _scaled(robot, 1.0)
+    unlimited.tau_max = np.where(np.arange(robot.dof) == 2, np.inf, robot.tau_max)
+    rng = np.random.default_rng(5)
+    answered = 0
+    for r in (robot, _scaled(robot, 0.4), unlimited):
+        for x0 in (lambda n: np.full(n, 0.3), lambda n: rng.uniform(0.0, 3.0, n),
+                   lambda n: np.where(np.arange(n) % 3 == 0, 1e-12, 0.5)):
+            for _, p in ptp3_paths[:2]:
+                answered += _rows_both_ways(r, p, x0)
+        answered += _rows_both_ways(r, path, lambda n: np.full(n, 1.0), use_torque=False)
+    assert answered == 3 * 7
+    assert not _rows_both_ways(robot, path, lambda n: np.where(np.arange(n) == 4, np.nan, 0.5))

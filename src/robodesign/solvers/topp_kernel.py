@@ -282,6 +282,79 @@ def rest_to_rest(a, b, c, low, high, deltas, sd):  # pragma: no cover - compiled
     return _forward(a, b, c, low, high, deltas, K, sd)
 
 
+@njit(cache=True, nogil=True)
+def _point_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, finite, fv, fc, use_torque, PA, PBR, PBL, PC):
+    """The per-grid-point rows (v = [q̈; τ_up; τ_lo] coefficients a, b right and left, c) of the time scaling's
+    DynamicsConstraint.compute_constraint_params (solvers/timing.py), the same operations per element as its
+    numpy passes (x0 floored at 1e-8, NaN kept; the viscous tangent's β and γ; rows of an infinite torque limit 0)."""  # pragma: no cover - compiled
+    N1, dof = qs.shape
+    for p in range(N1):
+        x = x0[p]
+        sq = np.sqrt(x if (x != x or x > 1e-8) else 1e-8)
+        for j in range(dof):
+            PA[p, j] = qs[p, j]
+            PBR[p, j] = qss_r[p, j]
+            PBL[p, j] = qss_l[p, j]
+            PC[p, j] = 0.0
+            if not use_torque:
+                continue
+            v = qs[p, j]
+            beta_up = fv[j] * v / (2 * sq) if v > 0 else 0.0
+            gam_up = fc[j] + fv[j] * v * sq / 2 if v > 0 else 0.0
+            beta_lo = fv[j] * -v / (2 * sq) if v < 0 else 0.0
+            gam_lo = fc[j] + fv[j] * -v * sq / 2 if v < 0 else 0.0
+            f = finite[j]
+            PA[p, dof + j] = ai[p, j] if f else 0.0
+            PA[p, 2 * dof + j] = ai[p, j] if f else 0.0
+            PBR[p, dof + j] = bri[p, j] + beta_up if f else 0.0
+            PBR[p, 2 * dof + j] = bri[p, j] - beta_lo if f else 0.0
+            PBL[p, dof + j] = bli[p, j] + beta_up if f else 0.0
+            PBL[p, 2 * dof + j] = bli[p, j] - beta_lo if f else 0.0
+            PC[p, dof + j] = g[p, j] + gam_up if f else 0.0
+            PC[p, 2 * dof + j] = g[p, j] - gam_lo if f else 0.0
+
+
+@njit(cache=True, nogil=True)
+def constraint_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, amax, tmax, fv, fc, use_torque, deltas, xbound,
+                    a, b, c, low, high):  # pragma: no cover - compiled
+    """seidelWrapper's coefficients of TOPPRA([velocity constraint, DynamicsConstraint]) straight from the path terms:
+    what DynamicsConstraint.compute_constraint_params (interpolation: stage i at s_i⁺ and at s_{i+1}⁻ with
+    x + 2Δu) followed by toppra_loop.seidel_rows (its F picks q̈, −q̈, τ_up, −τ_lo; +0 after each pick; c minus
+    the limits) give, bit for bit, into a, b, c (N+1, 2 + 2k) and low, high (N+1, 2). False (nothing usable) when a
+    coefficient is not finite (seidel_rows' case)."""
+    N1, dof = qs.shape
+    nb = 3 if use_torque else 1
+    m = nb * dof
+    k = 4 * dof if use_torque else 2 * dof      # rows of F: ±q̈, and τ_up, −τ_lo with torques
+    finite = np.empty(dof, np.bool_)
+    for j in range(dof):
+        finite[j] = np.isfinite(tmax[j])
+    PA, PBR, PBL, PC = np.empty((N1, m)), np.empty((N1, m)), np.empty((N1, m)), np.empty((N1, m))
+    _point_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, finite, fv, fc, use_torque, PA, PBR, PBL, PC)
+    for p in range(N1):
+        q = p + 1 if p + 1 < N1 else p
+        two_d = 2 * deltas[p] if p + 1 < N1 else 0.0
+        for r in range(k):
+            col = r if r < dof else r - dof
+            sign = 1.0 if (r < dof or (use_torque and 2 * dof <= r < 3 * dof)) else -1.0
+            lim = amax[col % dof] if r < 2 * dof else (tmax[col % dof] if finite[col % dof] else 1.0)
+            a[p, 2 + r] = PA[p, col] * sign + 0.0
+            b[p, 2 + r] = PBR[p, col] * sign + 0.0
+            c[p, 2 + r] = (PC[p, col] * sign + 0.0) - lim
+            second = PA[q, col] + two_d * PBL[q, col] if p + 1 < N1 else PA[q, col]
+            a[p, 2 + k + r] = second * sign + 0.0
+            b[p, 2 + k + r] = PBL[q, col] * sign + 0.0
+            c[p, 2 + k + r] = (PC[q, col] * sign + 0.0) - lim
+        for r in range(2, 2 + 2 * k):
+            if not (np.isfinite(a[p, r]) and np.isfinite(b[p, r]) and np.isfinite(c[p, r])):
+                return False
+        low[p, 0] = VAR_MIN
+        high[p, 0] = VAR_MAX
+        low[p, 1] = VAR_MIN if VAR_MIN > xbound[p, 0] else xbound[p, 0]
+        high[p, 1] = VAR_MAX if VAR_MAX < xbound[p, 1] else xbound[p, 1]
+    return True
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -290,9 +363,13 @@ def _warm() -> None:
     a = np.zeros((2, 3))
     rest_to_rest(a, a.copy(), a.copy() - 1.0, np.full((2, 2), VAR_MIN), np.full((2, 2), VAR_MAX), np.ones(1),
                  np.zeros(2))
+    z = np.zeros((2, 1))
+    one = np.ones(1)
+    constraint_rows(z, z, z, z, z, z, z, np.ones(2), one, one, one, one, True, one, np.zeros((2, 2)),
+                    np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
 
 
-KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest, ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected"), _warm)
+KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest, ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows", "_point_rows"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

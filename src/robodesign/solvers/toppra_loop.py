@@ -102,25 +102,53 @@ def seidel_rows(A: np.ndarray, B: np.ndarray, C: np.ndarray, F: np.ndarray, h: n
     return a, b, c, low, high
 
 
-def compiled_rest_to_rest(params, xbound: np.ndarray, gridpoints: np.ndarray) -> Optional[np.ndarray]:
+def compiled_rest_to_rest(dyn, path, gridpoints: np.ndarray, xbound: np.ndarray) -> Optional[np.ndarray]:
     """:func:`rest_to_rest`'s path velocities by the compiled kernel (:mod:`robodesign.solvers.topp_kernel`) for
-    TOPPRA([velocity constraint, constraint], path, gridpoints, "seidel"): ``params`` the constraint's
-    ``compute_constraint_params`` (identical over the grid), ``xbound`` the velocity constraint's. None when the
-    kernel is not compiled yet, the problem is not of that form, or the kernel is not sure to follow toppra (then
-    toppra runs: the same numbers either way)."""
+    TOPPRA([velocity constraint, dyn], path, gridpoints, "seidel") with ``xbound`` the velocity constraint's x bounds.
+    seidelWrapper's coefficients come from the compiled ``constraint_rows`` when ``dyn`` holds its path terms on
+    this grid (the time scaling's DynamicsConstraint), else from ``dyn.compute_constraint_params`` and
+    :func:`seidel_rows`. None when the kernel is not compiled yet, the problem is not of that form, or the kernel
+    is not sure to follow toppra (then toppra runs: the same numbers either way)."""
     from robodesign.solvers import topp_kernel
-    A, B, C, F, h, ubound, xb2 = params
-    if ubound is not None or xb2 is not None or A is None or not topp_kernel.ready():
+    if not topp_kernel.ready():
         return None
     grid = np.asarray(gridpoints, dtype=float)
     deltas = grid[1:] - grid[:-1]
     if not np.all(deltas > 0):
         return None
-    rows = seidel_rows(A, B, C, F, h, xbound)
+    tm = getattr(dyn, "terms", None)
+    if tm is not None and tm.path is path and np.array_equal(tm.grid, grid):
+        rows = _compiled_rows(dyn, tm, deltas, xbound)
+    else:
+        A, B, C, F, h, ubound, xb2 = dyn.compute_constraint_params(path, grid)
+        if ubound is not None or xb2 is not None or A is None:
+            return None
+        rows = seidel_rows(A, B, C, F, h, xbound)
     if rows is None:
         return None
     sd = np.empty(len(grid))
     return sd if topp_kernel.rest_to_rest(*rows, deltas, sd) == topp_kernel.OK else None
+
+
+def _compiled_rows(dyn, tm, deltas, xbound):
+    """seidel_rows(*dyn.compute_constraint_params(...)[:5], xbound) by the compiled kernel (topp_kernel.constraint_rows:
+    the same numbers), or None where that gives None (a coefficient not finite)."""
+    from robodesign.solvers import topp_kernel
+    N1, dof = tm.qs.shape
+    use_torque = bool(dyn.use_torque)
+    k = 4 * dof if use_torque else 2 * dof
+    a, b, c = np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k))
+    low, high = np.empty((N1, 2)), np.empty((N1, 2))
+    f64 = np.float64
+    tmax = np.broadcast_to(np.asarray(dyn.tau_max, f64), (dof,))
+    amax = np.broadcast_to(np.asarray(dyn.amax, f64), (dof,))
+    fv = np.broadcast_to(np.asarray(dyn.robot.friction_viscous, f64), (dof,))
+    fc = np.broadcast_to(np.asarray(dyn.robot.friction_coulomb, f64), (dof,))
+    g, ai, bri, bli = (tm.g, tm.a, tm.bR, tm.bL) if use_torque else (tm.qs,) * 4
+    x0 = np.broadcast_to(np.asarray(dyn.x0, f64), (N1,)) if use_torque else np.ones(N1)
+    ok = topp_kernel.constraint_rows(tm.qs, tm.qss_r, tm.qss_l, g, ai, bri, bli, np.ascontiguousarray(x0), amax,
+                                     tmax, fv, fc, use_torque, deltas, np.asarray(xbound, f64), a, b, c, low, high)
+    return (a, b, c, low, high) if ok else None
 
 
 def pass_velocities(tp, vel, dyn, path, grid, xbound):
@@ -128,7 +156,7 @@ def pass_velocities(tp, vel, dyn, path, grid, xbound):
     velocities (None when it fails) and toppra's return code when toppra's own loop ran. The compiled kernel
     (toppra_loop.compiled_rest_to_rest) first, then the lean loop, then toppra's loop: the same numbers."""
     if grid[0] == path.path_interval[0] and grid[-1] == path.path_interval[1]:   # (else toppra raises)
-        sd_vec = compiled_rest_to_rest(dyn.compute_constraint_params(path, grid), xbound, grid)
+        sd_vec = compiled_rest_to_rest(dyn, path, grid, xbound)
         if sd_vec is not None:
             return sd_vec, None
     algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
