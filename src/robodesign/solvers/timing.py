@@ -359,8 +359,11 @@ def _velocity_constraint(vmax: np.ndarray):
 
 
 def preload() -> None:
-    """Import toppra now (its import is slow) instead of at the first time scaling."""
+    """Import toppra now (its import is slow) and load the compiled TOPP-RA kernel (or start its background
+    compilation: topp_kernel.ready) instead of at the first time scaling."""
     _toppra()
+    from robodesign.solvers import topp_kernel
+    topp_kernel.ready()
 
 
 class BlendedPolyline:
