@@ -11,7 +11,7 @@ from robodesign import Robot, load_module_set
 from robodesign.core.defaults import DEFAULT_ORDER
 from robodesign.core.trajectory import Trajectory
 from robodesign.solvers import timing
-from robodesign.solvers.rnea_batch import link_model, rnea_rows
+from robodesign.solvers.rnea_batch import rnea_rows
 
 PATH = np.array([[0.0, -0.5, 1.0, 0.0, 0.5, 0.0],
                  [0.6, -0.2, 0.8, 0.4, 0.2, 0.3],
@@ -44,12 +44,34 @@ def test_rnea_rows_are_pinocchios_calls(robots):
         assert rnea_rows(r.model, Q[:0], V[:0], A[:0]).shape == (0, r.dof)
 
 
-def test_link_model_is_robots_link_side(robots):
-    """Robot.link_torques (its own armature-free copy, one call per sample) and rnea_rows on link_model's copy."""
+def test_link_side_is_robots_link_torques(robots):
+    """Robot.link_torques (its own armature-free copy, one call per sample) and rnea_rows(link_side=True)."""
     rng = np.random.default_rng(4)
     for r in robots:
         Q, V, A = (rng.uniform(-2, 2, (40, r.dof)) for _ in range(3))
-        assert rnea_rows(link_model(r), Q, V, A).tobytes() == r.link_torques(Q, V, A).tobytes()
+        assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == r.link_torques(Q, V, A).tobytes()
+
+
+def test_kept_pools_follow_the_models_changes(robots):
+    """The pools are kept per model and made again when the model changed (base pose, gravity): the torques are
+    always those of one pinocchio call per sample on the model as it is."""
+    from robodesign.core.spatial import homogeneous, rpy_to_matrix
+    r = robots[0]
+    rng = np.random.default_rng(6)
+    Q, V, A = (rng.uniform(-2, 2, (25, r.dof)) for _ in range(3))
+    base = r.base_pose.copy()
+    try:
+        for pose, g in ((base, (0.0, 0.0, -9.81)), (homogeneous(rpy_to_matrix(0.2, 0.1, 0.3), [0.5, 0.0, 0.2]),
+                                                    (0.0, 0.0, -9.81)), (base, (0.0, 1.0, -9.0)), (base, (0.0, 0.0, -9.81))):
+            r.set_base_pose(pose)
+            r.set_gravity(g)
+            data = r.model.createData()
+            ref = np.array([pin.rnea(r.model, data, Q[k], V[k], A[k]) for k in range(len(Q))])
+            assert rnea_rows(r.model, Q, V, A).tobytes() == ref.tobytes()
+            assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == r.link_torques(Q, V, A).tobytes()
+    finally:
+        r.set_base_pose(base)
+        r.set_gravity((0.0, 0.0, -9.81))
 
 
 def _sample_torques_per_call(robot, traj):

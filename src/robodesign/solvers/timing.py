@@ -95,7 +95,7 @@ import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
-from robodesign.solvers.rnea_batch import link_model, rnea_rows
+from robodesign.solvers.rnea_batch import rnea_rows
 from robodesign.solvers.toppra_loop import pass_velocities
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
@@ -124,8 +124,8 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]]) if n >= 2 else traj.ddq[:0]
     # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
     # the link-side RNEA of both in one batched call (the same numbers as Robot.link_torques' call per sample)
-    link = rnea_rows(link_model(robot), np.vstack([traj.q, traj.q[:len(before_acc)]]),
-                     np.vstack([traj.dq, traj.dq[:len(before_acc)]]), np.vstack([traj.ddq, before_acc]))
+    link = rnea_rows(robot.model, np.vstack([traj.q, traj.q[:len(before_acc)]]),
+                     np.vstack([traj.dq, traj.dq[:len(before_acc)]]), np.vstack([traj.ddq, before_acc]), True)
     after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
     if n < 2:
         return np.abs(after)
