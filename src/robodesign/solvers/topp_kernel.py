@@ -10,7 +10,8 @@ Adapted from toppra (MIT licence, © Hung Pham; https://github.com/hungpham2511/
 multiply-adds and squares by multiplication; the constants are its ``TINY = 1e-10``, ``SMALL = 1e-8``, ±1e8 variable
 bounds and ±1e10 bounds of the 1-D sub-problems, and ``toppra.constants.TINY = 1e-8`` of the forward step), so the
 path velocities are toppra's **bit for bit** (tests/test_topp_kernel.py compares them with toppra's own
-``compute_parameterization`` on PTP_3 paths and generated tasks' paths).
+``compute_parameterization`` on the planner's PTP_3 paths and on random paths of two IMPROV arms and the built-in
+arm, torque limits down to a fifth).
 
 Where this kernel is not sure to follow toppra it does not guess: it returns a status other than 0 and the caller
 runs toppra (as :func:`~robodesign.solvers.toppra_loop.rest_to_rest` returns None where toppra's loop takes another
