@@ -4,7 +4,6 @@ per-sample computations they replace: the same numbers, bit for bit."""
 import numpy as np
 import pinocchio as pin
 import pytest
-
 from conftest import IMPROV, ROOT
 
 from robodesign import Robot, load_module_set

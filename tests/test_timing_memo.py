@@ -2,7 +2,6 @@
 every move again): the same trajectories as timing them afresh, bit for bit, and only the slowed moves timed again."""
 import numpy as np
 import pytest
-
 from conftest import COBRA
 
 ARM = ["1", "21", "4", "22", "5", "23", "12"]

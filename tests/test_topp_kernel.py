@@ -3,7 +3,6 @@ compute_parameterization with its seidel solver: the same path velocities bit fo
 and the same trajectories from time_parameterize with and without the kernel."""
 import numpy as np
 import pytest
-
 from conftest import IMPROV
 
 from robodesign import Robot, load_module_set
@@ -25,6 +24,7 @@ def ptp3_paths():
     """(robot, joint path) of every move time_parameterize timed while solving PTP_3 with the known-good IMPROV
     arm (seeds 0 and 1): the planner's real paths."""
     from conftest import TASKS
+
     from robodesign.design import goal_planner
     from robodesign.design.solve import SolveSettings, solve
     from robodesign.formats.task_io import load_task

@@ -284,10 +284,11 @@ def rest_to_rest(a, b, c, low, high, deltas, sd):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _point_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, finite, fv, fc, use_torque, PA, PBR, PBL, PC):
+def _point_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, finite, fv, fc, use_torque, PA, PBR, PBL,
+                PC):  # pragma: no cover - compiled
     """The per-grid-point rows (v = [q̈; τ_up; τ_lo] coefficients a, b right and left, c) of the time scaling's
     DynamicsConstraint.compute_constraint_params (solvers/timing.py), the same operations per element as its
-    numpy passes (x0 floored at 1e-8, NaN kept; the viscous tangent's β and γ; rows of an infinite torque limit 0)."""  # pragma: no cover - compiled
+    numpy passes (x0 floored at 1e-8, NaN kept; the viscous tangent's β and γ; rows of an infinite torque limit 0)."""
     N1, dof = qs.shape
     for p in range(N1):
         x = x0[p]
@@ -370,7 +371,9 @@ def _warm() -> None:
                     np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
 
 
-KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest, ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows", "_point_rows"), _warm)
+KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest,
+                       ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows",
+                        "_point_rows"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

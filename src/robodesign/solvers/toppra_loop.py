@@ -126,8 +126,9 @@ def compiled_rest_to_rest(dyn, path, gridpoints: np.ndarray, xbound: np.ndarray)
         rows = seidel_rows(A, B, C, F, h, xbound)
     if rows is None:
         return None
+    a, b, c, low, high = rows
     sd = np.empty(len(grid))
-    return sd if topp_kernel.rest_to_rest(*rows, deltas, sd) == topp_kernel.OK else None
+    return sd if topp_kernel.rest_to_rest(a, b, c, low, high, deltas, sd) == topp_kernel.OK else None
 
 
 def _compiled_rows(dyn, tm, deltas, xbound):
