@@ -99,6 +99,7 @@ class GoalPlanner:
         self.order = [task.goal(gid) for gid in task.goal_order]
         self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
         self.follow_ik: Dict[str, List[np.ndarray]] = {}
+        self._timed_memo: Dict[tuple, Trajectory] = {}   # the moves timed for this robot (see _timed)
 
     # -- IK ------------------------------------------------------------------------------------
     def solve_ik(self) -> None:
@@ -414,8 +415,7 @@ class GoalPlanner:
             robot = self.robot if g is None or g.id not in slow else _SlowedRobot(self.robot, slow[g.id])
             if kind == "move":
                 if path is not None:
-                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing,
-                                            blend_radius=self.blend_radius)
+                    seg = self._timed(robot, path, dt=dt, method=self.settings.timing, blend_radius=self.blend_radius)
                     if cost is not None and robot is self.robot:  # a slowed move keeps its slow timing
                         seg = self._optimize_move(seg, cost)
                     traj = self._append_after_wait(traj, seg, g, colliders)
@@ -433,13 +433,27 @@ class GoalPlanner:
                 assert g is not None and path is not None  # a follow action has its goal and its path
                 t_rel = cast(_FollowGoal, g).t
                 if t_rel is None:
-                    seg = time_parameterize(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
-                                            stop_at=list(range(len(path))))
+                    seg = self._timed(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
+                                      stop_at=tuple(range(len(path))))
                 else:
                     seg = _timed_follow(path, t_rel, dt)
                 traj = self._append_after_wait(traj, seg, g, colliders)
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
+
+    def _timed(self, robot, path, **options):
+        """``time_parameterize(robot, path, **options)``, remembered for the planner's own robot: a goal retry
+        (solve._achieve_missed_goals) times every move again and slows only the missed goals' (a ``_SlowedRobot``),
+        and a motion delayed as a whole is timed again without colliders: the same path, robot and options give
+        the same trajectory (a copy of it is returned)."""
+        if robot is not self.robot:
+            return time_parameterize(robot, path, **options)
+        p = np.asarray(path, dtype=float)
+        key = (p.shape, p.tobytes(), tuple(sorted(options.items())))
+        memo = self._timed_memo
+        if key not in memo:
+            memo[key] = time_parameterize(robot, p, **options)
+        return memo[key].copy()
 
     def _append_after_wait(self, traj, seg, g, colliders):
         """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to

@@ -6,6 +6,11 @@ scaling's largest part is toppra's own loop over the grid points).
 ``_forward_step`` forward pass) and the same arithmetic between them, so its path velocities are toppra's bit
 for bit (tests/test_timing.py); it returns None wherever toppra's loop would leave the common path, and the
 caller then runs toppra's own loop.
+
+:func:`pass_velocities` is what the time scaling calls per TOPP-RA pass: first :func:`compiled_rest_to_rest` (the
+compiled kernel of :mod:`robodesign.solvers.topp_kernel` on seidelWrapper's coefficients, built here by
+:func:`seidel_rows` without toppra's set-up; issue 25), then :func:`rest_to_rest`, then toppra's own loop, each
+only where the one before does not answer: the same numbers in every case (tests/test_topp_kernel.py).
 """
 from __future__ import annotations
 
@@ -68,3 +73,98 @@ def rest_to_rest(algo) -> Optional[np.ndarray]:
     sw.close_solver()
     sd = np.sqrt(xs)
     return None if np.isnan(sd).any() else sd
+
+
+def seidel_rows(A: np.ndarray, B: np.ndarray, C: np.ndarray, F: np.ndarray, h: np.ndarray, xbound: np.ndarray):
+    """toppra's seidelWrapper coefficients (a_arr, b_arr, c_arr (N+1, 2 + rows of F); low_arr, high_arr (N+1, 2))
+    of an "identical" canonical linear constraint (A, B, C (N+1, m), F (k, m), h (k,)) after a velocity constraint
+    (``xbound`` (N+1, 2)), or None unless every row of F picks one column with ±1 and every coefficient is finite.
+    seidelWrapper computes A·Fᵀ, B·Fᵀ and C·Fᵀ − h with BLAS, whose sums start at +0: for such an F that is the
+    picked column times ±1, plus 0 (−0 becomes +0), the same numbers bit for bit (tests/test_topp_kernel.py)."""
+    row, col = np.nonzero(F)
+    N1, k = len(A), len(F)
+    if not (len(row) == k and np.array_equal(row, np.arange(k))):
+        return None
+    sign = F[row, col]
+    if not np.all(np.abs(sign) == 1.0):
+        return None
+    a, b, c = np.zeros((N1, 2 + k)), np.zeros((N1, 2 + k)), np.zeros((N1, 2 + k))
+    a[:, 2:] = A[:, col] * sign + 0.0
+    b[:, 2:] = B[:, col] * sign + 0.0
+    c[:, 2:] = (C[:, col] * sign + 0.0) - h
+    if not (np.isfinite(a).all() and np.isfinite(b).all() and np.isfinite(c).all()):
+        return None
+    low = np.full((N1, 2), -1e8)
+    high = np.full((N1, 2), 1e8)
+    # seidelWrapper's dbl_max/dbl_min: (a if a > b else b), (a if a < b else b)
+    low[:, 1] = np.where(low[:, 1] > xbound[:, 0], low[:, 1], xbound[:, 0])
+    high[:, 1] = np.where(high[:, 1] < xbound[:, 1], high[:, 1], xbound[:, 1])
+    return a, b, c, low, high
+
+
+def compiled_rest_to_rest(dyn, path, gridpoints: np.ndarray, xbound: np.ndarray) -> Optional[np.ndarray]:
+    """:func:`rest_to_rest`'s path velocities by the compiled kernel (:mod:`robodesign.solvers.topp_kernel`) for
+    TOPPRA([velocity constraint, dyn], path, gridpoints, "seidel") with ``xbound`` the velocity constraint's x bounds.
+    seidelWrapper's coefficients come from the compiled ``constraint_rows`` when ``dyn`` holds its path terms on
+    this grid (the time scaling's DynamicsConstraint), else from ``dyn.compute_constraint_params`` and
+    :func:`seidel_rows`. None when the kernel is not compiled yet, the problem is not of that form, or the kernel
+    is not sure to follow toppra (then toppra runs: the same numbers either way)."""
+    from robodesign.solvers import topp_kernel
+    if not topp_kernel.ready():
+        return None
+    grid = np.asarray(gridpoints, dtype=float)
+    deltas = grid[1:] - grid[:-1]
+    if not np.all(deltas > 0):
+        return None
+    tm = getattr(dyn, "terms", None)
+    if tm is not None and tm.path is path and np.array_equal(tm.grid, grid):
+        rows = _compiled_rows(dyn, tm, deltas, xbound)
+    else:
+        A, B, C, F, h, ubound, xb2 = dyn.compute_constraint_params(path, grid)
+        if ubound is not None or xb2 is not None or A is None:
+            return None
+        rows = seidel_rows(A, B, C, F, h, xbound)
+    if rows is None:
+        return None
+    a, b, c, low, high = rows
+    sd = np.empty(len(grid))
+    return sd if topp_kernel.rest_to_rest(a, b, c, low, high, deltas, sd) == topp_kernel.OK else None
+
+
+def _compiled_rows(dyn, tm, deltas, xbound):
+    """seidel_rows(*dyn.compute_constraint_params(...)[:5], xbound) by the compiled kernel (topp_kernel.constraint_rows:
+    the same numbers), or None where that gives None (a coefficient not finite)."""
+    from robodesign.solvers import topp_kernel
+    N1, dof = tm.qs.shape
+    use_torque = bool(dyn.use_torque)
+    k = 4 * dof if use_torque else 2 * dof
+    a, b, c = np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k))
+    low, high = np.empty((N1, 2)), np.empty((N1, 2))
+    f64 = np.float64
+    tmax = np.broadcast_to(np.asarray(dyn.tau_max, f64), (dof,))
+    amax = np.broadcast_to(np.asarray(dyn.amax, f64), (dof,))
+    fv = np.broadcast_to(np.asarray(dyn.robot.friction_viscous, f64), (dof,))
+    fc = np.broadcast_to(np.asarray(dyn.robot.friction_coulomb, f64), (dof,))
+    g, ai, bri, bli = (tm.g, tm.a, tm.bR, tm.bL) if use_torque else (tm.qs,) * 4
+    x0 = np.broadcast_to(np.asarray(dyn.x0, f64), (N1,)) if use_torque else np.ones(N1)
+    ok = topp_kernel.constraint_rows(tm.qs, tm.qss_r, tm.qss_l, g, ai, bri, bli, np.ascontiguousarray(x0), amax,
+                                     tmax, fv, fc, use_torque, deltas, np.asarray(xbound, f64), a, b, c, low, high)
+    return (a, b, c, low, high) if ok else None
+
+
+def pass_velocities(tp, vel, dyn, path, grid, xbound):
+    """One TOPP-RA pass (toppra's TOPPRA([vel, dyn], path, grid, "seidel").compute_parameterization(0, 0)): its path
+    velocities (None when it fails) and toppra's return code when toppra's own loop ran. The compiled kernel
+    (toppra_loop.compiled_rest_to_rest) first, then the lean loop, then toppra's loop: the same numbers."""
+    if grid[0] == path.path_interval[0] and grid[-1] == path.path_interval[1]:   # (else toppra raises)
+        sd_vec = compiled_rest_to_rest(dyn, path, grid, xbound)
+        if sd_vec is not None:
+            return sd_vec, None
+    algo = tp.algorithm.TOPPRA([vel, dyn], path, gridpoints=grid, solver_wrapper="seidel")
+    sd_vec = rest_to_rest(algo)
+    if sd_vec is not None:
+        return sd_vec, None
+    algo.compute_parameterization(0.0, 0.0)   # a branch of toppra's own loop (numerical trouble, uncontrollable)
+    pd = algo.problem_data
+    ok = pd.return_code == tp.algorithm.ParameterizationReturnCode.Ok and pd.sd_vec is not None
+    return (pd.sd_vec if ok else None), pd.return_code
