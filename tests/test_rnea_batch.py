@@ -1,4 +1,4 @@
-"""Batched RNEA for the time scaling (robodesign.solvers.rnea_batch) against one pinocchio call per sample, and the
+"""Batched RNEA for the time scaling (robodesign.model.rnea_batch) against one pinocchio call per sample, and the
 time scaling's users of it (the path terms of the TOPP-RA constraint, the per-sample torque check) against the
 per-sample computations they replace: the same numbers, bit for bit."""
 import numpy as np
@@ -10,7 +10,7 @@ from robodesign import Robot, load_module_set
 from robodesign.core.defaults import DEFAULT_ORDER
 from robodesign.core.trajectory import Trajectory
 from robodesign.solvers import timing
-from robodesign.solvers.rnea_batch import rnea_rows
+from robodesign.model.rnea_batch import rnea_rows
 
 PATH = np.array([[0.0, -0.5, 1.0, 0.0, 0.5, 0.0],
                  [0.6, -0.2, 0.8, 0.4, 0.2, 0.3],

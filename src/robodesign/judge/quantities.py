@@ -40,6 +40,7 @@ import pinocchio as pin
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Goal, JointLimitsConstraint, Task
 from robodesign.judge.motion import StepMotion, witness_velocities
+from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
@@ -133,27 +134,6 @@ def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
     with np.errstate(invalid="ignore"):
         close = np.nonzero((np.abs(t - v) <= TIME_ATOL + TIME_RTOL * abs(v)) & math.isfinite(v) | (t == v))[0]
     return int(close[0]) if len(close) == 1 else None
-
-
-_RNEA_ROWS = getattr(pin, "rneaInParallel", None)  # pinocchio built with OpenMP
-
-
-def rnea_rows(pool, Q, V, A) -> np.ndarray:
-    """(N, nv) pinocchio's RNEA of every row of Q, V, A (N, nq / nv) on the model and data of ``pool`` (a
-    ``pin.ModelPool`` of size 1): one ``pin.rneaInParallel`` call on one thread, the same ``rnea`` per row as
-    ``pin.rnea`` (the same numbers, bit for bit: tests/test_judge_rnea_rows.py) without a Python call per row;
-    a loop of ``pin.rnea`` where pinocchio was built without OpenMP. (``rneaInParallel`` sets OpenMP's thread
-    count of the calling thread to 1.)"""
-    Q, V, A = (np.asarray(x, dtype=float) for x in (Q, V, A))
-    m = pool.getModel(0)
-    if _RNEA_ROWS is not None and len(Q):
-        # (nv, N); eigenpy hands a matrix with one row or column back as a vector
-        return np.ascontiguousarray(np.reshape(_RNEA_ROWS(1, pool, Q.T, V.T, A.T), (m.nv, len(Q))).T)
-    d = pool.getData(0)
-    out = np.empty((len(Q), m.nv))
-    for k, (q, v, a) in enumerate(zip(Q, V, A)):
-        out[k] = pin.rnea(m, d, q, v, a)
-    return out
 
 
 class TrajectoryQuantities:
@@ -409,20 +389,13 @@ class TrajectoryQuantities:
             taken[rows] = True
         return W
 
-    @cached_property
-    def _link_pool(self):
-        """pinocchio's ModelPool of one copy of the model without armature (and its data): what :meth:`Robot.rnea
-        <robodesign.model.robot.Robot.rnea>` calls pinocchio's RNEA on."""
-        pool = pin.ModelPool(self.robot.model, 1)
-        pool.getModel(0).armature = np.zeros(self.robot.model.nv)
-        return pool
-
     def _rnea(self, Q, V, A, W: Optional[np.ndarray]) -> np.ndarray:
         """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows: pinocchio's RNEA of
-        every row in one call (:func:`rnea_rows`); rows under a wrench through ``Robot.link_torques``."""
+        every row in one call (:func:`robodesign.model.rnea_batch.rnea_rows`, on the armature-free model); rows
+        under a wrench through ``Robot.link_torques``."""
         if W is not None and np.any(W):
             return self.robot.link_torques(Q, V, A, W)
-        return rnea_rows(self._link_pool, Q, V, A)
+        return rnea_rows(self.robot.model, Q, V, A, link_side=True)
 
     @cached_property
     def link_torques(self) -> np.ndarray:

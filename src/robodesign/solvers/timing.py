@@ -95,7 +95,7 @@ import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
-from robodesign.solvers.rnea_batch import rnea_rows
+from robodesign.model.rnea_batch import rnea_rows
 from robodesign.solvers.toppra_loop import pass_velocities
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit

@@ -1,4 +1,5 @@
-"""pinocchio's inverse dynamics (RNEA) at many samples in one call, for the time scaling (issue 25).
+"""pinocchio's inverse dynamics (RNEA) at many samples in one call: the time scaling's path terms and torque
+check (robodesign.solvers.timing) and the judge's torques at the samples (robodesign.judge.quantities), issue 25.
 
 ``pinocchio.rneaInParallel`` with one thread runs pinocchio's own ``rnea`` once per column of its batch on a model
 pool's copy of the model: the same algorithm on the same numbers, so the same torques **bit for bit** as one
@@ -8,7 +9,7 @@ pool's copy of the model: the same algorithm on the same numbers, so the same to
 The pools copy the model when they are made; they are kept per model and used again only while the model equals
 the copy they were made from (pinocchio's ``Model ==`` compares every parameter, 1.4 µs): a robot's model changes
 with its base pose and gravity (``Robot.set_base_pose``, ``Robot.set_gravity``), and equal models give equal
-torques.
+torques. (``rneaInParallel`` sets OpenMP's thread count of the calling thread to 1.)
 """
 from __future__ import annotations
 
