@@ -222,6 +222,11 @@ def test_base_pairs_the_bounds_clear_are_farther_than_the_margin(which, whitman,
         if i % 5 == 4:   # an obstacle moved onto the base after the geometry was made
             robot.geom_model
             robot.move_obstacle(0, T)
+        elif i % 5 == 3:  # a geometry set from outside, with an obstacle on the base
+            robot.base_collisions()
+            geom = robot.geom_model.copy()
+            geom.geometryObjects[robot.obstacle_geometry_ids[0]].placement = pin.SE3(T)
+            robot.geom_model = geom
         near = set(robot._base_pairs_near())
         n = robot.n_collision_geometries
         objs = robot.geom_model.geometryObjects

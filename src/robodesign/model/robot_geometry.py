@@ -103,6 +103,8 @@ class RobotGeometry:
     @geom_model.setter
     def geom_model(self, geom: "pin.GeometryModel") -> None:
         self._geom_model = geom
+        # base_collisions' probe and bounds were made of the geometry before (its objects, its obstacles' poses)
+        self._base_probe = self._obstacle_bounds = None
         self._geometry_changed()
 
     def _geometry_changed(self) -> None:
