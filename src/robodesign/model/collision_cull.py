@@ -88,10 +88,7 @@ class ObstacleBounds:
         e = np.maximum(np.maximum(self.lo - x, x - self.hi), 0.0)
         near = np.sqrt(np.einsum("omi,omi->om", e, e)) <= limit                                     # the box bound
         for o in np.flatnonzero(near.any(axis=1)).tolist():
-            f = self.fields[o]
-            if not f.is_box:   # then the field's, where the box does not clear
-                idx = np.flatnonzero(near[o])
-                near[o, idx] = f.lower_bounds(np.asarray(centres, dtype=float)[idx]) <= limit[idx]
+            self.fields[o].field_near(np.asarray(centres, dtype=float), limit, near[o])   # then the field's
         return near
 
 
@@ -152,6 +149,14 @@ class DistanceField:
         x = (P - self.t) @ self.R_inv.T
         e = np.maximum(np.maximum(self.box_lo - x, x - self.box_hi), 0.0)
         return np.sqrt(np.einsum("ij,ij->i", e, e))
+
+    def field_near(self, P: np.ndarray, limit: np.ndarray, near: np.ndarray) -> np.ndarray:
+        """``near`` (booleans per row of ``P``: the box bound does not clear the point at ``limit``) where the field's
+        bound does not clear it either (in place; a box obstacle's box bound is exact: unchanged)."""
+        if not self.is_box and near.any():
+            idx = np.flatnonzero(near)
+            near[idx] = self.lower_bounds(P[idx]) <= limit[idx]
+        return near
 
     def lower_bounds(self, P: np.ndarray) -> np.ndarray:
         """A lower bound of the distance to the obstacle of every point (row) of ``P``: the field's (the exact
@@ -278,10 +283,7 @@ class CollisionCuller:
         for field, kk, geo, limit in self.obstacles:
             P = C[:, geo].reshape(-1, 3)
             lim = np.tile(limit, N)
-            near = field.box_bounds(P) <= lim        # the box bound first (exact for a box)
-            if near.any() and not field.is_box:      # then the field's, where the box does not clear
-                idx = np.flatnonzero(near)
-                near[idx] = field.lower_bounds(P[idx]) <= lim[idx]
+            near = field.field_near(P, lim, field.box_bounds(P) <= lim)   # the box bound, then the field's
             out[:, kk] = near.reshape(N, len(geo))
         out &= self.active
         return out
