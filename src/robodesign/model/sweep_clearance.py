@@ -28,7 +28,7 @@ from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from robodesign.model.collision_cull import SLACK, _bounding_sphere, distance_field
+from robodesign.model.collision_cull import SLACK, bounding_sphere, distance_field
 from robodesign.model.sweep_bounds import BOUND_SLACK, _kernel
 
 #: a certified step keeps a clearance above this fraction of its static bound (at most 1/ADVANCE_SHARE sub-steps
@@ -39,7 +39,7 @@ ADVANCE_SHARE = 500.0
 def robot_spheres(geometries: Sequence) -> Tuple[np.ndarray, np.ndarray]:
     """(centres (G, 3) in each geometry's frame, radii (G,)): the spheres of the collision culler around the robot's
     collision geometries (their coal shapes)."""
-    spheres = [_bounding_sphere(geo) for geo in geometries]
+    spheres = [bounding_sphere(geo) for geo in geometries]
     return (np.array([c for c, _ in spheres], dtype=float).reshape(len(spheres), 3),
             np.array([r for _, r in spheres], dtype=float))
 
