@@ -43,12 +43,20 @@ def test_rnea_rows_are_pinocchios_calls(robots):
         assert rnea_rows(r.model, Q[:0], V[:0], A[:0]).shape == (0, r.dof)
 
 
+def _link_per_row(r, Q, V, A):
+    """pinocchio's rnea per sample on an armature-free copy of the robot's model (what Robot.rnea calls)."""
+    return np.array([r.rnea(Q[k], V[k], A[k]) for k in range(len(Q))]).reshape(len(Q), r.dof)
+
+
 def test_link_side_is_robots_link_torques(robots):
-    """Robot.link_torques (its own armature-free copy, one call per sample) and rnea_rows(link_side=True)."""
+    """rnea_rows(link_side=True), and Robot.link_torques through it, against one pinocchio call per sample on the
+    robot's own armature-free copy (Robot.rnea)."""
     rng = np.random.default_rng(4)
     for r in robots:
         Q, V, A = (rng.uniform(-2, 2, (40, r.dof)) for _ in range(3))
-        assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == r.link_torques(Q, V, A).tobytes()
+        ref = _link_per_row(r, Q, V, A).tobytes()
+        assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == ref
+        assert r.link_torques(Q, V, A).tobytes() == ref
 
 
 def test_kept_pools_follow_the_models_changes(robots):
@@ -67,7 +75,7 @@ def test_kept_pools_follow_the_models_changes(robots):
             data = r.model.createData()
             ref = np.array([pin.rnea(r.model, data, Q[k], V[k], A[k]) for k in range(len(Q))])
             assert rnea_rows(r.model, Q, V, A).tobytes() == ref.tobytes()
-            assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == r.link_torques(Q, V, A).tobytes()
+            assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == _link_per_row(r, Q, V, A).tobytes()
     finally:
         r.set_base_pose(base)
         r.set_gravity((0.0, 0.0, -9.81))

@@ -40,7 +40,6 @@ import pinocchio as pin
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Goal, JointLimitsConstraint, Task
 from robodesign.judge.motion import StepMotion, witness_velocities
-from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
@@ -390,12 +389,9 @@ class TrajectoryQuantities:
         return W
 
     def _rnea(self, Q, V, A, W: Optional[np.ndarray]) -> np.ndarray:
-        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows: pinocchio's RNEA of
-        every row in one call (:func:`robodesign.model.rnea_batch.rnea_rows`, on the armature-free model); rows
-        under a wrench through ``Robot.link_torques``."""
-        if W is not None and np.any(W):
-            return self.robot.link_torques(Q, V, A, W)
-        return rnea_rows(self.robot.model, Q, V, A, link_side=True)
+        """:meth:`Robot.link_torques <robodesign.model.robot.Robot.link_torques>` of the rows (without a wrench:
+        pinocchio's RNEA of every row in one call)."""
+        return self.robot.link_torques(Q, V, A, W if W is not None and np.any(W) else None)
 
     @cached_property
     def link_torques(self) -> np.ndarray:

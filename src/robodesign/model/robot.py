@@ -33,6 +33,7 @@ from robodesign.formats.geometry import coal_shapes
 from robodesign.formats.module_spec import Connector, ModuleSet
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
+from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
@@ -485,13 +486,9 @@ class Robot(RobotGeometry):
         """Link-side torques (RNEA without motor inertia and friction) at every sample: arrays (N, dof) →
         (N, dof). ``fext``: None or (N, 6) world wrenches ``[f; τ]`` applied at the TCP (zero rows: none)."""
         Q, DQ, DDQ = (np.asarray(x, dtype=float).reshape(-1, self.dof) for x in (Q, DQ, DDQ))
+        if fext is None:   # pinocchio's RNEA of every row in one call (model.rnea_batch: the numbers of rnea per row)
+            return rnea_rows(self.model, Q, DQ, DDQ, link_side=True)
         out = np.empty_like(Q)
-        if fext is None and len(Q):   # (rnea's own call per row, without its per-call checks)
-            out[0] = self.rnea(Q[0], DQ[0], DDQ[0])
-            m, d, rnea = self._link_model, self._link_data, pin.rnea
-            for k in range(1, len(Q)):
-                out[k] = rnea(m, d, Q[k], DQ[k], DDQ[k])
-            return out
         for k in range(len(Q)):
             f = None if fext is None or not np.any(fext[k]) else self.tcp_wrench_forces(Q[k], fext[k])
             out[k] = self.rnea(Q[k], DQ[k], DDQ[k], f)

@@ -123,9 +123,9 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     n = len(traj.t)
     before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]]) if n >= 2 else traj.ddq[:0]
     # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
-    # the link-side RNEA of both in one batched call (the same numbers as Robot.link_torques' call per sample)
-    link = rnea_rows(robot.model, np.vstack([traj.q, traj.q[:len(before_acc)]]),
-                     np.vstack([traj.dq, traj.dq[:len(before_acc)]]), np.vstack([traj.ddq, before_acc]), True)
+    # the link-side RNEA of both in one batched call
+    link = robot.link_torques(np.vstack([traj.q, traj.q[:len(before_acc)]]),
+                              np.vstack([traj.dq, traj.dq[:len(before_acc)]]), np.vstack([traj.ddq, before_acc]))
     after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
     if n < 2:
         return np.abs(after)
