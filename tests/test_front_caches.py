@@ -270,6 +270,13 @@ def test_a_pool_adopts_the_robot_a_search_space_built_for_its_kinematics(whitman
     assert RobotPool(cell).take(ms, asm, T) is not spare  # another pool builds its own
 
 
+def _clear_as_before(space, params) -> bool:
+    """SearchSpace._clear as earlier releases wrote it: every primitive obstacle's exact test."""
+    from robodesign.formats.geometry import contains_point
+    p = space.base_bounds.pose(params)[:3, 3]
+    return not any(g.kind != "mesh" and contains_point(g, p) for g in space.obstacles)
+
+
 def _sample_base_as_before(space, rng, order, tries=64):
     """SearchSpace.sample_base as earlier releases wrote it (clearance tested before the shortfall)."""
     from robodesign.core.spatial import rot_z
@@ -292,7 +299,7 @@ def _sample_base_as_before(space, rng, order, tries=64):
             params = tuple(full[i] for i in free)
         else:
             params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-        if not bb.valid(params) or not space._clear(params):
+        if not bb.valid(params) or not _clear_as_before(space, params):
             continue
         s = space._shortfall(order, params)
         if s == 0.0:
@@ -311,6 +318,86 @@ def test_sample_base_draws_and_returns_what_it_did(whitman):
         a, b = np.random.default_rng(seed), np.random.default_rng(seed)
         assert space.sample_base(a, order, tries=16) == _sample_base_as_before(space, b, order, tries=16)
         assert a.random() == b.random()  # the same draws
+
+
+def test_base_positions_clear_of_the_obstacles_are_those_of_every_exact_test(whitman):
+    """_clear skips the exact test of an obstacle whose bounding sphere (radius scaled by the pose's largest
+    singular value) is far: the verdicts of points on, just inside and just outside each surface, and of random
+    points, are those of the exact tests, for rotated, scaled and sheared poses too."""
+    from robodesign.core.spatial import homogeneous, rot_z
+    from robodesign.formats.geometry import GeometrySpec, contains_point
+    rng = np.random.default_rng(7)
+    rot = homogeneous(rot_z(0.7) @ np.array([[1, 0, 0], [0, 0.6, -0.8], [0, 0.8, 0.6]]), (0.4, -0.3, 0.2))
+    sheared = rot @ np.diag([1.3, 0.7, 1.0, 1.0]) @ homogeneous(np.array([[1, 0.4, 0], [0, 1, 0], [0, 0, 1.0]]))
+    obstacles = tuple(GeometrySpec(kind, T, size) for T in (np.eye(4), rot, sheared)
+                      for kind, size in (("box", (0.5, 0.3, 0.2)), ("cylinder", (0.25, 0.4)), ("sphere", (0.3,))))
+    nominal = homogeneous(np.eye(3), (0.1, 0.0, 0.0))
+    space = dataclasses.replace(whitman.space, obstacles=obstacles,
+                                base_bounds=dataclasses.replace(whitman.space.base_bounds, nominal=nominal,
+                                                                lower=(-1.0, -1.0, -1.0, 0.0), upper=(1.0, 1.0, 1.0, 0.0)))
+    points = [rng.uniform(-1.0, 1.0, 3) for _ in range(3000)]
+    for g in obstacles:   # on the surface of each shape, and 1e-9 m in and out along the direction from its centre
+        for _ in range(150):
+            u = rng.normal(size=3)
+            u /= np.linalg.norm(u)
+            if g.kind == "box":
+                local = u / np.max(np.abs(u) / (0.5 * np.asarray(g.size)))
+            elif g.kind == "cylinder":
+                local = u * min(g.size[0] / max(np.hypot(u[0], u[1]), 1e-12), 0.5 * g.size[1] / max(abs(u[2]), 1e-12))
+            else:
+                local = u * g.size[0]
+            for f in (1.0 - 1e-9, 1.0, 1.0 + 1e-9):
+                points.append((g.pose @ np.append(local * f, 1.0))[:3])
+    inside = 0
+    for p in points:
+        params = tuple(float(v) for v in p - nominal[:3, 3])
+        exact = not any(contains_point(g, space.base_bounds.pose(params)[:3, 3]) for g in obstacles)
+        assert space._clear(params) == exact
+        inside += not exact
+    assert 300 < inside < len(points) - 300   # both verdicts are tested, many times
+    assert [r2 is not None for _, _, r2 in space._obstacle_spheres()] == [True] * 9
+    # the sheared box's bound: half its diagonal, scaled by its pose's largest singular value (+1e-6 m)
+    s_max = np.linalg.svd(sheared[:3, :3], compute_uv=False)[0]
+    assert space._obstacle_spheres()[6][2] == pytest.approx((s_max * (0.5 * np.sqrt(0.38) + 1e-6)) ** 2, rel=1e-12)
+
+
+def test_a_base_pose_is_the_nominal_pose_times_the_offset_bit_for_bit(whitman):
+    from robodesign.core.spatial import homogeneous, rot_z
+    bb = dataclasses.replace(whitman.space.base_bounds, nominal=homogeneous(rot_z(0.3), (0.2, -0.1, 0.05)),
+                             lower=(-1.0, -1.0, -0.5, -3.0), upper=(1.0, 1.0, 0.5, 3.0))
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        p = tuple(rng.uniform(-1, 1, 4))
+        assert np.array_equal(bb.pose(p), bb.nominal @ homogeneous(rot_z(p[3]), p[:3]))
+
+
+def test_the_reach_stage_measures_each_goal_pose_from_the_first_joint(whitman):
+    """solve's reach stage on its per-task goal points: the shortfall and the reason are those of every goal pose's
+    distance from the reach bound's centre, minus the bound and the pose's position slack."""
+    from robodesign.design.goal_planner import goal_poses, position_slack
+    from robodesign.design.solve import goal_points
+    task, space = whitman.task, whitman.space
+    assert [(g.id, tuple(p)) for g, p, _ in goal_points(task)] == \
+        [(g.id, tuple(pose.nominal[:3, 3])) for g in task.goals for pose in goal_poses(g)]
+    rng = np.random.default_rng(5)
+    failed = 0
+    for _ in range(60):
+        c = space.random_candidate(rng)
+        robot = Robot.from_order(whitman.module_set, c.order, base_pose=whitman.base_pose(c))
+        o, R = robot.reach_bound()
+        misses = [float(np.linalg.norm(pose.nominal[:3, 3] - o)) - R - position_slack(pose)
+                  for g in task.goals for pose in goal_poses(g)]
+        if max(misses) <= 0:
+            continue   # (it would go on to the IK)
+        res = solve(task, whitman.module_set, c.order, whitman.base_pose(c))
+        assert res.stage in ("base", "reach")
+        if res.stage == "reach":
+            failed += 1
+            assert res.shortfall == max(misses)
+            worst = int(np.argmax(misses))
+            gid = [g.id for g in task.goals for _ in goal_poses(g)][worst]
+            assert res.stages[-1].message.startswith(f"goal {gid} is ")
+    assert failed >= 5
 
 
 def test_assembly_of_an_order_is_remembered_per_set_and_order():

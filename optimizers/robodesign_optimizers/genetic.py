@@ -113,6 +113,7 @@ class GeneticOptimizer(Optimizer):
         super().__init__(problem, seed, **options)
         self.elite = min(self.options.elite, self.options.population_size - 1)
         self._free = tuple(self.space.base_bounds.free)
+        self._dofs: Dict[str, int] = {}
         self._py_random_state = random.Random(self.seed).getstate()
         self.toolbox = deap_base.Toolbox()
         self.toolbox.register("select", tools.selTournament, tournsize=self.options.tournament_size)
@@ -258,7 +259,14 @@ class GeneticOptimizer(Optimizer):
         return self.space.module_info(mid).kind
 
     def _dof(self, order: Sequence[str]) -> int:
-        return sum(self.space.module_info(m).dof for m in order)
+        dofs = self._dofs   # module ID → its DoF (space.module_info), asked once per module
+        try:
+            return sum(dofs[m] for m in order)
+        except KeyError:
+            for m in order:
+                if m not in dofs:
+                    dofs[m] = self.space.module_info(m).dof
+            return sum(dofs[m] for m in order)
 
     def _shuffled(self, items: list) -> list:
         return [items[i] for i in self.rng.permutation(len(items))] if items else []

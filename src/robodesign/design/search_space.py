@@ -22,19 +22,17 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache
-from typing import TYPE_CHECKING, FrozenSet, Iterator, List, Optional, Sequence, Tuple, cast
+from functools import lru_cache
+from typing import FrozenSet, Iterator, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
 
 from robodesign.core.errors import AssemblyError, InputError
-from robodesign.core.spatial import homogeneous, rot_z
+from robodesign.core.spatial import rot_z
+from robodesign.design.base_bounds import BaseBounds, clearance_spheres  # noqa: F401 - BaseBounds: its import path
 from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.model.extent import module_extent
-
-if TYPE_CHECKING:
-    from robodesign.formats.tolerance import ToleratedPose
 
 BASE_PARAMS = ("x", "y", "z", "yaw")
 _NO_MODULE = object()  # free connectors of a prefix whose first module is not in the module set
@@ -68,69 +66,6 @@ class Candidate:
 
     def to_json(self) -> dict:
         return {"order": list(self.order), "base": list(self.base)}
-
-
-@dataclass(frozen=True)
-class BaseBounds:
-    """Box bounds on (x, y, z, yaw) offsets from ``nominal``; a parameter with lo == hi is fixed."""
-    nominal: np.ndarray = field(default_factory=lambda: np.eye(4))
-    lower: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-    upper: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-    tolerance: Optional[ToleratedPose] = None  # that a base pose must satisfy (None: any)
-
-    @cached_property
-    def free(self) -> Tuple[int, ...]:
-        return tuple(i for i in range(4) if self.upper[i] > self.lower[i])
-
-    def pose(self, params: Sequence[float]) -> np.ndarray:
-        full = [0.0, 0.0, 0.0, 0.0]
-        for i, v in zip(self.free, params):
-            full[i] = float(v)
-        return self.nominal @ homogeneous(rot_z(full[3]), full[:3])
-
-    def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:   # (pose: made already)
-        free = self.free
-        if len(params) != len(free):
-            return False
-        for i, v in zip(free, params):
-            if not (self.lower[i] - 1e-12 <= v <= self.upper[i] + 1e-12):
-                return False
-        return self.tolerance is None or self.tolerance.valid(self.pose(params) if pose is None else pose)
-
-    def sample(self, rng, max_tries: int = 1000) -> Tuple[float, ...]:
-        free = self.free
-        for _ in range(max_tries):
-            p = tuple(float(rng.uniform(self.lower[i], self.upper[i])) for i in free)
-            if self.valid(p):
-                return p
-        return tuple(0.0 for _ in free)
-
-    @staticmethod
-    def from_tolerance(tp) -> "BaseBounds":
-        """Bounds from a base-placement ToleratedPose: x/y/z intervals (nominal or world frame), r_cyl or
-        r_sph as a box, yaw from N_z or Theta_R. An unconstrained tolerance gives a fixed base."""
-        if tp is None:
-            return BaseBounds()
-        nominal = np.array(tp.nominal, dtype=float)
-        if getattr(tp, "is_unconstrained", False):
-            return BaseBounds(nominal=nominal, tolerance=None)
-        lo = [0.0, 0.0, 0.0, 0.0]
-        hi = [0.0, 0.0, 0.0, 0.0]
-        for name, (a, b), _frame in tp.entries:
-            if name in ("x", "y", "z"):
-                i = "xyz".index(name)
-                lo[i], hi[i] = max(lo[i], a) if lo[i] else a, min(hi[i], b) if hi[i] else b
-            elif name in ("r_cyl", "r_sph"):
-                for i in (0, 1) if name == "r_cyl" else (0, 1, 2):
-                    lo[i], hi[i] = -b, b
-            elif name in ("N_z", "Y", "Alpha"):
-                lo[3], hi[3] = a, b
-            elif name == "Theta_R":
-                lo[3], hi[3] = -b, b
-        lo = [max(-10.0, v) for v in lo]
-        hi = [min(10.0, v) for v in hi]
-        return BaseBounds(nominal=nominal, lower=(lo[0], lo[1], lo[2], lo[3]), upper=(hi[0], hi[1], hi[2], hi[3]),
-                          tolerance=tp)
 
 
 @dataclass(frozen=True, eq=False)
@@ -511,7 +446,21 @@ class SearchSpace:
             return True
         from robodesign.formats.geometry import contains_point
         p = (self.base_bounds.pose(params) if pose is None else pose)[:3, 3]
-        return not any(g.kind != "mesh" and contains_point(g, p) for g in self.obstacles)
+        x, y, z = float(p[0]), float(p[1]), float(p[2])
+        for g, c, r2 in self._obstacle_spheres():
+            if r2 is not None and (x - c[0]) ** 2 + (y - c[1]) ** 2 + (z - c[2]) ** 2 > r2:
+                continue  # farther from its centre than any point of it: outside (no need to solve for its frame)
+            if contains_point(g, p):
+                return False
+        return True
+
+    def _obstacle_spheres(self) -> list:
+        """:func:`~robodesign.design.base_bounds.clearance_spheres` of the obstacles (made once)."""
+        memo = self._memo()
+        out = memo.get("obstacle_spheres")
+        if out is None:
+            out = memo["obstacle_spheres"] = clearance_spheres(self.obstacles)
+        return out
 
     def sample_base(self, rng, order: Sequence[str], tries: int = 64) -> Tuple[float, ...]:
         """Base parameters for ``order`` chosen from the goals' geometry: proposals put the first joint at a

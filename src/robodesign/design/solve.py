@@ -120,6 +120,20 @@ def robot_pool(task: Task) -> RobotPool:
     return pool
 
 
+_GOAL_POINTS: "weakref.WeakKeyDictionary[Task, list]" = weakref.WeakKeyDictionary()
+
+
+def goal_points(task: Task) -> list:
+    """(goal, nominal position, :func:`~robodesign.design.goal_planner.position_slack`) of every pose of every goal
+    of ``task`` in goal order (:func:`~robodesign.design.goal_planner.goal_poses`), the reach stage's data, made
+    once per task."""
+    pts = _GOAL_POINTS.get(task)
+    if pts is None:
+        pts = _GOAL_POINTS[task] = [(g, np.array(pose.nominal[:3, 3], dtype=float), position_slack(pose))
+                                    for g in task.goals for pose in goal_poses(g)]
+    return pts
+
+
 def warm_up() -> None:
     """Load now what :func:`solve` otherwise loads at its first use: the compiled IK kernels (when numba's
     cache holds them, ~0.3 s; with a cold cache this starts their background compilation, as the first IK
@@ -167,12 +181,11 @@ class _Pipeline:
     def reach(self) -> None:
         o, R = self.robot.reach_bound()
         worst = None  # (metres beyond the reach bound, goal, distance) of the farthest goal
-        for g in self.task.goals:
-            for pose in goal_poses(g):
-                d = float(np.linalg.norm(pose.nominal[:3, 3] - o))
-                miss = d - R - position_slack(pose)
-                if miss > 0 and (worst is None or miss > worst[0]):
-                    worst = (miss, g, d)
+        for g, p, slack in goal_points(self.task):
+            d = float(np.linalg.norm(p - o))
+            miss = d - R - slack
+            if miss > 0 and (worst is None or miss > worst[0]):
+                worst = (miss, g, d)
         if worst is not None:
             miss, g, d = worst
             self.res.shortfall = miss

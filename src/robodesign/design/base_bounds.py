@@ -1,0 +1,100 @@
+"""The base-pose parameters of a search space (:class:`BaseBounds`: offsets x, y, z, yaw from the nominal base pose
+within box bounds and the task's base-placement tolerance) and the bounding spheres that let a sampled base position
+skip the exact inside-test of the obstacles it is far from (:func:`clearance_spheres`)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Optional, Sequence, Tuple
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from robodesign.formats.tolerance import ToleratedPose
+
+
+@dataclass(frozen=True)
+class BaseBounds:
+    """Box bounds on (x, y, z, yaw) offsets from ``nominal``; a parameter with lo == hi is fixed."""
+    nominal: np.ndarray = field(default_factory=lambda: np.eye(4))
+    lower: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    upper: Tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    tolerance: Optional[ToleratedPose] = None  # that a base pose must satisfy (None: any)
+
+    @cached_property
+    def free(self) -> Tuple[int, ...]:
+        return tuple(i for i in range(4) if self.upper[i] > self.lower[i])
+
+    def pose(self, params: Sequence[float]) -> np.ndarray:
+        full = [0.0, 0.0, 0.0, 0.0]
+        for i, v in zip(self.free, params):
+            full[i] = float(v)
+        c, s = math.cos(full[3]), math.sin(full[3])  # (homogeneous(rot_z(yaw), xyz), written out)
+        return self.nominal @ np.array([[c, -s, 0.0, full[0]], [s, c, 0.0, full[1]], [0.0, 0.0, 1.0, full[2]],
+                                        [0.0, 0.0, 0.0, 1.0]])
+
+    def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:   # (pose: made already)
+        free = self.free
+        if len(params) != len(free):
+            return False
+        for i, v in zip(free, params):
+            if not (self.lower[i] - 1e-12 <= v <= self.upper[i] + 1e-12):
+                return False
+        return self.tolerance is None or self.tolerance.valid(self.pose(params) if pose is None else pose)
+
+    def sample(self, rng, max_tries: int = 1000) -> Tuple[float, ...]:
+        free = self.free
+        for _ in range(max_tries):
+            p = tuple(float(rng.uniform(self.lower[i], self.upper[i])) for i in free)
+            if self.valid(p):
+                return p
+        return tuple(0.0 for _ in free)
+
+    @staticmethod
+    def from_tolerance(tp) -> "BaseBounds":
+        """Bounds from a base-placement ToleratedPose: x/y/z intervals (nominal or world frame), r_cyl or
+        r_sph as a box, yaw from N_z or Theta_R. An unconstrained tolerance gives a fixed base."""
+        if tp is None:
+            return BaseBounds()
+        nominal = np.array(tp.nominal, dtype=float)
+        if getattr(tp, "is_unconstrained", False):
+            return BaseBounds(nominal=nominal, tolerance=None)
+        lo = [0.0, 0.0, 0.0, 0.0]
+        hi = [0.0, 0.0, 0.0, 0.0]
+        for name, (a, b), _frame in tp.entries:
+            if name in ("x", "y", "z"):
+                i = "xyz".index(name)
+                lo[i], hi[i] = max(lo[i], a) if lo[i] else a, min(hi[i], b) if hi[i] else b
+            elif name in ("r_cyl", "r_sph"):
+                for i in (0, 1) if name == "r_cyl" else (0, 1, 2):
+                    lo[i], hi[i] = -b, b
+            elif name in ("N_z", "Y", "Alpha"):
+                lo[3], hi[3] = a, b
+            elif name == "Theta_R":
+                lo[3], hi[3] = -b, b
+        lo = [max(-10.0, v) for v in lo]
+        hi = [min(10.0, v) for v in hi]
+        return BaseBounds(nominal=nominal, lower=(lo[0], lo[1], lo[2], lo[3]), upper=(hi[0], hi[1], hi[2], hi[3]),
+                          tolerance=tp)
+
+
+def clearance_spheres(obstacles) -> list:
+    """(spec, centre, squared radius or None) of each primitive obstacle (``SearchSpace._clear``'s; meshes are
+    left out). contains_point tests the point's coordinates in the shape's frame, ``local = R⁻¹ (p − t)``, and every
+    point inside has ``|local|`` at most the shape's radius r (box: half its diagonal); ``|local| ≥ |p − t| /
+    σ_max(R)``, so a point farther than ``σ_max(R)·(r + 1e-6)`` from t is outside (1e-6 m: far above the test's
+    1e-12 and the rounding of the frame change). None (the exact test always runs): a pose whose last row is
+    not (0, 0, 0, 1), or a size that is not finite."""
+    out = []
+    for g in obstacles:
+        if g.kind == "mesh":
+            continue
+        T, size = np.asarray(g.pose, float), [abs(float(v)) for v in g.size]
+        r = {"box": 0.5 * math.sqrt(sum(v * v for v in size[:3])) if len(size) >= 3 else math.inf,
+             "cylinder": math.hypot(size[0], 0.5 * size[1]) if len(size) >= 2 else math.inf,
+             "sphere": size[0] if size else math.inf}.get(g.kind, math.inf)
+        affine = T.shape == (4, 4) and bool(np.all(T[3] == (0.0, 0.0, 0.0, 1.0))) and bool(np.isfinite(T).all())
+        bound = float(np.linalg.svd(T[:3, :3], compute_uv=False)[0]) * (r + 1e-6) if affine else math.inf
+        out.append((g, tuple(float(v) for v in T[:3, 3]), bound * bound if math.isfinite(bound) else None))
+    return out
