@@ -361,6 +361,24 @@ def test_base_positions_clear_of_the_obstacles_are_those_of_every_exact_test(whi
     assert space._obstacle_spheres()[6][2] == pytest.approx((s_max * (0.5 * np.sqrt(0.38) + 1e-6)) ** 2, rel=1e-12)
 
 
+def test_the_reach_shortfall_in_floats_is_numpys_bit_for_bit():
+    from robodesign.design.search_space import _beyond
+    rng = np.random.default_rng(11)
+    for n in (1, 2, 3, 5, 8):
+        for _ in range(400):
+            G = np.column_stack([rng.normal(0, 1.5, (n, 3)), rng.uniform(0, 0.2, n)])
+            R = float(rng.uniform(0.1, 2.5))
+            pose = np.eye(4)
+            pose[:3, :3] = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+            pose[:3, 3] = rng.normal(0, 1, 3)
+            o_h = np.append(rng.normal(0, 0.3, 3), 1.0)
+            d = np.linalg.norm(G[:, :3] - (pose @ o_h)[:3], axis=1) - G[:, 3] - R
+            rows = tuple(tuple(float(v) for v in r) for r in G)
+            assert _beyond(rows, R, pose, o_h) == float(max(0.0, d.max()))
+    G[0, 0] = np.nan   # numpy's max is NaN, and max(0.0, NaN) is 0.0
+    assert _beyond(tuple(tuple(float(v) for v in r) for r in G), 0.0, pose, o_h) == 0.0
+
+
 def test_a_base_pose_is_the_nominal_pose_times_the_offset_bit_for_bit(whitman):
     from robodesign.core.spatial import homogeneous, rot_z
     bb = dataclasses.replace(whitman.space.base_bounds, nominal=homogeneous(rot_z(0.3), (0.2, -0.1, 0.05)),

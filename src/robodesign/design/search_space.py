@@ -413,16 +413,29 @@ class SearchSpace:
         return max(0, int(self.goal_rank) - self._order_geometry(tuple(str(m) for m in order))[2])
 
     def _goal_array(self) -> np.ndarray:
-        return np.asarray(self.goals, dtype=float).reshape(-1, 4)
+        """The goals as rows (x, y, z, slack), made once (read-only)."""
+        memo = self._memo()
+        G = memo.get("goal_array")
+        if G is None:
+            G = memo["goal_array"] = np.asarray(self.goals, dtype=float).reshape(-1, 4)
+            G.flags.writeable = False
+        return G
 
     def _shortfall(self, order: Tuple[str, ...], params: Sequence[float], pose: Optional[np.ndarray] = None) -> float:
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
-        o = ((self.base_bounds.pose(params) if pose is None else pose) @ np.append(o_local, 1.0))[:3]
         G = self._goal_array()
-        d = np.linalg.norm(G[:, :3] - o, axis=1) - G[:, 3] - R
-        return float(max(0.0, d.max()))
+        return _beyond(self._goal_rows(), R, self.base_bounds.pose(params) if pose is None else pose,
+                       np.append(o_local, 1.0))
+
+    def _goal_rows(self) -> Tuple[Tuple[float, float, float, float], ...]:
+        """:meth:`_goal_array`'s rows as Python floats (:func:`_beyond`'s)."""
+        memo = self._memo()
+        rows = memo.get("goal_rows")
+        if rows is None:
+            rows = memo["goal_rows"] = tuple(tuple(float(v) for v in r) for r in self._goal_array())
+        return rows
 
     def reach_shortfall(self, candidate: "Candidate") -> float:
         """How many metres the farthest goal lies beyond ``candidate``'s reach bound (the reach stage's test:
@@ -478,12 +491,13 @@ class SearchSpace:
         order = tuple(str(m) for m in order)
         o_local, R = self._order_reach(order)
         G = self._goal_array()
+        G3, rows, o_h, n = G[:, :3], self._goal_rows(), np.append(o_local, 1.0), len(G)
         inv = np.linalg.inv(bb.nominal)
         best, best_s = None, math.inf
         for k in range(tries):
             if k % 2 == 0:  # geometric: the first joint within R of a goal
                 full = [float(rng.uniform(bb.lower[i], bb.upper[i])) for i in range(4)]
-                g = G[int(rng.integers(len(G))), :3]
+                g = G3[int(rng.integers(n))]
                 v = rng.normal(size=3)
                 # at 20–75 % of the reach: a stretched arm rarely holds a pose's orientation (or its weight)
                 v *= rng.uniform(0.2, 0.75) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
@@ -495,7 +509,7 @@ class SearchSpace:
                 params = tuple(full[i] for i in free)
             else:
                 params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-            s = self._shortfall(order, params, T) if bb.valid(params, T := bb.pose(params)) else None  # (one pose)
+            s = _beyond(rows, R, T, o_h) if bb.valid(params, T := bb.pose(params)) else None  # (one pose)
             if s is None or s != 0.0 and s >= best_s or not self._clear(params, T):
                 continue  # invalid, or neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
@@ -677,6 +691,23 @@ class SearchSpace:
         return Candidate(tuple(order), tuple(0.0 if self.base_bounds.lower[i] <= 0 <= self.base_bounds.upper[i]
                                              else 0.5 * (self.base_bounds.lower[i] + self.base_bounds.upper[i])
                                              for i in self.base_bounds.free))
+
+
+def _beyond(goals, R: float, pose: np.ndarray, o_h: np.ndarray) -> float:
+    """How far [m] the farthest goal (rows x, y, z, slack) lies beyond the reach bound of radius ``R`` around
+    ``pose @ o_h`` (the first joint; ``o_h``: its homogeneous position in the base frame), each goal's slack off;
+    0 when none does. The numbers of ``max(0, max(norm(G[:, :3] - o, axis=1) - G[:, 3] - R))`` in numpy (whose
+    norm along an axis is the square root of the squares summed in order), in Python floats (a few goals)."""
+    ox, oy, oz = (pose @ o_h)[:3].tolist()
+    worst = -math.inf
+    for x, y, z, slack in goals:
+        dx, dy, dz = x - ox, y - oy, z - oz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz) - slack - R
+        if d != d:
+            return 0.0   # (numpy's max is NaN then, and max(0.0, NaN) is 0.0)
+        if d > worst:
+            worst = d
+    return max(0.0, worst)
 
 
 def _block(blocked: frozenset, blocks: dict, mid: str):
