@@ -306,3 +306,27 @@ def test_planned_states_leave_room_for_friction_away_from_the_rests():
                 assert headroom(x), x
     traj = time_parameterize(r, res.path, dt=0.01)
     np.testing.assert_allclose(traj.q[-1], B, atol=1e-9)
+
+
+def test_the_batched_static_test_gives_each_state_its_own_verdict():
+    """``rows`` of the static validator (the gravity torques of a segment's states in one RNEA call) answers
+    exactly as the one-state test (pinocchio's computeGeneralizedGravity per state) on every state: on a heavy
+    arm swung through poses it holds, poses it cannot hold, and poses near and far from the rests, with and
+    without the rest condition; and the torques themselves are those of computeGeneralizedGravity bit for bit
+    (up to the sign of a zero)."""
+    import pinocchio as pin
+
+    from robodesign.model.rnea_batch import rnea_rows
+    from robodesign.solvers.planning import _static_validator
+    r = Robot.from_order(load_module_set("robodesign_arm"), HEAVY_ORDER)
+    rng = np.random.default_rng(2)
+    Q = np.vstack([np.linspace(FOLD_A, FOLD_B, 201), rng.uniform(r.q_lower, r.q_upper, (400, r.dof)),
+                   FOLD_A + rng.normal(0, 0.05, (100, r.dof))])
+    Z = np.zeros_like(Q)
+    exact = np.array([pin.computeGeneralizedGravity(r.model, r.data, q).copy() for q in Q])
+    assert np.array_equal(np.abs(rnea_rows(r.model, Q, Z, Z)), np.abs(exact))
+    for rest in ((), (FOLD_A, FOLD_B)):
+        ok = _static_validator(r, True, rest)
+        each = np.array([ok(q) for q in Q])
+        assert np.array_equal(ok.rows(Q), each)
+        assert 50 < each.sum() < len(Q) - 50   # both verdicts, many times

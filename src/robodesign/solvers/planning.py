@@ -60,10 +60,10 @@ from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 
 import numpy as np
-import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.model.collision_cull import culler_of
+from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
 
@@ -153,9 +153,9 @@ def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
         out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
         if gravity is not None and out.any():
             idx = np.flatnonzero(out)
-            if isinstance(robot, Robot):   # (Robot.gravity_torque's pinocchio call, without its per-call checks)
-                m, d, grav = robot.model, robot.data, pin.computeGeneralizedGravity
-                G = np.abs(np.array([grav(m, d, Q[i]).copy() for i in idx]).reshape(len(idx), -1))
+            if isinstance(robot, Robot):   # Robot.gravity_torque of every row in one call: pinocchio's RNEA at
+                Z = np.zeros((len(idx), robot.model.nv))   # rest, the same |τ| bit for bit (tests/test_planning.py)
+                G = np.abs(rnea_rows(robot.model, Q[idx], Z, Z))
             else:
                 G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
             bad = (G > tau_max).any(axis=1)
@@ -257,7 +257,7 @@ class _Memoized:
                     j = at[i]
                     v = bool(ok[j])
                     if v and near[j]:
-                        v = not culler.collides(rows[i], np.flatnonzero(S[j]))
+                        v = not culler.collides(rows[i], S[j].nonzero()[0])
                     memo[key] = v
                 if not v:
                     return start + i
