@@ -325,8 +325,12 @@ def test_the_batched_static_test_gives_each_state_its_own_verdict():
     Z = np.zeros_like(Q)
     exact = np.array([pin.computeGeneralizedGravity(r.model, r.data, q).copy() for q in Q])
     assert np.array_equal(np.abs(rnea_rows(r.model, Q, Z, Z)), np.abs(exact))
+    verdicts = []
     for rest in ((), (FOLD_A, FOLD_B)):
         ok = _static_validator(r, True, rest)
         each = np.array([ok(q) for q in Q])
         assert np.array_equal(ok.rows(Q), each)
         assert 50 < each.sum() < len(Q) - 50   # both verdicts, many times
+        verdicts.append(each)
+    # states held standing still but without room for friction: out only away from the rests
+    assert (verdicts[0] & ~verdicts[1]).sum() >= 5

@@ -152,16 +152,18 @@ def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
         """``ok`` of every row of ``Q`` (the same elementwise tests, vectorised)."""
         out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
         if gravity is not None and out.any():
-            idx = np.flatnonzero(out)
+            idx = out.nonzero()[0]
+            Qi = Q[idx]
             if isinstance(robot, Robot):   # Robot.gravity_torque of every row in one call: pinocchio's RNEA at
-                Z = np.zeros((len(idx), robot.model.nv))   # rest, the same |τ| bit for bit (tests/test_planning.py)
-                G = np.abs(rnea_rows(robot.model, Q[idx], Z, Z))
+                Z = np.zeros(Qi.shape)     # rest, the same |τ| bit for bit (tests/test_planning.py)
+                G = np.abs(rnea_rows(robot.model, Qi, Z, Z))
             else:
-                G = np.abs(np.array([gravity(Q[i]) for i in idx]).reshape(len(idx), -1))
+                G = np.abs(np.array([gravity(q) for q in Qi]).reshape(len(idx), -1))
             bad = (G > tau_max).any(axis=1)
-            if R is not None:
-                far = np.min(np.max(np.abs(R[None, :, :] - Q[idx][:, None, :]), axis=2), axis=1) > REST_RADIUS
-                bad |= (G > moving_max).any(axis=1) & far
+            if R is not None:   # the rows held, but without room for friction: bad where far from every rest
+                t = ((G > moving_max).any(axis=1) & ~bad).nonzero()[0]
+                if len(t):
+                    bad[t[np.min(np.max(np.abs(R[None, :, :] - Qi[t][:, None, :]), axis=2), axis=1) > REST_RADIUS]] = True
             out[idx[bad]] = False
         return out
     ok.rows = rows_ok  # type: ignore[attr-defined]
