@@ -514,3 +514,52 @@ def test_evaluation_budget_keeps_whole_batches(bench, monkeypatch):
     res = Study(load_optimizer("genetic")(bench.problem, seed=0, population_size=8), ex, Budget(evaluations=10),
                 batch_size=4).run()
     assert ex.batches == [4, 4, 2] and len(res.history) == 10 and res.overrun is None and res.dropped == 0
+
+
+def _crossover_as_before(opt, a, b):
+    """GeneticOptimizer._crossover's one-point cuts as earlier releases found them (DoF sums and successor lists
+    asked per cut), then the same choice: the chosen orders, or None."""
+    A, B = list(a), list(b)
+    sp = opt.space
+    dof = lambda order: sum(sp.module_info(m).dof for m in order)  # noqa: E731
+    cuts = []
+    for i in range(len(A) - 1):
+        succ_a = sp.successors(A[:i + 1])
+        for j in range(len(B) - 1):
+            if B[j + 1] not in succ_a:
+                continue
+            c1, c2 = A[:i + 1] + B[j + 1:], B[:j + 1] + A[i + 1:]
+            if c1 in (A, B) or c2 in (A, B):
+                continue
+            d1, d2 = dof(A[:i + 1]) + dof(B[j + 1:]), dof(B[:j + 1]) + dof(A[i + 1:])
+            if sp.min_dof <= d1 <= sp.max_dof and sp.min_dof <= d2 <= sp.max_dof and A[i + 1] in sp.successors(B[:j + 1]):
+                cuts.append((c1, c2))
+    for c1, c2 in opt._shuffled(cuts)[:30]:
+        if opt._valid(c1) and opt._valid(c2):
+            return c1, c2
+    return None
+
+
+def test_genetic_crossover_cuts_are_those_of_the_former_loop(tmp_path):
+    """The crossover's cuts from DoF prefix sums and successor sets per junction: on 60 pairs of random orders of
+    the built-in set (7-DoF arms of a generated Whitman task), the orders it makes and the random draws it takes
+    are those of the former double loop."""
+    from robodesign.generate.registry import generate
+    from robodesign_optimizers.genetic import Individual
+    task = generate("whitman2020", tmp_path, 1, 0, {"goals": 5, "obstacles": 5, "base": "xyz_any_rot"})[0]
+    problem = Problem.build(task, "robodesign_arm", COST)
+    new, old = load_optimizer("genetic")(problem, seed=3), load_optimizer("genetic")(problem, seed=3)
+    rng = np.random.default_rng(1)
+    crossed = 0
+    for _ in range(60):
+        a, b = (Individual(problem.space.random_order(rng), ()) for _ in range(2))
+        before = (list(a), list(b))
+        want = _crossover_as_before(old, list(a), list(b))
+        new._crossover(a, b)
+        if want is None:
+            assert (list(a), list(b)) == before
+            continue
+        crossed += 1
+        assert (list(a), list(b)) == (list(want[0]), list(want[1]))
+        assert new.rng.random() == old.rng.random()   # the same draws so far
+    assert crossed >= 20

@@ -268,6 +268,13 @@ class GeneticOptimizer(Optimizer):
                     dofs[m] = self.space.module_info(m).dof
             return sum(dofs[m] for m in order)
 
+    def _dof_prefixes(self, order: Sequence[str]) -> List[int]:
+        """[DoF of order[:k] for k = 0 … len(order)]."""
+        out = [0]
+        for m in order:
+            out.append(out[-1] + self._dof((m,)))
+        return out
+
     def _shuffled(self, items: list) -> list:
         return [items[i] for i in self.rng.permutation(len(items))] if items else []
 
@@ -367,19 +374,23 @@ class GeneticOptimizer(Optimizer):
         sp = self.space
         lo, hi = sp.min_dof, sp.max_dof
         cuts = []
+        pa, pb = self._dof_prefixes(A), self._dof_prefixes(B)   # pa[k]: the DoF of A[:k]
+        succ_b: Dict[int, set] = {}   # j → the modules that may follow B[:j + 1]
         for i in range(len(A) - 1):
-            succ_a = sp.successors(A[:i + 1])
-            dof_a = self._dof(A[:i + 1])
+            succ_a = set(sp.successors(A[:i + 1]))
             for j in range(len(B) - 1):
                 if B[j + 1] not in succ_a:
                     continue
                 c1, c2 = A[:i + 1] + B[j + 1:], B[:j + 1] + A[i + 1:]
                 if c1 in (A, B) or c2 in (A, B):
                     continue
-                dof_b = self._dof(B[:j + 1])
-                d1 = dof_a + self._dof(B[j + 1:])
-                d2 = dof_b + self._dof(A[i + 1:])
-                if lo <= d1 <= hi and lo <= d2 <= hi and A[i + 1] in sp.successors(B[:j + 1]):
+                d1 = pa[i + 1] + pb[-1] - pb[j + 1]
+                d2 = pb[j + 1] + pa[-1] - pa[i + 1]
+                if not (lo <= d1 <= hi and lo <= d2 <= hi):
+                    continue
+                if j not in succ_b:
+                    succ_b[j] = set(sp.successors(B[:j + 1]))
+                if A[i + 1] in succ_b[j]:
                     cuts.append((c1, c2))
         changed = False
         for c1, c2 in self._shuffled(cuts)[:30]:
