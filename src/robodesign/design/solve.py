@@ -153,7 +153,6 @@ class _Pipeline:
         self.task, self.module_set, self.order_or_assembly = task, module_set, order_or_assembly
         self.colliders, self.start = list(colliders), start
         self.base_pose, self.cost, self.settings, self.res = base_pose, cost, settings, res
-        self.rng = np.random.default_rng(settings.seed)
         self.robot = None
 
     def assembly(self) -> None:
@@ -192,7 +191,8 @@ class _Pipeline:
             raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
 
     def ik(self) -> None:
-        self.planner = GoalPlanner(self.task, self.robot, self.settings, self.rng, self.res, self.cost,
+        rng = np.random.default_rng(self.settings.seed)   # (made here: most candidates stop before the IK)
+        self.planner = GoalPlanner(self.task, self.robot, self.settings, rng, self.res, self.cost,
                                    colliders=self.colliders, start=self.start)
         self.planner.solve_ik()
 
