@@ -35,13 +35,19 @@ class BaseBounds:
                                         [0.0, 0.0, 0.0, 1.0]])
 
     def valid(self, params: Sequence[float], pose: Optional[np.ndarray] = None) -> bool:   # (pose: made already)
+        return self.within(params) and (self.tolerance is None or
+                                        self.tolerance.valid(self.pose(params) if pose is None else pose))
+
+    def within(self, params: Sequence[float]) -> bool:
+        """Whether ``params`` has one value per free parameter, each within its bounds (:meth:`valid` without
+        the base-placement tolerance)."""
         free = self.free
         if len(params) != len(free):
             return False
         for i, v in zip(free, params):
             if not (self.lower[i] - 1e-12 <= v <= self.upper[i] + 1e-12):
                 return False
-        return self.tolerance is None or self.tolerance.valid(self.pose(params) if pose is None else pose)
+        return True
 
     def sample(self, rng, max_tries: int = 1000) -> Tuple[float, ...]:
         free = self.free

@@ -31,6 +31,7 @@ from robodesign.core.errors import AssemblyError, InputError
 from robodesign.core.spatial import rot_z
 from robodesign.design.base_bounds import BaseBounds, clearance_spheres  # noqa: F401 - BaseBounds: its import path
 from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
+from robodesign.formats.geometry import contains_point
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.model.extent import module_extent
 
@@ -425,7 +426,6 @@ class SearchSpace:
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
-        G = self._goal_array()
         return _beyond(self._goal_rows(), R, self.base_bounds.pose(params) if pose is None else pose,
                        np.append(o_local, 1.0))
 
@@ -457,7 +457,6 @@ class SearchSpace:
         (meshes are left to the pipeline's collision checks)."""
         if not self.obstacles:
             return True
-        from robodesign.formats.geometry import contains_point
         p = (self.base_bounds.pose(params) if pose is None else pose)[:3, 3]
         x, y, z = float(p[0]), float(p[1]), float(p[2])
         for g, c, r2 in self._obstacle_spheres():
@@ -509,9 +508,14 @@ class SearchSpace:
                 params = tuple(full[i] for i in free)
             else:
                 params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
-            s = _beyond(rows, R, T, o_h) if bb.valid(params, T := bb.pose(params)) else None  # (one pose)
-            if s is None or s != 0.0 and s >= best_s or not self._clear(params, T):
-                continue  # invalid, or neither returned nor the best so far (its clearance does not matter)
+            if not bb.within(params):
+                continue
+            T = bb.pose(params)   # (one pose for the tolerance, the shortfall and the clearance)
+            if bb.tolerance is not None and not bb.tolerance.valid(T):
+                continue
+            s = _beyond(rows, R, T, o_h)
+            if s != 0.0 and s >= best_s or not self._clear(params, T):
+                continue  # neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
                 return params
             if s < best_s:
