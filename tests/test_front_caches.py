@@ -362,7 +362,7 @@ def test_base_positions_clear_of_the_obstacles_are_those_of_every_exact_test(whi
 
 
 def test_the_reach_shortfall_in_floats_is_numpys_bit_for_bit():
-    from robodesign.design.search_space import _beyond
+    from robodesign.design.base_bounds import beyond_reach as _beyond
     rng = np.random.default_rng(11)
     for n in (1, 2, 3, 5, 8):
         for _ in range(400):

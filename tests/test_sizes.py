@@ -12,7 +12,7 @@ MAX_FUNCTION_LINES = 80
 BIG_FILES = {
     "design/optimize.py": (614, "the optimizer plugin API (options, budget, loading) and the Study loop; not split "
                                 "yet (design/ was being worked on elsewhere)"),
-    "design/search_space.py": (726, "one SearchSpace class: validity, successors, enumeration, base sampling, cost "
+    "design/search_space.py": (731, "one SearchSpace class: validity, successors, enumeration, base sampling, cost "
                                     "and reach bounds (BaseBounds moved to design/base_bounds.py)"),
     "formats/tolerance.py": (1000, "rotation maths, projections and ToleratedPose together (issue 23 §2 moves the "
                                    "rotation maths to core/spatial); +13: the plain tolerances' fast values"),

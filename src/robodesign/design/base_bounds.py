@@ -1,6 +1,7 @@
 """The base-pose parameters of a search space (:class:`BaseBounds`: offsets x, y, z, yaw from the nominal base pose
 within box bounds and the task's base-placement tolerance) and the bounding spheres that let a sampled base position
-skip the exact inside-test of the obstacles it is far from (:func:`clearance_spheres`)."""
+skip the exact inside-test of the obstacles it is far from (:func:`clearance_spheres`), and how far the goals lie
+beyond an order's reach bound at a proposed base pose (:func:`beyond_reach`)."""
 from __future__ import annotations
 
 import math
@@ -104,3 +105,20 @@ def clearance_spheres(obstacles) -> list:
         bound = float(np.linalg.svd(T[:3, :3], compute_uv=False)[0]) * (r + 1e-6) if affine else math.inf
         out.append((g, tuple(float(v) for v in T[:3, 3]), bound * bound if math.isfinite(bound) else None))
     return out
+
+
+def beyond_reach(goals, R: float, pose: np.ndarray, o_h: np.ndarray) -> float:
+    """How far [m] the farthest goal (rows x, y, z, slack) lies beyond the reach bound of radius ``R`` around
+    ``pose @ o_h`` (the first joint; ``o_h``: its homogeneous position in the base frame), each goal's slack off;
+    0 when none does. The numbers of ``max(0, max(norm(G[:, :3] - o, axis=1) - G[:, 3] - R))`` in numpy (whose
+    norm along an axis is the square root of the squares summed in order), in Python floats (a few goals)."""
+    ox, oy, oz = (pose @ o_h)[:3].tolist()
+    worst = -math.inf
+    for x, y, z, slack in goals:
+        dx, dy, dz = x - ox, y - oy, z - oz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz) - slack - R
+        if d != d:
+            return 0.0   # (numpy's max is NaN then, and max(0.0, NaN) is 0.0)
+        if d > worst:
+            worst = d
+    return max(0.0, worst)

@@ -29,7 +29,7 @@ import numpy as np
 
 from robodesign.core.errors import AssemblyError, InputError
 from robodesign.core.spatial import rot_z
-from robodesign.design.base_bounds import BaseBounds, clearance_spheres  # noqa: F401 - BaseBounds: its import path
+from robodesign.design.base_bounds import BaseBounds, beyond_reach, clearance_spheres  # noqa: F401 - BaseBounds: its import path
 from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
 from robodesign.formats.geometry import contains_point
 from robodesign.formats.module_spec import ModuleSet
@@ -426,11 +426,11 @@ class SearchSpace:
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
-        return _beyond(self._goal_rows(), R, self.base_bounds.pose(params) if pose is None else pose,
+        return beyond_reach(self._goal_rows(), R, self.base_bounds.pose(params) if pose is None else pose,
                        np.append(o_local, 1.0))
 
     def _goal_rows(self) -> Tuple[Tuple[float, float, float, float], ...]:
-        """:meth:`_goal_array`'s rows as Python floats (:func:`_beyond`'s)."""
+        """:meth:`_goal_array`'s rows as Python floats (:func:`~robodesign.design.base_bounds.beyond_reach`'s)."""
         memo = self._memo()
         rows = memo.get("goal_rows")
         if rows is None:
@@ -513,7 +513,7 @@ class SearchSpace:
             T = bb.pose(params)   # (one pose for the tolerance, the shortfall and the clearance)
             if bb.tolerance is not None and not bb.tolerance.valid(T):
                 continue
-            s = _beyond(rows, R, T, o_h)
+            s = beyond_reach(rows, R, T, o_h)
             if s != 0.0 and s >= best_s or not self._clear(params, T):
                 continue  # neither returned nor the best so far (its clearance does not matter)
             if s == 0.0:
@@ -695,23 +695,6 @@ class SearchSpace:
         return Candidate(tuple(order), tuple(0.0 if self.base_bounds.lower[i] <= 0 <= self.base_bounds.upper[i]
                                              else 0.5 * (self.base_bounds.lower[i] + self.base_bounds.upper[i])
                                              for i in self.base_bounds.free))
-
-
-def _beyond(goals, R: float, pose: np.ndarray, o_h: np.ndarray) -> float:
-    """How far [m] the farthest goal (rows x, y, z, slack) lies beyond the reach bound of radius ``R`` around
-    ``pose @ o_h`` (the first joint; ``o_h``: its homogeneous position in the base frame), each goal's slack off;
-    0 when none does. The numbers of ``max(0, max(norm(G[:, :3] - o, axis=1) - G[:, 3] - R))`` in numpy (whose
-    norm along an axis is the square root of the squares summed in order), in Python floats (a few goals)."""
-    ox, oy, oz = (pose @ o_h)[:3].tolist()
-    worst = -math.inf
-    for x, y, z, slack in goals:
-        dx, dy, dz = x - ox, y - oy, z - oz
-        d = math.sqrt(dx * dx + dy * dy + dz * dz) - slack - R
-        if d != d:
-            return 0.0   # (numpy's max is NaN then, and max(0.0, NaN) is 0.0)
-        if d > worst:
-            worst = d
-    return max(0.0, worst)
 
 
 def _block(blocked: frozenset, blocks: dict, mid: str):
