@@ -205,6 +205,39 @@ def distance_field(shape, pose: np.ndarray) -> DistanceField:
     return f
 
 
+def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
+    """(first, second): the objects of every collision pair of the geometry model ``gm`` (int64 arrays in pair
+    order), a robot object first in a robot–obstacle pair (the robot's objects are those below ``n_robot``). From
+    the model's pair map (``collisionPairMapping``: the pair index of (i, j) and of (j, i)), each pair as (smaller,
+    larger) object index: the bounds are symmetric; a map that does not hold every pair once falls back to the
+    pairs themselves (an obstacle listed first: NotImplementedError)."""
+    n = len(gm.collisionPairs)
+    M = np.asarray(gm.collisionPairMapping)
+    i, j = np.nonzero(np.triu(M >= 0, 1))
+    k = M[i, j].astype(np.int64)
+    first, second = np.full(n, -1, np.int64), np.full(n, -1, np.int64)
+    if len(k) == n and (n == 0 or (k.min() >= 0 and k.max() < n)):
+        first[k], second[k] = i, j
+        if (first >= 0).all():
+            return first, second
+    pairs = [(cp.first, cp.second) for cp in gm.collisionPairs]
+    if any(b < n_robot <= a for a, b in pairs):
+        raise NotImplementedError("an obstacle listed first in a collision pair")
+    return (np.array([a for a, _ in pairs], dtype=np.int64).reshape(n),
+            np.array([b for _, b in pairs], dtype=np.int64).reshape(n))
+
+
+def pair_margins(robot, gd) -> np.ndarray:
+    """The security margin of every collision request of ``gd``: the robot's record of the margins it set
+    (``RobotGeometry.request_margins``, kept with the scratch space it set them on), else read request by
+    request."""
+    known = getattr(robot, "request_margins", None)
+    m = known(gd) if known is not None else None
+    if m is None:
+        m = np.array([req.security_margin for req in gd.collisionRequests], dtype=float)
+    return m.reshape(len(gd.collisionRequests))
+
+
 class CollisionCuller:
     """``robot.in_collision`` for many configurations: the pairs a bound clears are not asked (module docstring).
     Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and
@@ -225,29 +258,23 @@ class CollisionCuller:
             radii.append(r)
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
-        pairs = [(cp.first, cp.second) for cp in gm.collisionPairs]
-        margin = np.array([req.security_margin for req in gd.collisionRequests], dtype=float).reshape(len(pairs))
-        active = np.array(list(gd.activeCollisionPairs), dtype=bool).reshape(len(pairs))
-        self.n_pairs = len(pairs)
-        self.active = active
-        selfp = [k for k, (a, b) in enumerate(pairs) if a < n_robot and b < n_robot]
-        self.self_k = np.array(selfp, dtype=int)
-        self.self_a = np.array([pairs[k][0] for k in selfp], dtype=int)
-        self.self_b = np.array([pairs[k][1] for k in selfp], dtype=int)
+        first, second = pair_ends(gm, n_robot)
+        margin = pair_margins(robot, gd)
+        self.n_pairs = len(first)
+        self.active = np.array(gd.activeCollisionPairs, dtype=bool).reshape(self.n_pairs)
+        selfp = (first < n_robot) & (second < n_robot)
+        self.self_k = np.flatnonzero(selfp)
+        self.self_a, self.self_b = first[self.self_k], second[self.self_k]
         self.self_limit = self.radius[self.self_a] + self.radius[self.self_b] + margin[self.self_k] + SLACK
-        # robot–obstacle pairs, grouped by obstacle
+        # robot–obstacle pairs, grouped by obstacle (in the order of each obstacle's first pair)
         self.obstacles: List[Tuple[DistanceField, np.ndarray, np.ndarray, np.ndarray]] = []
-        by_ob: Dict[int, List[int]] = {}
-        for k, (a, b) in enumerate(pairs):
-            if a < n_robot <= b:
-                by_ob.setdefault(b, []).append(k)
-            elif b < n_robot <= a:
-                raise NotImplementedError("an obstacle listed first in a collision pair")
-        for ob, ks in by_ob.items():
+        obp = np.flatnonzero((first < n_robot) & (second >= n_robot))
+        obs, first_at = np.unique(second[obp], return_index=True)
+        for ob in obs[np.argsort(first_at, kind="stable")].tolist():
             o = objs[ob]
             field = distance_field(o.geometry, o.placement.homogeneous)
-            kk = np.array(ks, dtype=int)
-            geo = np.array([pairs[k][0] for k in ks], dtype=int)
+            kk = obp[second[obp] == ob]
+            geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
@@ -414,4 +441,4 @@ def culler_of(robot) -> CollisionCuller:
 
 
 __all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
-           "SLACK", "CELL"]
+           "SLACK", "CELL", "pair_ends", "pair_margins"]

@@ -178,13 +178,33 @@ class RobotGeometry:
         return gd
 
     def _apply_margins(self, gd) -> None:
-        # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
-        # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
+        """Contacts on for every request, the safety margin on the robot–obstacle pairs' (after the self pairs).
+        enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps (e.g. a box centred on a
+        cylinder's end face); with contacts it runs EPA and is exact. A new scratch space's requests are all alike:
+        two copies of its first one, set so, make the whole vector at once (C++ copies)."""
+        reqs = gd.collisionRequests
+        n, ns = len(reqs), min(self._n_self_pairs, len(reqs))
         margin = getattr(self, "safety_margin", 0.0)
-        for k, req in enumerate(gd.collisionRequests):
-            req.enable_contact = True
-            if k >= self._n_self_pairs:
-                req.security_margin = margin
+        if n:
+            vec = type(reqs)
+            own, other, out = vec(), vec(), vec()
+            own.append(reqs[0])
+            own[0].enable_contact = True
+            other.append(own[0])
+            other[0].security_margin = margin
+            out.extend([own[0]] * ns + [other[0]] * (n - ns))
+            gd.collisionRequests = out
+            m = np.full(n, float(other[0].security_margin))
+            m[:ns] = own[0].security_margin
+        else:
+            m = np.zeros(0)
+        self._margins_set = (gd, m)
+
+    def request_margins(self, gd) -> Optional[np.ndarray]:
+        """The security margins of ``gd``'s collision requests as :meth:`_apply_margins` set them (None for another
+        scratch space): what :class:`~robodesign.model.collision_cull.CollisionCuller` bounds with."""
+        rec = getattr(self, "_margins_set", None)
+        return rec[1] if rec is not None and rec[0] is gd else None
 
     # ------------------------------------------------------------------------------------------
     # collision
