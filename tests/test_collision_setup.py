@@ -15,7 +15,7 @@ from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
-from robodesign.model.collision_cull import CollisionCuller, distance_field, pair_ends, pair_margins
+from robodesign.model.collision_cull import CollisionCuller, bounding_sphere, distance_field, pair_ends, pair_margins
 from robodesign.model.robot import Obstacle
 from robodesign.solvers.schedule import static_cell
 
@@ -126,7 +126,12 @@ def reference_culler(robot) -> dict:
     for k, (a, b) in enumerate(pairs):
         if a < n_robot <= b:
             by_ob.setdefault(b, []).append(k)
-    return {"self_k": selfp, "self_a": [pairs[k][0] for k in selfp], "self_b": [pairs[k][1] for k in selfp],
+    objs = gm.geometryObjects
+    spheres = [bounding_sphere(objs[i].geometry) for i in range(n_robot)]
+    local = [np.asarray(objs[i].placement.rotation) @ c + np.asarray(objs[i].placement.translation) for i, (c, _) in
+             enumerate(spheres)]
+    return {"parent": [int(objs[i].parentJoint) for i in range(n_robot)], "local": np.array(local),
+            "radius": np.array([r for _, r in spheres]), "self_k": selfp, "self_a": [pairs[k][0] for k in selfp], "self_b": [pairs[k][1] for k in selfp],
             "active": list(gd.activeCollisionPairs), "margin": margin, "obstacles": [
                 (ob, ks, [pairs[k][0] for k in ks]) for ob, ks in by_ob.items()]}
 
@@ -137,6 +142,8 @@ def test_culler_arrays_are_those_read_pair_by_pair(robot):
         robot.set_obstacles(boxes(robot, 5) + obstacles + boxes(robot, 6, 2), safety_margin=0.01)
         robot.geom_data.deactivateCollisionPair(3)
         c, ref = CollisionCuller(robot), reference_culler(robot)
+        assert c.parent.tolist() == ref["parent"] and np.array_equal(c.local, ref["local"])
+        assert np.array_equal(c.radius, ref["radius"])
         assert c.self_k.tolist() == ref["self_k"] and c.self_a.tolist() == ref["self_a"]
         assert c.self_b.tolist() == ref["self_b"] and c.active.tolist() == ref["active"] and not c.active[3]
         assert np.array_equal(c.self_limit, c.radius[c.self_a] + c.radius[c.self_b] + ref["margin"][c.self_k] + 1e-4)

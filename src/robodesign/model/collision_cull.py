@@ -213,7 +213,9 @@ def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
     pairs themselves (an obstacle listed first: NotImplementedError)."""
     n = len(gm.collisionPairs)
     M = np.asarray(gm.collisionPairMapping)
-    i, j = np.nonzero(np.triu(M >= 0, 1))
+    i, j = np.nonzero(M >= 0)
+    upper = i < j
+    i, j = i[upper], j[upper]
     k = M[i, j].astype(np.int64)
     first, second = np.full(n, -1, np.int64), np.full(n, -1, np.int64)
     if len(k) == n and (n == 0 or (k.min() >= 0 and k.max() < n)):
@@ -249,19 +251,20 @@ class CollisionCuller:
         gm, gd = robot.geom_model, robot.geom_data
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
-        self.parent = np.array([int(objs[i].parentJoint) for i in range(n_robot)])
-        centres, radii = [], []
-        for i in range(n_robot):
-            c, r = bounding_sphere(objs[i].geometry)
-            P = objs[i].placement
-            centres.append(np.asarray(P.rotation) @ c + np.asarray(P.translation))   # in the parent joint's frame
+        parent, centres, radii = [], [], []
+        for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
+            c, r = bounding_sphere(o.geometry)
+            P = o.placement
+            centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
             radii.append(r)
+            parent.append(o.parentJoint)
+        self.parent = np.array(parent, dtype=int).reshape(n_robot)
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
         first, second = pair_ends(gm, n_robot)
         margin = pair_margins(robot, gd)
         self.n_pairs = len(first)
-        self.active = np.array(gd.activeCollisionPairs, dtype=bool).reshape(self.n_pairs)
+        self.active = np.fromiter(gd.activeCollisionPairs, dtype=bool, count=self.n_pairs)
         selfp = (first < n_robot) & (second < n_robot)
         self.self_k = np.flatnonzero(selfp)
         self.self_a, self.self_b = first[self.self_k], second[self.self_k]
