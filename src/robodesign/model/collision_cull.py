@@ -324,16 +324,18 @@ class CollisionCuller:
         r = self.robot
         gm, gd = r.geom_model, r.geom_data
         pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
-        ks = [int(k) for k in pairs]
+        ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
         last = self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
-        for k in ks:
-            self.narrow += 1
-            if pin.computeCollision(gm, gd, k):
+        compute = pin.computeCollision
+        for i, k in enumerate(ks):
+            if compute(gm, gd, k):
+                self.narrow += i + 1
                 self._last_hit = k
                 return True
+        self.narrow += len(ks)
         return False
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
@@ -379,9 +381,10 @@ class CollisionCuller:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
         (:func:`robodesign.model.geometry_kernel.survivors`); the grid cells it asked about unknown are computed
         afterwards, for the next queries."""
-        if self._one is None:
-            self._one = self._kernel_args()
-        args, grids = self._one
+        one = self._one
+        if one is None:
+            one = self._one = self._kernel_args()
+        args, grids = one
         n, nu = geometry_kernel.survivors(q, *args)
         hit = bool(n) and self.collides(q, args[-2][:n].tolist())
         if nu:
