@@ -155,3 +155,31 @@ def test_culler_arrays_are_those_read_pair_by_pair(robot):
             assert np.array_equal(limit, c.radius[geo] + ref["margin"][kk] + 1e-4)
     finally:
         robot.set_obstacles(obstacles, safety_margin=before)
+
+
+def test_kept_pairs_make_the_model_fresh_pairs_make(robot):
+    """The robot–obstacle pairs added from the process's kept CollisionPair objects: the same pairs, in the same
+    order, and the same pair map as pairs made one by one; a longer column later keeps the shorter one's pairs."""
+    from robodesign.model.robot_geometry import _pair_column
+    obstacles, before = list(robot.obstacles), robot.safety_margin
+    try:
+        robot.set_obstacles(obstacles + boxes(robot, 7), safety_margin=0.01)
+        gm = robot.geom_model
+        ref, objs, n = pin.GeometryModel(), gm.geometryObjects, robot.n_collision_geometries
+        for i in range(n):
+            ref.addGeometryObject(objs[i])
+        ref.setCollisionPairs(robot._self_pairs)
+        for i in range(n, len(objs)):
+            ref.addGeometryObject(objs[i])
+        for k in robot.obstacle_geometry_ids:
+            for a in range(robot.n_collision_geometries):
+                ref.addCollisionPair(pin.CollisionPair(a, k))
+        assert [(p.first, p.second) for p in gm.collisionPairs] == [(p.first, p.second) for p in ref.collisionPairs]
+        assert np.array_equal(gm.collisionPairMapping, ref.collisionPairMapping)
+        k = max(robot.obstacle_geometry_ids) + 5
+        short, long = _pair_column(k, 3), _pair_column(k, 7)
+        assert [(p.first, p.second) for p in long] == [(a, k) for a in range(7)]
+        assert [(p.first, p.second) for p in short] == [(a, k) for a in range(3)] == [
+            (p.first, p.second) for p in _pair_column(k, 3)]
+    finally:
+        robot.set_obstacles(obstacles, safety_margin=before)

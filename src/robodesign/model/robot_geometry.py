@@ -125,9 +125,10 @@ class RobotGeometry:
         n_robot = len(self._geom_body)
         for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
             geom.addGeometryObject(self._obstacle_object(ob))
+        add = geom.addCollisionPair
         for k in self._obstacle_ids:
-            for a in range(n_robot):
-                geom.addCollisionPair(pin.CollisionPair(a, k))
+            for pair in _pair_column(k, n_robot):
+                add(pair)
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
@@ -335,6 +336,18 @@ _CULL_AFTER = 12
 _CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+_PAIR_COLUMNS: Dict[int, List["pin.CollisionPair"]] = {}   # object k → CollisionPair(a, k) for a = 0, 1, …
+
+
+def _pair_column(k: int, n: int) -> List["pin.CollisionPair"]:
+    """``[pin.CollisionPair(a, k) for a in range(n)]``, the pairs kept for the process (making one takes pinocchio
+    ~2 µs, adding one to a model, which copies it, a tenth of that; nothing changes a kept pair)."""
+    col = _PAIR_COLUMNS.get(k)
+    if col is None or len(col) < n:   # (a new list, made whole before it is kept: threads see one or the other)
+        col = _PAIR_COLUMNS[k] = [pin.CollisionPair(a, k) for a in range(n)]
+    return col[:n]
 
 
 def _fresh_guesses(gd: "pin.GeometryData") -> None:
