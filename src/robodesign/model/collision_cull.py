@@ -205,6 +205,41 @@ def distance_field(shape, pose: np.ndarray) -> DistanceField:
     return f
 
 
+def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
+    """(first, second): the objects of every collision pair of the geometry model ``gm`` (int64 arrays in pair
+    order), a robot object first in a robot–obstacle pair (the robot's objects are those below ``n_robot``). From
+    the model's pair map (``collisionPairMapping``: the pair index of (i, j) and of (j, i)), each pair as (smaller,
+    larger) object index: the bounds are symmetric; a map that does not hold every pair once falls back to the
+    pairs themselves (an obstacle listed first: NotImplementedError)."""
+    n = len(gm.collisionPairs)
+    M = np.asarray(gm.collisionPairMapping)
+    i, j = np.nonzero(M >= 0)
+    upper = i < j
+    i, j = i[upper], j[upper]
+    k = M[i, j].astype(np.int64)
+    first, second = np.full(n, -1, np.int64), np.full(n, -1, np.int64)
+    if len(k) == n and (n == 0 or (k.min() >= 0 and k.max() < n)):
+        first[k], second[k] = i, j
+        if (first >= 0).all():
+            return first, second
+    pairs = [(cp.first, cp.second) for cp in gm.collisionPairs]
+    if any(b < n_robot <= a for a, b in pairs):
+        raise NotImplementedError("an obstacle listed first in a collision pair")
+    return (np.array([a for a, _ in pairs], dtype=np.int64).reshape(n),
+            np.array([b for _, b in pairs], dtype=np.int64).reshape(n))
+
+
+def pair_margins(robot, gd) -> np.ndarray:
+    """The security margin of every collision request of ``gd``: the robot's record of the margins it set
+    (``RobotGeometry.request_margins``, kept with the scratch space it set them on), else read request by
+    request."""
+    known = getattr(robot, "request_margins", None)
+    m = known(gd) if known is not None else None
+    if m is None:
+        m = np.array([req.security_margin for req in gd.collisionRequests], dtype=float)
+    return m.reshape(len(gd.collisionRequests))
+
+
 class CollisionCuller:
     """``robot.in_collision`` for many configurations: the pairs a bound clears are not asked (module docstring).
     Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and
@@ -216,38 +251,33 @@ class CollisionCuller:
         gm, gd = robot.geom_model, robot.geom_data
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
-        self.parent = np.array([int(objs[i].parentJoint) for i in range(n_robot)])
-        centres, radii = [], []
-        for i in range(n_robot):
-            c, r = bounding_sphere(objs[i].geometry)
-            P = objs[i].placement
-            centres.append(np.asarray(P.rotation) @ c + np.asarray(P.translation))   # in the parent joint's frame
+        parent, centres, radii = [], [], []
+        for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
+            c, r = bounding_sphere(o.geometry)
+            P = o.placement
+            centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
             radii.append(r)
+            parent.append(o.parentJoint)
+        self.parent = np.array(parent, dtype=int).reshape(n_robot)
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
-        pairs = [(cp.first, cp.second) for cp in gm.collisionPairs]
-        margin = np.array([req.security_margin for req in gd.collisionRequests], dtype=float).reshape(len(pairs))
-        active = np.array(list(gd.activeCollisionPairs), dtype=bool).reshape(len(pairs))
-        self.n_pairs = len(pairs)
-        self.active = active
-        selfp = [k for k, (a, b) in enumerate(pairs) if a < n_robot and b < n_robot]
-        self.self_k = np.array(selfp, dtype=int)
-        self.self_a = np.array([pairs[k][0] for k in selfp], dtype=int)
-        self.self_b = np.array([pairs[k][1] for k in selfp], dtype=int)
+        first, second = pair_ends(gm, n_robot)
+        margin = pair_margins(robot, gd)
+        self.n_pairs = len(first)
+        self.active = np.fromiter(gd.activeCollisionPairs, dtype=bool, count=self.n_pairs)
+        selfp = (first < n_robot) & (second < n_robot)
+        self.self_k = np.flatnonzero(selfp)
+        self.self_a, self.self_b = first[self.self_k], second[self.self_k]
         self.self_limit = self.radius[self.self_a] + self.radius[self.self_b] + margin[self.self_k] + SLACK
-        # robot–obstacle pairs, grouped by obstacle
+        # robot–obstacle pairs, grouped by obstacle (in the order of each obstacle's first pair)
         self.obstacles: List[Tuple[DistanceField, np.ndarray, np.ndarray, np.ndarray]] = []
-        by_ob: Dict[int, List[int]] = {}
-        for k, (a, b) in enumerate(pairs):
-            if a < n_robot <= b:
-                by_ob.setdefault(b, []).append(k)
-            elif b < n_robot <= a:
-                raise NotImplementedError("an obstacle listed first in a collision pair")
-        for ob, ks in by_ob.items():
+        obp = np.flatnonzero((first < n_robot) & (second >= n_robot))
+        obs, first_at = np.unique(second[obp], return_index=True)
+        for ob in obs[np.argsort(first_at, kind="stable")].tolist():
             o = objs[ob]
             field = distance_field(o.geometry, o.placement.homogeneous)
-            kk = np.array(ks, dtype=int)
-            geo = np.array([pairs[k][0] for k in ks], dtype=int)
+            kk = obp[second[obp] == ob]
+            geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
@@ -294,16 +324,18 @@ class CollisionCuller:
         r = self.robot
         gm, gd = r.geom_model, r.geom_data
         pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
-        ks = [int(k) for k in pairs]
+        ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
         last = self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
-        for k in ks:
-            self.narrow += 1
-            if pin.computeCollision(gm, gd, k):
+        compute = pin.computeCollision
+        for i, k in enumerate(ks):
+            if compute(gm, gd, k):
+                self.narrow += i + 1
                 self._last_hit = k
                 return True
+        self.narrow += len(ks)
         return False
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
@@ -349,9 +381,10 @@ class CollisionCuller:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
         (:func:`robodesign.model.geometry_kernel.survivors`); the grid cells it asked about unknown are computed
         afterwards, for the next queries."""
-        if self._one is None:
-            self._one = self._kernel_args()
-        args, grids = self._one
+        one = self._one
+        if one is None:
+            one = self._one = self._kernel_args()
+        args, grids = one
         n, nu = geometry_kernel.survivors(q, *args)
         hit = bool(n) and self.collides(q, args[-2][:n].tolist())
         if nu:
@@ -414,4 +447,4 @@ def culler_of(robot) -> CollisionCuller:
 
 
 __all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
-           "SLACK", "CELL"]
+           "SLACK", "CELL", "pair_ends", "pair_margins"]

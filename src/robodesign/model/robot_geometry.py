@@ -125,9 +125,10 @@ class RobotGeometry:
         n_robot = len(self._geom_body)
         for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
             geom.addGeometryObject(self._obstacle_object(ob))
+        add = geom.addCollisionPair
         for k in self._obstacle_ids:
-            for a in range(n_robot):
-                geom.addCollisionPair(pin.CollisionPair(a, k))
+            for pair in _pair_column(k, n_robot):
+                add(pair)
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
@@ -178,13 +179,33 @@ class RobotGeometry:
         return gd
 
     def _apply_margins(self, gd) -> None:
-        # enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps
-        # (e.g. a box centred on a cylinder's end face); with contacts it runs EPA and is exact.
+        """Contacts on for every request, the safety margin on the robot–obstacle pairs' (after the self pairs).
+        enable_contact=True: coal's boolean-only GJK misses some exactly aligned overlaps (e.g. a box centred on a
+        cylinder's end face); with contacts it runs EPA and is exact. A new scratch space's requests are all alike:
+        two copies of its first one, set so, make the whole vector at once (C++ copies)."""
+        reqs = gd.collisionRequests
+        n, ns = len(reqs), min(self._n_self_pairs, len(reqs))
         margin = getattr(self, "safety_margin", 0.0)
-        for k, req in enumerate(gd.collisionRequests):
-            req.enable_contact = True
-            if k >= self._n_self_pairs:
-                req.security_margin = margin
+        if n:
+            vec = type(reqs)
+            own, other, out = vec(), vec(), vec()
+            own.append(reqs[0])
+            own[0].enable_contact = True
+            other.append(own[0])
+            other[0].security_margin = margin
+            out.extend([own[0]] * ns + [other[0]] * (n - ns))
+            gd.collisionRequests = out
+            m = np.full(n, float(other[0].security_margin))
+            m[:ns] = own[0].security_margin
+        else:
+            m = np.zeros(0)
+        self._margins_set = (gd, m)
+
+    def request_margins(self, gd) -> Optional[np.ndarray]:
+        """The security margins of ``gd``'s collision requests as :meth:`_apply_margins` set them (None for another
+        scratch space): what :class:`~robodesign.model.collision_cull.CollisionCuller` bounds with."""
+        rec = getattr(self, "_margins_set", None)
+        return rec[1] if rec is not None and rec[0] is gd else None
 
     # ------------------------------------------------------------------------------------------
     # collision
@@ -315,6 +336,18 @@ _CULL_AFTER = 12
 _CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+_PAIR_COLUMNS: Dict[int, List["pin.CollisionPair"]] = {}   # object k → CollisionPair(a, k) for a = 0, 1, …
+
+
+def _pair_column(k: int, n: int) -> List["pin.CollisionPair"]:
+    """``[pin.CollisionPair(a, k) for a in range(n)]``, the pairs kept for the process (making one takes pinocchio
+    ~2 µs, adding one to a model, which copies it, a tenth of that; nothing changes a kept pair)."""
+    col = _PAIR_COLUMNS.get(k)
+    if col is None or len(col) < n:   # (a new list, made whole before it is kept: threads see one or the other)
+        col = _PAIR_COLUMNS[k] = [pin.CollisionPair(a, k) for a in range(n)]
+    return col[:n]
 
 
 def _fresh_guesses(gd: "pin.GeometryData") -> None:

@@ -870,14 +870,15 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     if why:
         return finish(why)
 
-    evaluate, E, JJ = gm.evaluator(n)
-    m_rows = len(E)
     valid = goal.valid
+    trace = _trace
+    kernel = _kernel_descend(robot, gm, n, lo, hi, valid, max_iter) if trace is None else None
+    evaluate, E, JJ = gm.evaluator(n) if kernel is None else cast(Any, (None, np.zeros(0), None))  # (Python loop)
+    m_rows = len(E)
     cjj, ufp, gfj = pin.computeJointJacobians, pin.updateFramePlacement, pin.getFrameJacobian
     LOCAL = pin.LOCAL
     deadline = None if time_limit is None else t0 + float(time_limit)
     max_step2 = _MAX_STEP * _MAX_STEP
-    trace = _trace
     solve = _solve
     eye = np.eye(min(m_rows, n))
     small = m_rows <= n
@@ -942,7 +943,6 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         total_iter += its
         return found
 
-    kernel = _kernel_descend(robot, gm, n, lo, hi, valid, max_iter) if trace is None else None
     descend = py_descend if kernel is None else kernel_descend
 
     accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
