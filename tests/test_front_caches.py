@@ -309,6 +309,29 @@ def _sample_base_as_before(space, rng, order, tries=64):
     return best if best is not None else bb.sample(rng)
 
 
+def test_robots_of_a_cell_share_their_obstacle_bounds_and_a_moved_obstacle_gets_its_own(whitman):
+    from robodesign.model.collision_cull import ObstacleBounds, distance_field
+    ms, pool = whitman.module_set, RobotPool(static_cell(whitman.task))   # (the cell's obstacles made once)
+    rng = np.random.default_rng(2)
+    robots = []
+    for _ in range(3):
+        c = whitman.space.random_candidate(rng)
+        robots.append(pool.take(ms, Assembly.from_order(ms, c.order), whitman.base_pose(c)))
+        robots[-1].base_collisions()
+    assert robots[0]._obstacle_bounds is robots[1]._obstacle_bounds is robots[2]._obstacle_bounds
+    moved = np.array(robots[2].obstacles[0].pose, dtype=float)
+    moved[:3, 3] += (0.3, -0.2, 0.1)
+    robots[2].move_obstacle(0, moved)
+    robots[2].base_collisions()
+    mine = robots[2]._obstacle_bounds
+    assert mine is not robots[0]._obstacle_bounds
+    fresh = ObstacleBounds([distance_field(ob.shape, moved if j == 0 else ob.pose)
+                            for j, ob in enumerate(robots[2].obstacles)])
+    for name in ("R_inv", "t", "lo", "hi"):
+        assert np.array_equal(getattr(mine, name), getattr(fresh, name))
+    assert not np.array_equal(mine.t, robots[0]._obstacle_bounds.t)
+
+
 def test_sample_base_draws_and_returns_what_it_did(whitman):
     space = whitman.space
     rng = np.random.default_rng(4)

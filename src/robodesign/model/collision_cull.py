@@ -205,6 +205,24 @@ def distance_field(shape, pose: np.ndarray) -> DistanceField:
     return f
 
 
+_BOUNDS: Dict[Tuple[int, ...], Tuple[Tuple[DistanceField, ...], ObstacleBounds]] = {}
+
+
+def obstacle_bounds(fields: Sequence[DistanceField]) -> ObstacleBounds:
+    """The process's :class:`ObstacleBounds` of ``fields`` (the same field objects in the same order: every robot of a
+    cell asks for the same ones; :func:`distance_field` keeps them). The fields are held with it, so their ids are
+    not reused while the entry lives; at most :data:`_FIELD_LIMIT` sets are kept."""
+    key = tuple(id(f) for f in fields)
+    hit = _BOUNDS.get(key)
+    if hit is not None and len(hit[0]) == len(fields) and all(a is b for a, b in zip(hit[0], fields)):
+        return hit[1]
+    if len(_BOUNDS) >= _FIELD_LIMIT:
+        _BOUNDS.pop(next(iter(_BOUNDS)))
+    b = ObstacleBounds(fields)
+    _BOUNDS[key] = (tuple(fields), b)
+    return b
+
+
 def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
     """(first, second): the objects of every collision pair of the geometry model ``gm`` (int64 arrays in pair
     order), a robot object first in a robot–obstacle pair (the robot's objects are those below ``n_robot``). From

@@ -300,7 +300,7 @@ class RobotGeometry:
         the world (the bodies before the first joint) that the bounds of the collision culler do not clear: the
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
         field; :class:`robodesign.model.collision_cull.ObstacleBounds`)."""
-        from robodesign.model.collision_cull import ObstacleBounds, bounding_sphere, distance_field
+        from robodesign.model.collision_cull import bounding_sphere, distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
             root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
             C, r = np.zeros((len(root), 3)), np.zeros(len(root))
@@ -317,7 +317,7 @@ class RobotGeometry:
             poses = [ob.pose if made is None else made.geometryObjects[k].placement.homogeneous
                      for ob, k in zip(self.obstacles, self._obstacle_ids)]
             fields = [distance_field(ob.shape, T) for ob, T in zip(self.obstacles, poses)]
-            self._obstacle_bounds = ObstacleBounds(fields)
+            self._obstacle_bounds = obstacle_bounds(fields)
         T = self.base_pose
         near = self._obstacle_bounds.near(C @ T[:3, :3].T + T[:3, 3], r, self.safety_margin)
         return [(j, root[i]) for j, i in zip(*(x.tolist() for x in np.nonzero(near)))]
