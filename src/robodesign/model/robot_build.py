@@ -1,0 +1,301 @@
+"""How :class:`robodesign.model.robot.Robot` builds its pinocchio model from an assembly (its ``_build``).
+
+What a module contributes to every robot it is part of does not depend on the assembly: its bodies' inertias,
+the coal shapes of their collision geometry, its joints' pinocchio joint models, the inverses of the poses of a
+joint entered backwards, its connectors' entry poses, the suffixes of the names. Those are made once per module
+spec (:func:`module_table`, remembered per module object, which is immutable) and the breadth-first walk over
+the assembly's bodies (:func:`walk`) only places them: every matrix product is the one the walk always made, in
+the same order with the same operands, so the numbers are bit for bit those of a walk that makes everything
+itself (the tests check it against such a walk).
+"""
+from __future__ import annotations
+
+from collections import deque
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from robodesign.core.errors import AssemblyError
+from robodesign.core.spatial import inv
+from robodesign.formats.geometry import coal_shapes
+
+_MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
+
+
+def _memo(spec, make):
+    hit = _MEMO.get(id(spec))
+    if hit is None or hit[0] is not spec:
+        hit = _MEMO[id(spec)] = (spec, make(spec))
+    return hit[1]
+
+
+_SHAPES: Dict[Tuple[int, bool], Tuple[object, Tuple[object, ...]]] = {}   # (id(spec), flag) → (spec, its shapes)
+
+
+def _coal_shapes(spec, convex_meshes: bool) -> Tuple[object, ...]:
+    """:func:`coal_shapes` of a geometry spec, made once per spec and flag (shared by every robot: coal shapes are
+    never mutated)."""
+    hit = _SHAPES.get((id(spec), convex_meshes))
+    if hit is None or hit[0] is not spec:   # (the spec is held: its id is not reused while the entry lives)
+        hit = _SHAPES[(id(spec), convex_meshes)] = (spec, coal_shapes(spec, convex_meshes))
+    return hit[1]
+
+
+def _inertia(body) -> "pin.Inertia":
+    """The body's inertia (made once per body spec)."""
+    hit = _MEMO.get(id(body))
+    if hit is None or hit[0] is not body:
+        Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+        hit = _MEMO[id(body)] = (body, Y)
+    return hit[1]
+
+
+_ZERO_INERTIA = pin.Inertia.Zero()
+_EPS = float(np.finfo(float).eps)   # Eigen's epsilon, as in pinocchio's sum of inertias
+
+
+def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, float], j: int) -> None:
+    """The zero inertias that adding ``pending[j]`` frames to joint ``j`` adds to it (``addFrame`` adds each frame's
+    inertia, zero, at the frame). pinocchio's sum (``InertiaTpl::__pequ__``) then multiplies the joint's centre of
+    mass by ``m·(1/m)`` (m: the joint's mass, ``mass[j]``) and changes nothing else: nothing at all where that
+    factor is 1, the usual case; else the same operation is made here on pinocchio's zero inertia. The frames
+    themselves are added later without it (``Robot.add_frames``)."""
+    k = pending.pop(j, 0)
+    m = mass.get(j, 0.0)
+    if k and m * (1.0 / max(m, _EPS)) != 1.0:
+        Y = model.inertias[j]
+        for _ in range(k):
+            Y += _ZERO_INERTIA
+        model.inertias[j] = Y
+
+
+class ModuleTable:
+    """What a module brings to every robot (one per module spec and ``convex_meshes`` flag).
+
+    ``bodies[k]``: (body id, its name suffix ``.<body id>``, mass, inertia or None for a massless body, the number
+    of its frames (the body's and its connectors'), connectors, collision geometry, joints) with
+    * connectors: (connector id, pose, the Connector, name suffix) per connector of the body;
+    * collision geometry: (pose, ((name suffix, coal shape), ...)) per geometry spec;
+    * joints: (the other body's index, its id, reversed, P, Q, joint model or None for a fixed joint, name suffix,
+      (module id, joint id, type, reversed), its limits and drivetrain row) per joint at the body, in the
+      module's order: the joint's frame is at ``M @ P`` (M: the body's placement), the other body at ``@ Q``.
+
+    ``connectors``: connector id → (its body's index, its entry pose)."""
+
+    __slots__ = ("module", "bodies", "connectors")
+
+    def __init__(self, module, convex_meshes: bool):
+        self.module = module
+        index = {b.id: k for k, b in enumerate(module.bodies)}
+        self.bodies = tuple(_body_record(module, b, index, convex_meshes) for b in module.bodies)
+        self.connectors = {c.id: (index[c.body_id], c.entry_pose) for b in module.bodies for c in b.connectors}
+
+
+def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tuple:
+    conns = tuple((c.id, c.pose, c, f".{c.id}") for c in body.connectors)
+    geoms = tuple((g.pose, tuple((f".c{gi}" + (f".{si}" if si else ""), shape)
+                                 for si, shape in enumerate(_coal_shapes(g, convex_meshes))))
+                  for gi, g in enumerate(body.collision))
+    joints = []
+    for jt in module.joints:
+        if jt.parent == body.id:
+            other, rev = jt.child, False
+            P, Q = jt.pose_parent, jt.pose_child
+        elif jt.child == body.id:
+            other, rev = jt.parent, True
+            P, Q = _memo(jt, lambda j: (inv(j.pose_child), inv(j.pose_parent)))
+        else:
+            continue
+        if jt.type == "fixed":
+            jm = None
+        elif jt.type == "revolute":
+            jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
+        else:   # (pinocchio copies the joint model into the model it is added to: one serves every robot)
+            jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
+        L = jt.limits
+        row = (L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
+               jt.friction_coulomb, jt.friction_viscous)
+        joints.append((index[other], other, rev, P, Q, jm, f".{jt.id}", (module.id, jt.id, jt.type, rev), row))
+    Y = _inertia(body) if body.mass > 0 else None
+    poses = [c[1] for c in conns] + [g[0] for g in geoms]
+    stack = np.stack(poses) if poses and all(_plain(P) for P in poses) else None
+    return (body.id, f".{body.id}", body.mass, Y, 1 + len(body.connectors), conns, geoms, tuple(joints), stack)
+
+
+def _plain(P) -> bool:
+    """Whether ``M @ P`` is the product that ``(M @ stack)[k]`` makes for ``P`` at ``stack[k]`` (numpy multiplies a
+    stack matrix by matrix with the BLAS call it makes for one pair with the same strides): a C-ordered 4×4 array of
+    floats."""
+    return isinstance(P, np.ndarray) and P.dtype == np.float64 and P.shape == (4, 4) and P.flags.c_contiguous
+
+
+_TABLES: Dict[Tuple[int, bool], ModuleTable] = {}   # (id(module), flag) → its table (which holds the module)
+
+
+def module_table(module, convex_meshes: bool) -> ModuleTable:
+    """The module's :class:`ModuleTable` (made once per module object and flag)."""
+    t = _TABLES.get((id(module), convex_meshes))
+    if t is None or t.module is not module:
+        t = _TABLES[(id(module), convex_meshes)] = ModuleTable(module, convex_meshes)
+    return t
+
+
+class Walk:
+    """What the walk over an assembly's bodies made: the model (joints, bodies, their zero-inertia sums) and the
+    robot's lists (see :meth:`robodesign.model.robot.Robot._build`)."""
+
+    def __init__(self, model: "pin.Model", labels: Tuple[str, ...]):
+        self.model, self.labels = model, labels
+        self.bodies: List[tuple] = []   # per body in walk order: (name, joint, joint's frame, placement, connectors)
+        self.geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []
+        self.geom_body: List[Tuple[int, str]] = []
+        self.root_items: List[Tuple[str, int, np.ndarray]] = []
+        self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
+        self.rows: List[tuple] = []     # their limits and drivetrains
+        self.free: List[Tuple[Any, int, np.ndarray]] = []   # free connectors: (connector, joint, body placement)
+        self.direct_joint_pairs: set = set()
+        self.joint_frame: Dict[int, int] = {0: 0}
+        self.pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
+        self.masses: Dict[int, float] = {}  # joint → its mass so far
+        self.mass = 0.0
+
+
+def instance_labels(module_ids) -> Tuple[str, ...]:
+    counts: Dict[str, int] = {}
+    labels = []
+    for mid in module_ids:
+        k = counts.get(mid, 0)
+        labels.append(mid if k == 0 else f"{mid}-{k}")
+        counts[mid] = k + 1
+    return tuple(labels)
+
+
+def walk(ms, asm, convex_meshes: bool) -> Walk:
+    """The breadth-first walk from the base connector over the bodies of ``asm``: each body appended to its joint
+    (after the zero inertias of the frames on the joint so far), each joint added when first met."""
+    tabs = [module_table(ms[mid], convex_meshes) for mid in asm.module_ids]
+    model = pin.Model()
+    model.name = "robodesign:" + ",".join(asm.module_ids)
+    w = Walk(model, instance_labels(asm.module_ids))
+    links: List[Dict[str, Tuple[int, str]]] = [{} for _ in tabs]   # per instance: connector → the one mated to it
+    for a, ca, b, cb in asm.connections:
+        links[a][ca] = (b, cb)
+        links[b][cb] = (a, ca)
+    off = [0]
+    for t in tabs:
+        off.append(off[-1] + len(t.bodies))
+    seen = [False] * off[-1]
+    bi, bcon = asm.base
+    bk, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
+    queue = deque([(bi, bk, 0, entry)])
+    pop, push = queue.popleft, queue.append
+    labels, SE3 = w.labels, pin.SE3
+    append_body, pending, masses, joint_frame = model.appendBodyToJoint, w.pending, w.masses, w.joint_frame
+    bodies, specs, geom_body, root, free = w.bodies, w.geom_specs, w.geom_body, w.root_items, w.free
+    total_mass = 0.0
+    while queue:
+        i, k, jid, M = pop()
+        s = off[i] + k
+        if seen[s]:
+            continue
+        seen[s] = True
+        bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack = tabs[i].bodies[k]
+        total_mass += mass
+        if Y is not None:
+            if jid in pending:   # (_zero_inertias: nothing to do where m·(1/m) is 1)
+                m = masses.get(jid, 0.0)
+                if m * (1.0 / max(m, _EPS)) != 1.0:
+                    _zero_inertias(model, pending, masses, jid)
+                else:
+                    del pending[jid]
+            append_body(jid, Y, SE3(M))
+            masses[jid] = masses.get(jid, 0.0) + mass
+        name = labels[i] + bsuffix
+        jf = joint_frame[jid]
+        bodies.append((name, jid, jf, M, conns))
+        pending[jid] = pending.get(jid, 0) + nframes
+        Ps = None if stack is None else M @ stack   # M @ pose of each connector, then of each collision geometry
+        link = links[i]
+        for n, (cid, pose, c, _) in enumerate(conns):
+            other = link.get(cid)
+            if other is not None:
+                j2 = other[0]
+                k2, entry = tabs[j2].connectors[other[1]]
+                if not seen[off[j2] + k2]:
+                    push((j2, k2, jid, (M @ pose if Ps is None else Ps[n]) @ entry))
+            elif i != bi or cid != bcon:
+                free.append((c, jid, M))
+        n = len(conns)
+        for pose, shapes in geoms:
+            P = M @ pose if Ps is None else Ps[n]
+            n += 1
+            for suffix, shape in shapes:
+                if jid == 0:
+                    root.append(("geom", len(specs), P.copy()))
+                specs.append((name + suffix, jid, jf, P, shape))
+                geom_body.append((i, bid))
+        if joints:
+            _joints(w, i, bid, M, jid, joints, seen, off[i], push)
+    w.mass = total_mass
+    if not all(seen):
+        missing = [(i, t.bodies[k][0]) for i, t in enumerate(tabs) for k in range(len(t.bodies)) if not seen[off[i] + k]]
+        raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+    return w
+
+
+def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, seen: List[bool], o: int,
+            push) -> None:
+    """The joints at body ``bid`` of instance ``i`` (placed at ``M`` on joint ``jid``) to bodies not met yet."""
+    model, label = w.model, w.labels[i]
+    for k2, other, rev, P, Q, jm, jsuffix, info, row in joints:
+        if seen[o + k2]:
+            continue
+        w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
+        placement = M @ P
+        if jm is None:
+            push((i, k2, jid, placement @ Q))
+            continue
+        name = label + jsuffix
+        new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
+        w.joint_frame[new_jid] = model.addJointFrame(new_jid, -1)
+        if jid == 0:
+            w.root_items.append(("joint", new_jid, placement.copy()))
+        w.joints.append((name, i) + info)
+        w.rows.append(row)
+        push((i, k2, new_jid, Q))
+
+
+def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
+    """The TCP frame (the free ``eef`` connector; else the last free connector in walk order; else the base frame),
+    added after the zero inertias of every joint's frames: (its frame id, its placement on joint 0 or None)."""
+    model, pending, free = w.model, w.pending, w.free
+    eefs = [f for f in free if f[0].type == "eef"]
+    tcp = eefs[0] if len(eefs) == 1 else free[-1] if free else None
+    for j in list(pending):
+        _zero_inertias(model, pending, w.masses, j)
+    if tcp is None:
+        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)), np.eye(4)
+    tj, Mc = tcp[1], tcp[2] @ tcp[0].pose
+    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), pin.FrameType.OP_FRAME))
+    return fid, (Mc.copy() if tj == 0 else None)
+
+
+def add_body_frames(model: "pin.Model", bodies: List[tuple], base_pose: Optional[np.ndarray],
+                    root_items: list) -> None:
+    """The frames of the bodies (``<instance>.<body>``) and their connectors (``<instance>.<body>.<connector>``) in
+    walk order, without their zero inertias (added when the robot was built); those on joint 0 at ``base_pose``
+    (None: not placed yet), each also added to ``root_items``."""
+    add, Frame, SE3 = model.addFrame, pin.Frame, pin.SE3
+    BODY, OP = pin.FrameType.BODY, pin.FrameType.OP_FRAME
+    for name, jid, jf, M, conns in bodies:
+        on_root = jid == 0
+        fid = add(Frame(name, jid, jf, SE3(base_pose @ M if on_root and base_pose is not None else M), BODY), False)
+        if on_root:
+            root_items.append(("frame", fid, M.copy()))
+        for _, pose, _, csuffix in conns:
+            Mc = M @ pose
+            cf = add(Frame(name + csuffix, jid, fid, SE3(base_pose @ Mc if on_root and base_pose is not None else Mc),
+                           OP), False)
+            if on_root:
+                root_items.append(("frame", cf, Mc.copy()))
