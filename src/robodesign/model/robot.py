@@ -28,14 +28,16 @@ import pinocchio as pin
 from robodesign.core.errors import AssemblyError, InputError
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_spec import ModuleSet
+from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
 from robodesign.model.rnea_batch import rnea_rows
-from robodesign.model.robot_build import _coal_shapes, _inertia, _memo, _zero_inertias  # noqa: F401 (theirs)
 from robodesign.model.robot_build import add_body_frames, finish, walk
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
+# the build's memo helpers, where they were before robot_build had them
+_memo, _coal_shapes, _inertia, _zero_inertias = _rb._memo, _rb._coal_shapes, _rb._inertia, _rb._zero_inertias
 
 
 def smooth_sign(x: np.ndarray) -> np.ndarray:
@@ -56,6 +58,16 @@ class JointInfo:
     joint_id: str
     type: str
     reversed: bool
+
+
+_INFOS: Dict[tuple, JointInfo] = {}   # its fields → a JointInfo (immutable: robots share them)
+
+
+def _joint_info(fields: tuple) -> JointInfo:
+    if len(_INFOS) >= 65536:
+        _INFOS.clear()
+    info = _INFOS[fields] = JointInfo(*fields)
+    return info
 
 
 class Robot(RobotGeometry):
@@ -98,7 +110,7 @@ class Robot(RobotGeometry):
         model = w.model
         self.instance_labels = w.labels
         self._root_items = w.root_items   # (kind, index, base-frame placement)
-        self.joint_infos = [JointInfo(*j) for j in w.joints]
+        self.joint_infos = [_INFOS.get(j) or _joint_info(j) for j in w.joints]
         nq = model.nq
         if nq != len(self.joint_infos):
             raise AssemblyError("only 1-DoF joints are supported")
@@ -129,7 +141,7 @@ class Robot(RobotGeometry):
     # configuration of the robot in its cell
     def set_base_pose(self, T: np.ndarray) -> None:
         T = np.asarray(T, dtype=float)
-        if T.shape != (4, 4) or not np.isfinite(T).all():
+        if T.shape != (4, 4) or not all(map(math.isfinite, T.ravel().tolist())):
             raise InputError("base pose must be a finite 4x4 matrix")
         self.base_pose = T.copy()
         model, geom, SE3 = self.model, self._geom_model, pin.SE3

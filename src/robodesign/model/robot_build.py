@@ -52,6 +52,7 @@ def _inertia(body) -> "pin.Inertia":
 
 
 _ZERO_INERTIA = pin.Inertia.Zero()
+_OP_FRAME = pin.FrameType.OP_FRAME
 _EPS = float(np.finfo(float).eps)   # Eigen's epsilon, as in pinocchio's sum of inertias
 
 
@@ -73,23 +74,25 @@ def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, 
 class ModuleTable:
     """What a module brings to every robot (one per module spec and ``convex_meshes`` flag).
 
-    ``bodies[k]``: (body id, its name suffix ``.<body id>``, mass, inertia or None for a massless body, the number
-    of its frames (the body's and its connectors'), connectors, collision geometry, joints) with
+    ``bodies[k]``: (k, body id, its name suffix ``.<body id>``, mass, inertia or None for a massless body, the number
+    of its frames (the body's and its connectors'), connectors, collision geometry, joints, the stack of the poses
+    of its connectors and collision geometry (None where one is not a C-ordered 4×4 array of floats)) with
     * connectors: (connector id, pose, the Connector, name suffix) per connector of the body;
     * collision geometry: (pose, ((name suffix, coal shape), ...)) per geometry spec;
     * joints: (the other body's index, its id, reversed, P, Q, joint model or None for a fixed joint, name suffix,
       (module id, joint id, type, reversed), its limits and drivetrain row) per joint at the body, in the
       module's order: the joint's frame is at ``M @ P`` (M: the body's placement), the other body at ``@ Q``.
 
-    ``connectors``: connector id → (its body's index, its entry pose)."""
+    ``connectors``: connector id → (its body's record, its entry pose)."""
 
     __slots__ = ("module", "bodies", "connectors")
 
     def __init__(self, module, convex_meshes: bool):
         self.module = module
         index = {b.id: k for k, b in enumerate(module.bodies)}
-        self.bodies = tuple(_body_record(module, b, index, convex_meshes) for b in module.bodies)
-        self.connectors = {c.id: (index[c.body_id], c.entry_pose) for b in module.bodies for c in b.connectors}
+        self.bodies = tuple((k,) + _body_record(module, b, index, convex_meshes) for k, b in enumerate(module.bodies))
+        self.connectors = {c.id: (self.bodies[index[c.body_id]], c.entry_pose)
+                           for b in module.bodies for c in b.connectors}
 
 
 def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tuple:
@@ -187,46 +190,46 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
         off.append(off[-1] + len(t.bodies))
     seen = [False] * off[-1]
     bi, bcon = asm.base
-    bk, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
-    queue = deque([(bi, bk, 0, entry)])
+    brec, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
+    queue = deque([(bi, brec, 0, entry)])
     pop, push = queue.popleft, queue.append
     labels, SE3 = w.labels, pin.SE3
     append_body, pending, masses, joint_frame = model.appendBodyToJoint, w.pending, w.masses, w.joint_frame
     bodies, specs, geom_body, root, free = w.bodies, w.geom_specs, w.geom_body, w.root_items, w.free
     total_mass = 0.0
     while queue:
-        i, k, jid, M = pop()
+        i, rec, jid, M = pop()
+        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack = rec
         s = off[i] + k
         if seen[s]:
             continue
         seen[s] = True
-        bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack = tabs[i].bodies[k]
         total_mass += mass
         if Y is not None:
             if jid in pending:   # (_zero_inertias: nothing to do where m·(1/m) is 1)
-                m = masses.get(jid, 0.0)
+                m = masses[jid] if jid in masses else 0.0
                 if m * (1.0 / max(m, _EPS)) != 1.0:
                     _zero_inertias(model, pending, masses, jid)
                 else:
                     del pending[jid]
             append_body(jid, Y, SE3(M))
-            masses[jid] = masses.get(jid, 0.0) + mass
+            masses[jid] = masses[jid] + mass if jid in masses else 0.0 + mass
         name = labels[i] + bsuffix
         jf = joint_frame[jid]
         bodies.append((name, jid, jf, M, conns))
-        pending[jid] = pending.get(jid, 0) + nframes
+        pending[jid] = pending[jid] + nframes if jid in pending else nframes
         Ps = None if stack is None else M @ stack   # M @ pose of each connector, then of each collision geometry
         link = links[i]
-        for n, (cid, pose, c, _) in enumerate(conns):
-            other = link.get(cid)
-            if other is not None:
-                j2 = other[0]
-                k2, entry = tabs[j2].connectors[other[1]]
-                if not seen[off[j2] + k2]:
-                    push((j2, k2, jid, (M @ pose if Ps is None else Ps[n]) @ entry))
+        n = 0
+        for cid, pose, c, _ in conns:
+            if cid in link:
+                j2, c2 = link[cid]
+                rec2, entry = tabs[j2].connectors[c2]
+                if not seen[off[j2] + rec2[0]]:
+                    push((j2, rec2, jid, (M @ pose if Ps is None else Ps[n]) @ entry))
             elif i != bi or cid != bcon:
                 free.append((c, jid, M))
-        n = len(conns)
+            n += 1
         for pose, shapes in geoms:
             P = M @ pose if Ps is None else Ps[n]
             n += 1
@@ -236,17 +239,18 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                 specs.append((name + suffix, jid, jf, P, shape))
                 geom_body.append((i, bid))
         if joints:
-            _joints(w, i, bid, M, jid, joints, seen, off[i], push)
+            _joints(w, i, bid, M, jid, joints, seen, off[i], push, tabs[i].bodies)
     w.mass = total_mass
     if not all(seen):
-        missing = [(i, t.bodies[k][0]) for i, t in enumerate(tabs) for k in range(len(t.bodies)) if not seen[off[i] + k]]
+        missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
         raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
     return w
 
 
 def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, seen: List[bool], o: int,
-            push) -> None:
-    """The joints at body ``bid`` of instance ``i`` (placed at ``M`` on joint ``jid``) to bodies not met yet."""
+            push, recs: tuple) -> None:
+    """The joints at body ``bid`` of instance ``i`` (placed at ``M`` on joint ``jid``) to bodies not met yet (``recs``:
+    the instance's body records, ``o``: its offset in ``seen``)."""
     model, label = w.model, w.labels[i]
     for k2, other, rev, P, Q, jm, jsuffix, info, row in joints:
         if seen[o + k2]:
@@ -254,7 +258,7 @@ def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, s
         w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
         placement = M @ P
         if jm is None:
-            push((i, k2, jid, placement @ Q))
+            push((i, recs[k2], jid, placement @ Q))
             continue
         name = label + jsuffix
         new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
@@ -263,7 +267,7 @@ def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, s
             w.root_items.append(("joint", new_jid, placement.copy()))
         w.joints.append((name, i) + info)
         w.rows.append(row)
-        push((i, k2, new_jid, Q))
+        push((i, recs[k2], new_jid, Q))
 
 
 def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
@@ -272,12 +276,16 @@ def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
     model, pending, free = w.model, w.pending, w.free
     eefs = [f for f in free if f[0].type == "eef"]
     tcp = eefs[0] if len(eefs) == 1 else free[-1] if free else None
+    masses = w.masses
     for j in list(pending):
-        _zero_inertias(model, pending, w.masses, j)
+        m = masses[j] if j in masses else 0.0
+        if m * (1.0 / max(m, _EPS)) != 1.0:   # (else _zero_inertias changes nothing)
+            _zero_inertias(model, pending, masses, j)
+    pending.clear()
     if tcp is None:
-        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME)), np.eye(4)
+        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), np.eye(4)
     tj, Mc = tcp[1], tcp[2] @ tcp[0].pose
-    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), pin.FrameType.OP_FRAME))
+    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME))
     return fid, (Mc.copy() if tj == 0 else None)
 
 
