@@ -75,10 +75,10 @@ class ModuleTable:
     """What a module brings to every robot (one per module spec and ``convex_meshes`` flag).
 
     ``bodies[k]``: (k, body id, its name suffix ``.<body id>``, mass, inertia or None for a massless body, the number
-    of its frames (the body's and its connectors'), connectors, collision geometry, joints, the stack of the poses
-    of its connectors and collision geometry (None where one is not a C-ordered 4×4 array of floats)) with
+    of its frames (the body's and its connectors'), connectors, collision geometry, joints, the stack of the poses of
+    its connectors and collision geometries (None where one is not a C-ordered 4×4 array of floats), those poses) with
     * connectors: (connector id, pose, the Connector, name suffix) per connector of the body;
-    * collision geometry: (pose, ((name suffix, coal shape), ...)) per geometry spec;
+    * collision geometry: (index in the poses, name suffix, coal shape) per shape of each geometry spec;
     * joints: (the other body's index, its id, reversed, P, Q, joint model or None for a fixed joint, name suffix,
       (module id, joint id, type, reversed), its limits and drivetrain row) per joint at the body, in the
       module's order: the joint's frame is at ``M @ P`` (M: the body's placement), the other body at ``@ Q``.
@@ -113,17 +113,18 @@ def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tu
         if jt.type == "fixed":
             jm = None
         elif jt.type == "revolute":
-            jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
+            jm = pin.JointModel(pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0))
         else:   # (pinocchio copies the joint model into the model it is added to: one serves every robot)
-            jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
+            jm = pin.JointModel(pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0))
         L = jt.limits
         row = (L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
                jt.friction_coulomb, jt.friction_viscous)
         joints.append((index[other], other, rev, P, Q, jm, f".{jt.id}", (module.id, jt.id, jt.type, rev), row))
     Y = _inertia(body) if body.mass > 0 else None
-    poses = [c[1] for c in conns] + [g[0] for g in geoms]
+    poses = tuple([c[1] for c in conns] + [g[0] for g in geoms])
     stack = np.stack(poses) if poses and all(_plain(P) for P in poses) else None
-    return (body.id, f".{body.id}", body.mass, Y, 1 + len(body.connectors), conns, geoms, tuple(joints), stack)
+    flat = tuple((len(conns) + gi, suffix, shape) for gi, (_, shapes) in enumerate(geoms) for suffix, shape in shapes)
+    return (body.id, f".{body.id}", body.mass, Y, 1 + len(body.connectors), conns, flat, tuple(joints), stack, poses)
 
 
 def _plain(P) -> bool:
@@ -199,7 +200,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     total_mass = 0.0
     while queue:
         i, rec, jid, M = pop()
-        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack = rec
+        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack, poses = rec
         s = off[i] + k
         if seen[s]:
             continue
@@ -218,26 +219,29 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
         jf = joint_frame[jid]
         bodies.append((name, jid, jf, M, conns))
         pending[jid] = pending[jid] + nframes if jid in pending else nframes
-        Ps = None if stack is None else M @ stack   # M @ pose of each connector, then of each collision geometry
+        # M @ pose of each connector, then of each collision geometry (numpy multiplies each matrix of the stack with
+        # the BLAS call it makes for one pair with the same strides: the same numbers)
+        Ps = M @ stack if stack is not None else [M @ P for P in poses]
         link = links[i]
         n = 0
-        for cid, pose, c, _ in conns:
+        for cid, _, c, _ in conns:
             if cid in link:
                 j2, c2 = link[cid]
                 rec2, entry = tabs[j2].connectors[c2]
                 if not seen[off[j2] + rec2[0]]:
-                    push((j2, rec2, jid, (M @ pose if Ps is None else Ps[n]) @ entry))
+                    push((j2, rec2, jid, Ps[n] @ entry))
             elif i != bi or cid != bcon:
                 free.append((c, jid, M))
             n += 1
-        for pose, shapes in geoms:
-            P = M @ pose if Ps is None else Ps[n]
-            n += 1
-            for suffix, shape in shapes:
-                if jid == 0:
-                    root.append(("geom", len(specs), P.copy()))
-                specs.append((name + suffix, jid, jf, P, shape))
-                geom_body.append((i, bid))
+        if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
+            if jid:
+                specs.extend([(name + suffix, jid, jf, Ps[n], shape) for n, suffix, shape in geoms])
+                geom_body.extend([(i, bid)] * len(geoms))
+            else:
+                for n, suffix, shape in geoms:
+                    root.append(("geom", len(specs), Ps[n].copy()))
+                    specs.append((name + suffix, jid, jf, Ps[n], shape))
+                    geom_body.append((i, bid))
         if joints:
             _joints(w, i, bid, M, jid, joints, seen, off[i], push, tabs[i].bodies)
     w.mass = total_mass
