@@ -65,10 +65,15 @@ def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, 
     k = pending.pop(j, 0)
     m = mass.get(j, 0.0)
     if k and m * (1.0 / max(m, _EPS)) != 1.0:
-        Y = model.inertias[j]
-        for _ in range(k):
-            Y += _ZERO_INERTIA
-        model.inertias[j] = Y
+        _add_zeros(model, j, k)
+
+
+def _add_zeros(model: "pin.Model", j: int, k: int) -> None:
+    """Pinocchio's zero inertia added ``k`` times to joint ``j``'s."""
+    Y = model.inertias[j]
+    for _ in range(k):
+        Y += _ZERO_INERTIA
+    model.inertias[j] = Y
 
 
 class ModuleTable:
@@ -160,6 +165,9 @@ class Walk:
         self.free: List[Tuple[Any, int, np.ndarray]] = []   # free connectors: (connector, joint, body placement)
         self.direct_joint_pairs: set = set()
         self.joint_frame: Dict[int, int] = {0: 0}
+        self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
+        self.body_ops: List[tuple] = []    # (joint, inertia, placement) per body appended to a joint, in walk order,
+        #                                    or (joint, None, k) where k zero inertias are added to it
         self.pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
         self.masses: Dict[int, float] = {}  # joint → its mass so far
         self.mass = 0.0
@@ -194,8 +202,8 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     brec, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
     queue = deque([(bi, brec, 0, entry)])
     pop, push = queue.popleft, queue.append
-    labels, SE3 = w.labels, pin.SE3
-    append_body, pending, masses, joint_frame = model.appendBodyToJoint, w.pending, w.masses, w.joint_frame
+    labels, ops = w.labels, w.body_ops
+    pending, masses, joint_frame = w.pending, w.masses, w.joint_frame
     bodies, specs, geom_body, root, free = w.bodies, w.geom_specs, w.geom_body, w.root_items, w.free
     total_mass = 0.0
     while queue:
@@ -210,10 +218,9 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
             if jid in pending:   # (_zero_inertias: nothing to do where m·(1/m) is 1)
                 m = masses[jid] if jid in masses else 0.0
                 if m * (1.0 / max(m, _EPS)) != 1.0:
-                    _zero_inertias(model, pending, masses, jid)
-                else:
-                    del pending[jid]
-            append_body(jid, Y, SE3(M))
+                    ops.append((jid, None, pending[jid]))
+                del pending[jid]
+            ops.append((jid, Y, M))
             masses[jid] = masses[jid] + mass if jid in masses else 0.0 + mass
         name = labels[i] + bsuffix
         jf = joint_frame[jid]
@@ -248,14 +255,30 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     if not all(seen):
         missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
         raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+    _model(w)
     return w
+
+
+def _model(w: Walk) -> None:
+    """The walk's joints (with their frames), then its bodies, added to the model. A joint's inertia is the sum of
+    what is added to it, in order, and nothing else reads it: the other joints' additions may come between."""
+    model, SE3 = w.model, pin.SE3
+    add_joint, add_frame, append_body = model.addJoint, model.addJointFrame, model.appendBodyToJoint
+    for n, (parent, jm, placement, name) in enumerate(w.joint_ops, 1):
+        if add_joint(parent, jm, SE3(placement), name) != n or add_frame(n, -1) != n:
+            raise AssertionError("pinocchio numbers joints and their frames in order")
+    for jid, Y, M in w.body_ops:
+        if Y is not None:
+            append_body(jid, Y, SE3(M))
+        else:
+            _add_zeros(model, jid, M)
 
 
 def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, seen: List[bool], o: int,
             push, recs: tuple) -> None:
     """The joints at body ``bid`` of instance ``i`` (placed at ``M`` on joint ``jid``) to bodies not met yet (``recs``:
     the instance's body records, ``o``: its offset in ``seen``)."""
-    model, label = w.model, w.labels[i]
+    label = w.labels[i]
     for k2, other, rev, P, Q, jm, jsuffix, info, row in joints:
         if seen[o + k2]:
             continue
@@ -265,8 +288,9 @@ def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, s
             push((i, recs[k2], jid, placement @ Q))
             continue
         name = label + jsuffix
-        new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
-        w.joint_frame[new_jid] = model.addJointFrame(new_jid, -1)
+        new_jid = len(w.joint_ops) + 1   # (its frame's id too: _model checks it)
+        w.joint_ops.append((jid, jm, placement, name))
+        w.joint_frame[new_jid] = new_jid
         if jid == 0:
             w.root_items.append(("joint", new_jid, placement.copy()))
         w.joints.append((name, i) + info)
