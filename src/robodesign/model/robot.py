@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -116,7 +117,9 @@ class Robot(RobotGeometry):
             raise AssemblyError("only 1-DoF joints are supported")
         self.dof = nq
         self.mass = w.mass
-        self._set_joint_limits(model, np.array(w.rows, dtype=float).reshape(-1, 9).T.copy())
+        rows = w.rows   # (per joint: its nine numbers, read as np.array(rows, dtype=float) would)
+        columns = np.fromiter(chain.from_iterable(rows), float, 9 * len(rows)).reshape(-1, 9).T.copy()
+        self._set_joint_limits(model, columns)
         self.tcp_frame, Mc = finish(w)
         if Mc is not None:
             self._root_items.append(("frame", self.tcp_frame, Mc))
