@@ -150,6 +150,16 @@ def module_table(module, convex_meshes: bool) -> ModuleTable:
     return t
 
 
+def _tables(ms, module_ids, convex_meshes: bool) -> List[ModuleTable]:
+    """:func:`module_table` of each instance's module."""
+    modules, out = ms.modules, []
+    for mid in module_ids:
+        mod = modules.get(mid) or ms[mid]
+        t = _TABLES.get((id(mod), convex_meshes))
+        out.append(t if t is not None and t.module is mod else module_table(mod, convex_meshes))
+    return out
+
+
 class Walk:
     """What the walk over an assembly's bodies made: the model (joints, bodies, their zero-inertia sums) and the
     robot's lists (see :meth:`robodesign.model.robot.Robot._build`)."""
@@ -186,7 +196,7 @@ def instance_labels(module_ids) -> Tuple[str, ...]:
 def walk(ms, asm, convex_meshes: bool) -> Walk:
     """The breadth-first walk from the base connector over the bodies of ``asm``: each body appended to its joint
     (after the zero inertias of the frames on the joint so far), each joint added when first met."""
-    tabs = [module_table(ms[mid], convex_meshes) for mid in asm.module_ids]
+    tabs = _tables(ms, asm.module_ids, convex_meshes)
     model = pin.Model()
     model.name = "robodesign:" + ",".join(asm.module_ids)
     w = Walk(model, instance_labels(asm.module_ids))
