@@ -29,9 +29,12 @@ class Assembly:
         return self.module_ids
 
     def key(self) -> str:
-        """A stable text key (for caches and databases)."""
-        con = ";".join(f"{a}:{ca}-{b}:{cb}" for a, ca, b, cb in self.connections)
-        return f"{','.join(self.module_ids)}|{con}|{self.base[0]}:{self.base[1]}"
+        """A stable text key (for caches and databases; made once per assembly)."""
+        k = self.__dict__.get("_key")
+        if k is None:
+            con = ";".join(f"{a}:{ca}-{b}:{cb}" for a, ca, b, cb in self.connections)
+            k = self.__dict__["_key"] = f"{','.join(self.module_ids)}|{con}|{self.base[0]}:{self.base[1]}"
+        return k
 
     def is_serial(self) -> bool:
         return all(b == a - 1 for a, _, b, _ in self.connections) and self.base[0] == 0
