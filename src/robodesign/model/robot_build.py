@@ -11,7 +11,7 @@ itself (the tests check it against such a walk).
 from __future__ import annotations
 
 from collections import deque
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -84,9 +84,10 @@ class ModuleTable:
     its connectors and collision geometries (None where one is not a C-ordered 4×4 array of floats), those poses) with
     * connectors: (connector id, pose, the Connector, name suffix) per connector of the body;
     * collision geometry: (index in the poses, name suffix, coal shape) per shape of each geometry spec;
-    * joints: (the other body's index, its id, reversed, P, Q, joint model or None for a fixed joint, name suffix,
-      (module id, joint id, type, reversed), its limits and drivetrain row) per joint at the body, in the
-      module's order: the joint's frame is at ``M @ P`` (M: the body's placement), the other body at ``@ Q``.
+    * joints: (the other body's index, its id, reversed, n, Q, joint model or None for a fixed joint, name suffix,
+      (module id, joint id, type, reversed), its limits and drivetrain row, P) per joint at the body, in the
+      module's order: the joint's frame is at ``M @ P`` (M: the body's placement; P is pose ``n`` of the body's
+      products), the other body at ``@ Q``.
 
     ``connectors``: connector id → (its body's record, its entry pose)."""
 
@@ -105,7 +106,7 @@ def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tu
     geoms = tuple((g.pose, tuple((f".c{gi}" + (f".{si}" if si else ""), shape)
                                  for si, shape in enumerate(_coal_shapes(g, convex_meshes))))
                   for gi, g in enumerate(body.collision))
-    joints = []
+    joints: List[tuple] = []
     for jt in module.joints:
         if jt.parent == body.id:
             other, rev = jt.child, False
@@ -124,9 +125,10 @@ def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tu
         L = jt.limits
         row = (L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
                jt.friction_coulomb, jt.friction_viscous)
-        joints.append((index[other], other, rev, P, Q, jm, f".{jt.id}", (module.id, jt.id, jt.type, rev), row))
+        n = len(body.connectors) + len(geoms) + len(joints)   # (M @ P: the body's products, at n)
+        joints.append((index[other], other, rev, n, Q, jm, f".{jt.id}", (module.id, jt.id, jt.type, rev), row, P))
     Y = _inertia(body) if body.mass > 0 else None
-    poses = tuple([c[1] for c in conns] + [g[0] for g in geoms])
+    poses = tuple([c[1] for c in conns] + [g[0] for g in geoms] + [j[-1] for j in joints])
     stack = np.stack(poses) if poses and all(_plain(P) for P in poses) else None
     flat = tuple((len(conns) + gi, suffix, shape) for gi, (_, shapes) in enumerate(geoms) for suffix, shape in shapes)
     return (body.id, f".{body.id}", body.mass, Y, 1 + len(body.connectors), conns, flat, tuple(joints), stack, poses)
@@ -172,7 +174,7 @@ class Walk:
         self.root_items: List[Tuple[str, int, np.ndarray]] = []
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
-        self.free: List[Tuple[Any, int, np.ndarray]] = []   # free connectors: (connector, joint, body placement)
+        self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
         self.direct_joint_pairs: set = set()
         self.joint_frame: Dict[int, int] = {0: 0}
         self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
@@ -248,7 +250,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                 if not seen[off[j2] + rec2[0]]:
                     push((j2, rec2, jid, Ps[n] @ entry))
             elif i != bi or cid != bcon:
-                free.append((c, jid, M))
+                free.append((c, jid, M, Ps[n]))
             n += 1
         if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
             if jid:
@@ -260,7 +262,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                     specs.append((name + suffix, jid, jf, Ps[n], shape))
                     geom_body.append((i, bid))
         if joints:
-            _joints(w, i, bid, M, jid, joints, seen, off[i], push, tabs[i].bodies)
+            _joints(w, i, bid, Ps, jid, joints, seen, off[i], push, tabs[i].bodies)
     w.mass = total_mass
     if not all(seen):
         missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
@@ -284,16 +286,16 @@ def _model(w: Walk) -> None:
             _add_zeros(model, jid, M)
 
 
-def _joints(w: Walk, i: int, bid: str, M: np.ndarray, jid: int, joints: tuple, seen: List[bool], o: int,
+def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[bool], o: int,
             push, recs: tuple) -> None:
-    """The joints at body ``bid`` of instance ``i`` (placed at ``M`` on joint ``jid``) to bodies not met yet (``recs``:
-    the instance's body records, ``o``: its offset in ``seen``)."""
+    """The joints at body ``bid`` of instance ``i`` (on joint ``jid``; ``Ps``: its products) to bodies not met yet
+    (``recs``: the instance's body records, ``o``: its offset in ``seen``)."""
     label = w.labels[i]
-    for k2, other, rev, P, Q, jm, jsuffix, info, row in joints:
+    for k2, other, rev, n, Q, jm, jsuffix, info, row, _ in joints:
         if seen[o + k2]:
             continue
         w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
-        placement = M @ P
+        placement = Ps[n]   # (M @ P)
         if jm is None:
             push((i, recs[k2], jid, placement @ Q))
             continue
@@ -322,7 +324,7 @@ def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
     pending.clear()
     if tcp is None:
         return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), np.eye(4)
-    tj, Mc = tcp[1], tcp[2] @ tcp[0].pose
+    tj, Mc = tcp[1], tcp[3]   # (M @ the connector's pose)
     fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME))
     return fid, (Mc.copy() if tj == 0 else None)
 
