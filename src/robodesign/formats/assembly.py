@@ -29,9 +29,12 @@ class Assembly:
         return self.module_ids
 
     def key(self) -> str:
-        """A stable text key (for caches and databases)."""
-        con = ";".join(f"{a}:{ca}-{b}:{cb}" for a, ca, b, cb in self.connections)
-        return f"{','.join(self.module_ids)}|{con}|{self.base[0]}:{self.base[1]}"
+        """A stable text key (for caches and databases; made once per assembly)."""
+        k = self.__dict__.get("_key")
+        if k is None:
+            con = ";".join(f"{a}:{ca}-{b}:{cb}" for a, ca, b, cb in self.connections)
+            k = self.__dict__["_key"] = f"{','.join(self.module_ids)}|{con}|{self.base[0]}:{self.base[1]}"
+        return k
 
     def is_serial(self) -> bool:
         return all(b == a - 1 for a, _, b, _ in self.connections) and self.base[0] == 0
@@ -56,40 +59,34 @@ class Assembly:
         order = [str(x) for x in order]
         if not order:
             raise AssemblyError("module order is empty")
+        modules = ms.modules
         for i, mid in enumerate(order):
-            if mid not in ms:
+            if mid not in modules:
                 raise AssemblyError(f"module {mid!r} at position {i} is not in module set {ms.name!r} "
                                     f"(IDs: {', '.join(sorted(ms.ids, key=_natural))})")
-        first = ms[order[0]]
+        first = modules[order[0]]
         bases = [c for c in first.connectors if c.type == "base"]
         if len(bases) != 1:
             raise AssemblyError(f"the first module {order[0]!r} ({first.name}) must have exactly one base connector, "
                                 f"it has {len(bases)}")
-        free = [free_connectors(ms, order[0])]  # per instance: connectors a later module may attach to
+        free = [_free(ms, order[0])]  # per instance: connectors a later module may attach to
+        open_ = [0] if free[0] else []  # the instances with a free connector, in order
         connections: List[Connection] = []
         for i in range(1, len(order)):
-            new = ms[order[i]]
-            cands = [(k, c_old, c_new) for k in range(i) if free[k]    # (a module with no free connector: none)
-                     for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
-            prev = ms[order[i - 1]]
-            if not cands:
-                reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): "
-                           f"{c_new.mates_with(c_old)[1]}"
-                           for c_old in prev.connectors if c_old.id in free[i - 1] for c_new in new.connectors]
-                detail = "; ".join(reasons[:4]) or f"module {order[i-1]!r} has no free connector left"
-                raise AssemblyError(f"modules {order[i-1]!r} ({prev.name}) → {order[i]!r} ({new.name}) at positions "
-                                    f"{i-1}→{i} do not connect: {detail}")
-            if len(cands) > 1:
-                desc = ", ".join(f"{c_new.id}↔{order[k]}.{c_old.id}" for k, c_old, c_new in cands)
-                raise AssemblyError(f"module {order[i]!r} ({new.name}) at position {i} can be connected in "
-                                    f"{len(cands)} ways ({desc}); use an explicit moduleConnection")
+            cands = [(k, c_old, c_new) for k in open_ for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
+            if len(cands) != 1:
+                _not_one(ms, order, i, free, cands)
             k, c_old, c_new = cands[0]
             if k != i - 1:
                 raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
                                     f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
                                     f"form a chain")
             free[k] = tuple(c for c in free[k] if c != c_old.id)
-            free.append(free_connectors(ms, order[i], used=(c_new.id,)))
+            if not free[k]:
+                open_.remove(k)
+            free.append(tuple(c for c in _free(ms, order[i]) if c != c_new.id))   # (free_connectors, used=(c_new.id,))
+            if free[i]:
+                open_.append(i)
             connections.append((i, c_new.id, k, c_old.id))
         return Assembly(tuple(order), tuple(connections), (0, bases[0].id))
 
@@ -166,6 +163,21 @@ class Assembly:
         return out
 
 
+def _not_one(ms: ModuleSet, order: List[str], i: int, free: List[Tuple[str, ...]], cands: list) -> None:
+    """The AssemblyError of module ``i`` of a module order that attaches in no way or in several ways."""
+    new, prev = ms[order[i]], ms[order[i - 1]]
+    if not cands:
+        reasons = [f"{c_new.id} ({_cdesc(c_new)}) vs {c_old.id} ({_cdesc(c_old)}): "
+                   f"{c_new.mates_with(c_old)[1]}"
+                   for c_old in prev.connectors if c_old.id in free[i - 1] for c_new in new.connectors]
+        detail = "; ".join(reasons[:4]) or f"module {order[i-1]!r} has no free connector left"
+        raise AssemblyError(f"modules {order[i-1]!r} ({prev.name}) → {order[i]!r} ({new.name}) at positions "
+                            f"{i-1}→{i} do not connect: {detail}")
+    desc = ", ".join(f"{c_new.id}↔{order[k]}.{c_old.id}" for k, c_old, c_new in cands)
+    raise AssemblyError(f"module {order[i]!r} ({new.name}) at position {i} can be connected in "
+                        f"{len(cands)} ways ({desc}); use an explicit moduleConnection")
+
+
 def _cdesc(c: Connector) -> str:
     return f"{c.type}/{list(c.size)}/{c.gender}"
 
@@ -179,6 +191,19 @@ def free_connectors(ms: ModuleSet, module_id: str, used: Sequence[str] = ()) -> 
     """IDs of the connectors of ``module_id`` that a later module of a serial order may attach to: all but
     its base connector and the ``used`` ones."""
     return tuple(c.id for c in ms[module_id].connectors if c.type != "base" and c.id not in used)
+
+
+_FREE: Dict[Tuple[int, str], Tuple[ModuleSet, Tuple[str, ...]]] = {}   # (id(ms), module id) → (ms, free_connectors)
+
+
+def _free(ms: ModuleSet, module_id: str) -> Tuple[str, ...]:
+    """:func:`free_connectors` of ``module_id`` (no ``used``), remembered per module set."""
+    hit = _FREE.get((id(ms), module_id))
+    if hit is None or hit[0] is not ms:
+        if len(_FREE) >= 65536:
+            _FREE.clear()
+        hit = _FREE[(id(ms), module_id)] = (ms, free_connectors(ms, module_id))   # (ms held: its id is not reused)
+    return hit[1]
 
 
 def chain_pairs(ms: ModuleSet, prev_id: str, free: Sequence[str], next_id: str) -> List[Tuple[Connector, Connector]]:

@@ -19,24 +19,26 @@ Conventions (docs/formats.md):
 from __future__ import annotations
 
 import math
-from collections import deque
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import pinocchio as pin
 
 from robodesign.core.errors import AssemblyError, InputError
-from robodesign.core.spatial import inv
 from robodesign.formats.assembly import Assembly
-from robodesign.formats.geometry import coal_shapes
-from robodesign.formats.module_spec import Connector, ModuleSet
+from robodesign.formats.module_spec import ModuleSet
+from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
 from robodesign.model.rnea_batch import rnea_rows
+from robodesign.model.robot_build import add_body_frames, finish, walk
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
+# the build's memo helpers, where they were before robot_build had them
+_memo, _coal_shapes, _inertia, _zero_inertias = _rb._memo, _rb._coal_shapes, _rb._inertia, _rb._zero_inertias
 
 
 def smooth_sign(x: np.ndarray) -> np.ndarray:
@@ -45,54 +47,8 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     return s / np.sqrt(1.0 + s * s)
 
 
-_MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
-
-
-def _memo(spec, make):
-    hit = _MEMO.get(id(spec))
-    if hit is None or hit[0] is not spec:
-        hit = _MEMO[id(spec)] = (spec, make(spec))
-    return hit[1]
-
-
-_SHAPES: Dict[Tuple[int, bool], Tuple[object, Tuple[object, ...]]] = {}   # (id(spec), flag) → (spec, its shapes)
-
-
-def _coal_shapes(spec, convex_meshes: bool) -> Tuple[object, ...]:
-    """:func:`coal_shapes` of a geometry spec, made once per spec and flag (shared by every robot: coal shapes are
-    never mutated)."""
-    hit = _SHAPES.get((id(spec), convex_meshes))
-    if hit is None or hit[0] is not spec:   # (the spec is held: its id is not reused while the entry lives)
-        hit = _SHAPES[(id(spec), convex_meshes)] = (spec, coal_shapes(spec, convex_meshes))
-    return hit[1]
-
-
-def _inertia(body) -> "pin.Inertia":
-    """The body's inertia (made once per body spec)."""
-    hit = _MEMO.get(id(body))
-    if hit is None or hit[0] is not body:
-        Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
-        hit = _MEMO[id(body)] = (body, Y)
-    return hit[1]
-
-
-_ZERO_INERTIA = pin.Inertia.Zero()
-_EPS = float(np.finfo(float).eps)   # Eigen's epsilon, as in pinocchio's sum of inertias
-
-
-def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, float], j: int) -> None:
-    """The zero inertias that adding ``pending[j]`` frames to joint ``j`` adds to it (``addFrame`` adds each frame's
-    inertia, zero, at the frame). pinocchio's sum (``InertiaTpl::__pequ__``) then multiplies the joint's centre of
-    mass by ``m·(1/m)`` (m: the joint's mass, ``mass[j]``) and changes nothing else: nothing at all where that
-    factor is 1, the usual case; else the same operation is made here on pinocchio's zero inertia. The frames
-    themselves are added later without it (``Robot.add_frames``)."""
-    k = pending.pop(j, 0)
-    m = mass.get(j, 0.0)
-    if k and m * (1.0 / max(m, _EPS)) != 1.0:
-        Y = model.inertias[j]
-        for _ in range(k):
-            Y += _ZERO_INERTIA
-        model.inertias[j] = Y
+_G = (0.0, 0.0, -9.81)   # the default gravity, and pinocchio's motion of it (the model keeps a copy)
+_DEFAULT_GRAVITY = pin.Motion(np.array([*_G, 0.0, 0.0, 0.0], dtype=float))
 
 
 @dataclass(frozen=True)
@@ -105,16 +61,27 @@ class JointInfo:
     reversed: bool
 
 
+_INFOS: Dict[tuple, JointInfo] = {}   # its fields → a JointInfo (immutable: robots share them)
+
+
+def _joint_info(fields: tuple) -> JointInfo:
+    if len(_INFOS) >= 65536:
+        _INFOS.clear()
+    info = _INFOS[fields] = JointInfo(*fields)
+    return info
+
+
 class Robot(RobotGeometry):
     def __init__(self, module_set: ModuleSet, assembly: Assembly, base_pose: Optional[np.ndarray] = None,
-                 convex_meshes: bool = False, gravity: Sequence[float] = (0.0, 0.0, -9.81)):
+                 convex_meshes: bool = False, gravity: Sequence[float] = _G):
         self.module_set = module_set
         self.assembly = assembly
         self._build(convex_meshes)
-        self.model.gravity = pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
-        self.base_pose = np.eye(4)
+        self.model.gravity = _DEFAULT_GRAVITY if gravity is _G else pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0],
+                                                                                        dtype=float))
         self.data: "pin.Data"
-        if base_pose is None:   # (else set_base_pose below makes it)
+        if base_pose is None:   # (else set_base_pose below makes them)
+            self.base_pose = np.eye(4)
             self.data = self.model.createData()
         self._sync_link_model()
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
@@ -137,149 +104,36 @@ class Robot(RobotGeometry):
         return cls(module_set, Assembly.from_order(module_set, order), **kw)
 
     def _build(self, convex_meshes: bool) -> None:
-        ms, asm = self.module_set, self.assembly
-        model = pin.Model()
-        model.name = "robodesign:" + ",".join(asm.module_ids)
-        geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []  # (name, joint, frame, placement, shape)
-        counts: Dict[str, int] = {}
-        labels = []
-        for mid in asm.module_ids:
-            k = counts.get(mid, 0)
-            labels.append(mid if k == 0 else f"{mid}-{k}")
-            counts[mid] = k + 1
-        self.instance_labels = tuple(labels)
-        conn: Dict[Tuple[int, str], Tuple[int, str]] = {}
-        for a, ca, b, cb in asm.connections:
-            conn[(a, ca)] = (b, cb)
-            conn[(b, cb)] = (a, ca)
-        bi, bcon = asm.base
-        base_mod = ms[asm.module_ids[bi]]
-        base_con = base_mod.connector(bcon)
-        # base body pose in the base frame: the base connector's world pose is Rx(π)
-        start = (bi, base_con.body_id, 0, base_con.entry_pose)
-        visited = set()
-        queue = deque([start])
-        joint_frame: Dict[int, int] = {0: 0}  # joint id → its frame's id
-        # the body and connector frames, added by add_frames: (name, joint, parent frame id or ~index in this list,
-        # the body's placement in the joint's frame, the connector's in the body's or None, type); each adds a zero
-        # inertia to its joint, which changes the joint's inertia by rounding alone: those additions are made here
-        # in the order of the frames (_zero_inertias)
-        frames: List[Tuple[str, int, int, np.ndarray, Optional[np.ndarray], Any]] = []
-        pending: Dict[int, int] = {}  # joint → zero-inertia additions of frames not made yet
-        masses: Dict[int, float] = {}  # joint → its mass so far (pinocchio's sum of the masses of its bodies)
-        self._root_items: List[Tuple[str, int, np.ndarray]] = []  # (kind, index, base-frame placement)
-        self.joint_infos: List[JointInfo] = []
-        columns: List[List[float]] = [[] for _ in range(9)]  # the joints' limits (_set_joint_limits)
-        free_connectors: List[Tuple[int, Connector, Tuple[int, np.ndarray]]] = []  # (instance, connector, (joint, M))
-        total_mass = 0.0
-        geom_body: List[Tuple[int, str]] = []
-        direct_joint_pairs = set()
-        mods = [ms[mid] for mid in asm.module_ids]
-        while queue:
-            i, body_id, jid, M = queue.popleft()
-            if (i, body_id) in visited:
-                continue
-            visited.add((i, body_id))
-            mod = mods[i]
-            body = mod.body(body_id)
-            label = labels[i]
-            total_mass += body.mass
-            if body.mass > 0:
-                if jid in pending:
-                    _zero_inertias(model, pending, masses, jid)
-                model.appendBodyToJoint(jid, _inertia(body), pin.SE3(M))
-                masses[jid] = masses.get(jid, 0.0) + body.mass
-            name = f"{label}.{body_id}"
-            body_frame = ~len(frames)
-            frames.append((name, jid, joint_frame[jid], M, None, pin.FrameType.BODY))
-            pending[jid] = pending.get(jid, 0) + 1 + len(body.connectors)
-            for c in body.connectors:
-                frames.append((f"{name}.{c.id}", jid, body_frame, M, c.pose, pin.FrameType.OP_FRAME))
-                other = conn.get((i, c.id))
-                if other is not None:
-                    j2, c2id = other
-                    c2 = mods[j2].connector(c2id)
-                    if (j2, c2.body_id) not in visited:
-                        queue.append((j2, c2.body_id, jid, (M @ c.pose) @ c2.entry_pose))
-                elif (i, c.id) != asm.base:
-                    free_connectors.append((i, c, (jid, M)))
-            for gi, g in enumerate(body.collision):
-                P = M @ g.pose
-                for si, shape in enumerate(_coal_shapes(g, convex_meshes)):
-                    k = len(geom_specs)
-                    geom_specs.append((f"{name}.c{gi}" + (f".{si}" if si else ""), jid, joint_frame[jid], P, shape))
-                    geom_body.append((i, body_id))
-                    if jid == 0:
-                        self._root_items.append(("geom", k, P.copy()))
-            for jt in mod.joints:
-                if jt.parent == body_id:
-                    other_body, rev = jt.child, False
-                    P, Q = jt.pose_parent, jt.pose_child
-                elif jt.child == body_id:
-                    other_body, rev = jt.parent, True
-                    P, Q = _memo(jt, lambda j: (inv(j.pose_child), inv(j.pose_parent)))
-                else:
-                    continue
-                if (i, other_body) in visited:
-                    continue
-                direct_joint_pairs.add(frozenset(((i, body_id), (i, other_body))))
-                placement = M @ P
-                if jt.type == "fixed":
-                    queue.append((i, other_body, jid, placement @ Q))
-                    continue
-                if jt.type == "revolute":
-                    jm = pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0)
-                else:
-                    jm = pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0)
-                name = f"{label}.{jt.id}"
-                new_jid = model.addJoint(jid, jm, pin.SE3(placement), name)
-                joint_frame[new_jid] = model.addJointFrame(new_jid, -1)
-                if jid == 0:
-                    self._root_items.append(("joint", new_jid, placement.copy()))
-                self.joint_infos.append(JointInfo(name, i, mod.id, jt.id, jt.type, rev))
-                L = jt.limits
-                for column, v in zip(columns, (
-                        L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
-                        jt.friction_coulomb, jt.friction_viscous)):
-                    column.append(v)
-                queue.append((i, other_body, new_jid, Q))
-        missing = {(i, b.id) for i, mid in enumerate(asm.module_ids) for b in ms[mid].bodies} - visited
-        if missing:
-            raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+        """The model (its joints, bodies and TCP frame; the other frames are added by :meth:`add_frames`), the
+        joints' limits and the collision geometry's specs, by a breadth-first walk over the assembly's bodies from
+        the base connector (:func:`robodesign.model.robot_build.walk`)."""
+        w = walk(self.module_set, self.assembly, convex_meshes)
+        model = w.model
+        self.instance_labels = w.labels
+        self._root_items = w.root_items   # (kind, index, base-frame placement)
+        self.joint_infos = [_INFOS.get(j) or _joint_info(j) for j in w.joints]
         nq = model.nq
         if nq != len(self.joint_infos):
             raise AssemblyError("only 1-DoF joints are supported")
         self.dof = nq
-        self.mass = total_mass
+        self.mass = w.mass
+        rows = w.rows   # (per joint: its nine numbers, read as np.array(rows, dtype=float) would)
+        columns = np.fromiter(chain.from_iterable(rows), float, 9 * len(rows)).reshape(-1, 9).T.copy()
         self._set_joint_limits(model, columns)
-        # TCP: the free eef connector; else the last free connector in BFS order
-        eefs = [f for f in free_connectors if f[1].type == "eef"]
-        if len(eefs) == 1:
-            tcp = eefs[0]
-        elif free_connectors:
-            tcp = free_connectors[-1]
-        else:
-            tcp = None
-        for j in list(pending):
-            _zero_inertias(model, pending, masses, j)
-        if tcp is not None:
-            tj, Mc = tcp[2][0], tcp[2][1] @ tcp[1].pose
-            self.tcp_frame = model.addFrame(pin.Frame("TCP", tj, joint_frame[tj], pin.SE3(Mc), pin.FrameType.OP_FRAME))
-            if tj == 0:
-                self._root_items.append(("frame", self.tcp_frame, Mc.copy()))
-        else:
-            self.tcp_frame = model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
-            self._root_items.append(("frame", self.tcp_frame, np.eye(4)))
+        self.tcp_frame, Mc = finish(w)
+        if Mc is not None:
+            self._root_items.append(("frame", self.tcp_frame, Mc))
         self.model = model
-        self._frames: Optional[list] = frames   # (None once add_frames has added them)
+        self._frames: Optional[list] = w.bodies   # (the bodies' frames; None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
-        self._geom_specs, self._geom_body, self._placed = geom_specs, geom_body, False
-        self._direct_joint_pairs, self._self_map = direct_joint_pairs, None   # (the map: on first use)
+        self._geom_specs, self._geom_body, self._placed = w.geom_specs, w.geom_body, False
+        self._direct_joint_pairs, self._self_map = w.direct_joint_pairs, None   # (the map: on first use)
 
-    def _set_joint_limits(self, model: "pin.Model", columns: List[List[float]]) -> None:
-        """The joints' limits and drivetrains (columns in joint order: lower, upper, velocity, acceleration, torque,
-        gear ratio, motor inertia, Coulomb and viscous friction) on the robot and its model (armature)."""
-        lower, upper, vel, acc, eff, gear, im, fc, fv = (np.array(c, dtype=float) for c in columns)
+    def _set_joint_limits(self, model: "pin.Model", columns: np.ndarray) -> None:
+        """The joints' limits and drivetrains (rows of ``columns`` in joint order: lower, upper, velocity,
+        acceleration, torque, gear ratio, motor inertia, Coulomb and viscous friction) on the robot and its model
+        (armature)."""
+        lower, upper, vel, acc, eff, gear, im, fc, fv = columns
         self.q_lower, self.q_upper, self.dq_max, self.ddq_max, self.tau_max = lower, upper, vel, acc, eff
         self.gear_ratio, self.motor_inertia, self.friction_coulomb, self.friction_viscous = gear, im, fc, fv
         # (pinocchio keeps copies)
@@ -290,19 +144,19 @@ class Robot(RobotGeometry):
     # configuration of the robot in its cell
     def set_base_pose(self, T: np.ndarray) -> None:
         T = np.asarray(T, dtype=float)
-        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        if T.shape != (4, 4) or not all(map(math.isfinite, T.ravel().tolist())):
             raise InputError("base pose must be a finite 4x4 matrix")
         self.base_pose = T.copy()
+        model, geom, SE3 = self.model, self._geom_model, pin.SE3
         for kind, idx, M in self._root_items:
-            P = pin.SE3(T @ M)
             if kind == "joint":
-                self.model.jointPlacements[idx] = P
+                model.jointPlacements[idx] = SE3(T @ M)
             elif kind == "frame":
-                self.model.frames[idx].placement = P
-            elif self._geom_model is not None:
-                self._geom_model.geometryObjects[idx].placement = P
+                model.frames[idx].placement = SE3(T @ M)
+            elif geom is not None:   # (else the geometry, when it is made, places them: _geometry_object)
+                geom.geometryObjects[idx].placement = SE3(T @ M)
         self._placed = True
-        self.data = self.model.createData()
+        self.data = model.createData()
         self._sync_link_model()
         if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
             _fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
@@ -370,16 +224,7 @@ class Robot(RobotGeometry):
         frames, self._frames = self._frames, None
         if frames:
             model = self.model
-            ids: List[int] = []
-            for name, jid, parent, M, pose, kind in frames:
-                if pose is not None:   # a connector's frame
-                    M = M @ pose
-                placement = pin.SE3(self.base_pose @ M if jid == 0 and self._placed else M)
-                fid = model.addFrame(pin.Frame(name, jid, parent if parent >= 0 else ids[~parent], placement, kind),
-                                     False)   # (their zero inertias were added when the robot was built)
-                ids.append(fid)
-                if jid == 0:
-                    self._root_items.append(("frame", fid, M.copy()))
+            add_body_frames(model, frames, self.base_pose if self._placed else None, self._root_items)
             self.data = model.createData()
         return self.model
 

@@ -1,0 +1,349 @@
+"""How :class:`robodesign.model.robot.Robot` builds its pinocchio model from an assembly (its ``_build``).
+
+What a module contributes to every robot it is part of does not depend on the assembly: its bodies' inertias,
+the coal shapes of their collision geometry, its joints' pinocchio joint models, the inverses of the poses of a
+joint entered backwards, its connectors' entry poses, the suffixes of the names. Those are made once per module
+spec (:func:`module_table`, remembered per module object, which is immutable) and the breadth-first walk over
+the assembly's bodies (:func:`walk`) only places them: every matrix product is the one the walk always made, in
+the same order with the same operands, so the numbers are bit for bit those of a walk that makes everything
+itself (the tests check it against such a walk).
+"""
+from __future__ import annotations
+
+from collections import deque
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+import pinocchio as pin
+
+from robodesign.core.errors import AssemblyError
+from robodesign.core.spatial import inv
+from robodesign.formats.geometry import coal_shapes
+
+_MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
+
+
+def _memo(spec, make):
+    hit = _MEMO.get(id(spec))
+    if hit is None or hit[0] is not spec:
+        hit = _MEMO[id(spec)] = (spec, make(spec))
+    return hit[1]
+
+
+_SHAPES: Dict[Tuple[int, bool], Tuple[object, Tuple[object, ...]]] = {}   # (id(spec), flag) → (spec, its shapes)
+
+
+def _coal_shapes(spec, convex_meshes: bool) -> Tuple[object, ...]:
+    """:func:`coal_shapes` of a geometry spec, made once per spec and flag (shared by every robot: coal shapes are
+    never mutated)."""
+    hit = _SHAPES.get((id(spec), convex_meshes))
+    if hit is None or hit[0] is not spec:   # (the spec is held: its id is not reused while the entry lives)
+        hit = _SHAPES[(id(spec), convex_meshes)] = (spec, coal_shapes(spec, convex_meshes))
+    return hit[1]
+
+
+def _inertia(body) -> "pin.Inertia":
+    """The body's inertia (made once per body spec)."""
+    hit = _MEMO.get(id(body))
+    if hit is None or hit[0] is not body:
+        Y = pin.Inertia(body.mass, np.asarray(body.com, float), np.asarray(body.inertia, float))
+        hit = _MEMO[id(body)] = (body, Y)
+    return hit[1]
+
+
+_ZERO_INERTIA = pin.Inertia.Zero()
+_OP_FRAME = pin.FrameType.OP_FRAME
+_EPS = float(np.finfo(float).eps)   # Eigen's epsilon, as in pinocchio's sum of inertias
+
+
+def _zero_inertias(model: "pin.Model", pending: Dict[int, int], mass: Dict[int, float], j: int) -> None:
+    """The zero inertias that adding ``pending[j]`` frames to joint ``j`` adds to it (``addFrame`` adds each frame's
+    inertia, zero, at the frame). pinocchio's sum (``InertiaTpl::__pequ__``) then multiplies the joint's centre of
+    mass by ``m·(1/m)`` (m: the joint's mass, ``mass[j]``) and changes nothing else: nothing at all where that
+    factor is 1, the usual case; else the same operation is made here on pinocchio's zero inertia. The frames
+    themselves are added later without it (``Robot.add_frames``)."""
+    k = pending.pop(j, 0)
+    m = mass.get(j, 0.0)
+    if k and m * (1.0 / max(m, _EPS)) != 1.0:
+        _add_zeros(model, j, k)
+
+
+def _add_zeros(model: "pin.Model", j: int, k: int) -> None:
+    """Pinocchio's zero inertia added ``k`` times to joint ``j``'s."""
+    Y = model.inertias[j]
+    for _ in range(k):
+        Y += _ZERO_INERTIA
+    model.inertias[j] = Y
+
+
+class ModuleTable:
+    """What a module brings to every robot (one per module spec and ``convex_meshes`` flag).
+
+    ``bodies[k]``: (k, body id, its name suffix ``.<body id>``, mass, inertia or None for a massless body, the number
+    of its frames (the body's and its connectors'), connectors, collision geometry, joints, the stack of the poses of
+    its connectors and collision geometries (None where one is not a C-ordered 4×4 array of floats), those poses) with
+    * connectors: (connector id, pose, the Connector, name suffix) per connector of the body;
+    * collision geometry: (index in the poses, name suffix, coal shape) per shape of each geometry spec;
+    * joints: (the other body's index, its id, reversed, n, Q, joint model or None for a fixed joint, name suffix,
+      (module id, joint id, type, reversed), its limits and drivetrain row, P) per joint at the body, in the
+      module's order: the joint's frame is at ``M @ P`` (M: the body's placement; P is pose ``n`` of the body's
+      products), the other body at ``@ Q``.
+
+    ``connectors``: connector id → (its body's record, its entry pose)."""
+
+    __slots__ = ("module", "bodies", "connectors")
+
+    def __init__(self, module, convex_meshes: bool):
+        self.module = module
+        index = {b.id: k for k, b in enumerate(module.bodies)}
+        self.bodies = tuple((k,) + _body_record(module, b, index, convex_meshes) for k, b in enumerate(module.bodies))
+        self.connectors = {c.id: (self.bodies[index[c.body_id]], c.entry_pose)
+                           for b in module.bodies for c in b.connectors}
+
+
+def _body_record(module, body, index: Dict[str, int], convex_meshes: bool) -> tuple:
+    conns = tuple((c.id, c.pose, c, f".{c.id}") for c in body.connectors)
+    geoms = tuple((g.pose, tuple((f".c{gi}" + (f".{si}" if si else ""), shape)
+                                 for si, shape in enumerate(_coal_shapes(g, convex_meshes))))
+                  for gi, g in enumerate(body.collision))
+    joints: List[tuple] = []
+    for jt in module.joints:
+        if jt.parent == body.id:
+            other, rev = jt.child, False
+            P, Q = jt.pose_parent, jt.pose_child
+        elif jt.child == body.id:
+            other, rev = jt.parent, True
+            P, Q = _memo(jt, lambda j: (inv(j.pose_child), inv(j.pose_parent)))
+        else:
+            continue
+        if jt.type == "fixed":
+            jm = None
+        elif jt.type == "revolute":
+            jm = pin.JointModel(pin.JointModelRZ() if not rev else pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0))
+        else:   # (pinocchio copies the joint model into the model it is added to: one serves every robot)
+            jm = pin.JointModel(pin.JointModelPZ() if not rev else pin.JointModelPrismaticUnaligned(0.0, 0.0, -1.0))
+        L = jt.limits
+        row = (L.lower, L.upper, L.velocity, L.acceleration, L.torque, jt.gear_ratio, jt.motor_inertia,
+               jt.friction_coulomb, jt.friction_viscous)
+        n = len(body.connectors) + len(geoms) + len(joints)   # (M @ P: the body's products, at n)
+        joints.append((index[other], other, rev, n, Q, jm, f".{jt.id}", (module.id, jt.id, jt.type, rev), row, P))
+    Y = _inertia(body) if body.mass > 0 else None
+    poses = tuple([c[1] for c in conns] + [g[0] for g in geoms] + [j[-1] for j in joints])
+    stack = np.stack(poses) if poses and all(_plain(P) for P in poses) else None
+    flat = tuple((len(conns) + gi, suffix, shape) for gi, (_, shapes) in enumerate(geoms) for suffix, shape in shapes)
+    return (body.id, f".{body.id}", body.mass, Y, 1 + len(body.connectors), conns, flat, tuple(joints), stack, poses)
+
+
+def _plain(P) -> bool:
+    """Whether ``M @ P`` is the product that ``(M @ stack)[k]`` makes for ``P`` at ``stack[k]`` (numpy multiplies a
+    stack matrix by matrix with the BLAS call it makes for one pair with the same strides): a C-ordered 4×4 array of
+    floats."""
+    return isinstance(P, np.ndarray) and P.dtype == np.float64 and P.shape == (4, 4) and P.flags.c_contiguous
+
+
+_TABLES: Dict[Tuple[int, bool], ModuleTable] = {}   # (id(module), flag) → its table (which holds the module)
+
+
+def module_table(module, convex_meshes: bool) -> ModuleTable:
+    """The module's :class:`ModuleTable` (made once per module object and flag)."""
+    t = _TABLES.get((id(module), convex_meshes))
+    if t is None or t.module is not module:
+        t = _TABLES[(id(module), convex_meshes)] = ModuleTable(module, convex_meshes)
+    return t
+
+
+def _tables(ms, module_ids, convex_meshes: bool) -> List[ModuleTable]:
+    """:func:`module_table` of each instance's module."""
+    modules, out = ms.modules, []
+    for mid in module_ids:
+        mod = modules.get(mid) or ms[mid]
+        t = _TABLES.get((id(mod), convex_meshes))
+        out.append(t if t is not None and t.module is mod else module_table(mod, convex_meshes))
+    return out
+
+
+class Walk:
+    """What the walk over an assembly's bodies made: the model (joints, bodies, their zero-inertia sums) and the
+    robot's lists (see :meth:`robodesign.model.robot.Robot._build`)."""
+
+    def __init__(self, model: "pin.Model", labels: Tuple[str, ...]):
+        self.model, self.labels = model, labels
+        self.bodies: List[tuple] = []   # per body in walk order: (name, joint, joint's frame, placement, connectors)
+        self.geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []
+        self.geom_body: List[Tuple[int, str]] = []
+        self.root_items: List[Tuple[str, int, np.ndarray]] = []
+        self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
+        self.rows: List[tuple] = []     # their limits and drivetrains
+        self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
+        self.direct_joint_pairs: set = set()
+        self.joint_frame: Dict[int, int] = {0: 0}
+        self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
+        self.body_ops: List[tuple] = []    # (joint, inertia, placement) per body appended to a joint, in walk order,
+        #                                    or (joint, None, k) where k zero inertias are added to it
+        self.pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
+        self.masses: Dict[int, float] = {}  # joint → its mass so far
+        self.mass = 0.0
+
+
+def instance_labels(module_ids) -> Tuple[str, ...]:
+    counts: Dict[str, int] = {}
+    labels = []
+    for mid in module_ids:
+        k = counts.get(mid, 0)
+        labels.append(mid if k == 0 else f"{mid}-{k}")
+        counts[mid] = k + 1
+    return tuple(labels)
+
+
+def walk(ms, asm, convex_meshes: bool) -> Walk:
+    """The breadth-first walk from the base connector over the bodies of ``asm``: each body appended to its joint
+    (after the zero inertias of the frames on the joint so far), each joint added when first met."""
+    tabs = _tables(ms, asm.module_ids, convex_meshes)
+    model = pin.Model()
+    model.name = "robodesign:" + ",".join(asm.module_ids)
+    w = Walk(model, instance_labels(asm.module_ids))
+    links: List[Dict[str, Tuple[int, str]]] = [{} for _ in tabs]   # per instance: connector → the one mated to it
+    for a, ca, b, cb in asm.connections:
+        links[a][ca] = (b, cb)
+        links[b][cb] = (a, ca)
+    off = [0]
+    for t in tabs:
+        off.append(off[-1] + len(t.bodies))
+    seen = [False] * off[-1]
+    bi, bcon = asm.base
+    brec, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
+    queue = deque([(bi, brec, 0, entry)])
+    pop, push = queue.popleft, queue.append
+    labels, ops = w.labels, w.body_ops
+    pending, masses, joint_frame = w.pending, w.masses, w.joint_frame
+    bodies, specs, geom_body, root, free = w.bodies, w.geom_specs, w.geom_body, w.root_items, w.free
+    total_mass = 0.0
+    while queue:
+        i, rec, jid, M = pop()
+        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack, poses = rec
+        s = off[i] + k
+        if seen[s]:
+            continue
+        seen[s] = True
+        total_mass += mass
+        if Y is not None:
+            if jid in pending:   # (_zero_inertias: nothing to do where m·(1/m) is 1)
+                m = masses[jid] if jid in masses else 0.0
+                if m * (1.0 / max(m, _EPS)) != 1.0:
+                    ops.append((jid, None, pending[jid]))
+                del pending[jid]
+            ops.append((jid, Y, M))
+            masses[jid] = masses[jid] + mass if jid in masses else 0.0 + mass
+        name = labels[i] + bsuffix
+        jf = joint_frame[jid]
+        bodies.append((name, jid, jf, M, conns))
+        pending[jid] = pending[jid] + nframes if jid in pending else nframes
+        # M @ pose of each connector, then of each collision geometry (numpy multiplies each matrix of the stack with
+        # the BLAS call it makes for one pair with the same strides: the same numbers)
+        Ps = M @ stack if stack is not None else [M @ P for P in poses]
+        link = links[i]
+        n = 0
+        for cid, _, c, _ in conns:
+            if cid in link:
+                j2, c2 = link[cid]
+                rec2, entry = tabs[j2].connectors[c2]
+                if not seen[off[j2] + rec2[0]]:
+                    push((j2, rec2, jid, Ps[n] @ entry))
+            elif i != bi or cid != bcon:
+                free.append((c, jid, M, Ps[n]))
+            n += 1
+        if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
+            if jid:
+                specs.extend([(name + suffix, jid, jf, Ps[n], shape) for n, suffix, shape in geoms])
+                geom_body.extend([(i, bid)] * len(geoms))
+            else:
+                for n, suffix, shape in geoms:
+                    root.append(("geom", len(specs), Ps[n].copy()))
+                    specs.append((name + suffix, jid, jf, Ps[n], shape))
+                    geom_body.append((i, bid))
+        if joints:
+            _joints(w, i, bid, Ps, jid, joints, seen, off[i], push, tabs[i].bodies)
+    w.mass = total_mass
+    if not all(seen):
+        missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
+        raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
+    _model(w)
+    return w
+
+
+def _model(w: Walk) -> None:
+    """The walk's joints (with their frames), then its bodies, added to the model. A joint's inertia is the sum of
+    what is added to it, in order, and nothing else reads it: the other joints' additions may come between."""
+    model, SE3 = w.model, pin.SE3
+    add_joint, add_frame, append_body = model.addJoint, model.addJointFrame, model.appendBodyToJoint
+    for n, (parent, jm, placement, name) in enumerate(w.joint_ops, 1):
+        if add_joint(parent, jm, SE3(placement), name) != n or add_frame(n, -1) != n:
+            raise AssertionError("pinocchio numbers joints and their frames in order")
+    for jid, Y, M in w.body_ops:
+        if Y is not None:
+            append_body(jid, Y, SE3(M))
+        else:
+            _add_zeros(model, jid, M)
+
+
+def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[bool], o: int,
+            push, recs: tuple) -> None:
+    """The joints at body ``bid`` of instance ``i`` (on joint ``jid``; ``Ps``: its products) to bodies not met yet
+    (``recs``: the instance's body records, ``o``: its offset in ``seen``)."""
+    label = w.labels[i]
+    for k2, other, rev, n, Q, jm, jsuffix, info, row, _ in joints:
+        if seen[o + k2]:
+            continue
+        w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
+        placement = Ps[n]   # (M @ P)
+        if jm is None:
+            push((i, recs[k2], jid, placement @ Q))
+            continue
+        name = label + jsuffix
+        new_jid = len(w.joint_ops) + 1   # (its frame's id too: _model checks it)
+        w.joint_ops.append((jid, jm, placement, name))
+        w.joint_frame[new_jid] = new_jid
+        if jid == 0:
+            w.root_items.append(("joint", new_jid, placement.copy()))
+        w.joints.append((name, i) + info)
+        w.rows.append(row)
+        push((i, recs[k2], new_jid, Q))
+
+
+def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
+    """The TCP frame (the free ``eef`` connector; else the last free connector in walk order; else the base frame),
+    added after the zero inertias of every joint's frames: (its frame id, its placement on joint 0 or None)."""
+    model, pending, free = w.model, w.pending, w.free
+    eefs = [f for f in free if f[0].type == "eef"]
+    tcp = eefs[0] if len(eefs) == 1 else free[-1] if free else None
+    masses = w.masses
+    for j in list(pending):
+        m = masses[j] if j in masses else 0.0
+        if m * (1.0 / max(m, _EPS)) != 1.0:   # (else _zero_inertias changes nothing)
+            _zero_inertias(model, pending, masses, j)
+    pending.clear()
+    if tcp is None:
+        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), np.eye(4)
+    tj, Mc = tcp[1], tcp[3]   # (M @ the connector's pose)
+    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME))
+    return fid, (Mc.copy() if tj == 0 else None)
+
+
+def add_body_frames(model: "pin.Model", bodies: List[tuple], base_pose: Optional[np.ndarray],
+                    root_items: list) -> None:
+    """The frames of the bodies (``<instance>.<body>``) and their connectors (``<instance>.<body>.<connector>``) in
+    walk order, without their zero inertias (added when the robot was built); those on joint 0 at ``base_pose``
+    (None: not placed yet), each also added to ``root_items``."""
+    add, Frame, SE3 = model.addFrame, pin.Frame, pin.SE3
+    BODY, OP = pin.FrameType.BODY, pin.FrameType.OP_FRAME
+    for name, jid, jf, M, conns in bodies:
+        on_root = jid == 0
+        fid = add(Frame(name, jid, jf, SE3(base_pose @ M if on_root and base_pose is not None else M), BODY), False)
+        if on_root:
+            root_items.append(("frame", fid, M.copy()))
+        for _, pose, _, csuffix in conns:
+            Mc = M @ pose
+            cf = add(Frame(name + csuffix, jid, fid, SE3(base_pose @ Mc if on_root and base_pose is not None else Mc),
+                           OP), False)
+            if on_root:
+                root_items.append(("frame", cf, Mc.copy()))
