@@ -4,6 +4,7 @@ a goal's IK solutions, chooses one per goal, plans the moves between them and ti
 from __future__ import annotations
 
 import math
+import weakref
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Protocol, Sequence, Tuple, cast
 
 import numpy as np
@@ -76,6 +77,20 @@ def position_slack(pose: ToleratedPose) -> float:
     return s if math.isfinite(s) else 1e9
 
 
+_FULL_POSE: "weakref.WeakKeyDictionary[Task, Tuple[Tuple[str, ...], Optional[Goal]]]" = weakref.WeakKeyDictionary()
+
+
+def _full_pose_goal(task: Task, order: Sequence[Goal], fixes_full_pose) -> Optional[Goal]:
+    """The first goal of ``order`` (the task's goals in goal order) with a pose that ``fixes_full_pose``
+    (solvers.ik's), or None; found once per task."""
+    ids = tuple(g.id for g in order)
+    hit = _FULL_POSE.get(task)
+    if hit is None or hit[0] != ids:
+        hit = _FULL_POSE[task] = (ids, next((g for g in order if any(fixes_full_pose(p) for p in goal_poses(g))),
+                                            None))
+    return hit[1]
+
+
 class GoalPlanner:
     """The ik → static_torque → plan → timing stages for one robot: holds the per-goal IK solutions
     (``ik``, ``follow_ik``), the chosen ones (``choice``), the start configuration ``q0`` and the
@@ -114,7 +129,7 @@ class GoalPlanner:
                         f"move it ({block.slack * 1e3:.1f} mm)")
         # an arm that cannot move its tool in all six directions (solvers.ik.fixes_full_pose) does not look for
         # a goal that fixes position and orientation: its restarts would all fail (docs/diagnosis.md)
-        full = next((g for g in self.order if any(fixes_full_pose(p) for p in goal_poses(g))), None)
+        full = _full_pose_goal(self.task, self.order, fixes_full_pose)
         if full is not None and self.robot.generic_rank() < 6:
             self.res.goals_reached = 0
             raise _Fail(f"no IK solution for goal {full.id}: it fixes position and orientation, but the arm's tool "
