@@ -96,6 +96,22 @@ def toy_set(tmp_path):
     return load_module_set(toy_module_set(tmp_path))
 
 
+def boxes_around(robot, seed, n=6):
+    """Boxes of 10–40 cm within 0.9 m of the robot's base, at random orientations (obstacles for collision tests)."""
+    import coal
+    import pinocchio as pin
+
+    from robodesign.model.robot import Obstacle
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in range(n):
+        T = np.eye(4)
+        T[:3, :3] = pin.exp3(rng.normal(0.0, 1.0, 3))
+        T[:3, 3] = robot.base_pose[:3, 3] + rng.uniform(-0.9, 0.9, 3)
+        out.append(Obstacle(f"box{i}", coal.Box(*rng.uniform(0.1, 0.4, 3)), T))
+    return out
+
+
 def assert_within_limits(robot, tr):
     """Every limit at every sample of a trajectory, torques computed independently per sample with
     Robot.drivetrain_torques, with the sample's own ddq (the acceleration just after it) and with the previous

@@ -9,14 +9,13 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import IMPROV, TASKS
+from conftest import IMPROV, TASKS, boxes_around
 
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CollisionCuller, bounding_sphere, distance_field, pair_ends, pair_margins
-from robodesign.model.robot import Obstacle
 from robodesign.solvers.schedule import static_cell
 
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
@@ -35,14 +34,7 @@ def robot():
 
 
 def boxes(robot, seed, n=3):
-    rng = np.random.default_rng(seed)
-    out = []
-    for i in range(n):
-        T = np.eye(4)
-        T[:3, :3] = pin.exp3(rng.normal(0.0, 1.0, 3))
-        T[:3, 3] = robot.base_pose[:3, 3] + rng.uniform(-0.9, 0.9, 3)
-        out.append(Obstacle(f"box{i}", coal.Box(*rng.uniform(0.1, 0.4, 3)), T))
-    return out
+    return boxes_around(robot, seed, n)
 
 
 def request(req) -> tuple:

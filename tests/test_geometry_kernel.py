@@ -6,7 +6,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import IMPROV, TASKS
+from conftest import IMPROV, TASKS, boxes_around
 
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
@@ -40,18 +40,6 @@ def states(robot, n, seed):
     rng = np.random.default_rng(seed)
     Q = np.array([robot.random_configuration(rng) for _ in range(n)])
     return np.vstack([Q, Q[: n // 2] + rng.normal(0.0, 0.05, (n // 2, robot.dof))])
-
-
-def boxes_around(robot, seed, n=6):
-    """Boxes of 10–40 cm within 0.9 m of the base, at random orientations."""
-    rng = np.random.default_rng(seed)
-    out = []
-    for i in range(n):
-        T = np.eye(4)
-        T[:3, :3] = pin.exp3(rng.normal(0.0, 1.0, 3))
-        T[:3, 3] = robot.base_pose[:3, 3] + rng.uniform(-0.9, 0.9, 3)
-        out.append(Obstacle(f"box{i}", coal.Box(*rng.uniform(0.1, 0.4, 3)), T))
-    return out
 
 
 def check_cell(robot, Q):
