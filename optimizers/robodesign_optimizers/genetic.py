@@ -259,14 +259,13 @@ class GeneticOptimizer(Optimizer):
         return self.space.module_info(mid).kind
 
     def _dof(self, order: Sequence[str]) -> int:
-        dofs = self._dofs   # module ID → its DoF (space.module_info), asked once per module
-        try:
-            return sum(dofs[m] for m in order)
-        except KeyError:
-            for m in order:
-                if m not in dofs:
-                    dofs[m] = self.space.module_info(m).dof
-            return sum(dofs[m] for m in order)
+        dofs, total = self._dofs, 0   # module ID → its DoF (space.module_info), asked once per module
+        for m in order:
+            d = dofs.get(m)
+            if d is None:
+                d = dofs[m] = self.space.module_info(m).dof
+            total += d
+        return total
 
     def _dof_prefixes(self, order: Sequence[str]) -> List[int]:
         """[DoF of order[:k] for k = 0 … len(order)]."""

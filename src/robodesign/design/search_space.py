@@ -426,8 +426,8 @@ class SearchSpace:
         if not self.goals:
             return 0.0
         o_local, R = self._order_reach(order)
-        return beyond_reach(self._goal_rows(), R, self.base_bounds.pose(params) if pose is None else pose,
-                       np.append(o_local, 1.0))
+        T = self.base_bounds.pose(params) if pose is None else pose
+        return beyond_reach(self._goal_rows(), R, T, np.append(o_local, 1.0))
 
     def _goal_rows(self) -> Tuple[Tuple[float, float, float, float], ...]:
         """:meth:`_goal_array`'s rows as Python floats (:func:`~robodesign.design.base_bounds.beyond_reach`'s)."""
