@@ -10,7 +10,7 @@ MAX_FUNCTION_LINES = 80
 
 #: file (relative to src/robodesign) → (its lines today, why it is still that big)
 BIG_FILES = {
-    "design/optimize.py": (614, "the optimizer plugin API (options, budget, loading) and the Study loop; not split "
+    "design/optimize.py": (617, "the optimizer plugin API (options, budget, loading) and the Study loop; not split "
                                 "yet (design/ was being worked on elsewhere)"),
     "design/search_space.py": (731, "one SearchSpace class: validity, successors, enumeration, base sampling, cost "
                                     "and reach bounds (BaseBounds moved to design/base_bounds.py)"),

@@ -51,6 +51,7 @@ from typing import (
 import numpy as np
 
 from robodesign.core.errors import InputError
+from robodesign.core.gc_heap import startup_heap_frozen
 from robodesign.design.evaluator import Evaluation
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import BASE_PARAMS, Candidate, SearchSpace
@@ -426,11 +427,13 @@ class Study:
         self.storage = storage
         self.on_evaluation = on_evaluation
 
+    @startup_heap_frozen()
     def run(self) -> StudyResult:
         """Run the study until the budget ends or the optimizer is exhausted. With ``stop_on_interrupt``, a
         ``KeyboardInterrupt`` (Ctrl-C; the CLI turns SIGTERM into one) ends it too: the result then holds the
         evaluations told so far (``stopped == "interrupted"``); those stored are replayed by a resume, the
-        ones in flight are evaluated again."""
+        ones in flight are evaluated again. Meanwhile the garbage collector skips the objects that were alive
+        when it started (:mod:`robodesign.core.gc_heap`)."""
         t0 = self._start()
         try:
             if getattr(self.optimizer, "independent_asks", False) and hasattr(self.executor, "imap"):

@@ -47,6 +47,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Dict, List, Optional
 
 from robodesign.core.errors import InputError
+from robodesign.core.gc_heap import freeze_worker_heap
 from robodesign.design.evaluator import Evaluation, Evaluator, EvaluatorSpec
 from robodesign.design.search_space import Candidate
 from robodesign.design.solve import warm_up
@@ -85,6 +86,7 @@ def _init_worker(specs: Dict[str, EvaluatorSpec], parent_pid: Optional[int] = No
     _WORKER.clear()
     _WORKER.update(build_evaluators(specs))
     warm_up()  # the first candidates of this worker cost what the others do
+    freeze_worker_heap()  # (imports and evaluators: skipped by the collector from now on)
 
 
 def _evaluate_chunk(spec_id: str, candidates: List[Candidate]) -> List[Evaluation]:

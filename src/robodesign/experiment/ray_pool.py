@@ -10,6 +10,7 @@ from concurrent.futures import Future
 from typing import Dict, List, Optional
 
 from robodesign.core.errors import InputError
+from robodesign.core.gc_heap import freeze_worker_heap
 from robodesign.design.evaluator import Evaluation, EvaluatorSpec
 from robodesign.design.search_space import Candidate
 from robodesign.design.solve import warm_up
@@ -35,6 +36,7 @@ class EvaluatorActor:
             os.environ["ROBODESIGN_JIT"] = "wait" if jit else "0"
         self.evaluators = build_evaluators(specs)
         warm_up()  # as a process-pool worker: the first candidates cost what the others do
+        freeze_worker_heap()
 
     def evaluate_chunk(self, spec_id: str, candidates: List[Candidate]) -> List[Evaluation]:
         ev = self.evaluators[spec_id]
