@@ -32,6 +32,7 @@ import pinocchio as pin
 
 from robodesign.model import geometry_kernel
 from robodesign.model.batch_fk import batch_kinematics
+from robodesign.model.pair_scratch import PairScratch
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
 SLACK = 1e-4
@@ -247,6 +248,17 @@ def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
             np.array([b for _, b in pairs], dtype=np.int64).reshape(n))
 
 
+def pair_settings(robot) -> Tuple[np.ndarray, np.ndarray]:
+    """(security margins, active flags) of every collision pair of ``robot``: its own record
+    (``RobotGeometry.pair_requests``, which does not make the scratch space), else read from its scratch space."""
+    own = getattr(robot, "pair_requests", None)
+    if own is not None:
+        return own()
+    gd = robot.geom_data
+    n = len(gd.collisionRequests)
+    return pair_margins(robot, gd), np.fromiter(gd.activeCollisionPairs, dtype=bool, count=n)
+
+
 def pair_margins(robot, gd) -> np.ndarray:
     """The security margin of every collision request of ``gd``: the robot's record of the margins it set
     (``RobotGeometry.request_margins``, kept with the scratch space it set them on), else read request by
@@ -260,13 +272,13 @@ def pair_margins(robot, gd) -> np.ndarray:
 
 class CollisionCuller:
     """``robot.in_collision`` for many configurations: the pairs a bound clears are not asked (module docstring).
-    Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and
-    ``geom_data`` are the scratch space, as for ``in_collision``."""
+    Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and a
+    :class:`~robodesign.model.pair_scratch.PairScratch` of the pairs asked (``scratch``) are the scratch space."""
 
     def __init__(self, robot):
         self.robot = robot
         robot.joint_poses_batch(np.zeros((1, robot.dof)))   # NotImplementedError now for a joint it cannot batch
-        gm, gd = robot.geom_model, robot.geom_data
+        gm = robot.geom_model
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
         parent, centres, radii = [], [], []
@@ -280,9 +292,8 @@ class CollisionCuller:
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
         first, second = pair_ends(gm, n_robot)
-        margin = pair_margins(robot, gd)
+        margin, self.active = pair_settings(robot)
         self.n_pairs = len(first)
-        self.active = np.fromiter(gd.activeCollisionPairs, dtype=bool, count=self.n_pairs)
         selfp = (first < n_robot) & (second < n_robot)
         self.self_k = np.flatnonzero(selfp)
         self.self_a, self.self_b = first[self.self_k], second[self.self_k]
@@ -298,6 +309,7 @@ class CollisionCuller:
             geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
+        self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
         self._last_hit = -1                  # the pair collides found colliding last
 
@@ -337,21 +349,23 @@ class CollisionCuller:
         return out
 
     def collides(self, q: np.ndarray, pairs: Iterable) -> bool:
-        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it; the pair that collided
-        last is asked first: consecutive queries tend to share it)."""
+        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it, on ``scratch``; the pair
+        that collided last is asked first: consecutive queries tend to share it)."""
         r = self.robot
-        gm, gd = r.geom_model, r.geom_data
-        pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
         ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
         last = self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
+        sc = self.scratch
+        local = sc.pairs(ks)
+        gm, gd = sc.model, sc.data
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
         compute = pin.computeCollision
-        for i, k in enumerate(ks):
-            if compute(gm, gd, k):
+        for i, j in enumerate(local):
+            if compute(gm, gd, j):
                 self.narrow += i + 1
-                self._last_hit = k
+                self._last_hit = ks[i]
                 return True
         self.narrow += len(ks)
         return False
@@ -465,4 +479,4 @@ def culler_of(robot) -> CollisionCuller:
 
 
 __all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
-           "SLACK", "CELL", "pair_ends", "pair_margins"]
+           "SLACK", "CELL", "pair_ends", "pair_margins", "pair_settings"]
