@@ -62,7 +62,8 @@ def replay(robot, Q, rng):
         ks = rng.choice(n, size=int(rng.integers(1, 12)), replace=True).tolist()
         pin.updateGeometryPlacements(robot.model, robot.data, gm, gd, q)
         ref += [pin.computeCollision(gm, gd, k) for k in ks]
-        local = sc.pairs(ks)
+        sc.add(ks)
+        local = [sc.local[k] for k in ks]
         pin.updateGeometryPlacements(robot.model, data, sc.model, sc.data, q)
         got += [pin.computeCollision(sc.model, sc.data, j) for j in local]
         for g, i in sc._objects.items():
@@ -97,7 +98,9 @@ def test_new_requests_are_those_of_the_robots_scratch_space():
         gm, gd = robot.geom_model, robot.geom_data
         sc = PairScratch(gm, robot.request_margins(gd))
         ks = list(range(len(gm.collisionPairs)))[::-1]
-        local = sc.pairs(ks[:7]) + sc.pairs(ks)   # made in two steps: the first ones carried over
+        sc.add(ks[:7])
+        sc.add(ks)   # made in two steps: the first ones carried over
+        local = [sc.local[k] for k in ks[:7] + ks]
         assert local[:7] == local[7:14] == list(range(7)) and sorted(local[7:]) == list(range(len(ks)))
         for k, j in zip(ks, local[7:]):
             assert saved(sc.data.collisionRequests[j]) == saved(gd.collisionRequests[k])

@@ -357,15 +357,19 @@ class CollisionCuller:
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
-        sc = self.scratch
-        local = sc.pairs(ks)
-        gm, gd = sc.model, sc.data
-        pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
+        sc, q = self.scratch, np.asarray(q, dtype=float)
+        local, gm, gd = sc.local, sc.model, sc.data
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
         compute = pin.computeCollision
-        for i, j in enumerate(local):
+        for i, k in enumerate(ks):
+            j = local.get(k)
+            if j is None:   # a pair not asked before: it and the rest of this query's enter the scratch space
+                sc.add(ks[i:])
+                j, gd = local[k], sc.data
+                pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
             if compute(gm, gd, j):
                 self.narrow += i + 1
-                self._last_hit = ks[i]
+                self._last_hit = k
                 return True
         self.narrow += len(ks)
         return False

@@ -12,7 +12,7 @@ with the same fields.
 """
 from __future__ import annotations
 
-from typing import Dict, List
+from typing import Any, Dict, List
 
 import numpy as np
 import pinocchio as pin
@@ -31,14 +31,11 @@ class PairScratch:
         self.local: Dict[int, int] = {}
         self._objects: Dict[int, int] = {}   # robot geometry object → its index in model
 
-    def pairs(self, ks: List[int]) -> List[int]:
-        """The indices in ``model`` of the robot pairs ``ks`` (those not asked before added first)."""
-        local = self.local
-        try:
-            return [local[k] for k in ks]
-        except KeyError:
-            self._add([k for k in dict.fromkeys(ks) if k not in local])
-            return [local[k] for k in ks]
+    def add(self, ks: List[int]) -> None:
+        """Add the robot pairs ``ks`` not asked before (``local`` then holds every one)."""
+        new = [k for k in dict.fromkeys(ks) if k not in self.local]
+        if new:
+            self._add(new)
 
     def _object(self, g: int) -> int:
         """The index in ``model`` of robot geometry object ``g`` (added on first use)."""
@@ -57,14 +54,18 @@ class PairScratch:
             self.local[k] = len(self.local)
         old = self.data.collisionRequests
         data = pin.GeometryData(self.model)
-        fresh = data.collisionRequests
-        out = type(fresh)()
+        out = type(old)()
         out.extend(old)
+        made: Dict[float, Any] = {}   # security margin → a request made for it, alone in a vector (then copied)
         for k in new:
-            out.append(fresh[len(out)])
-            req = out[len(out) - 1]
-            req.enable_contact = True
-            req.security_margin = float(self.margins[k])
+            m = float(self.margins[k])
+            one = made.get(m)
+            if one is None:
+                one = made[m] = type(old)()
+                one.append(data.collisionRequests[0])
+                one[0].enable_contact = True
+                one[0].security_margin = m
+            out.append(one[0])
         data.collisionRequests = out
         self.data = data
 
