@@ -7,8 +7,9 @@ collides. :class:`CollisionCuller` gives the same verdict per state, asking coal
 ``pin.computeCollision`` of the same pair on the same placements) only about the pairs that a lower bound of
 their distance does not clear:
 
-* every robot geometry is bounded by a sphere (its local AABB's centre and half diagonal, plus coal's swept-
-  sphere radius), its centre from the joint poses of the state;
+* every robot geometry is bounded by a sphere (:func:`tight_sphere`: the shape's own circumscribed sphere where its
+  type gives one, else its local AABB's centre and half diagonal; plus coal's swept-sphere radius), its centre from
+  the joint poses of the state;
 * a self pair is cleared when its spheres lie farther apart than the pair's security margin;
 * a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin: first by the
   distance to the obstacle's box (its local AABB in its frame, which contains it: the exact distance for a box),
@@ -56,7 +57,30 @@ def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + swept
 
 
+def _tight_sphere(shape) -> Tuple[np.ndarray, float]:
+    """A sphere containing ``shape`` (centre in its frame, radius), as tight as the shape's type tells: a sphere's
+    own; about the centre of a cylinder, cone or capsule (coal's, on their z axis) the farthest point of its rims or
+    caps; a convex polytope's farthest vertex from its box's centre; for any other shape :func:`_bounding_sphere`'s.
+    Never larger than that one; coal's swept-sphere radius added."""
+    c, r = _bounding_sphere(shape)
+    swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
+    kind, origin = type(shape).__name__, np.zeros(3)
+    if kind == "Sphere":
+        centre, own = origin, float(shape.radius)
+    elif kind in ("Cylinder", "Cone"):
+        centre, own = origin, float(np.hypot(shape.radius, shape.halfLength))
+    elif kind == "Capsule":
+        centre, own = origin, float(shape.radius) + float(shape.halfLength)
+    elif kind.startswith("Convex") and shape.num_points:
+        P = np.asarray(shape.points(), dtype=float).reshape(-1, 3)
+        centre, own = c, float(np.sqrt(((P - c) ** 2).sum(axis=1).max()))
+    else:
+        return c, r
+    return (centre, own + swept) if own + swept < r else (c, r)
+
+
 _SPHERES: Dict[int, Tuple[object, np.ndarray, float]] = {}   # id(shape) → (shape, centre, radius)
+_TIGHT: Dict[int, Tuple[object, np.ndarray, float]] = {}     # id(shape) → (shape, centre, radius): _tight_sphere
 
 
 def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
@@ -65,6 +89,14 @@ def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
     hit = _SPHERES.get(id(shape))
     if hit is None or hit[0] is not shape:
         hit = _SPHERES[id(shape)] = (shape, *_bounding_sphere(shape))   # (the shape is held: its id is not reused)
+    return hit[1], hit[2]
+
+
+def tight_sphere(shape) -> Tuple[np.ndarray, float]:
+    """:func:`_tight_sphere` of a robot shape, kept per shape object (as :func:`bounding_sphere`)."""
+    hit = _TIGHT.get(id(shape))
+    if hit is None or hit[0] is not shape:
+        hit = _TIGHT[id(shape)] = (shape, *_tight_sphere(shape))
     return hit[1], hit[2]
 
 
@@ -283,7 +315,7 @@ class CollisionCuller:
         n_robot = robot.n_collision_geometries
         parent, centres, radii = [], [], []
         for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
-            c, r = bounding_sphere(o.geometry)
+            c, r = tight_sphere(o.geometry)
             P = o.placement
             centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
             radii.append(r)
@@ -482,5 +514,5 @@ def culler_of(robot) -> CollisionCuller:
     return c
 
 
-__all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
+__all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "tight_sphere", "culler_of", "distance_field", "ObstacleBounds",
            "SLACK", "CELL", "pair_ends", "pair_margins", "pair_settings"]
