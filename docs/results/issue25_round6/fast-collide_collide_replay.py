@@ -1,10 +1,11 @@
-"""Issue 25 round 6 (fast-collide): the genetic search's in_collision queries on bpo2024 oven_hard_s0_0001 (200
-evaluations, seed 0; 62 robots, 4891 queries; recorded once with ``--record`` into a pickle), replayed on fresh robots
+"""Issue 25 round 6 (fast-collide): the genetic search's in_collision queries on a generated task (``--task``, default
+bpo2024 oven_hard_s0_0001: 62 robots, 4891 queries; whitman2020's ``..._0001``; 200 evaluations, seed 0; recorded once
+with ``--record`` into a pickle), replayed on fresh robots
 of a checkout: the process CPU time of all the queries of each robot summed (everything the queries make on first
 use included: the coal geometry model, the scratch space, the culler), the robot's build excluded. Prints the CPU
 ms per round and a hash of every verdict.
 
-    python fast-collide_collide_replay.py --src CHECKOUT --cases cases.pkl [--rounds 3] [--record]
+    python fast-collide_collide_replay.py --src CHECKOUT --cases cases.pkl [--task T] [--rounds 3] [--record]
 """
 import argparse
 import hashlib
@@ -17,6 +18,7 @@ ap.add_argument("--src", required=True)
 ap.add_argument("--cases", required=True)
 ap.add_argument("--rounds", type=int, default=3)
 ap.add_argument("--record", action="store_true")
+ap.add_argument("--task", default="oven_hard", help="a substring of the generated task's name (bpo2024 or whitman2020)")
 args = ap.parse_args()
 sys.path.insert(0, args.src + "/src")
 sys.path.insert(0, "/work/main/experiments")
@@ -30,7 +32,8 @@ from robodesign.model.robot import Robot  # noqa: E402
 
 warm_up()
 geometry_kernel.warm_up()
-task = next(f for f in family_tasks("bpo2024", 2, 0) if "oven_hard" in f.name)
+family = "whitman2020_g5o5" if "whitman" in args.task else "bpo2024"
+task = next(f for f in family_tasks(family, 2, 0) if args.task in f.name)
 problem = Problem.build(task, "robodesign_arm", "cyc")
 if args.record:
     from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings

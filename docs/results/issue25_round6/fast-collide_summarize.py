@@ -103,13 +103,16 @@ if pe:
     print("## profile_evaluator (--only good,whitman2020_g5o5,bpo2024 --feasible 20 --failing 30 --tasks 1)")
     table(pe)
 
-cr = defaultdict(lambda: defaultdict(dict))
-if present("collide_replay"):
-    for r, s, text in runs("collide_replay"):
+for name, what in (("collide_replay", "oven_hard: 62 robots, 4891 queries"),
+                   ("whitman_collide_replay", "whitman2020 _0001: 56 robots, 12278 queries")):
+    if not present(name):
+        continue
+    cr: dict = defaultdict(lambda: defaultdict(dict))
+    for r, s, text in runs(name):
         cpu = [float(x) for x in re.findall(r"in_collision cpu ([0-9.]+) ms", text)]
         cr[s]["in_collision cpu ms (median of the run's 3)"][r] = statistics.median(cpu)
         for h in re.findall(r"verdict hash (\w+)", text):
-            hashes["collide " + Path(s).name].add(h)
-    print("## the search's collision queries replayed (fast-collide_collide_replay.py, 62 robots, 4891 queries)")
+            hashes[name + " " + Path(s).name].add(h)
+    print(f"## the search's collision queries replayed (fast-collide_collide_replay.py, {what})")
     table(cr)
-    print("  hashes:", {s: sorted(h) for s, h in hashes.items() if s.startswith("collide")})
+    print("  hashes:", {s: sorted(h) for s, h in hashes.items() if s.startswith(name)})
