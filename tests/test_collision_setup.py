@@ -15,7 +15,7 @@ from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
-from robodesign.model.collision_cull import CollisionCuller, bounding_sphere, distance_field, pair_ends, pair_margins
+from robodesign.model.collision_cull import CollisionCuller, distance_field, pair_ends, pair_margins, tight_sphere
 from robodesign.solvers.schedule import static_cell
 
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
@@ -119,7 +119,7 @@ def reference_culler(robot) -> dict:
         if a < n_robot <= b:
             by_ob.setdefault(b, []).append(k)
     objs = gm.geometryObjects
-    spheres = [bounding_sphere(objs[i].geometry) for i in range(n_robot)]
+    spheres = [tight_sphere(objs[i].geometry) for i in range(n_robot)]
     local = [np.asarray(objs[i].placement.rotation) @ c + np.asarray(objs[i].placement.translation) for i, (c, _) in
              enumerate(spheres)]
     return {"parent": [int(objs[i].parentJoint) for i in range(n_robot)], "local": np.array(local),

@@ -15,7 +15,6 @@ from robodesign.model import collision_cull, geometry_kernel
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CELL, DistanceField, distance_field
 from robodesign.model.robot import Obstacle
-from robodesign.model.robot_geometry import _CULL_AFTER
 from robodesign.solvers.schedule import static_cell
 
 pytestmark = pytest.mark.skipif(not geometry_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
@@ -108,17 +107,17 @@ def test_several_gridded_obstacles_share_one_grid_array(robot, monkeypatch):
             assert np.array_equal(grid[o:o + len(f.values)], f.values, equal_nan=True)   # filled in both
         assert np.isfinite(grid).sum() > 0
         robot.set_base_pose(robot.base_pose)
-        for q in Q[:_CULL_AFTER + 1]:
+        for q in Q[:1]:
             robot.in_collision(q)
         args2, _ = robot._culler._one
-        assert all(geometry_kernel.survivors(q, *args2)[1] == 0 for q in Q[_CULL_AFTER:])   # (the culled ones)
+        assert all(geometry_kernel.survivors(q, *args2)[1] == 0 for q in Q[1:])   # (the culled ones)
     finally:
         robot.set_obstacles(obstacles, safety_margin=margin)
 
 
 def test_the_robot_forgets_its_culler_when_its_geometry_changes(robot):
     Q = states(robot, 40, 6)
-    for q in Q[:_CULL_AFTER + 1]:
+    for q in Q[:1]:
         robot.in_collision(q)
     assert robot._culler is not None
     free = next(q for q in Q if not coal_verdict(robot, q))
@@ -130,7 +129,7 @@ def test_the_robot_forgets_its_culler_when_its_geometry_changes(robot):
         away[:3, 3] = 50.0
         box = Obstacle("box", coal.Box(0.2, 0.2, 0.2), away)
         robot.set_obstacles([*obstacles, box], robot.safety_margin)
-        for q in Q[:_CULL_AFTER + 1]:
+        for q in Q[:1]:
             robot.in_collision(q)
         assert robot._culler is not None
         assert not robot.in_collision(free) and not coal_verdict(robot, free)
@@ -139,7 +138,7 @@ def test_the_robot_forgets_its_culler_when_its_geometry_changes(robot):
         assert robot.in_collision(free) and coal_verdict(robot, free)
         # the base moved 10 m away from the machine: no obstacle contact is left for the same states
         robot.set_obstacles(obstacles, robot.safety_margin)
-        for q in Q[:_CULL_AFTER + 1]:
+        for q in Q[:1]:
             robot.in_collision(q)
         far = T.copy()
         far[:3, 3] += (10.0, 0.0, 0.0)
@@ -186,13 +185,14 @@ def test_box_bound_is_coal_distance_for_a_box():
 def test_unknown_cells_are_filled_for_the_next_queries(robot):
     robot.set_base_pose(robot.base_pose)        # a fresh culler
     Q = states(robot, 60, 12)
-    for q in Q[:_CULL_AFTER + 1]:
+    for q in Q[:1]:
         robot.in_collision(q)
     args, _ = robot._culler._one
     for q in Q:
         robot.in_collision(q)
         n, nu = geometry_kernel.survivors(q, *args)
         assert nu == 0                            # the cells this state asked about are known now
+        pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, robot.geom_data, q)
         assert set(args[-2][:n].tolist()) >= {k for k in range(len(robot.geom_model.collisionPairs))
                                             if pin.computeCollision(robot.geom_model, robot.geom_data, k)}
 

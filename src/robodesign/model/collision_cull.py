@@ -7,8 +7,9 @@ collides. :class:`CollisionCuller` gives the same verdict per state, asking coal
 ``pin.computeCollision`` of the same pair on the same placements) only about the pairs that a lower bound of
 their distance does not clear:
 
-* every robot geometry is bounded by a sphere (its local AABB's centre and half diagonal, plus coal's swept-
-  sphere radius), its centre from the joint poses of the state;
+* every robot geometry is bounded by a sphere (:func:`tight_sphere`: the shape's own circumscribed sphere where its
+  type gives one, else its local AABB's centre and half diagonal; plus coal's swept-sphere radius), its centre from
+  the joint poses of the state;
 * a self pair is cleared when its spheres lie farther apart than the pair's security margin;
 * a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin: first by the
   distance to the obstacle's box (its local AABB in its frame, which contains it: the exact distance for a box),
@@ -32,6 +33,7 @@ import pinocchio as pin
 
 from robodesign.model import geometry_kernel
 from robodesign.model.batch_fk import batch_kinematics
+from robodesign.model.pair_scratch import PairScratch
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
 SLACK = 1e-4
@@ -55,7 +57,30 @@ def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
     return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + swept
 
 
+def _tight_sphere(shape) -> Tuple[np.ndarray, float]:
+    """A sphere containing ``shape`` (centre in its frame, radius), as tight as the shape's type tells: a sphere's
+    own; about the centre of a cylinder, cone or capsule (coal's, on their z axis) the farthest point of its rims or
+    caps; a convex polytope's farthest vertex from its box's centre; for any other shape :func:`_bounding_sphere`'s.
+    Never larger than that one; coal's swept-sphere radius added."""
+    c, r = _bounding_sphere(shape)
+    swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
+    kind, origin = type(shape).__name__, np.zeros(3)
+    if kind == "Sphere":
+        centre, own = origin, float(shape.radius)
+    elif kind in ("Cylinder", "Cone"):
+        centre, own = origin, float(np.hypot(shape.radius, shape.halfLength))
+    elif kind == "Capsule":
+        centre, own = origin, float(shape.radius) + float(shape.halfLength)
+    elif kind.startswith("Convex") and shape.num_points:
+        P = np.asarray(shape.points(), dtype=float).reshape(-1, 3)
+        centre, own = c, float(np.sqrt(((P - c) ** 2).sum(axis=1).max()))
+    else:
+        return c, r
+    return (centre, own + swept) if own + swept < r else (c, r)
+
+
 _SPHERES: Dict[int, Tuple[object, np.ndarray, float]] = {}   # id(shape) → (shape, centre, radius)
+_TIGHT: Dict[int, Tuple[object, np.ndarray, float]] = {}     # id(shape) → (shape, centre, radius): _tight_sphere
 
 
 def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
@@ -64,6 +89,14 @@ def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
     hit = _SPHERES.get(id(shape))
     if hit is None or hit[0] is not shape:
         hit = _SPHERES[id(shape)] = (shape, *_bounding_sphere(shape))   # (the shape is held: its id is not reused)
+    return hit[1], hit[2]
+
+
+def tight_sphere(shape) -> Tuple[np.ndarray, float]:
+    """:func:`_tight_sphere` of a robot shape, kept per shape object (as :func:`bounding_sphere`)."""
+    hit = _TIGHT.get(id(shape))
+    if hit is None or hit[0] is not shape:
+        hit = _TIGHT[id(shape)] = (shape, *_tight_sphere(shape))
     return hit[1], hit[2]
 
 
@@ -247,6 +280,17 @@ def pair_ends(gm, n_robot: int) -> Tuple[np.ndarray, np.ndarray]:
             np.array([b for _, b in pairs], dtype=np.int64).reshape(n))
 
 
+def pair_settings(robot) -> Tuple[np.ndarray, np.ndarray]:
+    """(security margins, active flags) of every collision pair of ``robot``: its own record
+    (``RobotGeometry.pair_requests``, which does not make the scratch space), else read from its scratch space."""
+    own = getattr(robot, "pair_requests", None)
+    if own is not None:
+        return own()
+    gd = robot.geom_data
+    n = len(gd.collisionRequests)
+    return pair_margins(robot, gd), np.fromiter(gd.activeCollisionPairs, dtype=bool, count=n)
+
+
 def pair_margins(robot, gd) -> np.ndarray:
     """The security margin of every collision request of ``gd``: the robot's record of the margins it set
     (``RobotGeometry.request_margins``, kept with the scratch space it set them on), else read request by
@@ -260,18 +304,18 @@ def pair_margins(robot, gd) -> np.ndarray:
 
 class CollisionCuller:
     """``robot.in_collision`` for many configurations: the pairs a bound clears are not asked (module docstring).
-    Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and
-    ``geom_data`` are the scratch space, as for ``in_collision``."""
+    Built for the robot's current geometry (base pose, obstacles, margins); the robot's own ``data`` and a
+    :class:`~robodesign.model.pair_scratch.PairScratch` of the pairs asked (``scratch``) are the scratch space."""
 
     def __init__(self, robot):
         self.robot = robot
         robot.joint_poses_batch(np.zeros((1, robot.dof)))   # NotImplementedError now for a joint it cannot batch
-        gm, gd = robot.geom_model, robot.geom_data
+        gm = robot.geom_model
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
         parent, centres, radii = [], [], []
         for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
-            c, r = bounding_sphere(o.geometry)
+            c, r = tight_sphere(o.geometry)
             P = o.placement
             centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
             radii.append(r)
@@ -280,9 +324,8 @@ class CollisionCuller:
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
         first, second = pair_ends(gm, n_robot)
-        margin = pair_margins(robot, gd)
+        margin, self.active = pair_settings(robot)
         self.n_pairs = len(first)
-        self.active = np.fromiter(gd.activeCollisionPairs, dtype=bool, count=self.n_pairs)
         selfp = (first < n_robot) & (second < n_robot)
         self.self_k = np.flatnonzero(selfp)
         self.self_a, self.self_b = first[self.self_k], second[self.self_k]
@@ -298,6 +341,7 @@ class CollisionCuller:
             geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
+        self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
         self._last_hit = -1                  # the pair collides found colliding last
 
@@ -337,19 +381,25 @@ class CollisionCuller:
         return out
 
     def collides(self, q: np.ndarray, pairs: Iterable) -> bool:
-        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it; the pair that collided
-        last is asked first: consecutive queries tend to share it)."""
+        """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it, on ``scratch``; the pair
+        that collided last is asked first: consecutive queries tend to share it)."""
         r = self.robot
-        gm, gd = r.geom_model, r.geom_data
-        pin.updateGeometryPlacements(r.model, r.data, gm, gd, np.asarray(q, dtype=float))
         ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
         last = self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
+        sc, q = self.scratch, np.asarray(q, dtype=float)
+        local, gm, gd = sc.local, sc.model, sc.data
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
         compute = pin.computeCollision
         for i, k in enumerate(ks):
-            if compute(gm, gd, k):
+            j = local.get(k)
+            if j is None:   # a pair not asked before: it and the rest of this query's enter the scratch space
+                sc.add(ks[i:])
+                j, gd = local[k], sc.data
+                pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+            if compute(gm, gd, j):
                 self.narrow += i + 1
                 self._last_hit = k
                 return True
@@ -464,5 +514,5 @@ def culler_of(robot) -> CollisionCuller:
     return c
 
 
-__all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "culler_of", "distance_field", "ObstacleBounds",
-           "SLACK", "CELL", "pair_ends", "pair_margins"]
+__all__ = ["CollisionCuller", "DistanceField", "bounding_sphere", "tight_sphere", "culler_of", "distance_field", "ObstacleBounds",
+           "SLACK", "CELL", "pair_ends", "pair_margins", "pair_settings"]

@@ -110,7 +110,7 @@ class RobotGeometry:
     def _geometry_changed(self) -> None:
         """Forget the collision culler (built for the geometry before the change)."""
         self._culler: Optional[Any] = None   # model.collision_cull.CollisionCuller of the current geometry
-        self._plain_queries = 0              # in_collision queries asked of every pair since the change
+        self._plain_queries = 0              # in_collision queries asked of every pair (< 0: while waiting)
 
     def _geometry_object(self, k: int) -> "pin.GeometryObject":
         """Robot object ``k`` as the geometry holds it (one fixed to the world at the base pose)."""
@@ -168,7 +168,6 @@ class RobotGeometry:
         gd = self._geom_data
         if gd is None:
             gd = self._geom_data = pin.GeometryData(self.geom_model)
-            self._geometry_changed()
             self._apply_margins(gd)
             probe, self._base_probe = self._base_probe, None
             if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
@@ -184,22 +183,38 @@ class RobotGeometry:
         cylinder's end face); with contacts it runs EPA and is exact. A new scratch space's requests are all alike:
         two copies of its first one, set so, make the whole vector at once (C++ copies)."""
         reqs = gd.collisionRequests
-        n, ns = len(reqs), min(self._n_self_pairs, len(reqs))
-        margin = getattr(self, "safety_margin", 0.0)
+        m = self._request_margins(len(reqs))
+        n, ns = len(m), min(self._n_self_pairs, len(m))
         if n:
             vec = type(reqs)
             own, other, out = vec(), vec(), vec()
             own.append(reqs[0])
             own[0].enable_contact = True
             other.append(own[0])
-            other[0].security_margin = margin
+            other[0].security_margin = float(m[n - 1])
             out.extend([own[0]] * ns + [other[0]] * (n - ns))
             gd.collisionRequests = out
-            m = np.full(n, float(other[0].security_margin))
-            m[:ns] = own[0].security_margin
-        else:
-            m = np.zeros(0)
         self._margins_set = (gd, m)
+
+    def _request_margins(self, n: int) -> np.ndarray:
+        """The security margins of the ``n`` collision requests as :meth:`_apply_margins` sets them: coal's default
+        (0) on the self pairs, the safety margin on the robot–obstacle pairs."""
+        m = np.full(n, float(getattr(self, "safety_margin", 0.0)))
+        m[:min(self._n_self_pairs, n)] = 0.0
+        return m
+
+    def pair_requests(self) -> Tuple[np.ndarray, np.ndarray]:
+        """(security margins, active flags) of every collision pair: those of the scratch space, or, before it is
+        made, those it will have (:meth:`_request_margins`; pinocchio makes every pair active). What
+        :class:`~robodesign.model.collision_cull.CollisionCuller` bounds with, without making the scratch space."""
+        gd = self._geom_data
+        if gd is None:
+            n = len(self.geom_model.collisionPairs)
+            return self._request_margins(n), np.ones(n, dtype=bool)
+        m = self.request_margins(gd)
+        if m is None:
+            m = np.array([req.security_margin for req in gd.collisionRequests], dtype=float)
+        return m, np.fromiter(gd.activeCollisionPairs, dtype=bool, count=len(m))
 
     def request_margins(self, gd) -> Optional[np.ndarray]:
         """The security margins of ``gd``'s collision requests as :meth:`_apply_margins` set them (None for another
@@ -234,13 +249,13 @@ class RobotGeometry:
         return bool(self._check_pairs(0, self._n_self_pairs))
 
     def in_collision(self, q) -> bool:
-        """Self-collision or contact with an obstacle (within the safety margin). After :data:`_CULL_AFTER`
-        queries on the same geometry, coal is asked only about the pairs that the compiled bounds of
-        :class:`~robodesign.model.collision_cull.CollisionCuller` do not clear (the same verdicts)."""
+        """Self-collision or contact with an obstacle (within the safety margin). coal is asked only about the
+        pairs that the compiled bounds of :class:`~robodesign.model.collision_cull.CollisionCuller` do not clear
+        (the same verdicts); about every pair while the compiled kernel is not ready."""
         culler = self._culler
         if culler is None:
             self._plain_queries += 1
-            if self._plain_queries < _CULL_AFTER or (culler := self._single_culler()) is None:
+            if self._plain_queries <= 0 or (culler := self._single_culler()) is None:
                 return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q),
                                                   True))
         return bool(culler.in_collision(self._q(q)))
@@ -331,8 +346,6 @@ class RobotGeometry:
         return float(s), float(o)
 
 
-#: in_collision queries on one geometry before the culled path takes over (its set-up costs ~a few queries)
-_CULL_AFTER = 12
 _CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
