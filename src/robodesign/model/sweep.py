@@ -349,12 +349,12 @@ def _cached_setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Op
     return hit[1]
 
 
-def self_pair_arms(robot: Robot) -> np.ndarray:
-    """(dof, self-collision pairs) the static bounds W of :class:`SweepChecker` for the robot's self pairs (column
-    k: collision pair k): the distance of a self pair changes by at most ``|q' − q| · W[:, k]`` between any two
-    configurations q and q' (along the straight segment between them, every point of one body moves by at most
-    that relative to the other)."""
-    return _cached_setup(robot, True, False, None, True, False)["W"]
+def pair_arms(robot: Robot) -> np.ndarray:
+    """(dof, collision pairs) the static bounds W of :class:`SweepChecker` for every collision pair of the robot
+    (column k: collision pair k): the distance of pair k changes by at most ``|q' − q| · W[:, k]`` between any two
+    configurations q and q' (along the straight segment between them, every point of one body moves by at most that
+    relative to the other; an obstacle stands still)."""
+    return _cached_setup(robot, True, True, None, True, False)["W"]
 
 
 class SweepChecker:

@@ -66,7 +66,7 @@ from robodesign.model.collision_cull import culler_of, pair_margins
 from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
-from robodesign.solvers.self_certificates import SelfCertificates
+from robodesign.solvers.pair_certificates import PairCertificates
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -195,8 +195,8 @@ class _Memoized:
 
     :meth:`first_invalid` decides many states (a segment's) at once with the same verdicts: the torque tests
     per state, the collision queries through :class:`~robodesign.model.collision_cull.CollisionCuller`
-    (coal asked only about the pairs its bounds do not clear, less the self pairs a distance computed at another
-    state proves free: :mod:`~robodesign.solvers.self_certificates`) when ``robot`` is given and ``valid`` came
+    (coal asked only about the pairs its bounds do not clear, less the pairs a distance computed at another
+    state proves free: :mod:`~robodesign.solvers.pair_certificates`) when ``robot`` is given and ``valid`` came
     from :func:`_config_validator`."""
 
     def __init__(self, valid: Callable[[np.ndarray], bool], robot=None):
@@ -206,7 +206,7 @@ class _Memoized:
         self.static_ok = getattr(valid, "static_ok", None)
         self.robot = robot if self.static_ok is not None else None
         self._culler = None
-        self.certificates: Optional[SelfCertificates] = None   # (with the culler, for a Robot)
+        self.certificates: Optional[PairCertificates] = None   # (with the culler, for a Robot)
 
     def __call__(self, q: np.ndarray) -> bool:
         self.lookups += 1
@@ -224,7 +224,7 @@ class _Memoized:
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
                 self.robot = None
             if isinstance(self.robot, Robot):
-                self.certificates = SelfCertificates(self.robot, pair_margins(self.robot, self.robot.geom_data))
+                self.certificates = PairCertificates(self.robot, pair_margins(self.robot, self.robot.geom_data))
         return self._culler
 
     def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None,

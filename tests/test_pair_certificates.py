@@ -1,19 +1,20 @@
-"""solvers/self_certificates.py: a self pair's distance at one configuration proves it free at others, and the
-planner's segment checks with these certificates give every state coal's own verdict (random IMPROV arms in the
-PTP_3 cell, seeded)."""
+"""solvers/pair_certificates.py: a pair's distance at one configuration proves it free at others, and the planner's
+segment checks with these certificates give every state coal's own verdict (random IMPROV arms in the PTP_3 cell,
+with its mesh, and among random boxes; seeded)."""
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import IMPROV, TASKS
+from conftest import IMPROV, TASKS, boxes_around
 
 from robodesign.design.problem import Problem
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
 from robodesign.model.cell import build_robot
-from robodesign.model.sweep import self_pair_arms
+from robodesign.model.robot import Robot
+from robodesign.model.sweep import pair_arms
 from robodesign.solvers import planning
-from robodesign.solvers.self_certificates import SLACK
+from robodesign.solvers.pair_certificates import SLACK
 from robodesign.solvers.schedule import static_cell
 
 
@@ -26,7 +27,13 @@ def robots():
     space = Problem.build(TASKS / "simple" / "PTP_3.json", IMPROV, "cyc").space
     rng = np.random.default_rng(11)
     orders = [space.random_order(rng) for _ in range(8)] + [("1", "21", "4", "22", "5", "23", "12")]
-    return [build_robot(static_cell(task), ms, Assembly.from_order(ms, o), task.nominal_base_pose) for o in orders]
+    cell = [build_robot(static_cell(task), ms, Assembly.from_order(ms, o), task.nominal_base_pose) for o in orders]
+    boxed = []
+    for i, o in enumerate(orders[:5]):
+        r = Robot.from_order(ms, list(o))
+        r.set_obstacles(boxes_around(r, 20 + i, n=8))
+        boxed.append(r)
+    return cell + boxed
 
 
 def coal_verdict(robot, q) -> bool:
@@ -34,25 +41,25 @@ def coal_verdict(robot, q) -> bool:
     return bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
 
 
-def self_distances(robot, q) -> np.ndarray:
-    """coal's distance of every self pair at ``q``."""
+def distances(robot, q) -> np.ndarray:
+    """coal's distance of every collision pair at ``q``."""
     gm, gd = robot.geom_model, robot.geom_data
     pin.updateGeometryPlacements(robot.model, robot.data, gm, gd, q)
-    return np.array([pin.computeDistance(gm, gd, k).min_distance for k in range(robot.n_self_collision_pairs)])
+    return np.array([pin.computeDistance(gm, gd, k).min_distance for k in range(len(gm.collisionPairs))])
 
 
 def test_a_distance_bounds_the_distance_elsewhere(robots):
-    """d(q) ≥ d(a) − |q − a|·W for every self pair, at random pairs of configurations near and far apart, up to
+    """d(q) ≥ d(a) − |q − a|·W for every pair (self and with a box), at random pairs of configurations near and far apart, up to
     coal's own distance error (GJK's tolerance, ~1e-6 m; a cylinder turning about its axis: W 0, distances that
     differ by some 1e-7 m), far below the certificates' SLACK."""
     rng = np.random.default_rng(3)
     checked, worst = 0, 0.0
     for robot in robots:
-        W = self_pair_arms(robot)
-        for _ in range(25):
+        W = pair_arms(robot)
+        for _ in range(12):
             a = robot.random_configuration(rng)
             q = a + rng.normal(0.0, rng.choice([0.01, 0.1, 1.0]), robot.dof)
-            da, dq = self_distances(robot, a), self_distances(robot, q)
+            da, dq = distances(robot, a), distances(robot, q)
             bound = da - np.abs(q - a) @ W
             ok = np.isfinite(da) & (da > 0)
             worst = max(worst, float(np.max(bound[ok] - dq[ok], initial=0.0)))
@@ -65,7 +72,7 @@ def test_segment_verdicts_are_coals(robots):
     """first_invalid with the certificates: the first invalid state and every state's verdict those of coal asked
     about every pair, on random segments (many passing through self-collisions), with far fewer collision tests."""
     rng = np.random.default_rng(7)
-    used = asked = 0
+    used = asked = boxes = 0
     for robot in robots:
         valid = planning._Memoized(planning._config_validator(robot), robot)
         for _ in range(12):
@@ -81,26 +88,29 @@ def test_segment_verdicts_are_coals(robots):
             for q, v in zip(Q[:first if first >= 0 else n], ref):
                 assert valid.memo[q.tobytes()] == v
             asked += n
-        assert valid.certificates is not None
-        used += valid.certificates.count
+        certs = valid.certificates
+        assert certs is not None
+        used += certs.count
+        boxes += int(np.isfinite(certs.free[:, robot.n_self_collision_pairs:]).sum())
     assert 0 < used < asked / 4
+    assert boxes > 0   # pairs with a box certified too
 
 
 def test_certified_states_leave_the_slack(robots):
-    """A state the certificates clear for a self pair has that pair farther apart than its margin + SLACK."""
+    """A state the certificates clear for a pair has that pair farther apart than its margin + SLACK."""
     rng = np.random.default_rng(9)
-    robot = robots[-1]
+    robot = robots[8]
     valid = planning._Memoized(planning._config_validator(robot), robot)
     valid.culler()
     certs = valid.certificates
     a = robot.random_configuration(rng)
     Q = a + rng.normal(0.0, 0.02, (200, robot.dof))
     S = np.zeros((len(Q), len(robot.geom_model.collisionPairs)), dtype=bool)
-    S[:, :certs.n_self] = True
+    S[:, certs.certified] = True
     P = certs.pending(Q, S)
     for j in range(len(Q)):
         left = set(certs.ask(P, Q, j))
-        d = self_distances(robot, Q[j])
-        cleared = [k for k in range(certs.n_self) if k not in left]
+        d = distances(robot, Q[j])
+        cleared = [k for k in np.flatnonzero(certs.certified) if k not in left]
         assert np.all(d[cleared] - certs.margin[cleared] > SLACK)
     assert certs.count < len(Q) / 4
