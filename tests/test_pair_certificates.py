@@ -114,3 +114,21 @@ def test_certified_states_leave_the_slack(robots):
         cleared = [k for k in np.flatnonzero(certs.certified) if k not in left]
         assert np.all(d[cleared] - certs.margin[cleared] > SLACK)
     assert certs.count < len(Q) / 4
+
+
+def test_which_pairs_get_certificates(robots):
+    """An IMPROV arm (convex meshes): every pair but those with the CNC machine's triangle mesh; a built-in arm
+    (cylinders and spheres only): none."""
+    from robodesign.solvers.pair_certificates import certified_pairs
+    for robot in (robots[8], robots[9]):
+        gm = robot.geom_model
+        kinds = [type(o.geometry).__name__ for o in gm.geometryObjects]
+        mesh = np.array(["BVHModelOBBRSS" in (kinds[cp.first], kinds[cp.second]) for cp in gm.collisionPairs])
+        assert np.array_equal(certified_pairs(gm), ~mesh)
+    assert certified_pairs(robots[8].geom_model)[:robots[8].n_self_collision_pairs].all()
+    assert certified_pairs(robots[9].geom_model)[robots[9].n_self_collision_pairs:].all()   # (the boxes)
+    space = Problem.build(TASKS / "simple" / "PTP_3.json", "robodesign_arm", "cyc").space
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        builtin = Robot.from_order(load_module_set("robodesign_arm"), list(space.random_order(rng)))
+        assert not certified_pairs(builtin.geom_model).any()

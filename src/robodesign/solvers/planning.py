@@ -62,7 +62,7 @@ from typing import Callable, Dict, List, Optional, Sequence, Tuple, cast
 import numpy as np
 
 from robodesign.core.errors import InputError
-from robodesign.model.collision_cull import culler_of, pair_margins
+from robodesign.model.collision_cull import culler_of
 from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
@@ -224,7 +224,7 @@ class _Memoized:
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
                 self.robot = None
             if isinstance(self.robot, Robot):
-                self.certificates = PairCertificates(self.robot, pair_margins(self.robot, self.robot.geom_data))
+                self.certificates = PairCertificates.of(self.robot)
         return self._culler
 
     def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None,
