@@ -124,11 +124,12 @@ def test_which_pairs_get_certificates(robots):
         gm = robot.geom_model
         kinds = [type(o.geometry).__name__ for o in gm.geometryObjects]
         mesh = np.array(["BVHModelOBBRSS" in (kinds[cp.first], kinds[cp.second]) for cp in gm.collisionPairs])
-        assert np.array_equal(certified_pairs(gm), ~mesh)
-    assert certified_pairs(robots[8].geom_model)[:robots[8].n_self_collision_pairs].all()
-    assert certified_pairs(robots[9].geom_model)[robots[9].n_self_collision_pairs:].all()   # (the boxes)
+        assert np.array_equal(certified_pairs(gm, robot.n_collision_geometries), ~mesh)
+    cell, boxed = robots[8], robots[9]
+    assert certified_pairs(cell.geom_model, cell.n_collision_geometries)[:cell.n_self_collision_pairs].all()
+    assert certified_pairs(boxed.geom_model, boxed.n_collision_geometries)[boxed.n_self_collision_pairs:].all()
     space = Problem.build(TASKS / "simple" / "PTP_3.json", "robodesign_arm", "cyc").space
     rng = np.random.default_rng(4)
     for _ in range(3):
         builtin = Robot.from_order(load_module_set("robodesign_arm"), list(space.random_order(rng)))
-        assert not certified_pairs(builtin.geom_model).any()
+        assert not certified_pairs(builtin.geom_model, builtin.n_collision_geometries).any()

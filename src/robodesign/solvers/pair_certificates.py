@@ -20,12 +20,13 @@ microsecond) gets none: the genetic search on the whitman2020 tasks planned 1.0â
 """
 from __future__ import annotations
 
+import weakref
 from typing import List, Optional
 
 import numpy as np
 import pinocchio as pin
 
-from robodesign.model.collision_cull import pair_margins
+from robodesign.model.collision_cull import pair_ends, pair_margins
 from robodesign.model.sweep import pair_arms
 
 #: clearance (m) beyond the pair's margin that a certificate must prove: 100Ã— coal's distance error (GJK tolerance)
@@ -34,13 +35,20 @@ SLACK = 1e-4
 ANCHORS = 32
 
 
-def certified_pairs(gm) -> np.ndarray:
-    """Per collision pair of the geometry model ``gm``: whether it gets certificates (module docstring)."""
+def certified_pairs(gm, n_robot: int) -> np.ndarray:
+    """Per collision pair of the geometry model ``gm`` (robot objects below ``n_robot``): whether it gets
+    certificates (module docstring)."""
     kind = [type(o.geometry).__name__ for o in gm.geometryObjects]
+    first, second = pair_ends(gm, n_robot)
     if not any(k.startswith("Convex") for k in kind):
-        return np.zeros(len(gm.collisionPairs), dtype=bool)
-    return np.array([not (kind[cp.first].startswith("BVH") or kind[cp.second].startswith("BVH"))
-                     for cp in gm.collisionPairs], dtype=bool)
+        return np.zeros(len(first), dtype=bool)
+    mesh = np.array([k.startswith("BVH") for k in kind], dtype=bool)
+    return ~(mesh[first] | mesh[second])
+
+
+#: per culler (kept while the robot's geometry and margins are: model.collision_cull.culler_of), the set-up of its
+#: robot's certificates: (the pairs certified, W, the margins), or None when no pair is certified
+_SETUPS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 class PairCertificates:
@@ -48,11 +56,11 @@ class PairCertificates:
     configuration and pair the clearance found beyond the margin (``free``; NaN: not computed); ``certified``: the
     pairs that get certificates (:func:`certified_pairs`)."""
 
-    def __init__(self, robot, margins: np.ndarray, certified: np.ndarray):
+    def __init__(self, robot, certified: np.ndarray, W: np.ndarray, margins: np.ndarray):
         self.robot = robot
         self.certified = certified
-        self.W = np.ascontiguousarray(pair_arms(robot), dtype=float)   # (dof, pairs)
-        self.margin = np.asarray(margins, dtype=float)
+        self.W = W                  # (dof, pairs): model.sweep.pair_arms
+        self.margin = margins
         self.anchors = np.zeros((ANCHORS, robot.dof))
         self.free = np.full((ANCHORS, len(self.certified)), np.nan)
         self.count = 0         # certificates made
@@ -70,10 +78,15 @@ class PairCertificates:
         return P
 
     @classmethod
-    def of(cls, robot) -> "Optional[PairCertificates]":
-        """The certificates of ``robot``'s planning call, or None when none of its pairs gets them."""
-        certified = certified_pairs(robot.geom_model)
-        return cls(robot, pair_margins(robot, robot.geom_data), certified) if certified.any() else None
+    def of(cls, robot, culler) -> "Optional[PairCertificates]":
+        """New certificates for a planning call of ``robot`` (whose collision culler is ``culler``), or None when
+        none of its pairs gets them. Their set-up is made once per culler."""
+        if culler not in _SETUPS:
+            certified = certified_pairs(robot.geom_model, robot.n_collision_geometries)
+            _SETUPS[culler] = (certified, np.ascontiguousarray(pair_arms(robot), dtype=float),
+                               np.asarray(pair_margins(robot, robot.geom_data), dtype=float)) if certified.any() else None
+        setup = _SETUPS[culler]
+        return None if setup is None else cls(robot, *setup)
 
     def ask(self, P: np.ndarray, R: np.ndarray, j: int) -> List[int]:
         """The pairs of row ``j`` of :meth:`pending`'s ``P`` the collision test must be asked about at ``R[j]``:

@@ -224,7 +224,7 @@ class _Memoized:
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
                 self.robot = None
             if isinstance(self.robot, Robot):
-                self.certificates = PairCertificates.of(self.robot)
+                self.certificates = PairCertificates.of(self.robot, self._culler)
         return self._culler
 
     def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None,
