@@ -332,6 +332,31 @@ def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[
             "_spheres": robot_spheres(tree.geom_geometry) if posed is not None else None}
 
 
+def _cached_setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[Collection[int]],
+                  symmetry: bool, posed_arms: bool) -> dict:
+    """:func:`_setup`, shared by robots built alike (:func:`_setup_key`; the 64 latest kept)."""
+    key = _setup_key(robot, (check_self, check_env, None if obstacles is None else tuple(obstacles), symmetry,
+                             posed_arms))
+    hit = _SETUPS.get(key) if key is not None else None
+    if hit is None or hit[0] is not robot.module_set:
+        hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
+                                                          posed_arms))
+        if key is not None:
+            with _SETUPS_LOCK:
+                _SETUPS[key] = hit
+                while len(_SETUPS) > 64:
+                    _SETUPS.pop(next(iter(_SETUPS)))
+    return hit[1]
+
+
+def pair_arms(robot: Robot) -> np.ndarray:
+    """(dof, collision pairs) the static bounds W of :class:`SweepChecker` for every collision pair of the robot
+    (column k: collision pair k): the distance of pair k changes by at most ``|q' − q| · W[:, k]`` between any two
+    configurations q and q' (along the straight segment between them, every point of one body moves by at most that
+    relative to the other; an obstacle stands still)."""
+    return _cached_setup(robot, True, True, None, True, False)["W"]
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
@@ -360,18 +385,7 @@ class SweepChecker:
         self.tolerance = tolerance
         self.max_substeps = max_substeps
         gm = robot.geom_model
-        key = _setup_key(robot, (check_self, check_env, None if obstacles is None else tuple(obstacles), symmetry,
-                                 posed_arms))
-        hit = _SETUPS.get(key) if key is not None else None
-        if hit is None or hit[0] is not robot.module_set:
-            hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
-                                                              posed_arms))
-            if key is not None:
-                with _SETUPS_LOCK:
-                    _SETUPS[key] = hit
-                    while len(_SETUPS) > 64:
-                        _SETUPS.pop(next(iter(_SETUPS)))
-        self.__dict__.update(hit[1])
+        self.__dict__.update(_cached_setup(robot, check_self, check_env, obstacles, symmetry, posed_arms))
         if self._posed is not None:  # the template's, bound to this robot (its motion caches empty)
             self._posed = self._posed.bound_to(robot)
         self._gm = gm  # (the robot's; its scratch space below)

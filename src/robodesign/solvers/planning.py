@@ -66,6 +66,7 @@ from robodesign.model.collision_cull import culler_of
 from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
+from robodesign.solvers.pair_certificates import PairCertificates
 
 __all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
 
@@ -194,7 +195,8 @@ class _Memoized:
 
     :meth:`first_invalid` decides many states (a segment's) at once with the same verdicts: the torque tests
     per state, the collision queries through :class:`~robodesign.model.collision_cull.CollisionCuller`
-    (coal asked only about the pairs its bounds do not clear) when ``robot`` is given and ``valid`` came
+    (coal asked only about the pairs its bounds do not clear, less the pairs a distance computed at another
+    state proves free: :mod:`~robodesign.solvers.pair_certificates`) when ``robot`` is given and ``valid`` came
     from :func:`_config_validator`."""
 
     def __init__(self, valid: Callable[[np.ndarray], bool], robot=None):
@@ -204,6 +206,7 @@ class _Memoized:
         self.static_ok = getattr(valid, "static_ok", None)
         self.robot = robot if self.static_ok is not None else None
         self._culler = None
+        self.certificates: Optional[PairCertificates] = None   # (with the culler, for a Robot)
 
     def __call__(self, q: np.ndarray) -> bool:
         self.lookups += 1
@@ -220,6 +223,8 @@ class _Memoized:
                 self._culler = culler_of(self.robot)
             except (AttributeError, NotImplementedError):  # a robot without coal geometry or batched FK
                 self.robot = None
+            if isinstance(self.robot, Robot):
+                self.certificates = PairCertificates.of(self.robot, self._culler)
         return self._culler
 
     def first_invalid(self, Q: np.ndarray, counter: Optional[List[int]] = None,
@@ -237,16 +242,19 @@ class _Memoized:
                 if not self(q):
                     return i
             return -1
-        memo, static_ok = self.memo, self.static_ok
+        memo, static_ok, certs = self.memo, self.static_ok, self.certificates
         assert static_ok is not None  # a culler only with _config_validator's valid
         start = 0
         for size in _CHUNKS:   # a segment that collides early pays for few states' bounds
             rows = Q[start:start + size]
             keys = [q.tobytes() for q in rows]
             new = [i for i, k in enumerate(keys) if k not in memo]
-            S = culler.survivors(rows[new])
+            R = rows[new]
+            S = culler.survivors(R)
+            if certs is not None:     # (the self pairs a distance certifies free not asked)
+                S = certs.pending(R, S)
             near = S.any(axis=1)      # rows with a pair the bounds do not clear
-            ok = static_ok.rows(rows[new])  # type: ignore[attr-defined]
+            ok = static_ok.rows(R)  # type: ignore[attr-defined]
             at = {i: j for j, i in enumerate(new)}
             for i, key in enumerate(keys):
                 if counter is not None:
@@ -259,7 +267,8 @@ class _Memoized:
                     j = at[i]
                     v = bool(ok[j])
                     if v and near[j]:
-                        v = not culler.collides(rows[i], S[j].nonzero()[0])
+                        ks = S[j].nonzero()[0] if certs is None else certs.ask(S, R, j)
+                        v = not (len(ks) and culler.collides(rows[i], ks))
                     memo[key] = v
                 if not v:
                     return start + i
