@@ -1,0 +1,172 @@
+"""The cheap paths of a candidate that fails early (issue 25): each equals, bit for bit, the formula it replaced,
+written out here as it was, on many random robots of three module sets at random base poses.
+
+* ``Robot.generic_rank``: configurations from cached standard uniforms, the Jacobians after the first in one SVD
+  call; the same rank for every ``samples`` and ``rtol`` tried, and the scratch space (``data``) left as the
+  one-by-one loop left it;
+* ``Robot.reach_bound`` and ``Robot.tcp_chain``: the chain from the walk, norms as ``t.dot(t)``; the same point
+  and radius bit for bit, the same chain as pinocchio's parents give.
+"""
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robodesign import Assembly, Robot, load_module_set
+from robodesign.core.errors import AssemblyError
+from robodesign.formats.assembly import random_serial_order
+from robodesign.model import robot as robot_module
+
+from conftest import IMPROV, PRIMITIVES
+
+
+def _old_tcp_chain(robot):
+    m, chain = robot.model, []
+    j = m.frames[robot.tcp_frame].parentJoint
+    while j > 0:
+        chain.append(j)
+        j = m.parents[j]
+    return chain[::-1]
+
+
+def _old_reach_bound(robot):
+    m, d = robot.model, robot.data
+    chain = _old_tcp_chain(robot)
+    pin.forwardKinematics(m, d, pin.neutral(m))
+    if not chain:
+        return pin.updateFramePlacement(m, d, robot.tcp_frame).translation.copy(), 0.0
+    o = d.oMi[chain[0]].translation.copy()
+    R = sum(float(np.linalg.norm(m.jointPlacements[b].translation)) for b in chain[1:])
+    R += float(np.linalg.norm(m.frames[robot.tcp_frame].placement.translation))
+    for j in chain:
+        if m.joints[j].shortname().startswith("JointModelP"):
+            idx = m.joints[j].idx_q
+            lo, hi = m.lowerPositionLimit[idx], m.upperPositionLimit[idx]
+            R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf
+    return o, R
+
+
+def _old_generic_rank(robot, samples=4, rtol=1e-8):
+    rng = np.random.default_rng(0)
+    lo = np.maximum(np.asarray(robot.q_lower, float), -math.pi)
+    hi = np.minimum(np.asarray(robot.q_upper, float), math.pi)
+    scale = max(_old_reach_bound(robot)[1], 1e-3)
+    best = 0
+    for _ in range(max(1, samples)):
+        J = np.array(robot.jacobian(rng.uniform(lo, hi)), dtype=float)
+        J[3:] *= scale
+        s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
+        best = max(best, int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0)
+        if best >= min(J.shape):
+            break
+    return best
+
+
+def _random_pose(rng):
+    T = np.eye(4)
+    T[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-math.pi, math.pi, 3))
+    T[:3, 3] = rng.uniform(-1.0, 1.0, 3)
+    return T
+
+
+def _twins(modules, seed, n):
+    """``n`` pairs of robots built alike (random orders with 1–7 joints where the set has them, random base
+    poses)."""
+    ms = load_module_set(modules)
+    rng = np.random.default_rng(seed)
+    made = 0
+    while made < n:
+        try:
+            asm = Assembly.from_order(ms, random_serial_order(ms, rng, dof=int(rng.integers(1, 8))))
+        except AssemblyError:
+            continue
+        made += 1
+        T = _random_pose(rng)
+        yield Robot(ms, asm, base_pose=T), Robot(ms, asm, base_pose=T)
+
+
+def _scratch(robot):
+    """The scratch space's joint and TCP poses, as bytes."""
+    d = robot.data
+    return [M.homogeneous.tobytes() for M in d.oMi] + [d.oMf[robot.tcp_frame].homogeneous.tobytes()]
+
+
+SETS = [("robodesign_arm", 1), (IMPROV, 2), (PRIMITIVES, 3)]
+
+
+@pytest.mark.parametrize("modules,seed", SETS)
+def test_reach_bound_and_chain_equal_the_former_formula(modules, seed):
+    """Point and radius bit for bit, the same chain, the same scratch space after, then at another base pose."""
+    rng = np.random.default_rng(seed + 100)
+    for new, old in _twins(modules, seed, 60):
+        for _ in range(2):
+            assert new.tcp_chain() == _old_tcp_chain(old)
+            o, R = new.reach_bound()
+            o_old, R_old = _old_reach_bound(old)
+            assert o.tobytes() == o_old.tobytes() and np.float64(R).tobytes() == np.float64(R_old).tobytes()
+            assert _scratch(new) == _scratch(old)
+            T = _random_pose(rng)
+            new.set_base_pose(T)
+            old.set_base_pose(T)
+
+
+@pytest.mark.parametrize("modules,seed", SETS)
+def test_generic_rank_equals_the_one_by_one_loop(modules, seed):
+    """The same rank and scratch space for several sample counts and tolerances (large tolerances make ranks that
+    differ between samples, so the loop stops at the second or third sample or never)."""
+    ranks = set()
+    for new, old in _twins(modules, seed, 40):
+        for samples in (1, 2, 4, 6):
+            for rtol in (1e-8, 1e-2, 0.1, 0.3, 0.6):
+                new._generic_rank = None
+                got = _outcome(lambda: new.generic_rank(samples, rtol))
+                assert got == _outcome(lambda: _old_generic_rank(old, samples, rtol))
+                assert _scratch(new) == _scratch(old)
+                ranks.add(got)
+    assert len(ranks) >= 5   # (with the error of a one-joint arm: pinocchio gives its Jacobian as a vector)
+
+
+def _outcome(f):
+    """f's value, or the type and message of what it raised."""
+    try:
+        return f()
+    except Exception as e:   # noqa: BLE001 - compared, not handled
+        return (type(e), str(e))
+
+
+def test_rank_samples_are_the_generators_draws():
+    """``_rank_samples`` rows equal ``default_rng(0).uniform(lo, hi)`` called once per row, bit for bit."""
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        n = int(rng.integers(0, 9))
+        lo = rng.uniform(-4.0, 1.0, n)
+        hi = lo + rng.uniform(0.0, 7.0, n)
+        g = np.random.default_rng(0)
+        samples = int(rng.integers(1, 7))
+        want = np.array([g.uniform(lo, hi) for _ in range(samples)]).reshape(samples, n)
+        assert robot_module._rank_samples(lo, hi, samples).tobytes() == want.tobytes()
+
+
+def test_norm_is_numpys():
+    """``_norm`` equals ``float(np.linalg.norm(t))`` bit for bit (contiguous and strided vectors, zeros, large)."""
+    rng = np.random.default_rng(3)
+    for k in range(3000):
+        T = rng.normal(size=(4, 4)) * 10.0 ** rng.integers(-8, 8)
+        t = T[:3, 3] if k % 2 else T[:3, 3].copy()
+        if k % 7 == 0:
+            t = np.zeros(3)
+        assert np.float64(robot_module._norm(t)).tobytes() == np.float64(float(np.linalg.norm(t))).tobytes()
+
+
+def test_rank_counts_as_numpy():
+    """``_rank`` equals ``int(np.sum(s > rtol * s[0]))`` (0 without values or a largest one not above 0), on
+    random, tied, zero, negative and NaN values."""
+    rng = np.random.default_rng(5)
+    for k in range(5000):
+        s = np.sort(rng.uniform(0.0, 1.0, int(rng.integers(0, 8))) * 10.0 ** rng.integers(-6, 6))[::-1]
+        if k % 5 == 0 and s.size:
+            s[rng.integers(s.size)] = [0.0, np.nan, -1.0, s[0] * 1e-8][k % 4]
+        rtol = [1e-8, 0.5, 1.0, 0.0][k % 4]
+        want = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0
+        assert robot_module._rank(s, rtol) == want
