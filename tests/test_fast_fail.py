@@ -149,14 +149,14 @@ def test_rank_samples_are_the_generators_draws():
 
 
 def test_norm_is_numpys():
-    """``_norm`` equals ``float(np.linalg.norm(t))`` bit for bit (contiguous and strided vectors, zeros, large)."""
+    """``vector_norm`` equals ``float(np.linalg.norm(t))`` bit for bit (contiguous and strided vectors, zeros, large)."""
     rng = np.random.default_rng(3)
     for k in range(3000):
         T = rng.normal(size=(4, 4)) * 10.0 ** rng.integers(-8, 8)
         t = T[:3, 3] if k % 2 else T[:3, 3].copy()
         if k % 7 == 0:
             t = np.zeros(3)
-        assert np.float64(robot_module._norm(t)).tobytes() == np.float64(float(np.linalg.norm(t))).tobytes()
+        assert np.float64(robot_module.vector_norm(t)).tobytes() == np.float64(float(np.linalg.norm(t))).tobytes()
 
 
 def test_rank_counts_as_numpy():
@@ -170,3 +170,80 @@ def test_rank_counts_as_numpy():
         rtol = [1e-8, 0.5, 1.0, 0.0][k % 4]
         want = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0
         assert robot_module._rank(s, rtol) == want
+
+
+def test_seeded_rng_is_default_rng():
+    """The pipeline's generator has ``np.random.default_rng``'s state and stream for int seeds (small, large, the
+    evaluator's 32-bit ones); other kinds (a SeedSequence, a Generator, a numpy int) go to default_rng itself."""
+    from robodesign.design.evaluator import candidate_seed
+    from robodesign.design.solve import seeded_rng
+    seeds = [0, 1, 7, 2 ** 31, 2 ** 32 - 1, 2 ** 64 + 5, 10 ** 30] + [candidate_seed(0, f"c{k}") for k in range(300)]
+    for s in seeds:
+        a, b = seeded_rng(s), np.random.default_rng(s)
+        assert a.bit_generator.state == b.bit_generator.state
+        assert a.random(50).tobytes() == b.random(50).tobytes() and a.normal(size=20).tobytes() == b.normal(size=20).tobytes()
+    ss = np.random.SeedSequence(3)
+    assert seeded_rng(ss).bit_generator.state == np.random.default_rng(np.random.SeedSequence(3)).bit_generator.state
+    g = np.random.default_rng(4)
+    assert seeded_rng(g) is g
+    assert seeded_rng(np.int64(9)).bit_generator.state == np.random.default_rng(9).bit_generator.state
+    with pytest.raises(ValueError):
+        seeded_rng(-1)
+    with pytest.raises(ValueError):
+        np.random.default_rng(-1)
+
+
+def _old_chain_bounds(robot):
+    """(c_tcp, circle, R1, R2) as ChainBounds computed them before (None where it stopped early)."""
+    from robodesign.solvers.ik import _REVOLUTE_AXES
+    m, chain = robot.model, _old_tcp_chain(robot)
+    fr = m.frames[robot.tcp_frame]
+    c_tcp = np.asarray(fr.placement.rotation, float).T @ np.asarray(fr.placement.translation, float)
+    R = _old_reach_bound(robot)[1]
+    if len(chain) < 2 or not math.isfinite(R):
+        return c_tcp, None, None, None
+    j1, j2 = chain[0], chain[1]
+    jm = m.joints[j1]
+    name = jm.shortname()
+    if name in _REVOLUTE_AXES:
+        ax = np.array(_REVOLUTE_AXES[name])
+    elif name == "JointModelRevoluteUnaligned":
+        ax = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float)
+    else:
+        return c_tcp, None, None, None
+    F1 = m.jointPlacements[j1]
+    if m.parents[j1] != 0 or m.parents[j2] != j1:
+        return c_tcp, None, None, None
+    R1, p1 = np.asarray(F1.rotation, float), np.asarray(F1.translation, float)
+    t2 = np.asarray(m.jointPlacements[j2].translation, float)
+    along = float(ax @ t2)
+    circle = (p1 + R1 @ (ax * along), R1 @ ax / np.linalg.norm(ax), float(np.linalg.norm(t2 - ax * along)))
+    r1 = R - float(np.linalg.norm(t2))
+    return c_tcp, circle, r1, r1 - float(np.linalg.norm(fr.placement.translation))
+
+
+def _bits(x):
+    """Everything in ``x`` (arrays, floats, tuples, None) as bytes."""
+    if x is None:
+        return b"none"
+    if isinstance(x, tuple):
+        return b"|".join(_bits(v) for v in x)
+    return np.asarray(x, dtype=float).tobytes()
+
+
+@pytest.mark.parametrize("modules,seed", SETS)
+def test_chain_bounds_equal_the_former_formula(modules, seed):
+    """ChainBounds' TCP offset, circle and radii bit for bit, at two base poses per robot (some robots have a
+    revolute first joint, some a prismatic one, some one joint only)."""
+    from robodesign.solvers.ik import ChainBounds
+    rng = np.random.default_rng(seed + 200)
+    circles = 0
+    for robot, _ in _twins(modules, seed, 60):
+        for _ in range(2):
+            cb = ChainBounds(robot)
+            got = (cb.c_tcp, cb.circle, getattr(cb, "R1", None), getattr(cb, "R2", None))
+            want = _old_chain_bounds(robot)
+            assert _bits(got) == _bits(want)
+            circles += cb.circle is not None
+            robot.set_base_pose(_random_pose(rng))
+    assert circles >= 20

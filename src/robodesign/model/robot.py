@@ -47,7 +47,7 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     return s / np.sqrt(1.0 + s * s)
 
 
-def _norm(t: np.ndarray) -> float:
+def vector_norm(t: np.ndarray) -> float:
     """``float(np.linalg.norm(t))`` of a vector of floats: the square root of ``t.dot(t)`` (numpy's norm of a
     1-D float array is exactly that)."""
     t = t.ravel(order="K")
@@ -320,8 +320,8 @@ class Robot(RobotGeometry):
             else:
                 o = d.oMi[chain[0]].translation.copy()
                 placements = m.jointPlacements
-                R = sum(_norm(placements[b].translation) for b in chain[1:])
-                R += _norm(m.frames[self.tcp_frame].placement.translation)
+                R = sum(vector_norm(placements[b].translation) for b in chain[1:])
+                R += vector_norm(m.frames[self.tcp_frame].placement.translation)
                 infos = self.joint_infos
                 for j in chain:
                     if infos[j - 1].type == "prismatic":   # (pinocchio's PZ or PrismaticUnaligned)
