@@ -44,6 +44,7 @@ from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Task
 from robodesign.judge.checker import check
 from robodesign.model.cell import RobotPool
+from robodesign.model.robot import vector_norm
 from robodesign.solvers.schedule import moving_obstacles, static_cell
 
 
@@ -187,7 +188,7 @@ class _Pipeline:
         o, R = self.robot.reach_bound()
         worst = None  # (metres beyond the reach bound, goal, distance) of the farthest goal
         for g, p, slack in goal_points(self.task):
-            d = float(np.linalg.norm(p - o))
+            d = vector_norm(p - o)   # (float(np.linalg.norm(p - o)), bit for bit)
             miss = d - R - slack
             if miss > 0 and (worst is None or miss > worst[0]):
                 worst = (miss, g, d)
