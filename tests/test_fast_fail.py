@@ -172,27 +172,6 @@ def test_rank_counts_as_numpy():
         assert robot_module._rank(s, rtol) == want
 
 
-def test_seeded_rng_is_default_rng():
-    """The pipeline's generator has ``np.random.default_rng``'s state and stream for int seeds (small, large, the
-    evaluator's 32-bit ones); other kinds (a SeedSequence, a Generator, a numpy int) go to default_rng itself."""
-    from robodesign.design.evaluator import candidate_seed
-    from robodesign.design.solve import seeded_rng
-    seeds = [0, 1, 7, 2 ** 31, 2 ** 32 - 1, 2 ** 64 + 5, 10 ** 30] + [candidate_seed(0, f"c{k}") for k in range(300)]
-    for s in seeds:
-        a, b = seeded_rng(s), np.random.default_rng(s)
-        assert a.bit_generator.state == b.bit_generator.state
-        assert a.random(50).tobytes() == b.random(50).tobytes() and a.normal(size=20).tobytes() == b.normal(size=20).tobytes()
-    ss = np.random.SeedSequence(3)
-    assert seeded_rng(ss).bit_generator.state == np.random.default_rng(np.random.SeedSequence(3)).bit_generator.state
-    g = np.random.default_rng(4)
-    assert seeded_rng(g) is g
-    assert seeded_rng(np.int64(9)).bit_generator.state == np.random.default_rng(9).bit_generator.state
-    with pytest.raises(ValueError):
-        seeded_rng(-1)
-    with pytest.raises(ValueError):
-        np.random.default_rng(-1)
-
-
 def _old_chain_bounds(robot):
     """(c_tcp, circle, R1, R2) as ChainBounds computed them before (None where it stopped early)."""
     from robodesign.solvers.ik import _REVOLUTE_AXES

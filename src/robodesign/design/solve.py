@@ -146,12 +146,6 @@ def warm_up() -> None:
     timing.preload()
 
 
-def seeded_rng(seed) -> np.random.Generator:
-    """``np.random.default_rng(seed)``: for an int seed it is ``Generator(PCG64(seed))``, made here directly (numpy's
-    checks of the seed's kind take as long as making it)."""
-    return np.random.Generator(np.random.PCG64(seed)) if type(seed) is int else np.random.default_rng(seed)
-
-
 class _Pipeline:
     """The stages of :func:`solve`, one method per name in STAGES; each raises _Fail (or an InfeasibleError)
     to stop the pipeline with its reason."""
@@ -198,7 +192,7 @@ class _Pipeline:
             raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
 
     def ik(self) -> None:
-        rng = seeded_rng(self.settings.seed)   # (made here: most candidates stop before the IK)
+        rng = np.random.default_rng(self.settings.seed)   # (made here: most candidates stop before the IK)
         self.planner = GoalPlanner(self.task, self.robot, self.settings, rng, self.res, self.cost,
                                    colliders=self.colliders, start=self.start)
         self.planner.solve_ik()
