@@ -226,3 +226,33 @@ def test_chain_bounds_equal_the_former_formula(modules, seed):
             circles += cb.circle is not None
             robot.set_base_pose(_random_pose(rng))
     assert circles >= 20
+
+
+def test_lazy_generator_draws_as_the_generator_made_at_once():
+    """The IK stage's LazyGenerator and ``np.random.default_rng(seed)``: the same draws through every way the
+    pipeline uses it (its own methods, ``solve_ik``'s generator, ``Robot.random_configuration``), interleaved,
+    for the evaluator's seeds; ``solve_ik`` on a robot gives the same solutions and statistics with either."""
+    from robodesign.design.evaluator import candidate_seed
+    from robodesign.solvers.ik import _as_rng, solve_ik
+    from robodesign.solvers.lazy_rng import LazyGenerator
+    for k in range(200):
+        seed = candidate_seed(k % 3, f"c{k}")
+        lazy, eager = LazyGenerator(seed), np.random.default_rng(seed)
+        assert _as_rng(lazy) is _as_rng(lazy)
+        for step in range(6):
+            a = [lazy.integers(2 ** 31), lazy.uniform(-1.0, 1.0, 3), _as_rng(lazy).random(4), lazy.normal(size=2)]
+            b = [eager.integers(2 ** 31), eager.uniform(-1.0, 1.0, 3), eager.random(4), eager.normal(size=2)]
+            assert _bits(tuple(np.asarray(x, dtype=float) for x in a)) == _bits(tuple(np.asarray(x, dtype=float) for x in b))
+        assert lazy.bit_generator.state == eager.bit_generator.state
+    ms = load_module_set(IMPROV)
+    robot = Robot.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"])
+    from robodesign.formats.tolerance import ToleratedPose
+    goal = ToleratedPose(robot.fk(robot.random_configuration(np.random.default_rng(1))))
+    for seed in (3, 4):
+        lazy, eager = LazyGenerator(seed), np.random.default_rng(seed)
+        q_lazy, q_eager = robot.random_configuration(lazy), robot.random_configuration(eager)
+        assert q_lazy.tobytes() == q_eager.tobytes()
+        r1, r2 = solve_ik(robot, goal, lazy, max_restarts=20, n_solutions=3), solve_ik(robot, goal, eager, max_restarts=20,
+                                                                                       n_solutions=3)
+        assert [q.tobytes() for q in r1.solutions] == [q.tobytes() for q in r2.solutions] and r1.solutions
+        assert lazy.bit_generator.state == eager.bit_generator.state

@@ -59,6 +59,14 @@ for fam in fams:
               if fam in prof.get((r, "new"), {}) and fam in prof.get((r, "base"), {})]
     tot = [prof[(r, "new")][fam][-2] / prof[(r, "base")][fam][-2] for r in rounds
            if fam in prof.get((r, "new"), {}) and fam in prof.get((r, "base"), {})]
+    pairs = [(prof[(r, "base")][fam], prof[(r, "new")][fam]) for r in rounds
+             if fam in prof.get((r, "new"), {}) and fam in prof.get((r, "base"), {})]
+    control = [(n[0] + n[1]) / (b[0] + b[1]) for b, n in pairs]   # assembly + base: code not changed
+    changed = [(n[2] + n[3]) / (b[2] + b[3]) for b, n in pairs]   # reach + ik
+    print("new/base assembly+base (unchanged code: the machine's speed) per round: " +
+          ", ".join(f"{x:.2f}" for x in control))
+    print("new/base reach+ik per round: " + ", ".join(f"{x:.2f}" for x in changed) +
+          (f" (median {statistics.median(changed):.2f})" if changed else ""))
     print("new/base CPU per round: " + ", ".join(f"{x:.2f}" for x in ratios) +
           (f" (median {statistics.median(ratios):.2f})" if ratios else ""))
     print("new/base total per round: " + ", ".join(f"{x:.2f}" for x in tot) +

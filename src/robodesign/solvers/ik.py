@@ -73,6 +73,7 @@ from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
 from robodesign.model.robot import vector_norm
 from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.lazy_rng import LazyGenerator
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
            "provably_unreachable"]
@@ -810,7 +811,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
 def _as_rng(rng) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
-    return np.random.default_rng(rng)
+    return rng.generator if isinstance(rng, LazyGenerator) else np.random.default_rng(rng)
 
 
 _trace: Optional[list] = None   # development hook: a list receives (converged, iterations, [err²…]) per attempt
