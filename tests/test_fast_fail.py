@@ -256,3 +256,22 @@ def test_lazy_generator_draws_as_the_generator_made_at_once():
                                                                                        n_solutions=3)
         assert [q.tobytes() for q in r1.solutions] == [q.tobytes() for q in r2.solutions] and r1.solutions
         assert lazy.bit_generator.state == eager.bit_generator.state
+
+
+def test_lazy_generator_copies_and_pickles():
+    """A copy, a deep copy and a pickled LazyGenerator, made before and after its first draw, go on drawing what
+    the original would (a deep copy or a pickle has its own generator; a copy made after a draw shares it)."""
+    import copy
+    import pickle
+    from robodesign.solvers.lazy_rng import LazyGenerator
+    for drawn in (False, True):
+        lazy = LazyGenerator(11)
+        if drawn:
+            lazy.random(3)
+        for twin in (copy.deepcopy(lazy), pickle.loads(pickle.dumps(lazy))):
+            assert isinstance(twin, LazyGenerator)
+            assert twin.random(5).tobytes() == copy.deepcopy(lazy).random(5).tobytes()
+        shallow = copy.copy(lazy)
+        assert isinstance(shallow, LazyGenerator) and shallow.integers(1000) >= 0
+    with pytest.raises(AttributeError):
+        LazyGenerator(1)._missing

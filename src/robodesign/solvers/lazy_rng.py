@@ -9,8 +9,8 @@ import numpy as np
 class LazyGenerator:
     """``np.random.default_rng(seed)``, made when it is first used (making one costs ~15–90 µs): the solve
     pipeline's IK-stage generator, which most candidates that fail there never draw from (the rank and reach
-    tests come first). Every attribute is the generator's, and :func:`robodesign.solvers.ik.solve_ik` takes it as the generator itself,
-    so the draws are those of the generator made at once."""
+    tests come first). Every public attribute is the generator's, and :func:`robodesign.solvers.ik.solve_ik`
+    takes it as the generator itself, so the draws are those of the generator made at once."""
 
     __slots__ = ("_seed", "_generator")
 
@@ -25,4 +25,6 @@ class LazyGenerator:
         return self._generator
 
     def __getattr__(self, name: str):
+        if name.startswith("_"):   # (its own slots before they are set, and the copy and pickle protocols)
+            raise AttributeError(name)
         return getattr(self.generator, name)
