@@ -44,6 +44,8 @@ from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Task
 from robodesign.judge.checker import check
 from robodesign.model.cell import RobotPool
+from robodesign.model.robot import vector_norm
+from robodesign.solvers.lazy_rng import LazyGenerator
 from robodesign.solvers.schedule import moving_obstacles, static_cell
 
 
@@ -181,7 +183,7 @@ class _Pipeline:
         o, R = self.robot.reach_bound()
         worst = None  # (metres beyond the reach bound, goal, distance) of the farthest goal
         for g, p, slack in goal_points(self.task):
-            d = float(np.linalg.norm(p - o))
+            d = vector_norm(p - o)   # (float(np.linalg.norm(p - o)), bit for bit)
             miss = d - R - slack
             if miss > 0 and (worst is None or miss > worst[0]):
                 worst = (miss, g, d)
@@ -191,7 +193,7 @@ class _Pipeline:
             raise _Fail(f"goal {g.id} is {d:.3f} m from the first joint, the arm reaches at most {R:.3f} m")
 
     def ik(self) -> None:
-        rng = np.random.default_rng(self.settings.seed)   # (made here: most candidates stop before the IK)
+        rng = LazyGenerator(self.settings.seed)   # (made at its first draw: most candidates never draw)
         self.planner = GoalPlanner(self.task, self.robot, self.settings, rng, self.res, self.cost,
                                    colliders=self.colliders, start=self.start)
         self.planner.solve_ik()

@@ -33,7 +33,7 @@ from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
 from robodesign.model.rnea_batch import rnea_rows
-from robodesign.model.robot_build import add_body_frames, finish, walk
+from robodesign.model.robot_build import add_body_frames, chain_to, finish, walk
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
@@ -45,6 +45,36 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
     s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
     return s / np.sqrt(1.0 + s * s)
+
+
+def vector_norm(t: np.ndarray) -> float:
+    """``float(np.linalg.norm(t))`` of a vector of floats: the square root of ``t.dot(t)`` (numpy's norm of a
+    1-D float array is exactly that)."""
+    t = t.ravel(order="K")
+    return math.sqrt(t.dot(t))
+
+
+_UNIFORMS: Dict[int, np.ndarray] = {}   # n → the first n standard uniforms of np.random.default_rng(0)
+
+
+def _rank_samples(lo: np.ndarray, hi: np.ndarray, samples: int) -> np.ndarray:
+    """The ``samples`` configurations (rows) that ``np.random.default_rng(0).uniform(lo, hi)`` gives one call after
+    the other: each is ``lo + (hi − lo)·u`` with ``u`` the generator's next standard uniforms, the same numbers."""
+    n = samples * lo.size
+    u = _UNIFORMS.get(n)
+    if u is None:
+        u = _UNIFORMS[n] = np.random.default_rng(0).random(n)
+    return lo + (hi - lo) * u.reshape(samples, lo.size)
+
+
+def _rank(s: np.ndarray, rtol: float) -> int:
+    """The rank of a matrix with singular values ``s`` (descending): how many exceed ``rtol`` times the largest
+    (0 for none or a zero matrix); the comparisons of ``np.sum(s > rtol * s[0])``, in Python floats."""
+    v = s.tolist()
+    if not v or not v[0] > 0:
+        return 0
+    t = rtol * v[0]
+    return sum(x > t for x in v)
 
 
 _G = (0.0, 0.0, -9.81)   # the default gravity, and pinocchio's motion of it (the model keeps a copy)
@@ -120,7 +150,8 @@ class Robot(RobotGeometry):
         rows = w.rows   # (per joint: its nine numbers, read as np.array(rows, dtype=float) would)
         columns = np.fromiter(chain.from_iterable(rows), float, 9 * len(rows)).reshape(-1, 9).T.copy()
         self._set_joint_limits(model, columns)
-        self.tcp_frame, Mc = finish(w)
+        self.tcp_frame, tcp_joint, Mc = finish(w)
+        self._chain = chain_to(w, tcp_joint)   # (tcp_chain's)
         if Mc is not None:
             self._root_items.append(("frame", self.tcp_frame, Mc))
         self.model = model
@@ -183,14 +214,7 @@ class Robot(RobotGeometry):
 
     def tcp_chain(self) -> List[int]:
         """The pinocchio joint ids from the world to the TCP's joint, in order (empty: TCP on the base)."""
-        m = self.model
-        chain = []
-        j = m.frames[self.tcp_frame].parentJoint
-        while j > 0:
-            chain.append(j)
-            j = m.parents[j]
-        chain.reverse()
-        return chain
+        return list(self._chain)
 
     def fk(self, q, frame: Optional[int] = None) -> np.ndarray:
         """World pose (4x4) of a frame (default: TCP)."""
@@ -250,22 +274,35 @@ class Robot(RobotGeometry):
         limits, the angular rows scaled by the reach radius so both halves have units of length. A structural
         rank below 6 (parallel or coaxial axes where a wrist needs three independent ones, fewer than six
         joints, ...) holds at every configuration except a set of measure zero: such an arm reaches only a
-        lower-dimensional set of poses. Cached (independent of the base pose)."""
+        lower-dimensional set of poses. Cached (independent of the base pose).
+
+        The configurations are ``np.random.default_rng(0).uniform(lo, hi)`` drawn ``samples`` times
+        (:func:`_rank_samples`); the first one's rank decides when it is full, else the others' Jacobians go
+        through one SVD call (numpy's SVD of a stack is each matrix's own LAPACK call: the same singular values),
+        and the scratch space is left as the one-by-one loop that stops at the first full rank leaves it."""
         if self._generic_rank is None:
-            rng = np.random.default_rng(0)
             lo = np.maximum(np.asarray(self.q_lower, float), -math.pi)
             hi = np.minimum(np.asarray(self.q_upper, float), math.pi)
             scale = max(self.reach_bound()[1], 1e-3)
-            best = 0
-            for _ in range(max(1, samples)):
-                J = np.array(self.jacobian(rng.uniform(lo, hi)), dtype=float)
-                J[3:] *= scale
-                s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
-                best = max(best, int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0)
-                if best >= min(J.shape):
-                    break
+            Q = _rank_samples(lo, hi, max(1, samples))
+            J = self._scaled_jacobian(Q[0], scale)
+            full = min(J.shape)
+            best = _rank(np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0), rtol)
+            if best < full and len(Q) > 1:
+                Js = np.stack([self._scaled_jacobian(q, scale) for q in Q[1:]])
+                ranks = [_rank(s, rtol) for s in np.linalg.svd(Js, compute_uv=False)]
+                best = max(best, *ranks)
+                first_full = next((k for k, r in enumerate(ranks, 1) if r >= full), len(Q) - 1)
+                if first_full < len(Q) - 1:   # (where the loop stopped: its Jacobian was the last one made)
+                    self.jacobian(Q[first_full])
             self._generic_rank = best
         return self._generic_rank
+
+    def _scaled_jacobian(self, q: np.ndarray, scale: float) -> np.ndarray:
+        """The TCP Jacobian at ``q`` with its angular rows times ``scale`` (:meth:`generic_rank`'s)."""
+        J = np.array(self.jacobian(q), dtype=float)
+        J[3:] *= scale
+        return J
 
     def reach_bound(self) -> Tuple[np.ndarray, float]:
         """(world point o, radius R): every reachable TCP position lies within R of o.
@@ -276,16 +313,18 @@ class Robot(RobotGeometry):
         """
         if self._reach is None:
             m, d = self.model, self.data    # (scratch space: the joint poses at the neutral configuration)
-            chain = self.tcp_chain()
+            chain = self._chain
             pin.forwardKinematics(m, d, pin.neutral(m))
             if not chain:
                 o, R = pin.updateFramePlacement(m, d, self.tcp_frame).translation.copy(), 0.0
             else:
                 o = d.oMi[chain[0]].translation.copy()
-                R = sum(float(np.linalg.norm(m.jointPlacements[b].translation)) for b in chain[1:])
-                R += float(np.linalg.norm(m.frames[self.tcp_frame].placement.translation))
+                placements = m.jointPlacements
+                R = sum(vector_norm(placements[b].translation) for b in chain[1:])
+                R += vector_norm(m.frames[self.tcp_frame].placement.translation)
+                infos = self.joint_infos
                 for j in chain:
-                    if m.joints[j].shortname().startswith("JointModelP"):  # PX/PY/PZ, PrismaticUnaligned
+                    if infos[j - 1].type == "prismatic":   # (pinocchio's PZ or PrismaticUnaligned)
                         idx = m.joints[j].idx_q
                         lo, hi = m.lowerPositionLimit[idx], m.upperPositionLimit[idx]
                         R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf

@@ -310,9 +310,10 @@ def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[b
         push((i, recs[k2], new_jid, Q))
 
 
-def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
+def finish(w: Walk) -> Tuple[int, int, Optional[np.ndarray]]:
     """The TCP frame (the free ``eef`` connector; else the last free connector in walk order; else the base frame),
-    added after the zero inertias of every joint's frames: (its frame id, its placement on joint 0 or None)."""
+    added after the zero inertias of every joint's frames: (its frame id, its joint, its placement on joint 0 or
+    None)."""
     model, pending, free = w.model, w.pending, w.free
     eefs = [f for f in free if f[0].type == "eef"]
     tcp = eefs[0] if len(eefs) == 1 else free[-1] if free else None
@@ -323,10 +324,20 @@ def finish(w: Walk) -> Tuple[int, Optional[np.ndarray]]:
             _zero_inertias(model, pending, masses, j)
     pending.clear()
     if tcp is None:
-        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), np.eye(4)
+        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), 0, np.eye(4)
     tj, Mc = tcp[1], tcp[3]   # (M @ the connector's pose)
     fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME))
-    return fid, (Mc.copy() if tj == 0 else None)
+    return fid, tj, (Mc.copy() if tj == 0 else None)
+
+
+def chain_to(w: Walk, j: int) -> Tuple[int, ...]:
+    """The joints from the world to joint ``j`` of the walk's model, in order (its parents, as pinocchio's
+    ``model.parents`` holds them)."""
+    ops, chain = w.joint_ops, []
+    while j > 0:
+        chain.append(j)
+        j = ops[j - 1][0]
+    return tuple(reversed(chain))
 
 
 def add_body_frames(model: "pin.Model", bodies: List[tuple], base_pose: Optional[np.ndarray],

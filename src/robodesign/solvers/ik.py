@@ -71,7 +71,9 @@ import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
+from robodesign.model.robot import vector_norm
 from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.lazy_rng import LazyGenerator
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
            "provably_unreachable"]
@@ -623,8 +625,9 @@ class ChainBounds:
         self.circle = None
         m = robot.model
         chain = robot.tcp_chain()
-        fr = m.frames[robot.tcp_frame]
-        self.c_tcp = np.asarray(fr.placement.rotation, float).T @ np.asarray(fr.placement.translation, float)
+        P = m.frames[robot.tcp_frame].placement
+        t_tcp = np.asarray(P.translation, float)
+        self.c_tcp = np.asarray(P.rotation, float).T @ t_tcp
         if len(chain) < 2 or not math.isfinite(self.R):
             return
         j1, j2 = chain[0], chain[1]
@@ -642,10 +645,9 @@ class ChainBounds:
         R1, p1 = np.asarray(F1.rotation, float), np.asarray(F1.translation, float)
         t2 = np.asarray(m.jointPlacements[j2].translation, float)
         along = float(ax @ t2)
-        self.circle = (p1 + R1 @ (ax * along), R1 @ ax / np.linalg.norm(ax),
-                       float(np.linalg.norm(t2 - ax * along)))
-        self.R1 = self.R - float(np.linalg.norm(t2))                           # R'
-        self.R2 = self.R1 - float(np.linalg.norm(fr.placement.translation))    # R''
+        self.circle = (p1 + R1 @ (ax * along), R1 @ ax / vector_norm(ax), vector_norm(t2 - ax * along))
+        self.R1 = self.R - vector_norm(t2)       # R'
+        self.R2 = self.R1 - vector_norm(t_tcp)   # R''
         self.key = robot.base_pose.tobytes()
 
     def unreachable(self, gm: "GoalModel") -> str:
@@ -809,7 +811,7 @@ def _kernel_descend(robot, gm: GoalModel, n: int, lo: np.ndarray, hi: np.ndarray
 def _as_rng(rng) -> np.random.Generator:
     if isinstance(rng, np.random.Generator):
         return rng
-    return np.random.default_rng(rng)
+    return rng.generator if isinstance(rng, LazyGenerator) else np.random.default_rng(rng)
 
 
 _trace: Optional[list] = None   # development hook: a list receives (converged, iterations, [err²…]) per attempt
