@@ -239,8 +239,11 @@ def _warm() -> None:
     n = 2
     z = np.zeros((1, n))
     m3 = np.zeros((n, 3, 3))
-    link_torques(z, z, z, z, z, z, np.zeros((1, 3)), z, z, np.zeros(n, np.int64), np.array([0, 1], np.int64),
-                 np.ones(n), m3, m3, np.ones(n), m3, m3)
+    for writeable in (True, False):   # the gravity's acceleration: a read-only array of the robot's
+        acc0 = np.zeros((1, 3))
+        acc0.flags.writeable = writeable
+        link_torques(z, z, z, z, z, z, acc0, z, z, np.zeros(n, np.int64), np.array([0, 1], np.int64),
+                     np.ones(n), m3, m3, np.ones(n), m3, m3)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,

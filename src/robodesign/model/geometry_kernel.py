@@ -192,8 +192,9 @@ def _warm() -> None:
     survivors(np.zeros(1), *args)
     survivors_rows(np.zeros((1, 1)), *args, np.zeros((1, 1), np.bool_), np.zeros(2, np.int64))
     tree = args[:6]
-    frame_poses(np.zeros((1, 1)), *tree, 1, np.eye(3), np.zeros(3), np.zeros((2, 3, 3)), np.zeros((2, 3)),
-                np.zeros((1, 4, 4)))
+    for Rf in (np.eye(3), np.eye(3).T):   # the frame's rotation C- or F-ordered (a pinocchio matrix is the latter)
+        frame_poses(np.zeros((1, 1)), *tree, 1, Rf, np.zeros(3), np.zeros((2, 3, 3)), np.zeros((2, 3)),
+                    np.zeros((1, 4, 4)))
     joint_poses(np.zeros((1, 1)), *tree, np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 2, 4, 4)))
 
 

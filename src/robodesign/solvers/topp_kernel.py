@@ -366,9 +366,11 @@ def _warm() -> None:
     rest_to_rest(a, a.copy(), a.copy() - 1.0, np.full((2, 2), VAR_MIN), np.full((2, 2), VAR_MAX), np.ones(1),
                  np.zeros(2))
     z = np.zeros((2, 1))
-    one = np.ones(1)
-    constraint_rows(z, z, z, z, z, z, z, np.ones(2), one, one, one, one, True, one, np.zeros((2, 2)),
-                    np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
+    for writeable in (True, False):   # the robot's limits and friction vectors are read-only arrays
+        x0, one = np.ones(2), np.ones(1)
+        x0.flags.writeable = one.flags.writeable = writeable
+        constraint_rows(z, z, z, z, z, z, z, x0, one, one, one, one, True, np.ones(1), np.zeros((2, 2)),
+                        np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
 
 
 KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest,
