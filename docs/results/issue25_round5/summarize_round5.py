@@ -2,15 +2,20 @@
 feasible PTP_3 evaluation's stages, the failing candidates' totals and stages, and the genetic search's evaluations
 per CPU second and ask seconds, with the per-round ratios of main to the other checkouts.
 
-    python docs/results/issue25_round5/summarize_round5.py
+    python docs/results/issue25_round5/summarize_round5.py [FOLDER NAMES]
+
+FOLDER and NAMES (comma-separated checkouts, the first the issue's baseline, the second the round's start, the
+last main) read another round's records, e.g. ``docs/results/issue25_round6 base_9d,base_s6,main``.
 """
 import json
 import re
 import statistics
+import sys
 from pathlib import Path
 
-HERE = Path(__file__).parent
-NAMES = ("base_9d", "base_s5", "main")
+HERE = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent
+NAMES = tuple(sys.argv[2].split(",")) if len(sys.argv) > 2 else ("base_9d", "base_s5", "main")
+START = NAMES[1]
 ROUNDS = sorted({int(m.group(1)) for p in HERE.glob("profile_r*_main.md") if (m := re.match(r"profile_r(\d+)_", p.name))})
 
 
@@ -54,8 +59,8 @@ for fam in ("whitman2020_g5o5", "bpo2024"):
         st = {k: med([num(x.get(k, "0")) for x in rows]) for k in ("assembly", "base", "reach", "ik", "total (median)")}
         print(n, {k: round(v, 2) for k, v in st.items()}, "per round", [num(x["total (median)"]) for x in rows])
     ratio = [num(prof["main"][r][fam]["failed at ik"]["total (median)"]) /
-             num(prof["base_s5"][r][fam]["failed at ik"]["total (median)"]) for r in ROUNDS]
-    print("main / base_s5 per round", [round(x, 2) for x in ratio], "median", round(med(ratio), 2))
+             num(prof[START][r][fam]["failed at ik"]["total (median)"]) for r in ROUNDS]
+    print(f"main / {START} per round", [round(x, 2) for x in ratio], "median", round(med(ratio), 2))
 print("## genetic search: evaluations per CPU second (median of rounds), ask seconds")
 tasks = [d["task"] for d in ga["main"][ROUNDS[0]]]
 for i, t in enumerate(tasks):

@@ -1,6 +1,6 @@
 """first_invalid and the certificates' parts, ms per good-arm evaluation (wrapped with perf_counter; argv[1]: checkout)."""
 import sys, time, statistics
-exec(open("/work/h-fast-feasible2/docs/results/issue25_round6/fast-feasible2_bench_plan.py").read().split("tp, tc = [], []")[0])
+exec(open(__import__("pathlib").Path(__file__).with_name("fast-feasible2_bench_plan.py")).read().split("tp, tc = [], []")[0])
 from robodesign.model import collision_cull as C
 from robodesign.solvers import pair_certificates as PC, planning as PL
 acc = {}
