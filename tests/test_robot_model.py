@@ -137,6 +137,34 @@ def test_reference_module_sets_load_and_random_assemblies_build(folder):
         assert r.n_collision_geometries >= len(order) - 1
 
 
+@pytest.mark.parametrize("folder", [IMPROV, PRIMITIVES])
+def test_random_serial_orders_keep_their_rules(folder):
+    """Every order: a base first, an end effector last and nowhere else, exactly ``dof`` joint DoF, at most
+    ``max_links_between`` links in a row, and it assembles; the same generator state gives the same order."""
+    ms = load_module_set(folder)
+    checked = 0
+    for seed in range(6):
+        for dof in (1, 3, 6, 7):
+            for most in (0, 1, 2):
+                rng = np.random.default_rng(seed)
+                try:
+                    order = random_serial_order(ms, rng, dof=dof, max_links_between=most, max_tries=300)
+                except AssemblyError:
+                    continue
+                kinds = [ms[m].kind for m in order]
+                assert kinds[0] == "base" and kinds[-1] == "eef" and "eef" not in kinds[1:-1]
+                assert sum(ms[m].dof for m in order if ms[m].kind == "joint") == dof
+                run = 0
+                for k in kinds[1:-1]:
+                    run = run + 1 if k == "link" else 0
+                    assert run <= most
+                Assembly.from_order(ms, order)
+                assert random_serial_order(ms, np.random.default_rng(seed), dof=dof, max_links_between=most,
+                                           max_tries=300) == order
+                checked += 1
+    assert checked >= 18   # (IMPROV has no 1- or 7-DoF chains, and needs links between some joints)
+
+
 def test_improv_known_arm_values():
     ms = load_module_set(IMPROV)
     r = Robot.from_order(ms, ["1", "21", "4", "21", "23", "12"])

@@ -253,17 +253,23 @@ def random_serial_order(ms: ModuleSet, rng, dof: int = 6, max_links_between: int
     bases = [m.id for m in ms.of_kind("base")]
     if not bases:
         raise AssemblyError(f"module set {ms.name!r} has no base module")
+    # (last module, joints left, a link allowed) → the modules that may come next, made once per call
+    options: Dict[Tuple[str, int, bool], List[str]] = {}
     for _ in range(max_tries):
         order = [bases[rng.integers(len(bases))]]
         d, links = 0, 0
         ok = True
         while True:
-            cands = next_compatible(ms, order[-1])
-            if d >= dof:
-                cands = [c for c in cands if ms[c].kind == "eef"]
-            else:
-                cands = [c for c in cands if ms[c].kind != "eef" and ms[c].dof <= dof - d
-                         and (ms[c].kind == "joint" or links < max_links_between)]
+            key = (order[-1], dof - d, links < max_links_between)
+            cands = options.get(key)
+            if cands is None:
+                cands = next_compatible(ms, order[-1])
+                if d >= dof:
+                    cands = [c for c in cands if ms[c].kind == "eef"]
+                else:
+                    cands = [c for c in cands if ms[c].kind != "eef" and ms[c].dof <= dof - d
+                             and (ms[c].kind == "joint" or links < max_links_between)]
+                options[key] = cands
             if not cands:
                 ok = False
                 break
