@@ -64,7 +64,6 @@ class PairCertificates:
         self.anchors = np.zeros((ANCHORS, robot.dof))
         self.free = np.full((ANCHORS, len(self.certified)), np.nan)
         self.count = 0         # certificates made
-        self.distances = 0     # distance queries asked (statistics)
 
     def pending(self, R: np.ndarray, S: np.ndarray) -> np.ndarray:
         """(N, pairs) booleans: ``S`` (the pairs the culler's bounds do not clear at the rows of ``R``) without the
@@ -117,5 +116,4 @@ class PairCertificates:
         self.free[row] = np.nan
         self.free[row, own] = free
         self.count += 1
-        self.distances += len(own)
         return free
