@@ -1,7 +1,8 @@
 """The base-pose parameters of a search space (:class:`BaseBounds`: offsets x, y, z, yaw from the nominal base pose
 within box bounds and the task's base-placement tolerance) and the bounding spheres that let a sampled base position
-skip the exact inside-test of the obstacles it is far from (:func:`clearance_spheres`), and how far the goals lie
-beyond an order's reach bound at a proposed base pose (:func:`beyond_reach`)."""
+skip the exact inside-test of the obstacles it is far from (:func:`clearance_spheres`), how far the goals lie
+beyond an order's reach bound at a proposed base pose (:func:`beyond_reach`) and the base parameters that
+``SearchSpace.sample_base`` proposes for an order (:class:`BaseProposals`)."""
 from __future__ import annotations
 
 import math
@@ -10,6 +11,8 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Optional, Sequence, Tuple
 
 import numpy as np
+
+from robodesign.core.spatial import rot_z
 
 if TYPE_CHECKING:
     from robodesign.formats.tolerance import ToleratedPose
@@ -122,3 +125,45 @@ def beyond_reach(goals, R: float, pose: np.ndarray, o_h: np.ndarray) -> float:
         if d > worst:
             worst = d
     return max(0.0, worst)
+
+
+_NEAR, _FAR = 0.2, 0.75   # a geometric proposal's first joint: at this share of the reach radius from a goal
+
+
+class BaseProposals:
+    """The base parameters :meth:`SearchSpace.sample_base` proposes for one order, each with the draws it made and
+    the numbers it had, in fewer calls: ``rng.uniform(lo, hi)`` is numpy's ``lo + (hi − lo)·u`` of the double
+    ``rng.random()`` gives (so a vector of ``rng.random`` draws gives a row of them), and ``np.linalg.norm`` of a
+    vector is the square root of its dot product. ``goals``: rows (x, y, z, slack) in the world; ``o_local``: the
+    first joint in the frame of the base parameters' origin; ``R``: the order's reach radius."""
+
+    def __init__(self, bounds: BaseBounds, goals, o_local: np.ndarray, R: float, inverse_nominal: np.ndarray):
+        self.free = bounds.free
+        self.lo = [float(v) for v in bounds.lower]
+        self.span = [float(h) - lo for h, lo in zip(bounds.upper, self.lo)]
+        if not all(math.isfinite(s) for s in self.span):
+            raise OverflowError("high - low range exceeds valid bounds")   # (numpy's uniform raises it)
+        self.goals, self.o_local, self.inv = goals, o_local, inverse_nominal
+        self.radius = min(R, 10.0)
+        # the first joint turned by the yaw, made once when the yaw is fixed (its every draw is lo + 0.0)
+        self.turned = rot_z(self.lo[3] + 0.0) @ o_local if self.span[3] == 0.0 else None
+
+    def geometric(self, rng) -> Tuple[float, ...]:
+        """The first joint at a random point 20–75 % of the reach radius (at most 10 m) from a random goal: every
+        parameter drawn in its bounds, then the free x, y, z set to put the first joint there (at the drawn yaw)."""
+        lo, span = self.lo, self.span
+        u = rng.random(4).tolist()
+        full = [lo[0] + span[0] * u[0], lo[1] + span[1] * u[1], lo[2] + span[2] * u[2], lo[3] + span[3] * u[3]]
+        gx, gy, gz, _ = self.goals[int(rng.integers(len(self.goals)))]
+        v = rng.normal(size=3)
+        f = (_NEAR + (_FAR - _NEAR) * rng.random()) * self.radius / max(math.sqrt(float(v.dot(v))), 1e-12)
+        vx, vy, vz = v.tolist()
+        o_n = (self.inv @ np.array([gx + vx * f, gy + vy * f, gz + vz * f, 1.0]))[:3]   # in the nominal frame
+        turned = self.turned if self.turned is not None else rot_z(full[3]) @ self.o_local
+        t = (o_n - turned).tolist()
+        return tuple(t[i] if i < 3 else full[i] for i in self.free)
+
+    def uniform(self, rng) -> Tuple[float, ...]:
+        """The free parameters drawn uniformly in their bounds."""
+        lo, span = self.lo, self.span
+        return tuple(lo[i] + span[i] * u for i, u in zip(self.free, rng.random(len(self.free)).tolist()))

@@ -28,8 +28,7 @@ from typing import FrozenSet, Iterator, List, Optional, Sequence, Tuple, cast
 import numpy as np
 
 from robodesign.core.errors import AssemblyError, InputError
-from robodesign.core.spatial import rot_z
-from robodesign.design.base_bounds import BaseBounds, beyond_reach, clearance_spheres  # noqa: F401 - BaseBounds: its import path
+from robodesign.design.base_bounds import BaseBounds, BaseProposals, beyond_reach, clearance_spheres  # noqa: F401 - BaseBounds: its import path
 from robodesign.formats.assembly import Assembly, chain_pairs, chain_step, free_connectors, next_compatible
 from robodesign.formats.geometry import contains_point
 from robodesign.formats.module_spec import ModuleSet
@@ -429,6 +428,14 @@ class SearchSpace:
         T = self.base_bounds.pose(params) if pose is None else pose
         return beyond_reach(self._goal_rows(), R, T, np.append(o_local, 1.0))
 
+    def _inverse_nominal(self) -> np.ndarray:
+        """The inverse of the nominal base pose (made once)."""
+        memo = self._memo()
+        inv = memo.get("inverse_nominal")
+        if inv is None:
+            inv = memo["inverse_nominal"] = np.linalg.inv(self.base_bounds.nominal)
+        return inv
+
     def _goal_rows(self) -> Tuple[Tuple[float, float, float, float], ...]:
         """:meth:`_goal_array`'s rows as Python floats (:func:`~robodesign.design.base_bounds.beyond_reach`'s)."""
         memo = self._memo()
@@ -489,37 +496,23 @@ class SearchSpace:
             return bb.sample(rng)
         order = tuple(str(m) for m in order)
         o_local, R = self._order_reach(order)
-        G = self._goal_array()
-        G3, rows, o_h, n = G[:, :3], self._goal_rows(), np.append(o_local, 1.0), len(G)
-        inv = np.linalg.inv(bb.nominal)
+        rows = self._goal_rows()
+        propose = BaseProposals(bb, rows, o_local, R, self._inverse_nominal())
+        o_h = np.append(o_local, 1.0)
         best, best_s = None, math.inf
         for k in range(tries):
-            if k % 2 == 0:  # geometric: the first joint within R of a goal
-                full = [float(rng.uniform(bb.lower[i], bb.upper[i])) for i in range(4)]
-                g = G3[int(rng.integers(n))]
-                v = rng.normal(size=3)
-                # at 20–75 % of the reach: a stretched arm rarely holds a pose's orientation (or its weight)
-                v *= rng.uniform(0.2, 0.75) * min(R, 10.0) / max(float(np.linalg.norm(v)), 1e-12)
-                o_n = (inv @ np.append(g + v, 1.0))[:3]  # the first joint in the nominal frame
-                t = o_n - rot_z(full[3]) @ o_local
-                for i in range(3):
-                    if i in free:
-                        full[i] = float(t[i])
-                params = tuple(full[i] for i in free)
-            else:
-                params = tuple(float(rng.uniform(bb.lower[i], bb.upper[i])) for i in free)
+            params = propose.geometric(rng) if k % 2 == 0 else propose.uniform(rng)
             if not bb.within(params):
                 continue
-            T = bb.pose(params)   # (one pose for the tolerance, the shortfall and the clearance)
-            if bb.tolerance is not None and not bb.tolerance.valid(T):
-                continue
+            T = bb.pose(params)   # (one pose for the shortfall, the tolerance and the clearance)
             s = beyond_reach(rows, R, T, o_h)
-            if s != 0.0 and s >= best_s or not self._clear(params, T):
-                continue  # neither returned nor the best so far (its clearance does not matter)
+            if s != 0.0 and s >= best_s:
+                continue   # neither returned nor the best so far (its tolerance and clearance do not matter)
+            if bb.tolerance is not None and not bb.tolerance.valid(T) or not self._clear(params, T):
+                continue
             if s == 0.0:
                 return params
-            if s < best_s:
-                best, best_s = params, s
+            best, best_s = params, s   # (s < best_s)
         return best if best is not None else bb.sample(rng)
 
     def informed_candidate(self, rng, orders: int = 8) -> "Candidate":
