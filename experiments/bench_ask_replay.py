@@ -4,9 +4,10 @@
 
 Runs the search of experiments/bench_front_ga.py (optimizer ``genetic``, seed 0, batches of 16) on its family
 tasks once with the real evaluator of ``--src`` and records every evaluation; then runs it ``--repeat`` more
-times, each in a fresh problem (its search space's memos empty) and optimizer, with an evaluator that returns the recorded evaluation of the candidate it is
-given (no evaluation work). Prints per task the CPU seconds of the replays' asks (each, and their median) and the
-hash of the candidates asked with their scores (the same as bench_front_ga's: the same search path).
+times, each in a fresh problem (its search space's memos empty) and optimizer, with an evaluator that returns
+the recorded evaluation of the candidate it is given (no evaluation work). Prints per task the CPU seconds of
+the replays' asks (each, and their median) and the hash of the candidates asked with their scores (the same as
+bench_front_ga's: the same search path).
 """
 from __future__ import annotations
 
