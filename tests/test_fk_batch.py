@@ -77,3 +77,18 @@ def test_base_pose_change_and_input_checks(robots):
     assert robot.fk_batch(Q[0]).shape == (1, 4, 4)  # one configuration
     with pytest.raises(InputError):
         robot.fk_batch(np.zeros((3, robot.dof + 1)))
+
+
+def test_plus_z_test_equals_numpy_allclose():
+    """batch_fk._is_plus_z decides as ``np.allclose(ax, (0, 0, 1), atol=0)`` did: on exact, signed-zero, non-finite
+    and random axes, and on the neighbours of its tolerance's bounds."""
+    from robodesign.model.batch_fk import _is_plus_z
+    rng = np.random.default_rng(7)
+    edge = [1.0 + 1e-5, 1.0 - 1e-5, np.nextafter(1.0 + 1e-5, 2.0), np.nextafter(1.0 - 1e-5, 0.0),
+            np.nextafter(1.0 + 1e-5, 0.0), np.nextafter(1.0 - 1e-5, 2.0), 1.0, -1.0, 0.0, -0.0]
+    small = [0.0, -0.0, 5e-324, -5e-324, 1e-12, np.nan, np.inf, -np.inf]
+    axes = [(x, y, z) for x in small for y in small[:3] for z in edge + small]
+    axes += [tuple(float(v) for v in a) for a in rng.normal(size=(300, 3))]
+    axes += [(0.0, 0.0, float(z)) for z in 1.0 + rng.normal(0.0, 2e-5, 300)]
+    for ax in axes:
+        assert _is_plus_z(ax) == bool(np.allclose(ax, (0.0, 0.0, 1.0), atol=0.0)), ax

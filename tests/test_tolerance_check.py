@@ -218,3 +218,26 @@ def test_huge_poses_go_the_reference_way():
         with np.errstate(all="ignore"):
             assert tp._plan.valid(tp.delta(T), EPS) is None
             assert tp.valid(T) is (not tp.violations(T))
+
+
+RADIAL_GROUPS = [g for g in GROUPS if set(g) <= {"x", "y", "z", "r_cyl", "r_sph", "Theta_R"}]
+
+
+@pytest.mark.parametrize("frame", FRAMES)
+@pytest.mark.parametrize("names", RADIAL_GROUPS)
+def test_radial_frames_give_the_reference_values_in_entry_order(names, frame):
+    """A frame of x, y, z, r_cyl, r_sph and Theta_R only takes the plan's list path (``radial_values``): the same
+    values, bit for bit, as the dict path and as the reference, in the entries' order."""
+    pose = _pose(names, frame)
+    plan = pose._plan
+    assert plan.radial
+    rng = np.random.default_rng(zlib.crc32(repr((names, frame)).encode()))
+    for T in _delta_poses(rng, 60):
+        D = pose._nominal_inv @ T
+        rows = D.tolist()
+        ref = pose._frame_values(T)
+        for fr in plan.frames:
+            fast = fr.radial_values(D, rows)
+            slow = fr.values(D, rows)
+            for (name, *_), v in zip(fr.entries, fast):
+                assert _same(v, slow[name][0]) and _same(v, ref[fr.frame][name][0])

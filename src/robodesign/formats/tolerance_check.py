@@ -38,6 +38,8 @@ _AZIMUTHS = {"phi_cyl", "phi_sph"}
 _RPY = {"R": 0, "P": 1, "Y": 2, "Gamma": 0, "Beta": 1, "Alpha": 2}
 _QUAT = {"A": 0, "B": 1, "C": 2, "D": 3}
 _AXIS = {"N_x": 0, "N_y": 1, "N_z": 2}
+#: the values a frame of :meth:`_Frame.radial_values` holds, in its order: never degenerate, none periodic
+_RADIAL = ("x", "y", "z", "r_cyl", "r_sph", "Theta_R")
 
 
 def _angle(r0, r1, r2) -> float:
@@ -73,6 +75,28 @@ class _Frame:
         self.axis = sorted(self.r_names & set(_AXIS))
         self.rpy = sorted(self.r_names & set(_RPY))
         self.quat = sorted(self.r_names & set(_QUAT))
+        # a frame of x, y, z, r_cyl, r_sph and Theta_R only: the entries' values in their order, without the dict
+        self.radial = names <= set(_RADIAL) and not any(e[3] for e in entries)
+        self.slots = [_RADIAL.index(e[0]) for e in entries] if self.radial else []
+
+    def radial_values(self, D: np.ndarray, rows) -> List[float]:
+        """The value of every entry, in their order, for a :attr:`radial` frame: those of :meth:`values` (the same
+        operations on the same numbers; none of these is ever degenerate)."""
+        x = y = z = rho = r = th = 0.0
+        if self.p_names:
+            if self.skip_p:
+                x, y, z = rows[0][3], rows[1][3], rows[2][3]
+            else:
+                x, y, z = (self.Q @ D[:3, 3]).tolist()
+            if self.rho:
+                rho = math.hypot(x, y)
+                if self.r:
+                    r = math.sqrt(rho * rho + z * z)
+        if self.theta_r:
+            m = rows if self.skip_r else (self.Q @ D[:3, :3] @ self.QT).tolist()
+            th = _angle(m[0], m[1], m[2])
+        v = (x, y, z, rho, r, th)
+        return [v[i] for i in self.slots]
 
     def values(self, D: np.ndarray, rows) -> Dict[str, Tuple[float, bool]]:
         """name → (value, degenerate), as the reference's ``_frame_values(T)[frame]`` has them."""
@@ -148,6 +172,7 @@ class ValidPlan:
         self.frames = [_Frame(f, Q[f], plain[f], e, systems, degenerate, quaternion) for f, e in by_frame.items()]
         self.needs_finite = any(fr.needs_finite for fr in self.frames)
         self.arc_contains = arc_contains
+        self.radial = all(fr.radial for fr in self.frames)   # every frame's values without dicts (valid_radial)
 
     def values(self, D: np.ndarray) -> Optional[List[Dict[str, Tuple[float, bool]]]]:
         """Per frame of :attr:`frames`: name → (value, degenerate) of Δ = ``D`` (4×4), as the reference's
@@ -161,6 +186,8 @@ class ValidPlan:
         """Whether Δ = ``D`` satisfies every entry (``lo − eps ≤ v ≤ hi + eps``, angles on the circle), or None
         for a pose the plan leaves to the reference (not finite). Every value is computed before any is checked,
         as the reference does (a value that raises raises here too)."""
+        if self.radial:
+            return self.valid_radial(D, eps)
         try:
             vals = self.values(D)
         except OverflowError:   # a Python float's ** raises where numpy's float64 gives inf: the reference decides
@@ -177,5 +204,21 @@ class ValidPlan:
                     if not arc_contains(v, lo, hi, eps):
                         return False
                 elif not lo - eps <= v <= hi + eps:
+                    return False
+        return True
+
+    def valid_radial(self, D: np.ndarray, eps: float) -> Optional[bool]:
+        """:meth:`valid` of a plan whose every frame is :attr:`_Frame.radial`: the same values (every one computed
+        before any is checked), checked as ``lo − eps ≤ v ≤ hi + eps`` in the same order, None where it gives None."""
+        rows = D.tolist()
+        if self.needs_finite and not math.isfinite(sum(rows[0]) + sum(rows[1]) + sum(rows[2])):
+            return None
+        try:
+            vals = [fr.radial_values(D, rows) for fr in self.frames]
+        except OverflowError:
+            return None
+        for fr, fv in zip(self.frames, vals):
+            for (_, lo, hi, _), v in zip(fr.entries, fv):
+                if not lo - eps <= v <= hi + eps:
                     return False
         return True
