@@ -315,15 +315,10 @@ class RobotGeometry:
         the world (the bodies before the first joint) that the bounds of the collision culler do not clear: the
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
         field; :class:`robodesign.model.collision_cull.ObstacleBounds`)."""
-        from robodesign.model.collision_cull import bounding_sphere, distance_field, obstacle_bounds
+        from robodesign.model.collision_cull import distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
             root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
-            C, r = np.zeros((len(root), 3)), np.zeros(len(root))
-            for i, a in enumerate(root):
-                _, _, _, P, shape = self._geom_specs[a]
-                c, r[i] = bounding_sphere(shape)
-                C[i] = P[:3, :3] @ c + P[:3, 3]
-            self._root_spheres = (root, C, r)
+            self._root_spheres = (root, *_placed_spheres([self._geom_specs[a] for a in root]))
         root, C, r = self._root_spheres
         if not root:
             return []
@@ -349,6 +344,31 @@ class RobotGeometry:
 _CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
 _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+_SPHERES: Dict[tuple, tuple] = {}   # ((id(shape), placement bytes) per root object) → (their shapes, C, r)
+
+
+def _placed_spheres(specs: List[tuple]) -> Tuple[np.ndarray, np.ndarray]:
+    """(C, r): the bounding spheres (:func:`~robodesign.model.collision_cull.bounding_sphere`) of the objects of the
+    geometry ``specs`` (name, joint, frame, placement P, shape), their centres placed by P (the base frame for the
+    objects fixed to the world), read-only. Kept per shapes and placements: robots of one search share their first
+    modules, so their roots' spheres are the same numbers."""
+    from robodesign.model.collision_cull import bounding_sphere
+    key = tuple([(id(spec[4]), spec[3].tobytes()) for spec in specs])
+    hit = _SPHERES.get(key)
+    if hit is not None and all(a is spec[4] for a, spec in zip(hit[0], specs)):
+        return hit[1], hit[2]
+    C, r = np.zeros((len(specs), 3)), np.zeros(len(specs))
+    for i, (_, _, _, P, shape) in enumerate(specs):
+        c, r[i] = bounding_sphere(shape)
+        C[i] = P[:3, :3] @ c + P[:3, 3]
+    C.setflags(write=False)
+    r.setflags(write=False)
+    if len(_SPHERES) >= 4096:
+        _SPHERES.clear()
+    _SPHERES[key] = (tuple(spec[4] for spec in specs), C, r)   # (the shapes held: their ids are not reused)
+    return C, r
 
 
 _PAIR_COLUMNS: Dict[int, List["pin.CollisionPair"]] = {}   # object k → CollisionPair(a, k) for a = 0, 1, …

@@ -1,0 +1,108 @@
+"""What a robot's build keeps or makes faster gives the numbers it made before: the scratch space made in place
+(``pin.Data(model)``) is ``model.createData()``'s, and the root objects' bounding spheres kept per shapes and
+placements are those the formula makes for each robot (``base_collisions``' bounds)."""
+import dataclasses
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from robodesign import Assembly, Robot, load_module_set
+from robodesign.formats.assembly import random_serial_order
+from robodesign.model import robot_geometry
+from robodesign.model.collision_cull import bounding_sphere
+from robodesign.model.robot import Obstacle
+
+from conftest import IMPROV
+
+
+def _random_pose(rng) -> np.ndarray:
+    """A random rigid pose (rotation from a normalised quaternion, translation in a 1 m box)."""
+    T = np.eye(4)
+    T[:3, :3] = pin.Quaternion(*rng.normal(size=4)).normalized().toRotationMatrix()
+    T[:3, 3] = rng.uniform(-1.0, 1.0, 3)
+    return T
+
+
+def _robots(modules: str, n: int, seed: int):
+    ms = load_module_set(modules)
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        order = random_serial_order(ms, rng, dof=int(rng.integers(3, 8)) if modules != IMPROV else 6)
+        yield ms, order, Robot.from_order(ms, order, base_pose=_random_pose(rng))
+
+
+def test_scratch_space_is_create_datas():
+    """On 40 random robots (two module sets): the Data of a new, a moved and a framed robot equals a new
+    ``model.createData()`` (pinocchio compares every field), and the kinematics through it are the same numbers."""
+    rng = np.random.default_rng(5)
+    for modules in ("robodesign_arm", IMPROV):
+        for _, _, robot in _robots(modules, 20, 17):
+            assert robot.data == robot.model.createData()
+            robot.set_base_pose(_random_pose(rng))
+            assert robot.data == robot.model.createData()
+            q = robot.random_configuration(rng)
+            ref = robot.model.createData()
+            pin.framesForwardKinematics(robot.model, ref, q)
+            assert robot.fk(q).tobytes() == ref.oMf[robot.tcp_frame].homogeneous.tobytes()
+            robot.add_frames()
+            assert robot.data == robot.model.createData()
+
+
+def _spheres_by_formula(robot: Robot):
+    """The root objects' sphere centres (base frame) and radii, by the formula, for this robot alone."""
+    root = sorted(k for kind, k, _ in robot._root_items if kind == "geom")
+    C, r = np.zeros((len(root), 3)), np.zeros(len(root))
+    for i, a in enumerate(root):
+        _, _, _, P, shape = robot._geom_specs[a]
+        c, r[i] = bounding_sphere(shape)
+        C[i] = P[:3, :3] @ c + P[:3, 3]
+    return root, C, r
+
+
+def test_root_spheres_kept_are_the_formulas():
+    """On 60 random robots (two module sets, many sharing their first modules, so kept spheres are met again): the
+    root spheres base_collisions bounds with are bit for bit the formula's, and its answer is that of the same robot
+    with its spheres computed afresh (nothing kept)."""
+    robot_geometry._SPHERES.clear()
+    box = Obstacle("box", coal.Box(0.3, 0.3, 0.3), np.eye(4))
+    seen, reused = set(), 0
+    for modules in ("robodesign_arm", IMPROV):
+        for _, _, robot in _robots(modules, 30, 23):
+            robot.set_obstacles([box], safety_margin=0.05)
+            got = robot.base_collisions()
+            root, C, r = _spheres_by_formula(robot)
+            kept = robot._root_spheres
+            assert kept is not None and kept[0] == root
+            assert kept[1].tobytes() == C.tobytes() and kept[2].tobytes() == r.tobytes()
+            reused += id(kept[1]) in seen
+            seen.add(id(kept[1]))
+            saved = dict(robot_geometry._SPHERES)
+            robot_geometry._SPHERES.clear()
+            robot._root_spheres = robot._obstacle_bounds = robot._base_probe = None
+            assert robot.base_collisions() == got
+            robot_geometry._SPHERES.update(saved)
+    assert reused > 10
+
+
+def test_root_spheres_follow_the_shapes_and_placements():
+    """A module set whose base module's first collision geometry is moved: robots of it get their own spheres (the
+    formula's for them), not those kept for the other set's robot with the same module IDs."""
+    ms = load_module_set("robodesign_arm")
+    order = random_serial_order(ms, np.random.default_rng(3), dof=6)
+    base = ms[order[0]]
+    shift = np.eye(4)
+    shift[:3, 3] = [0.01, -0.02, 0.03]
+    bodies = list(base.bodies)
+    k = next(i for i, b in enumerate(bodies) if b.collision)
+    coll = tuple(dataclasses.replace(g, pose=shift @ g.pose) if j == 0 else g for j, g in enumerate(bodies[k].collision))
+    bodies[k] = dataclasses.replace(bodies[k], collision=coll)
+    other = dataclasses.replace(ms, modules={**ms.modules, order[0]: dataclasses.replace(base, bodies=tuple(bodies))})
+    robots = [Robot(s, Assembly.from_order(s, order), base_pose=np.eye(4)) for s in (ms, other, ms)]
+    for robot in robots:
+        robot.set_obstacles([Obstacle("box", coal.Box(0.3, 0.3, 0.3), np.eye(4))])
+        robot.base_collisions()
+        _, C, r = _spheres_by_formula(robot)
+        assert robot._root_spheres[1].tobytes() == C.tobytes() and robot._root_spheres[2].tobytes() == r.tobytes()
+    assert robots[0]._root_spheres[1].tobytes() != robots[1]._root_spheres[1].tobytes()
+    assert robots[0]._root_spheres[1] is robots[2]._root_spheres[1]
