@@ -106,3 +106,27 @@ def test_root_spheres_follow_the_shapes_and_placements():
         assert robot._root_spheres[1].tobytes() == C.tobytes() and robot._root_spheres[2].tobytes() == r.tobytes()
     assert robots[0]._root_spheres[1].tobytes() != robots[1]._root_spheres[1].tobytes()
     assert robots[0]._root_spheres[1] is robots[2]._root_spheres[1]
+
+
+def test_collision_objects_made_on_first_use_are_the_plain_walks():
+    """On 24 random robots (two module sets): base_collisions answers without the robot's list of collision objects
+    where no root pair is near; made later, the list is the plain walk's (names, joints, placements bit for bit,
+    test_robot_build's reference), each object's (instance, body) is the one its name says, and the objects fixed
+    to the world are the root ones base_collisions bounded."""
+    from test_robot_build import _reference
+    far = np.eye(4)
+    far[:3, 3] = [50.0, 50.0, 50.0]
+    box = Obstacle("far", coal.Box(0.1, 0.1, 0.1), far)
+    for modules in ("robodesign_arm", IMPROV):
+        for ms, order, robot in _robots(modules, 12, 31):
+            robot.set_obstacles([box])
+            assert robot.base_collisions() == [] and robot._specs is None and robot._bodies_of_geoms is None
+            _, geoms, _ = _reference(ms, robot.assembly)
+            specs = robot._geom_specs
+            assert len(specs) == len(geoms) == robot.n_collision_geometries == len(robot._geom_body)
+            for (name, jid, _, P, _), (rname, rjid, RP) in zip(specs, geoms):
+                assert (name, jid) == (rname, rjid) and P.tobytes() == RP.tobytes()
+            labels = robot.instance_labels
+            assert all(name.startswith(f"{labels[i]}.{bid}.") for (name, *_), (i, bid) in zip(specs, robot._geom_body))
+            assert [k for k, s in enumerate(specs) if s[1] == 0] == robot._root_spheres[0]
+
