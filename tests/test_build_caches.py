@@ -130,3 +130,67 @@ def test_collision_objects_made_on_first_use_are_the_plain_walks():
             assert all(name.startswith(f"{labels[i]}.{bid}.") for (name, *_), (i, bid) in zip(specs, robot._geom_body))
             assert [k for k, s in enumerate(specs) if s[1] == 0] == robot._root_spheres[0]
 
+
+def _order_reference(ms, order):
+    """The serial assembly of ``order`` by the chaining rule step by step, nothing remembered (the module order's
+    rule as Assembly.from_order applied it before its steps were kept): (module ids, connections, base) or the
+    AssemblyError's message."""
+    from robodesign.core.errors import AssemblyError
+    from robodesign.formats.assembly import _not_one, chain_pairs, free_connectors
+    try:
+        for i, mid in enumerate(order):
+            if mid not in ms.modules:
+                raise AssemblyError("unknown")
+        bases = [c for c in ms[order[0]].connectors if c.type == "base"]
+        if len(bases) != 1:
+            raise AssemblyError("bases")
+        free, open_, connections = [free_connectors(ms, order[0])], [], []
+        open_ = [0] if free[0] else []
+        for i in range(1, len(order)):
+            cands = [(k, a, b) for k in open_ for a, b in chain_pairs(ms, order[k], free[k], order[i])]
+            if len(cands) != 1:
+                _not_one(ms, list(order), i, free, cands)
+            k, c_old, c_new = cands[0]
+            if k != i - 1:
+                raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
+                                    f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
+                                    f"form a chain")
+            free[k] = tuple(c for c in free[k] if c != c_old.id)
+            if not free[k]:
+                open_.remove(k)
+            free.append(free_connectors(ms, order[i], used=(c_new.id,)))
+            if free[i]:
+                open_.append(i)
+            connections.append((i, c_new.id, k, c_old.id))
+        return tuple(order), tuple(connections), (0, bases[0].id)
+    except AssemblyError as e:
+        return str(e)
+
+
+def test_module_orders_by_kept_steps_are_the_rules():
+    """On 1,200 orders (two module sets: random valid orders, and each with one module replaced, dropped or two
+    swapped, most of which do not assemble): the assembly made of kept steps is the rule's step by step, and an
+    order that does not assemble raises the same error."""
+    from robodesign.core.errors import AssemblyError
+    from robodesign.formats import assembly
+    rng = np.random.default_rng(41)
+    for modules in ("robodesign_arm", IMPROV):
+        ms = load_module_set(modules)
+        ids = sorted(ms.modules)
+        for n in range(200):
+            order = list(random_serial_order(ms, rng, dof=int(rng.integers(3, 8)) if modules != IMPROV else 6))
+            replaced, dropped, swapped = list(order), list(order), list(order)
+            replaced[int(rng.integers(1, len(order)))] = ids[int(rng.integers(len(ids)))]
+            del dropped[int(rng.integers(1, len(order)))]
+            a, b = rng.integers(1, len(order), 2)
+            swapped[a], swapped[b] = swapped[b], swapped[a]
+            for o in (order, replaced, dropped, swapped)[: 4 if n % 2 else 2]:
+                if n % 50 == 0:
+                    assembly._STEPS.clear()
+                want = _order_reference(ms, o)
+                try:
+                    asm = assembly.Assembly._from_order(ms, o)
+                    got = (asm.module_ids, asm.connections, asm.base)
+                except AssemblyError as e:
+                    got = str(e)
+                assert got == want
