@@ -194,3 +194,23 @@ def test_module_orders_by_kept_steps_are_the_rules():
                 except AssemblyError as e:
                     got = str(e)
                 assert got == want
+
+
+def test_a_pools_new_robot_has_the_cells_gravity():
+    """A robot the pool builds for a cell with a gravity of its own (given at construction now, no longer set after
+    it) is build_robot's: the same model (pinocchio compares every field, gravity included) and gravity torques."""
+    from robodesign.formats.task_io import load_task
+    from robodesign.model.cell import RobotPool, build_robot
+
+    from conftest import TASKS
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    task = dataclasses.replace(task, header=dataclasses.replace(task.header, gravity=(0.3, -1.7, -9.7)))
+    ms = load_module_set(IMPROV)
+    rng = np.random.default_rng(2)
+    for _ in range(5):
+        asm = Assembly.from_order(ms, random_serial_order(ms, rng, dof=6))
+        T = _random_pose(rng)
+        robot, fresh = RobotPool(task).take(ms, asm, T), build_robot(task, ms, asm, T)
+        assert robot.model == fresh.model and robot.model.gravity.vector.tolist() == [0.3, -1.7, -9.7, 0.0, 0.0, 0.0]
+        q = robot.random_configuration(rng)
+        assert robot.gravity_torque(q).tobytes() == fresh.gravity_torque(q).tobytes()

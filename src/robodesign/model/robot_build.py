@@ -179,7 +179,7 @@ class Walk:
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
         self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
-        self.direct_joint_pairs: set = set()
+        self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
         self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
         self.body_ops: List[tuple] = []    # (joint, inertia, placement) per body appended to a joint, in walk order,
@@ -189,14 +189,25 @@ class Walk:
         self.mass = 0.0
 
 
+_LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their instance_labels
+
+
 def instance_labels(module_ids) -> Tuple[str, ...]:
-    counts: Dict[str, int] = {}
-    labels = []
-    for mid in module_ids:
-        k = counts.get(mid, 0)
-        labels.append(mid if k == 0 else f"{mid}-{k}")
-        counts[mid] = k + 1
-    return tuple(labels)
+    """Each instance's label: its module id, with ``-k`` for the k-th repetition of the id (remembered per tuple of
+    ids: a search builds each order again at its base poses, and in its ask)."""
+    key = tuple(module_ids)
+    labels = _LABELS.get(key)
+    if labels is None:
+        counts: Dict[str, int] = {}
+        out = []
+        for mid in key:
+            k = counts.get(mid, 0)
+            out.append(mid if k == 0 else f"{mid}-{k}")
+            counts[mid] = k + 1
+        if len(_LABELS) >= 4096:
+            _LABELS.clear()
+        labels = _LABELS[key] = tuple(out)
+    return labels
 
 
 def walk(ms, asm, convex_meshes: bool) -> Walk:
@@ -308,7 +319,7 @@ def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[b
     for k2, other, rev, n, Q, jm, jsuffix, info, row, _ in joints:
         if seen[o + k2]:
             continue
-        w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
+        w.direct_joint_pairs.append(((i, bid), (i, other)))
         placement = Ps[n]   # (M @ P)
         if jm is None:
             push((i, recs[k2], jid, placement @ Q))

@@ -52,7 +52,7 @@ class RobotGeometry:
     _root_spheres: Optional[tuple]
     _obstacle_bounds: Optional[Any]
     _placed: bool
-    _direct_joint_pairs: set
+    _direct_joint_pairs: List[tuple]   # ((instance, body), (instance, body)) of each joint (robot_build.Walk)
     _self_map: Optional[np.ndarray]
     _n_self: int
 
