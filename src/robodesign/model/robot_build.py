@@ -269,9 +269,9 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
             n += 1
         if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
             if not jid:
-                for k, (n, _, shape) in enumerate(geoms, n_geoms):
-                    root.append(("geom", k, Ps[n].copy()))
-                    w.root_geoms.append((k, Ps[n], shape))
+                for g, (n, _, shape) in enumerate(geoms, n_geoms):   # (g: the object's index)
+                    root.append(("geom", g, Ps[n].copy()))
+                    w.root_geoms.append((g, Ps[n], shape))
             placed.append((name, jid, jf, Ps, geoms, i, bid))
             n_geoms += len(geoms)
         if joints:
