@@ -9,7 +9,7 @@ have aligned x-axes and anti-parallel z-axes (the transform between them is Rx(Ï
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, NoReturn, Optional, Sequence, Tuple
 
 from robodesign.core.errors import AssemblyError
 from robodesign.formats.module_spec import Connector, ModuleSet
@@ -73,21 +73,18 @@ class Assembly:
         open_ = [0] if free[0] else []  # the instances with a free connector, in order
         connections: List[Connection] = []
         for i in range(1, len(order)):
-            cands = [(k, c_old, c_new) for k in open_ for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
-            if len(cands) != 1:
-                _not_one(ms, order, i, free, cands)
-            k, c_old, c_new = cands[0]
-            if k != i - 1:
-                raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
-                                    f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
-                                    f"form a chain")
-            free[k] = tuple(c for c in free[k] if c != c_old.id)
-            if not free[k]:
-                open_.remove(k)
-            free.append(tuple(c for c in _free(ms, order[i]) if c != c_new.id))   # (free_connectors, used=(c_new.id,))
-            if free[i]:
+            step = _step(ms, order, i, open_, free)
+            if step is None:
+                _no_step(ms, order, i, open_, free)
+            p, old_id, new_id, free_k, free_i = step
+            k = open_[p]
+            free[k] = free_k
+            if not free_k:
+                del open_[p]
+            free.append(free_i)
+            if free_i:
                 open_.append(i)
-            connections.append((i, c_new.id, k, c_old.id))
+            connections.append((i, new_id, k, old_id))
         return Assembly(tuple(order), tuple(connections), (0, bases[0].id))
 
     @staticmethod
@@ -161,6 +158,44 @@ class Assembly:
             out["moduleConnection"] = [[a, ca, b, cb] for a, ca, b, cb in self.connections]
             out["baseConnection"] = [[self.base[0], self.base[1], 0]]
         return out
+
+
+_STEPS: Dict[tuple, Tuple[ModuleSet, Optional[tuple]]] = {}   # _step's memo
+
+
+def _step(ms: ModuleSet, order: List[str], i: int, open_: List[int], free: List[Tuple[str, ...]]) -> Optional[tuple]:
+    """How module ``i`` of a module order attaches (the serial-chaining rule, :func:`chain_pairs`, over the free
+    connectors ``free[k]`` of the instances ``open_``): (its instance's position in ``open_``, the connector of that
+    instance, the module's connector, that instance's free connectors after, the module's), or None where it does not
+    attach to the previous module in exactly one way (:func:`_no_step` says why). It depends only on the modules
+    and free connectors of the open instances, which is the previous one, and module ``i``: remembered per module set
+    and those (a search meets the same few steps at every position of every order)."""
+    key = (id(ms), order[i], tuple([(order[k], free[k], k == i - 1) for k in open_]))
+    hit = _STEPS.get(key)
+    if hit is not None and hit[0] is ms:
+        return hit[1]
+    cands = [(p, c_old, c_new) for p, k in enumerate(open_) for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
+    step = None
+    if len(cands) == 1 and open_[cands[0][0]] == i - 1:
+        p, c_old, c_new = cands[0]
+        step = (p, c_old.id, c_new.id, tuple(c for c in free[i - 1] if c != c_old.id),
+                tuple(c for c in _free(ms, order[i]) if c != c_new.id))   # (free_connectors, used=(c_new.id,))
+    if len(_STEPS) >= 65536:
+        _STEPS.clear()
+    _STEPS[key] = (ms, step)   # (the module set held: its id is not reused while the entry lives)
+    return step
+
+
+def _no_step(ms: ModuleSet, order: List[str], i: int, open_: List[int], free: List[Tuple[str, ...]]) -> NoReturn:
+    """The AssemblyError of module ``i`` of a module order that does not attach to the previous module in exactly
+    one way (:func:`_step` is None)."""
+    cands = [(k, c_old, c_new) for k in open_ for c_old, c_new in chain_pairs(ms, order[k], free[k], order[i])]
+    if len(cands) != 1:
+        _not_one(ms, order, i, free, cands)
+    k = cands[0][0]
+    raise AssemblyError(f"module {order[i]!r} at position {i} would connect to module {order[k]!r} at "
+                        f"position {k}, not to the previous module {order[i-1]!r}: a module order must "
+                        f"form a chain")
 
 
 def _not_one(ms: ModuleSet, order: List[str], i: int, free: List[Tuple[str, ...]], cands: list) -> None:

@@ -91,11 +91,13 @@ class RobotPool:
         if robot is None or robot.module_set is not ms or robot.assembly != assembly:
             robot = _adopt(ms, assembly)  # a bare robot of the assembly built for its kinematics, or None
             if robot is None:
-                robot = Robot(ms, assembly, base_pose=base_pose)
+                robot = Robot(ms, assembly, base_pose=base_pose) if self.task is None else \
+                    Robot(ms, assembly, base_pose=base_pose, gravity=self.task.header.gravity)
             else:
                 robot.set_base_pose(base_pose)
+                if self.task is not None:
+                    robot.set_gravity(self.task.header.gravity)
             if self.task is not None:
-                robot.set_gravity(self.task.header.gravity)
                 robot.set_obstacles(self.obstacles, safety_margin=self.margin)
             return robot
         robot.set_base_pose(base_pose)  # (its collision scratch space as a new one's)

@@ -112,7 +112,7 @@ class Robot(RobotGeometry):
         self.data: "pin.Data"
         if base_pose is None:   # (else set_base_pose below makes them)
             self.base_pose = np.eye(4)
-            self.data = self.model.createData()
+            self.data = pin.Data(self.model)
         self._sync_link_model()
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._geometry_changed()
@@ -157,7 +157,9 @@ class Robot(RobotGeometry):
         self.model = model
         self._frames: Optional[list] = w.bodies   # (the bodies' frames; None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
-        self._geom_specs, self._geom_body, self._placed = w.geom_specs, w.geom_body, False
+        self._geoms, self._n_geoms, self._root_geoms, self._placed = w.geoms, w.n_geoms, w.root_geoms, False
+        self._specs: Optional[list] = None   # (_geom_specs, _geom_body: made of _geoms on first use)
+        self._bodies_of_geoms: Optional[list] = None
         self._direct_joint_pairs, self._self_map = w.direct_joint_pairs, None   # (the map: on first use)
 
     def _set_joint_limits(self, model: "pin.Model", columns: np.ndarray) -> None:
@@ -187,7 +189,7 @@ class Robot(RobotGeometry):
             elif geom is not None:   # (else the geometry, when it is made, places them: _geometry_object)
                 geom.geometryObjects[idx].placement = SE3(T @ M)
         self._placed = True
-        self.data = model.createData()
+        self.data = pin.Data(model)   # (createData's Data, made in place: createData returns a copy)
         self._sync_link_model()
         if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
             _fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
@@ -249,7 +251,7 @@ class Robot(RobotGeometry):
         if frames:
             model = self.model
             add_body_frames(model, frames, self.base_pose if self._placed else None, self._root_items)
-            self.data = model.createData()
+            self.data = pin.Data(model)
         return self.model
 
     def fk_all(self, q) -> Dict[str, np.ndarray]:
@@ -339,7 +341,7 @@ class Robot(RobotGeometry):
         if self._link_model is None:  # a copy without armature: link-side RNEA in one pinocchio call
             self._link_model = pin.Model(self.model)
             self._link_model.armature = np.zeros(self.model.nv)
-            self._link_data = self._link_model.createData()
+            self._link_data = pin.Data(self._link_model)
         m, d = self._link_model, self._link_data
         if f_ext is None:
             return pin.rnea(m, d, self._q(q), np.asarray(dq, dtype=float), np.asarray(ddq, dtype=float))

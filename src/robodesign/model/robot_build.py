@@ -169,13 +169,17 @@ class Walk:
     def __init__(self, model: "pin.Model", labels: Tuple[str, ...]):
         self.model, self.labels = model, labels
         self.bodies: List[tuple] = []   # per body in walk order: (name, joint, joint's frame, placement, connectors)
-        self.geom_specs: List[Tuple[str, int, int, np.ndarray, object]] = []
-        self.geom_body: List[Tuple[int, str]] = []
+        # per body with collision geometry, in walk order: (name, joint, joint's frame, its products, its table's
+        # (n, name suffix, shape) per shape, instance, body id); the objects' specs are made of them on first use
+        # (geometry_specs)
+        self.geoms: List[tuple] = []
+        self.n_geoms = 0
+        self.root_geoms: List[Tuple[int, np.ndarray, object]] = []   # (index, placement, shape) on joint 0
         self.root_items: List[Tuple[str, int, np.ndarray]] = []
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
         self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
-        self.direct_joint_pairs: set = set()
+        self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
         self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
         self.body_ops: List[tuple] = []    # (joint, inertia, placement) per body appended to a joint, in walk order,
@@ -185,14 +189,25 @@ class Walk:
         self.mass = 0.0
 
 
+_LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their instance_labels
+
+
 def instance_labels(module_ids) -> Tuple[str, ...]:
-    counts: Dict[str, int] = {}
-    labels = []
-    for mid in module_ids:
-        k = counts.get(mid, 0)
-        labels.append(mid if k == 0 else f"{mid}-{k}")
-        counts[mid] = k + 1
-    return tuple(labels)
+    """Each instance's label: its module id, with ``-k`` for the k-th repetition of the id (remembered per tuple of
+    ids: a search builds each order again at its base poses, and in its ask)."""
+    key = tuple(module_ids)
+    labels = _LABELS.get(key)
+    if labels is None:
+        counts: Dict[str, int] = {}
+        out = []
+        for mid in key:
+            k = counts.get(mid, 0)
+            out.append(mid if k == 0 else f"{mid}-{k}")
+            counts[mid] = k + 1
+        if len(_LABELS) >= 4096:
+            _LABELS.clear()
+        labels = _LABELS[key] = tuple(out)
+    return labels
 
 
 def walk(ms, asm, convex_meshes: bool) -> Walk:
@@ -216,8 +231,8 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     pop, push = queue.popleft, queue.append
     labels, ops = w.labels, w.body_ops
     pending, masses, joint_frame = w.pending, w.masses, w.joint_frame
-    bodies, specs, geom_body, root, free = w.bodies, w.geom_specs, w.geom_body, w.root_items, w.free
-    total_mass = 0.0
+    bodies, placed, root, free = w.bodies, w.geoms, w.root_items, w.free
+    total_mass, n_geoms = 0.0, 0
     while queue:
         i, rec, jid, M = pop()
         k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack, poses = rec
@@ -253,22 +268,32 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                 free.append((c, jid, M, Ps[n]))
             n += 1
         if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
-            if jid:
-                specs.extend([(name + suffix, jid, jf, Ps[n], shape) for n, suffix, shape in geoms])
-                geom_body.extend([(i, bid)] * len(geoms))
-            else:
-                for n, suffix, shape in geoms:
-                    root.append(("geom", len(specs), Ps[n].copy()))
-                    specs.append((name + suffix, jid, jf, Ps[n], shape))
-                    geom_body.append((i, bid))
+            if not jid:
+                for g, (n, _, shape) in enumerate(geoms, n_geoms):   # (g: the object's index)
+                    root.append(("geom", g, Ps[n].copy()))
+                    w.root_geoms.append((g, Ps[n], shape))
+            placed.append((name, jid, jf, Ps, geoms, i, bid))
+            n_geoms += len(geoms)
         if joints:
             _joints(w, i, bid, Ps, jid, joints, seen, off[i], push, tabs[i].bodies)
-    w.mass = total_mass
+    w.mass, w.n_geoms = total_mass, n_geoms
     if not all(seen):
         missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
         raise AssemblyError(f"bodies not reachable from the base: {sorted(missing)}")
     _model(w)
     return w
+
+
+def geometry_specs(geoms: List[tuple]) -> List[Tuple[str, int, int, np.ndarray, object]]:
+    """The robot's collision objects of a walk's ``geoms``: (name, joint, joint's frame, placement, coal shape) each,
+    in walk order."""
+    return [(name + suffix, jid, jf, Ps[n], shape) for name, jid, jf, Ps, shapes, _, _ in geoms
+            for n, suffix, shape in shapes]
+
+
+def geometry_bodies(geoms: List[tuple]) -> List[Tuple[int, str]]:
+    """The (instance, body id) of each collision object of a walk's ``geoms``, in walk order."""
+    return [(i, bid) for _, _, _, _, shapes, i, bid in geoms for _ in shapes]
 
 
 def _model(w: Walk) -> None:
@@ -294,7 +319,7 @@ def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[b
     for k2, other, rev, n, Q, jm, jsuffix, info, row, _ in joints:
         if seen[o + k2]:
             continue
-        w.direct_joint_pairs.add(frozenset(((i, bid), (i, other))))
+        w.direct_joint_pairs.append(((i, bid), (i, other)))
         placement = Ps[n]   # (M @ P)
         if jm is None:
             push((i, recs[k2], jid, placement @ Q))

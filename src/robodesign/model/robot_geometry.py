@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import pinocchio as pin
 
+from robodesign.model.robot_build import geometry_bodies, geometry_specs
+
 if TYPE_CHECKING:
     from robodesign.formats.module_spec import ModuleSet
 
@@ -39,21 +41,42 @@ class RobotGeometry:
     safety_margin: float
     _geom_model: Optional["pin.GeometryModel"]
     _geom_data: Optional["pin.GeometryData"]
-    _geom_specs: List[Tuple[str, int, int, np.ndarray, object]]
-    _geom_body: List[Tuple[int, str]]
+    _geoms: List[tuple]   # the walk's bodies with collision geometry (robot_build.Walk.geoms)
+    _n_geoms: int
+    _root_geoms: List[Tuple[int, np.ndarray, object]]
+    _specs: Optional[List[Tuple[str, int, int, np.ndarray, object]]]
+    _bodies_of_geoms: Optional[List[Tuple[int, str]]]
     _root_items: List[Tuple[str, int, np.ndarray]]
     _obstacle_ids: List[int]
     _base_probe: Optional[tuple]
     _root_spheres: Optional[tuple]
     _obstacle_bounds: Optional[Any]
     _placed: bool
-    _direct_joint_pairs: set
+    _direct_joint_pairs: List[tuple]   # ((instance, body), (instance, body)) of each joint (robot_build.Walk)
     _self_map: Optional[np.ndarray]
     _n_self: int
 
     def _q(self, q) -> np.ndarray:
         """One configuration, checked (Robot's own)."""
         raise NotImplementedError
+
+    @property
+    def _geom_specs(self) -> List[Tuple[str, int, int, np.ndarray, object]]:
+        """The robot's collision objects: (name, joint, joint's frame, placement, coal shape) each, in walk order,
+        made on first use (a design that fails before its first collision query needs only the count and the
+        objects fixed to the world)."""
+        specs = self._specs
+        if specs is None:
+            specs = self._specs = geometry_specs(self._geoms)
+        return specs
+
+    @property
+    def _geom_body(self) -> List[Tuple[int, str]]:
+        """The (instance, body id) of each collision object, made on first use."""
+        bodies = self._bodies_of_geoms
+        if bodies is None:
+            bodies = self._bodies_of_geoms = geometry_bodies(self._geoms)
+        return bodies
 
     @property
     def _self_pairs(self) -> np.ndarray:
@@ -122,7 +145,7 @@ class RobotGeometry:
         return pin.GeometryObject("obstacle:" + ob.name, 0, 0, pin.SE3(np.asarray(ob.pose, float)), ob.shape)
 
     def _add_obstacles(self, geom) -> None:
-        n_robot = len(self._geom_body)
+        n_robot = self._n_geoms
         for ob in self.obstacles:  # at the indices _obstacle_ids: after the robot's objects, in order
             geom.addGeometryObject(self._obstacle_object(ob))
         add = geom.addCollisionPair
@@ -132,7 +155,7 @@ class RobotGeometry:
 
     def set_obstacles(self, obstacles: Sequence[Obstacle], safety_margin: float = 0.0) -> None:
         """Add environment collision objects; robot–obstacle pairs are checked with ``safety_margin``."""
-        n_robot = len(self._geom_body)
+        n_robot = self._n_geoms
         self.obstacles = list(obstacles)
         self._obstacle_ids = list(range(n_robot, n_robot + len(self.obstacles)))  # after the robot's own objects
         geom = self._geom_model
@@ -156,7 +179,7 @@ class RobotGeometry:
 
     def _robot_only_geom(self):
         g = pin.GeometryModel()
-        for k in range(len(self._geom_body)):
+        for k in range(self._n_geoms):
             g.addGeometryObject(self.geom_model.geometryObjects[k])
         for cp in list(self.geom_model.collisionPairs)[: self._n_self_pairs]:
             g.addCollisionPair(cp)
@@ -226,7 +249,7 @@ class RobotGeometry:
     # collision
     @property
     def n_collision_geometries(self) -> int:
-        return len(self._geom_body)
+        return self._n_geoms
 
     @property
     def n_self_collision_pairs(self) -> int:
@@ -292,7 +315,7 @@ class RobotGeometry:
         collides at every configuration."""
         if not self._obstacle_ids:
             return []
-        n = len(self._geom_body)
+        n = self._n_geoms
         # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a; those that a certified bound
         # clears are not asked (their answer is no)
         near = self._base_pairs_near()
@@ -307,6 +330,8 @@ class RobotGeometry:
         else:
             self._update_geometry(np.zeros(self.dof))
             hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
+        if not any(hit):
+            return []
         names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
         return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
 
@@ -315,15 +340,10 @@ class RobotGeometry:
         the world (the bodies before the first joint) that the bounds of the collision culler do not clear: the
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
         field; :class:`robodesign.model.collision_cull.ObstacleBounds`)."""
-        from robodesign.model.collision_cull import bounding_sphere, distance_field, obstacle_bounds
+        from robodesign.model.collision_cull import distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
-            root = sorted(k for kind, k, _ in self._root_items if kind == "geom")  # parentJoint 0
-            C, r = np.zeros((len(root), 3)), np.zeros(len(root))
-            for i, a in enumerate(root):
-                _, _, _, P, shape = self._geom_specs[a]
-                c, r[i] = bounding_sphere(shape)
-                C[i] = P[:3, :3] @ c + P[:3, 3]
-            self._root_spheres = (root, C, r)
+            root = [k for k, _, _ in self._root_geoms]   # (parentJoint 0, in index order)
+            self._root_spheres = (root, *_placed_spheres([(P, shape) for _, P, shape in self._root_geoms]))
         root, C, r = self._root_spheres
         if not root:
             return []
@@ -351,6 +371,31 @@ _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32) 
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
 
 
+_SPHERES: Dict[tuple, tuple] = {}   # ((id(shape), placement bytes) per root object) → (their shapes, C, r)
+
+
+def _placed_spheres(objects: List[Tuple[np.ndarray, object]]) -> Tuple[np.ndarray, np.ndarray]:
+    """(C, r): the bounding spheres (:func:`~robodesign.model.collision_cull.bounding_sphere`) of the ``objects``
+    (placement P, coal shape), their centres placed by P (the base frame for the objects fixed to the world),
+    read-only. Kept per shapes and placements: robots of one search share their first modules, so their roots'
+    spheres are the same numbers."""
+    from robodesign.model.collision_cull import bounding_sphere
+    key = tuple([(id(shape), P.tobytes()) for P, shape in objects])
+    hit = _SPHERES.get(key)
+    if hit is not None and all(a is shape for a, (_, shape) in zip(hit[0], objects)):
+        return hit[1], hit[2]
+    C, r = np.zeros((len(objects), 3)), np.zeros(len(objects))
+    for i, (P, shape) in enumerate(objects):
+        c, r[i] = bounding_sphere(shape)
+        C[i] = P[:3, :3] @ c + P[:3, 3]
+    C.setflags(write=False)
+    r.setflags(write=False)
+    if len(_SPHERES) >= 4096:
+        _SPHERES.clear()
+    _SPHERES[key] = (tuple(shape for _, shape in objects), C, r)   # (the shapes held: their ids are not reused)
+    return C, r
+
+
 _PAIR_COLUMNS: Dict[int, List["pin.CollisionPair"]] = {}   # object k → CollisionPair(a, k) for a = 0, 1, …
 
 
@@ -375,7 +420,7 @@ def _fresh_guesses(gd: "pin.GeometryData") -> None:
 def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
     """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
     the requests of the robot's own scratch space (contacts on, the safety margin)."""
-    gm, n, made = pin.GeometryModel(), len(robot._geom_body), robot._geom_model
+    gm, n, made = pin.GeometryModel(), robot._n_geoms, robot._geom_model
     index: Dict[int, int] = {}
     for a, ob in ab:
         for g in (a, ob):
