@@ -335,7 +335,7 @@ class TrajectoryQuantities:
             for i in range(3):
                 w[i] += z[i] * qd
             b = [p[i] - J[:, j, i, 3] for i in range(3)]
-            for i in range(3):  # numpy.cross(z, b)[:, i] (_cross), times q̇
+            for i in range(3):  # numpy.cross(z, b)[:, i], times q̇
                 v[i] += (z[(i + 1) % 3] * b[(i + 2) % 3] - z[(i + 2) % 3] * b[(i + 1) % 3]) * qd
         return np.column_stack(v + w)
 
