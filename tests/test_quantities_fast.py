@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-from conftest import IMPROV, TASKS
+from conftest import IMPROV, PRIMITIVES, TASKS
 
 from robodesign import load_module_set
-from robodesign.formats.assembly import Assembly
+from robodesign.core.errors import AssemblyError
+from robodesign.formats.assembly import Assembly, random_serial_order
 from robodesign.formats.task_io import load_task
-from robodesign.judge.quantities import TIME_ATOL, TIME_RTOL, TrajectoryQuantities, find_time_index
+from robodesign.judge.quantities import TIME_ATOL, TIME_RTOL, TrajectoryQuantities, _chain_axes, find_time_index
 from robodesign.model.cell import build_robot
+from robodesign.model.robot import Robot
 
 
 def _reference(t, value):
@@ -53,10 +55,45 @@ def test_joint_poses_feed_the_twists():
         np.testing.assert_allclose(tq.joint_poses[k, 3], robot.data.oMi[3].homogeneous, rtol=0, atol=1e-12)
 
 
-def test_cross_is_numpys():
-    from robodesign.judge.quantities import _cross
-    rng = np.random.default_rng(3)
-    a, b = rng.normal(size=(500, 3)) * 10 ** rng.uniform(-8, 8, (500, 1)), rng.normal(size=(500, 3))
-    a[0], b[1] = np.inf, np.nan
-    with np.errstate(invalid="ignore"):
-        assert np.array_equal(_cross(a, b), np.cross(a, b), equal_nan=True)
+def _former_twists(tq):
+    """The twists as tcp_twists computed them before (issue 25, round 7): numpy's batched product and cross."""
+    axes = _chain_axes(tq.robot)
+    J, p = tq.joint_poses, tq.tcp_poses[:, :3, 3]
+    v, w = np.zeros((tq.n, 3)), np.zeros((tq.n, 3))
+    for j, iv, prismatic, ax in axes:
+        z = J[:, j, :3, :3] @ ax
+        qd = tq.dq[:, iv, None]
+        if prismatic:
+            v += z * qd
+        else:
+            w += z * qd
+            v += np.cross(z, p - J[:, j, :3, 3]) * qd
+    return np.hstack([v, w])
+
+
+def test_twists_are_the_former_formulas_bit_for_bit():
+    """On random robots of three module sets (coordinate axes, unaligned and reversed axes, prismatic joints) and
+    random, huge and non-finite configurations: every entry equal, signs of zeros and NaNs included."""
+    rng = np.random.default_rng(7)
+    checked = 0
+    for name in (IMPROV, "robodesign_arm", PRIMITIVES):
+        ms = load_module_set(name)
+        for _ in range(6):
+            try:
+                asm = Assembly.from_order(ms, random_serial_order(ms, rng, dof=int(rng.integers(1, 8))))
+            except AssemblyError:  # (no order of that many joints in the set)
+                continue
+            robot = Robot(ms, asm, base_pose=np.eye(4))
+            if _chain_axes(robot) is None:
+                continue
+            n = 60
+            q = rng.uniform(-4, 4, (n, robot.dof)) * 10.0 ** rng.integers(-3, 4, (n, 1))
+            dq = rng.normal(0, 2, (n, robot.dof))
+            dq[rng.random((n, robot.dof)) < 0.2] = 0.0
+            q[3, 0], q[5, -1], dq[7, 0], q[9] = np.inf, np.nan, np.inf, 1e300
+            with np.errstate(invalid="ignore", over="ignore"):
+                tq = TrajectoryQuantities(robot, np.arange(n) * 0.01, q, dq, np.zeros_like(q))
+                got, want = tq.tcp_twists, _former_twists(tq)
+            assert got.shape == want.shape and got.tobytes() == want.tobytes()
+            checked += 1
+    assert checked >= 12

@@ -120,10 +120,17 @@ def _chain_axes(robot: Robot) -> Optional[list]:
     return out
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """numpy.cross of rows of 3-vectors (N, 3), the same products and differences, without its axis handling."""
-    a0, a1, a2, b0, b1, b2 = a[:, 0], a[:, 1], a[:, 2], b[:, 0], b[:, 1], b[:, 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+def _world_axis(J: np.ndarray, j: int, ax: np.ndarray) -> list:
+    """The components (3 arrays (N,)) of ``J[:, j, :3, :3] @ ax``, joint j's unit axis ``ax`` in world axes at every
+    sample. Along a coordinate axis (ax = ±e_c) that is ±(column c of the rotations): the product's other terms are
+    R·0 = ±0, so its sum is ±R_ic to the sign of a zero, which no sum of the twists keeps (they start at +0) —
+    unless a rotation entry is no finite number (R·0 is NaN then: the product as written)."""
+    R = J[:, j, :3, :3]
+    c = np.flatnonzero(ax)
+    if len(c) == 1 and abs(ax[c[0]]) == 1.0 and np.isfinite(R).all():
+        return [R[:, i, c[0]] * ax[c[0]] for i in range(3)]
+    z = R @ ax
+    return [np.ascontiguousarray(z[:, i]) for i in range(3)]
 
 
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
@@ -316,17 +323,21 @@ class TrajectoryQuantities:
         J = self.joint_poses
         if J is None:
             J = r.joint_poses_batch(self.q)
-        p = self.tcp_poses[:, :3, 3]
-        v, w = np.zeros((self.n, 3)), np.zeros((self.n, 3))
+        p = [np.ascontiguousarray(self.tcp_poses[:, i, 3]) for i in range(3)]
+        v, w = [np.zeros(self.n) for _ in range(3)], [np.zeros(self.n) for _ in range(3)]
         for j, iv, prismatic, ax in axes:
-            z = J[:, j, :3, :3] @ ax
-            qd = self.dq[:, iv, None]
+            z = _world_axis(J, j, ax)
+            qd = np.ascontiguousarray(self.dq[:, iv])
             if prismatic:
-                v += z * qd
-            else:
-                w += z * qd
-                v += _cross(z, p - J[:, j, :3, 3]) * qd
-        return np.hstack([v, w])
+                for i in range(3):
+                    v[i] += z[i] * qd
+                continue
+            for i in range(3):
+                w[i] += z[i] * qd
+            b = [p[i] - J[:, j, i, 3] for i in range(3)]
+            for i in range(3):  # numpy.cross(z, b)[:, i], times q̇
+                v[i] += (z[(i + 1) % 3] * b[(i + 2) % 3] - z[(i + 2) % 3] * b[(i + 1) % 3]) * qd
+        return np.column_stack(v + w)
 
     def _tcp_twists_per_sample(self) -> np.ndarray:
         r = self.robot

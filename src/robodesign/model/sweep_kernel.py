@@ -64,12 +64,11 @@ def posed_arms(J, geom_joint, joints, t_g, axes, jv, g, jid, R, rad, dQ, d_row, 
             a, b, e = ry * uz - rz * uy, rz * ux - rx * uz, rx * uy - ry * ux
             rho[k, c] = np.sqrt((a * a + b * b) + e * e)
     drift = np.zeros((n - 1, K))
-    for t in range(len(d_row)):
-        i = d_row[t]
-        for p in range(d_ptr[t], d_ptr[t + 1]):
-            col, v = d_col[p], d_val[p]
-            for k in range(n - 1):
-                drift[k, col] += dQ[k, i] * v
+    for k in range(n - 1):  # (per entry the terms in the order of the joints, as the numpy path adds them)
+        for t in range(len(d_row)):
+            dq = dQ[k, d_row[t]]
+            for p in range(d_ptr[t], d_ptr[t + 1]):
+                drift[k, d_col[p]] += dq * d_val[p]
     for k in range(n - 1):
         for c in range(K):
             r0, r1 = rho[k, c], rho[k + 1, c]
@@ -295,8 +294,8 @@ def sphere_gaps(TG, cen, a, b, rad_sum, out):  # pragma: no cover - compiled
             for r in range(3):
                 C[k, g, r] = TG[k, g, r, 0] * cen[g, 0] + TG[k, g, r, 1] * cen[g, 1] + TG[k, g, r, 2] * cen[g, 2] \
                     + TG[k, g, r, 3]
-    for i in range(len(a)):
-        for k in range(n):
+    for k in range(n):
+        for i in range(len(a)):
             d0, d1, d2 = C[k, a[i], 0] - C[k, b[i], 0], C[k, a[i], 1] - C[k, b[i], 1], C[k, a[i], 2] - C[k, b[i], 2]
             out[k, i] = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - rad_sum[i]
 
@@ -309,8 +308,9 @@ def open_steps(F, sched, fastest, wsum, ext, slack, share, out):  # pragma: no c
     n, P = F.shape
     for c in range(P):
         nxt = n - 1
+        w = wsum[c] / share
         for k in range(n - 2, -1, -1):
-            keep = max(ext, fastest[k] * (wsum[c] / share))
+            keep = max(ext, fastest[k] * w)
             if not (((F[k, c] + F[k + 1, c]) - sched[k, c] * slack) * 0.5 - 1e-12 > keep):
                 nxt = k
             out[c, k] = nxt

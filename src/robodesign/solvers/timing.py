@@ -89,14 +89,15 @@ from __future__ import annotations
 import math
 import time as _time
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Literal, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
 from robodesign.core.errors import InfeasibleError
 from robodesign.core.trajectory import Trajectory
 from robodesign.model.rnea_batch import rnea_rows
-from robodesign.solvers.toppra_loop import pass_velocities
+from robodesign.solvers.blended_path import BlendedPolyline
+from robodesign.solvers.toppra_loop import pass_velocities, velocity_xbound
 
 UNBOUNDED_LIMIT = 1e3  # stands in for an infinite velocity (rad/s, m/s) or acceleration limit
 REVERSAL_ANGLE = math.radians(175.0)  # corners turning more than this are always stops
@@ -366,121 +367,6 @@ def preload() -> None:
     topp_kernel.ready()
 
 
-class BlendedPolyline:
-    """Piecewise-linear joint path with parabolic corner blends (see module docstring).
-
-    Pieces are ``q(s) = p0 + d0·σ + ½·c·σ²`` with σ = s − s_start; straight pieces have c = 0 and
-    |d0| = 1. Implements toppra's ``AbstractGeometricPath`` interface (``__call__(s, order)``,
-    ``dof``, ``path_interval``) plus left limits (:meth:`eval_left`).
-    """
-
-    def __init__(self, waypoints: np.ndarray, blend_radius: float = 0.05):
-        W = np.asarray(waypoints, dtype=float)
-        keep = [0]
-        for i in range(1, len(W)):
-            if np.linalg.norm(W[i] - W[keep[-1]]) > 1e-12:
-                keep.append(i)
-        W = W[keep]
-        self.points = W
-        self._dof = W.shape[1]
-        if len(W) < 2:
-            raise ValueError("a path needs two distinct waypoints")
-        D = np.diff(W, axis=0)
-        L = np.linalg.norm(D, axis=1)
-        U = D / L[:, None]
-        K = len(W)
-        r = np.zeros(K)
-        theta = np.zeros(K)
-        for i in range(1, K - 1):
-            c = float(np.clip(U[i - 1] @ U[i], -1.0, 1.0))
-            theta[i] = math.acos(c)
-            if theta[i] > 1e-9:
-                r[i] = min(blend_radius, 0.5 * L[i - 1], 0.5 * L[i])
-        self.radii, self.angles = r, theta
-        s0, p0, d0, cc, kind = [], [], [], [], []
-        s = 0.0
-        for i in range(K - 1):
-            a = W[i] + r[i] * U[i]
-            length = L[i] - r[i] - r[i + 1]
-            if length > 1e-12:
-                s0.append(s)
-                p0.append(a)
-                d0.append(U[i])
-                cc.append(np.zeros(self._dof))
-                kind.append(0)
-                s += length
-            if i + 1 < K - 1 and r[i + 1] > 0:
-                s0.append(s)
-                p0.append(W[i + 1] - r[i + 1] * U[i])
-                d0.append(U[i])
-                cc.append((U[i + 1] - U[i]) / (2 * r[i + 1]))
-                kind.append(1)
-                s += 2 * r[i + 1]
-        self.breaks = np.array(s0 + [s])
-        self.p0, self.d0, self.c = np.array(p0), np.array(d0), np.array(cc)
-        self.is_blend = np.array(kind, dtype=bool)
-        self.length = s
-        self._end = W[-1]
-        self.max_deviation = float(np.max(r * np.sin(theta) / 4.0, initial=0.0))
-        self.max_waypoint_distance = float(np.max(r * np.sin(theta / 2.0) / 2.0, initial=0.0))
-
-    @property
-    def dof(self) -> int:
-        return self._dof
-
-    @property
-    def path_interval(self) -> np.ndarray:
-        return np.array([0.0, self.length])
-
-    @property
-    def waypoints(self):
-        return None
-
-    def _eval(self, s, order: int, left: bool) -> np.ndarray:
-        scalar = np.ndim(s) == 0
-        s = np.clip(np.atleast_1d(np.asarray(s, float)), 0.0, self.length)
-        side: Literal["left", "right"] = "left" if left else "right"
-        k = np.clip(np.searchsorted(self.breaks, s, side=side) - 1, 0, len(self.p0) - 1)
-        sig = (s - self.breaks[k])[:, None]
-        if order == 0:
-            out = self.p0[k] + self.d0[k] * sig + 0.5 * self.c[k] * sig ** 2
-            out[s >= self.length] = self._end
-        elif order == 1:
-            out = self.d0[k] + self.c[k] * sig
-        elif order == 2:
-            out = self.c[k].copy()
-        else:
-            out = np.zeros((len(s), self._dof))
-        return out[0] if scalar else out
-
-    def __call__(self, s, order: int = 0) -> np.ndarray:
-        return self._eval(s, order, left=False)
-
-    def eval(self, s):
-        return self._eval(s, 0, False)
-
-    def evald(self, s):
-        return self._eval(s, 1, False)
-
-    def evaldd(self, s):
-        return self._eval(s, 2, False)
-
-    def eval_left(self, s, order: int) -> np.ndarray:
-        return self._eval(s, order, left=True)
-
-    def gridpoints(self, step: float, min_per_blend: int = 4, min_total: int = 100) -> np.ndarray:
-        """Grid including every piece boundary; ≥ ``min_per_blend`` intervals per blend."""
-        step = min(step, self.length / min_total)
-        pts = [0.0]
-        for k in range(len(self.p0)):
-            a, b = self.breaks[k], self.breaks[k + 1]
-            m = max(int(math.ceil((b - a) / step - 1e-9)), min_per_blend if self.is_blend[k] else 1)
-            pts.extend(a + (b - a) * np.arange(1, m + 1) / m)
-        g = np.array(pts)
-        g[-1] = self.length
-        return g
-
-
 class _PathTerms:
     """What the dynamics constraint needs of a path on a grid and does not depend on the viscous tangent
     points: q'(s), q''(s) (right and left limits) and the RNEA terms g(q), a = M(q)·q' and
@@ -488,13 +374,14 @@ class _PathTerms:
 
     def __init__(self, robot, path, grid: np.ndarray, use_torque: bool):
         self.path, self.grid = path, np.array(grid, dtype=float)
-        self.qs = path(grid, 1)
-        self.qss_r = path(grid, 2)
+        if isinstance(path, BlendedPolyline):  # (the grid located once: the same numbers as a call per order)
+            q, self.qs, self.qss_r = path.eval_orders(grid, (0, 1, 2))
+        else:
+            q, self.qs, self.qss_r = path(grid, 0), path(grid, 1), path(grid, 2)
         self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
         self.g = self.a = self.bR = self.bL = None
         if not use_torque:
             return
-        q = path(grid, 0)
         qs, qss_r, qss_l = self.qs, self.qss_r, self.qss_l
         N1 = len(q)
         left = ~np.all(qss_l == qss_r, axis=1) if qss_l is not qss_r else np.zeros(N1, bool)  # own left limits
@@ -625,7 +512,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     # later passes at the previous solution (which stays feasible, so they never get slower)
     x0 = x_vel / 4.0
     p = 0
-    xbound = vel.compute_constraint_params(path, grid)[-1]   # the velocity constraint's x bounds, once per path
+    xbound = velocity_xbound(vel, terms.qs)   # the velocity constraint's x bounds, once per path
     while p < passes:
         sd_vec, code = pass_velocities(tp, vel, _DYN_CLS(robot, amax, tau, x0, use_torque, terms), path, grid,
                                         xbound)

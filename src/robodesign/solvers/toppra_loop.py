@@ -168,3 +168,15 @@ def pass_velocities(tp, vel, dyn, path, grid, xbound):
     pd = algo.problem_data
     ok = pd.return_code == tp.algorithm.ParameterizationReturnCode.Ok and pd.sd_vec is not None
     return (pd.sd_vec if ok else None), pd.return_code
+
+
+def velocity_xbound(vel, qs: np.ndarray) -> np.ndarray:
+    """``vel.compute_constraint_params(path, grid)``'s x bounds (toppra's JointVelocityConstraint) from the path's
+    q'(s) on the grid, ``qs`` = ``path(grid, 1)``, which that call would compute again: its own routine on the same
+    numbers."""
+    from toppra._CythonUtils import _create_velocity_constraint
+    _, _, xb = _create_velocity_constraint(qs, vel.vlim)
+    out = np.array(xb)
+    out[:, 0] = xb[:, 1]
+    out[:, 1] = -xb[:, 0]
+    return out
