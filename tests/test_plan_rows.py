@@ -50,14 +50,18 @@ def _segment(robot, rng) -> np.ndarray:
 
 
 class _Gate:
-    """A work limit: True for the first ``left`` calls."""
+    """A work limit as the planner's: a counted state passes while the counter is below ``budget`` (``room()``:
+    how many more pass); ``refused``: the calls that said False."""
 
-    def __init__(self, left: int):
-        self.left = left
+    def __init__(self, counter, budget: int):
+        self.counter, self.budget, self.refused = counter, budget, 0
 
     def __call__(self) -> bool:
-        self.left -= 1
-        return self.left >= 0
+        self.refused += self.counter[0] >= self.budget
+        return self.counter[0] < self.budget
+
+    def room(self) -> int:
+        return self.budget - self.counter[0] - 1
 
 
 @pytest.mark.parametrize("gated", [False, True])
@@ -74,11 +78,14 @@ def test_block_verdicts_are_the_state_by_state_ones(robots, gated):
             Q = segments[int(rng.integers(len(segments)))]   # (segments asked again: memo hits, valid and invalid)
             if rng.random() < 0.3:
                 Q = Q[int(rng.integers(len(Q))):]
-            limit = int(rng.integers(1, 2 * len(Q))) if gated else None
+            budget = int(rng.integers(1, 2 * len(Q))) if gated else 0
             got, want = [0], [0]
-            i = fast.first_invalid(Q, got, _Gate(limit) if gated else None)
-            j = plain.first_invalid(Q, want, _Gate(limit) if gated else None)
+            gates = (_Gate(got, budget), _Gate(want, budget)) if gated else (None, None)
+            i = fast.first_invalid(Q, got, gates[0])
+            j = plain.first_invalid(Q, want, gates[1])
             assert i == j
+            if gated:   # the work limit's stop asked (and only it)
+                assert gates[0].refused == gates[1].refused <= 1
             assert got == want and fast.lookups == plain.lookups
             assert list(fast.memo.items()) == list(plain.memo.items())   # the same verdicts, remembered in order
             invalid += i >= 0

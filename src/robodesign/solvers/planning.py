@@ -185,7 +185,9 @@ class _Memoized:
                       gate: Optional[Callable[[], bool]] = None) -> int:
         """The first row of ``Q`` that is invalid, or -1: the verdicts (and counts) of asking ``self(q)`` row
         by row until then; ``counter[0]`` grows by the rows asked. ``gate``: asked after each row is counted and
-        before its verdict; False makes that row invalid unasked (the planner's work limit)."""
+        before its verdict; False makes that row invalid unasked (the planner's work limit). With the collision
+        culler, ``gate.room()`` tells how many of the next rows it lets through (it then is asked only at the row
+        where it stops)."""
         culler = self.culler()
         if culler is None:
             for i, q in enumerate(Q):
@@ -208,10 +210,11 @@ class _Memoized:
 
     def _chunk_first_invalid(self, culler, rows: np.ndarray, counter: Optional[List[int]],
                              gate: Optional[Callable[[], bool]]) -> int:
-        """:meth:`first_invalid` of one block of rows, their bounds and torque tests made at once. Without a
-        ``gate`` only the rows whose verdict can be False are visited one by one (those the memo holds invalid, new
-        ones that fail the torque test or have a pair the bounds do not clear); the others are valid. The rows
-        decided are remembered in row order and counted up to the first invalid row (its index, or -1)."""
+        """:meth:`first_invalid` of one block of rows, their bounds and torque tests made at once. Only the rows
+        whose verdict can be False are visited one by one (those the memo holds invalid, new ones that fail the
+        torque test or have a pair the bounds do not clear); the others are valid. A ``gate`` is asked only at the
+        row its ``room()`` says it stops (no earlier row can end the block there). The rows decided are remembered
+        in row order and counted up to the first invalid row (its index, or -1)."""
         memo, static_ok, certs = self.memo, self.static_ok, self.certificates
         assert static_ok is not None  # a culler only with _config_validator's valid
         keys = [q.tobytes() for q in rows]
@@ -229,21 +232,13 @@ class _Memoized:
         ok = static_ok.rows(R)  # type: ignore[attr-defined]
         near = S.any(axis=1)      # rows with a pair the bounds do not clear
         at = dict(zip(new, range(len(new))))
-        if gate is None:
-            flagged = [new[j] for j in (~ok | near).nonzero()[0].tolist()]
-            visit: Sequence[int] = sorted(flagged + bad) if bad else flagged
-        else:
-            visit = range(len(rows))
+        flagged = [new[j] for j in (~ok | near).nonzero()[0].tolist()]
+        limit = len(rows) if gate is None else max(0, min(len(rows), gate.room()))  # type: ignore[attr-defined]
         got: Dict[bytes, bool] = {}   # the verdicts made here (remembered in row order at the end)
-        stop, n = -1, len(rows)       # the first invalid row; the rows decided
-        for i in visit:
-            if gate is not None:
-                if counter is not None:
-                    counter[0] += 1
-                if not gate():
-                    stop = n = i
-                    break
-                self.lookups += 1
+        stop, n = -1, limit           # the first invalid row; the rows decided
+        for i in sorted(flagged + bad) if bad else flagged:
+            if i >= limit:
+                break
             key = keys[i]
             v = memo.get(key)
             if v is None:
@@ -258,10 +253,14 @@ class _Memoized:
             if not v:
                 stop, n = i, i + 1
                 break
-        if gate is None:   # the rows not visited: valid
+        if counter is not None:
+            counter[0] += n
+        self.lookups += n
+        if stop < 0 and gate is not None and limit < len(rows):   # the row the gate stops: counted, then asked
             if counter is not None:
-                counter[0] += n
-            self.lookups += n
+                counter[0] += 1
+            gate()   # (False: the work limit is spent, the planner's solve ends)
+            stop = limit
         for i in new:
             if i >= n:
                 break
@@ -546,6 +545,12 @@ def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize
                     stop[0].terminate()   # the work limit is spent: OMPL ends the solve
                 return False         # and planners that ignore the condition (FMT) stop soon
             return True
+
+        def room() -> float:
+            """How many more states ``within_budget`` lets through, each counted before it is asked (none past
+            the wall-clock cap)."""
+            return 0 if time.perf_counter() > hard_deadline[0] else budget[0] - counter[0] - 1
+        within_budget.room = room  # type: ignore[attr-defined]  # read by _Memoized.first_invalid
 
         def is_valid(s) -> bool:
             counter[0] += 1
