@@ -1,9 +1,9 @@
 """solvers/planning.py, ``_Memoized.first_invalid``: the states of a block decided together (bounds, certificates,
-torque tests at once; without a work-limit gate only the states that can be invalid visited one by one) give what
-asking ``valid(q)`` state by state gives: the first invalid row, the counter, the lookups, and the verdicts
-remembered in the same order. Random IMPROV arms in the PTP_3 cell and built-in arms among random boxes, segments
-with and without collisions, memos holding earlier verdicts (valid and invalid), repeated states, work limits that
-end a segment midway; seeded."""
+torque tests at once; only the states that can be invalid visited one by one, a work limit's gate asked only where
+its ``room()`` ends) give what asking ``valid(q)`` state by state gives: the first invalid row, the counter, the
+lookups, the gate's refusal, and the verdicts remembered in the same order. Random IMPROV arms in the PTP_3 cell
+and built-in arms among random boxes, segments with and without collisions, memos holding earlier verdicts (valid
+and invalid), repeated states, work limits that end a segment midway; seeded."""
 import numpy as np
 import pytest
 from conftest import IMPROV, ROOT, TASKS, boxes_around
