@@ -133,3 +133,30 @@ def test_which_pairs_get_certificates(robots):
     for _ in range(3):
         builtin = Robot.from_order(load_module_set("robodesign_arm"), list(space.random_order(rng)))
         assert not certified_pairs(builtin.geom_model, builtin.n_collision_geometries).any()
+
+
+def test_the_certified_pairs_kept_per_geometry_model_follow_its_changes():
+    """The set-up's certified pairs, remembered per geometry model, are certified_pairs of the model as it is: an
+    IMPROV arm without obstacles, then with boxes (added to the same model), then with the PTP_3 cell's triangle
+    mesh among them (a new model), then boxes again, each asked twice; against the pairs' kinds read afresh."""
+    from robodesign.solvers.pair_certificates import _certified_of
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    ms = load_module_set(IMPROV)
+    robot = Robot.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"])
+    mesh_cell = build_robot(static_cell(task), ms, Assembly.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"]),
+                            task.nominal_base_pose).obstacles
+    models, seen = set(), 0
+    for obstacles in ([], boxes_around(robot, 3, n=4), list(mesh_cell) + boxes_around(robot, 4, n=2),
+                      boxes_around(robot, 5, n=3)):
+        if obstacles:
+            robot.set_obstacles(obstacles)
+        gm = robot.geom_model
+        models.add(id(gm))
+        kinds = [type(o.geometry).__name__ for o in gm.geometryObjects]
+        want = np.array([not ("BVH" in kinds[cp.first][:3] or "BVH" in kinds[cp.second][:3])
+                         for cp in gm.collisionPairs])
+        for _ in range(2):
+            got = _certified_of(gm, robot.n_collision_geometries)
+            assert np.array_equal(got, want)
+        seen += int((~want).sum())
+    assert len(models) >= 2 and seen > 0   # a model changed in place and models made anew; mesh pairs left out

@@ -180,7 +180,7 @@ def test_a_busy_machine_plans_the_same_path(robot, monkeypatch):
     from robodesign.solvers import planning
     quick = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
     assert quick.success and quick.stats["reason"] == "planned"
-    real = planning._static_validator
+    real = planning.static_validator
 
     def wait(rows: int) -> None:
         t = _time.perf_counter()
@@ -199,7 +199,7 @@ def test_a_busy_machine_plans_the_same_path(robot, monkeypatch):
             return ok.rows(Q)
         slow.rows = slow_rows
         return slow
-    monkeypatch.setattr(planning, "_static_validator", slowed_validator)
+    monkeypatch.setattr(planning, "static_validator", slowed_validator)
     slowed = plan_path(robot, QA, QB, time_limit=0.5, seed=3)
     assert slowed.success and slowed.stats["checks"] == quick.stats["checks"]
     assert np.array_equal(slowed.path, quick.path)
@@ -211,7 +211,7 @@ def test_the_work_budget_stops_a_planner_that_cannot_succeed(robot, monkeypatch)
     """A query with no solution (the goal region walled off) spends exactly its check budget in OMPL."""
     from robodesign.solvers import planning
     monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 2000)
-    real = planning._static_validator
+    real = planning.static_validator
     wall = 0.5 * (QA[0] + QB[0])
     asked = []
 
@@ -227,12 +227,12 @@ def test_the_work_budget_stops_a_planner_that_cannot_succeed(robot, monkeypatch)
             return ok.rows(Q) & (np.abs(Q[:, 0] - wall) >= 0.05)
         walled.rows = walled_rows
         return walled
-    monkeypatch.setattr(planning, "_static_validator", walled_validator)
+    monkeypatch.setattr(planning, "static_validator", walled_validator)
     monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 100_000)   # a budget that plans around the box alone
     assert plan_path(robot, QA, QB, time_limit=0.25, seed=0, resolution=0.02).stats["reason"] == "no_solution"
-    monkeypatch.setattr(planning, "_static_validator", real)
+    monkeypatch.setattr(planning, "static_validator", real)
     assert plan_path(robot, QA, QB, time_limit=0.25, seed=0, resolution=0.02).success   # (the wall is the obstacle)
-    monkeypatch.setattr(planning, "_static_validator", walled_validator)
+    monkeypatch.setattr(planning, "static_validator", walled_validator)
     monkeypatch.setattr(planning, "CHECKS_PER_SECOND", 2000)
     res = plan_path(robot, QA, QB, time_limit=0.25, seed=0)
     assert not res.success and res.stats["reason"] == "no_solution" and sum(asked) > 500
@@ -317,7 +317,7 @@ def test_the_batched_static_test_gives_each_state_its_own_verdict():
     import pinocchio as pin
 
     from robodesign.model.rnea_batch import rnea_rows
-    from robodesign.solvers.planning import _static_validator
+    from robodesign.solvers.static_validity import static_validator
     r = Robot.from_order(load_module_set("robodesign_arm"), HEAVY_ORDER)
     rng = np.random.default_rng(2)
     Q = np.vstack([np.linspace(FOLD_A, FOLD_B, 201), rng.uniform(r.q_lower, r.q_upper, (400, r.dof)),
@@ -327,7 +327,7 @@ def test_the_batched_static_test_gives_each_state_its_own_verdict():
     assert np.array_equal(np.abs(rnea_rows(r.model, Q, Z, Z)), np.abs(exact))
     verdicts = []
     for rest in ((), (FOLD_A, FOLD_B)):
-        ok = _static_validator(r, True, rest)
+        ok = static_validator(r, True, rest)
         each = np.array([ok(q) for q in Q])
         assert np.array_equal(ok.rows(Q), each)
         assert 50 < each.sum() < len(Q) - 50   # both verdicts, many times

@@ -46,9 +46,23 @@ def certified_pairs(gm, n_robot: int) -> np.ndarray:
     return ~(mesh[first] | mesh[second])
 
 
+#: per geometry model, :func:`certified_pairs` with what it was made of: (objects, pairs, robot objects). A model's
+#: objects and pairs are only ever appended (model.robot_geometry: the obstacles added once, a new model when they
+#: change), so the same counts are the same geometry
+_CERTIFIED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 #: per culler (kept while the robot's geometry and margins are: model.collision_cull.culler_of), the set-up of its
 #: robot's certificates: (the pairs certified, W, the margins), or None when no pair is certified
 _SETUPS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _certified_of(gm, n_robot: int) -> np.ndarray:
+    """:func:`certified_pairs` of ``gm``, remembered per geometry model (a robot keeps its model while its culler
+    is made again at each change of its geometry's state: PTP_3's good arm once per evaluation)."""
+    key = (len(gm.geometryObjects), len(gm.collisionPairs), n_robot)
+    hit = _CERTIFIED.get(gm)
+    if hit is None or hit[0] != key:
+        hit = _CERTIFIED[gm] = (key, certified_pairs(gm, n_robot))
+    return hit[1]
 
 
 class PairCertificates:
@@ -81,7 +95,7 @@ class PairCertificates:
         """New certificates for a planning call of ``robot`` (whose collision culler is ``culler``), or None when
         none of its pairs gets them. Their set-up is made once per culler."""
         if culler not in _SETUPS:
-            certified = certified_pairs(robot.geom_model, robot.n_collision_geometries)
+            certified = _certified_of(robot.geom_model, robot.n_collision_geometries)
             _SETUPS[culler] = (certified, np.ascontiguousarray(pair_arms(robot), dtype=float),
                                np.asarray(pair_margins(robot, robot.geom_data), dtype=float)) if certified.any() else None
         setup = _SETUPS[culler]

@@ -63,12 +63,13 @@ import numpy as np
 
 from robodesign.core.errors import InputError
 from robodesign.model.collision_cull import culler_of
-from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot import Robot
 from robodesign.solvers.ompl_motion import PLANNERS_TWO_STATE, motion_validator, set_start_and_goals
 from robodesign.solvers.pair_certificates import PairCertificates
+from robodesign.solvers.static_validity import REST_RADIUS, static_validator
 
-__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND"]
+__all__ = ["PlanResult", "plan_path", "check_path", "available_planners", "planner_name", "PLANNERS", "CHECKS_PER_SECOND",
+           "REST_RADIUS"]
 
 #: validity checks per second of ``time_limit``: what one quiet core does on IMPROV and built-in arms
 #: (5–7k per CPU second measured with other jobs on the machine); the planner's work limit
@@ -76,9 +77,6 @@ CHECKS_PER_SECOND = 8000
 #: the wall-clock safety net, as a multiple of ``time_limit`` (reached only on a machine ~10x slower)
 WALL_FACTOR = 10.0
 WALL_MIN = 10.0  # s: the wall-clock cap's floor
-#: rad (largest joint difference): around the configurations where a planned motion stands still (start, goals)
-#: the friction headroom of the static-torque test is not asked (the robot starts and stops there)
-REST_RADIUS = 0.05
 
 # name → OMPL class name (only the classes present in the installed OMPL are offered)
 PLANNERS: Dict[str, str] = {
@@ -87,7 +85,6 @@ PLANNERS: Dict[str, str] = {
     "fmt": "FMT", "bfmt": "BFMT", "informedrrtstar": "InformedRRTstar", "sorrtstar": "SORRTstar",
     "aorrtc": "AORRTC",
 }
-_LIMIT_SLACK = 1e-9
 _SHORTCUT_TRIES = 40
 _SHORTCUT_SAFETY_SECONDS = 120.0
 _GOAL_TOL = 1e-9            # OMPL goal threshold (the last waypoint is then set to q_goal exactly)
@@ -128,49 +125,6 @@ def planner_name(planner: str) -> str:
 # ---------------------------------------------------------------------------------------------------------
 # Dense checking
 # ---------------------------------------------------------------------------------------------------------
-def _static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
-    """The part of :func:`_config_validator` before the collision query: joint limits and, with
-    ``static_torque``, the torque tests."""
-    lo = np.asarray(robot.q_lower, dtype=float) - _LIMIT_SLACK
-    hi = np.asarray(robot.q_upper, dtype=float) + _LIMIT_SLACK
-    tau_max = np.asarray(robot.tau_max, dtype=float)
-    gravity = robot.gravity_torque if static_torque and np.isfinite(tau_max).any() else None
-    moving_max = tau_max - np.asarray(getattr(robot, "friction_coulomb", np.zeros_like(tau_max)), dtype=float)
-    R = np.vstack([np.asarray(q, dtype=float) for q in rest]) if len(rest) and gravity is not None else None
-
-    def ok(q: np.ndarray) -> bool:
-        if (q < lo).any() or (q > hi).any():
-            return False
-        if gravity is not None:
-            g = np.abs(gravity(q))
-            if (g > tau_max).any():
-                return False
-            if R is not None and (g > moving_max).any() and np.min(np.max(np.abs(R - q), axis=1)) > REST_RADIUS:
-                return False
-        return True
-
-    def rows_ok(Q: np.ndarray) -> np.ndarray:
-        """``ok`` of every row of ``Q`` (the same elementwise tests, vectorised)."""
-        out: np.ndarray = np.asarray(~((Q < lo).any(axis=1) | (Q > hi).any(axis=1)))
-        if gravity is not None and out.any():
-            idx = out.nonzero()[0]
-            Qi = Q[idx]
-            if isinstance(robot, Robot):   # Robot.gravity_torque of every row in one call: pinocchio's RNEA at
-                Z = np.zeros(Qi.shape)     # rest, the same |τ| bit for bit (tests/test_planning.py)
-                G = np.abs(rnea_rows(robot.model, Qi, Z, Z))
-            else:
-                G = np.abs(np.array([gravity(q) for q in Qi]).reshape(len(idx), -1))
-            bad = (G > tau_max).any(axis=1)
-            if R is not None:   # the rows held, but without room for friction: bad where far from every rest
-                t = ((G > moving_max).any(axis=1) & ~bad).nonzero()[0]
-                if len(t):
-                    bad[t[np.min(np.max(np.abs(R[None, :, :] - Qi[t][:, None, :]), axis=2), axis=1) > REST_RADIUS]] = True
-            out[idx[bad]] = False
-        return out
-    ok.rows = rows_ok  # type: ignore[attr-defined]
-    return ok
-
-
 def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
     """Joint limits and collisions; with ``static_torque`` also that the joints hold the configuration
     against gravity within their torque limits (|g(q)| ≤ τ_max), so that a path never needs more torque
@@ -178,7 +132,7 @@ def _config_validator(robot, static_torque: bool = False, rest: Sequence = ()):
     ``rest`` (the configurations where the motion stands still: its start and goals) a state farther than
     :data:`REST_RADIUS` from all of them must also leave room for Coulomb friction, |g(q)| + f_c ≤ τ_max:
     the robot moves through it, and however slowly it moves, friction adds f_c."""
-    static_ok = _static_validator(robot, static_torque, rest)
+    static_ok = static_validator(robot, static_torque, rest)
     in_collision = robot.in_collision
 
     def valid(q: np.ndarray) -> bool:
@@ -231,7 +185,9 @@ class _Memoized:
                       gate: Optional[Callable[[], bool]] = None) -> int:
         """The first row of ``Q`` that is invalid, or -1: the verdicts (and counts) of asking ``self(q)`` row
         by row until then; ``counter[0]`` grows by the rows asked. ``gate``: asked after each row is counted and
-        before its verdict; False makes that row invalid unasked (the planner's work limit)."""
+        before its verdict; False makes that row invalid unasked (the planner's work limit). With the collision
+        culler, ``gate.room()`` tells how many of the next rows it lets through (it then is asked only at the row
+        where it stops)."""
         culler = self.culler()
         if culler is None:
             for i, q in enumerate(Q):
@@ -242,40 +198,74 @@ class _Memoized:
                 if not self(q):
                     return i
             return -1
-        memo, static_ok, certs = self.memo, self.static_ok, self.certificates
-        assert static_ok is not None  # a culler only with _config_validator's valid
         start = 0
         for size in _CHUNKS:   # a segment that collides early pays for few states' bounds
-            rows = Q[start:start + size]
-            keys = [q.tobytes() for q in rows]
-            new = [i for i, k in enumerate(keys) if k not in memo]
-            R = rows[new]
-            S = culler.survivors(R)
-            if certs is not None:     # (the self pairs a distance certifies free not asked)
-                S = certs.pending(R, S)
-            near = S.any(axis=1)      # rows with a pair the bounds do not clear
-            ok = static_ok.rows(R)  # type: ignore[attr-defined]
-            at = {i: j for j, i in enumerate(new)}
-            for i, key in enumerate(keys):
-                if counter is not None:
-                    counter[0] += 1
-                if gate is not None and not gate():
-                    return start + i
-                self.lookups += 1
-                v = memo.get(key)
-                if v is None:
-                    j = at[i]
-                    v = bool(ok[j])
-                    if v and near[j]:
-                        ks = S[j].nonzero()[0] if certs is None else certs.ask(S, R, j)
-                        v = not (len(ks) and culler.collides(rows[i], ks))
-                    memo[key] = v
-                if not v:
-                    return start + i
+            i = self._chunk_first_invalid(culler, Q[start:start + size], counter, gate)
+            if i >= 0:
+                return start + i
             start += size
             if start >= len(Q):
                 break
         return -1
+
+    def _chunk_first_invalid(self, culler, rows: np.ndarray, counter: Optional[List[int]],
+                             gate: Optional[Callable[[], bool]]) -> int:
+        """:meth:`first_invalid` of one block of rows, their bounds and torque tests made at once. Only the rows
+        whose verdict can be False are visited one by one (those the memo holds invalid, new ones that fail the
+        torque test or have a pair the bounds do not clear); the others are valid. A ``gate`` is asked only at the
+        row its ``room()`` says it stops (no earlier row can end the block there). The rows decided are remembered
+        in row order and counted up to the first invalid row (its index, or -1)."""
+        memo, static_ok, certs = self.memo, self.static_ok, self.certificates
+        assert static_ok is not None  # a culler only with _config_validator's valid
+        keys = [q.tobytes() for q in rows]
+        new, bad = [], []     # rows not remembered; remembered invalid
+        for i, k in enumerate(keys):
+            v = memo.get(k)
+            if v is None:
+                new.append(i)
+            elif not v:
+                bad.append(i)
+        R = rows[new]
+        S = culler.survivors(R)
+        if certs is not None:     # (the self pairs a distance certifies free not asked)
+            S = certs.pending(R, S)
+        ok = static_ok.rows(R)  # type: ignore[attr-defined]
+        near = S.any(axis=1)      # rows with a pair the bounds do not clear
+        at = dict(zip(new, range(len(new))))
+        flagged = [new[j] for j in (~ok | near).nonzero()[0].tolist()]
+        limit = len(rows) if gate is None else max(0, min(len(rows), gate.room()))  # type: ignore[attr-defined]
+        got: Dict[bytes, bool] = {}   # the verdicts made here (remembered in row order at the end)
+        stop, n = -1, limit           # the first invalid row; the rows decided
+        for i in sorted(flagged + bad) if bad else flagged:
+            if i >= limit:
+                break
+            key = keys[i]
+            v = memo.get(key)
+            if v is None:
+                v = got.get(key)      # (an earlier row of this block may be the same state)
+            if v is None:
+                j = at[i]
+                v = bool(ok[j])
+                if v and near[j]:
+                    ks = S[j].nonzero()[0] if certs is None else certs.ask(S, R, j)
+                    v = not (len(ks) and culler.collides(rows[i], ks))
+                got[key] = v
+            if not v:
+                stop, n = i, i + 1
+                break
+        if counter is not None:
+            counter[0] += n
+        self.lookups += n
+        if stop < 0 and gate is not None and limit < len(rows):   # the row the gate stops: counted, then asked
+            if counter is not None:
+                counter[0] += 1
+            gate()   # (False: the work limit is spent, the planner's solve ends)
+            stop = limit
+        for i in new:
+            if i >= n:
+                break
+            memo.setdefault(keys[i], got.get(keys[i], True))
+        return stop
 
 
 #: the row blocks :meth:`_Memoized.first_invalid` bounds at once (the last one takes the rest)
@@ -555,6 +545,12 @@ def _plan_ompl(robot, valid, qs, G, name, time_limit, seed, resolution, optimize
                     stop[0].terminate()   # the work limit is spent: OMPL ends the solve
                 return False         # and planners that ignore the condition (FMT) stop soon
             return True
+
+        def room() -> float:
+            """How many more states ``within_budget`` lets through, each counted before it is asked (none past
+            the wall-clock cap)."""
+            return 0 if time.perf_counter() > hard_deadline[0] else budget[0] - counter[0] - 1
+        within_budget.room = room  # type: ignore[attr-defined]  # read by _Memoized.first_invalid
 
         def is_valid(s) -> bool:
             counter[0] += 1
