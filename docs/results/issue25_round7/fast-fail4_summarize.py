@@ -19,13 +19,18 @@ def profile_rows(path):
             fam = m.group(1)
         if line.startswith("| failed at ik"):
             cells = [c.strip() for c in line.strip("|").split("|")]
-            num = lambda s: float(s.split()[0]) if s not in ("–", "") else float("nan")
             out[fam] = {"assembly": num(cells[2]), "base": num(cells[3]), "reach": num(cells[4]), "ik": num(cells[5]),
                         "total": num(cells[11]), "cpu": num(cells[12])}
     return out
 
 
+def num(cell):
+    """The number at the start of a table cell (NaN for '–')."""
+    return float(cell.split()[0]) if cell not in ("–", "") else float("nan")
+
+
 def ga_rows(path):
+    """{task file: bench_front_ga's JSON line}."""
     return {json.loads(line)["task"]: json.loads(line) for line in path.read_text().splitlines()
             if line.startswith("{")}
 
