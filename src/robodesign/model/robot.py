@@ -67,6 +67,24 @@ def _rank_samples(lo: np.ndarray, hi: np.ndarray, samples: int) -> np.ndarray:
     return lo + (hi - lo) * u.reshape(samples, lo.size)
 
 
+try:  # the gufunc behind np.linalg.svd(compute_uv=False) without its ~15 µs of Python-level checks
+    from numpy.linalg import _umath_linalg as _ul
+
+    def _svd_values(J: np.ndarray) -> np.ndarray:
+        """``np.linalg.svd(J, compute_uv=False)`` of a float64 matrix or stack: the same LAPACK call. A vector, a
+        non-finite input, or an output with a non-finite value (no convergence) goes through numpy's own call,
+        which then raises or answers (and warns) as it does."""
+        if J.ndim < 2 or not np.isfinite(J).all():
+            return np.linalg.svd(J, compute_uv=False)
+        s = _ul.svd(J, signature="d->d")
+        return s if np.isfinite(s).all() else np.linalg.svd(J, compute_uv=False)
+    _svd_values(np.eye(2))
+except Exception:  # pragma: no cover - other numpy layouts
+    def _svd_values(J: np.ndarray) -> np.ndarray:
+        """``np.linalg.svd(J, compute_uv=False)``."""
+        return np.linalg.svd(J, compute_uv=False)
+
+
 def _rank(s: np.ndarray, rtol: float) -> int:
     """The rank of a matrix with singular values ``s`` (descending): how many exceed ``rtol`` times the largest
     (0 for none or a zero matrix); the comparisons of ``np.sum(s > rtol * s[0])``, in Python floats."""
@@ -289,10 +307,10 @@ class Robot(RobotGeometry):
             Q = _rank_samples(lo, hi, max(1, samples))
             J = self._scaled_jacobian(Q[0], scale)
             full = min(J.shape)
-            best = _rank(np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0), rtol)
+            best = _rank(_svd_values(J) if J.size else np.zeros(0), rtol)
             if best < full and len(Q) > 1:
                 Js = np.stack([self._scaled_jacobian(q, scale) for q in Q[1:]])
-                ranks = [_rank(s, rtol) for s in np.linalg.svd(Js, compute_uv=False)]
+                ranks = [_rank(s, rtol) for s in _svd_values(Js)]
                 best = max(best, *ranks)
                 first_full = next((k for k, r in enumerate(ranks, 1) if r >= full), len(Q) - 1)
                 if first_full < len(Q) - 1:   # (where the loop stopped: its Jacobian was the last one made)

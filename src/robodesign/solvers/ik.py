@@ -367,6 +367,9 @@ class GoalModel:
                 d = self.rot_boxes.setdefault(c.frame, {})
                 d[c.projection[-1]] = (min(a for a, _ in pieces), max(b for _, b in pieces))
         self._Qs = Qs
+        # (frame's Q or None, lower corner, upper corner) of every complete x/y/z box: position_lower_bound's
+        self._position_boxes = [(Qs.get(frame), np.array([d[n][0] for n in "xyz"]), np.array([d[n][1] for n in "xyz"]))
+                                for frame, d in self.boxes.items() if all(n in d for n in "xyz")]
         self.need_p = any(nm in ("x", "y", "z", "r_sph", "r_cyl", "phi_cyl", "phi_sph", "theta")
                           for nm in self.names)
         self.need_rv = any(nm in ("N_x", "N_y", "N_z", "Theta_R") for nm in self.names)
@@ -581,13 +584,9 @@ class GoalModel:
         best = 0.0
         if math.isfinite(self.sphere_hi):
             best = float(np.linalg.norm(pd)) - self.sphere_hi
-        for frame, d in self.boxes.items():
-            if all(n in d for n in "xyz"):
-                Q = self._Qs.get(frame)
-                v = pd if Q is None else Q @ pd
-                lo = np.array([d[n][0] for n in "xyz"])
-                hi = np.array([d[n][1] for n in "xyz"])
-                best = max(best, float(np.linalg.norm(v - np.clip(v, lo, hi))))
+        for Q, lo, hi in self._position_boxes:
+            v = pd if Q is None else Q @ pd
+            best = max(best, float(np.linalg.norm(v - np.clip(v, lo, hi))))
         return best
 
 
