@@ -50,7 +50,7 @@ GRID_CELLS_MAX = 1 << 22
 #: the dense grids' cells kept in all (64 MB; the oldest fields are dropped beyond)
 GRID_CELLS_KEPT = 1 << 23
 #: the asks of a self pair of coal after which the culler tries to prove it never collides (:mod:`.pair_clearance`)
-PROVE_AFTER = 16
+PROVE_AFTER = 8
 
 
 def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
@@ -327,7 +327,9 @@ class CollisionCuller:
             radii.append(r)
             parent.append(o.parentJoint)
         self.parent = np.array(parent, dtype=int).reshape(n_robot)
+        self.shapes = shapes
         self.provable = pair_clearance.worth_proving(shapes)   # (else its pairs are not counted nor proven)
+        self._chains: Dict[Tuple[int, int], object] = {}    # pair_clearance.chain's, by joint pair (the proofs')
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
         first, second = pair_ends(gm, n_robot)
@@ -438,7 +440,8 @@ class CollisionCuller:
         if b >= len(self.parent):
             return
         objs = self.robot.geom_model.geometryObjects
-        if pair_clearance.never_collides(self.robot.model, objs[a], objs[b], float(self.margin[k]) + SLACK):
+        a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
+        if pair_clearance.never_collides(self.robot.model, a_end, b_end, float(self.margin[k]) + SLACK, self._chains):
             self.active[k] = False
             self.proven += 1
 

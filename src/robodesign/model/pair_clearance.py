@@ -40,6 +40,8 @@ ALLOWANCE = 1e-6
 #: the farthest (m) a point of b may lie from a's frame for the allowance to cover the rounding (else: not tried)
 REACH_MAX = 100.0
 _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
+#: verdicts kept (the oldest is dropped beyond)
+KEPT = 1 << 16
 _KNOWN: Dict[tuple, Tuple[tuple, bool]] = {}   # key → (the shapes, held so their ids are not reused; verdict)
 
 
@@ -234,25 +236,31 @@ def in_a_frame(Pa: np.ndarray, links, Pb: np.ndarray):
     return [(np.round(M, DIGITS), axis) for M, axis in first], np.round(Pb, DIGITS)
 
 
-def never_collides(model, obj_a, obj_b, limit: float) -> bool:
-    """Whether the self pair of the geometry objects ``obj_a``, ``obj_b`` of a robot ``model`` is proven farther
-    apart than ``limit`` at every configuration (module docstring).
+def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[object, np.ndarray, int], limit: float,
+                   chains: Optional[Dict[Tuple[int, int], object]] = None) -> bool:
+    """Whether the self pair of a robot ``model`` whose ends are ``end_a``, ``end_b`` (each: coal shape, 4×4
+    placement in its parent joint's frame, parent joint) is proven farther apart than ``limit`` at every
+    configuration (module docstring). ``chains``: the caller's memo of :func:`chain` for this model.
 
     The proof is made on the pair as :func:`in_a_frame` gives it, at ``limit`` + :data:`ALLOWANCE`, and kept per
     process by exactly that (the two shapes, the rounded placements, the axes, the limit): a robot's own relative
     poses differ from the rounded ones by at most 10^−DIGITS per entry, which moves no point within
-    :data:`REACH_MAX` of a by more than the allowance."""
-    if any(type(o.geometry).__name__.startswith("BVH") for o in (obj_a, obj_b)):
-        return False   # (a triangle mesh: its distance costs more than its collision tests)
-    i, j = int(obj_a.parentJoint), int(obj_b.parentJoint)
-    links = chain(model, i, j)
+    :data:`REACH_MAX` of a by more than the allowance. A pair with a triangle mesh is not tried (its distance costs
+    more than its collision tests)."""
+    if any(type(e[0]).__name__.startswith("BVH") for e in (end_a, end_b)):
+        return False
+    memo: Dict[Tuple[int, int], object] = {} if chains is None else chains
+    for i, j in ((end_a[2], end_b[2]), (end_b[2], end_a[2])):
+        if (i, j) not in memo:
+            memo[i, j] = chain(model, i, j)
+    links = memo[end_a[2], end_b[2]]
     if links is None:
-        links = chain(model, j, i)
+        links = memo[end_b[2], end_a[2]]
         if links is None:
             return False
-        obj_a, obj_b = obj_b, obj_a
-    links, Pb = in_a_frame(np.array(obj_a.placement.homogeneous), links, np.array(obj_b.placement.homogeneous))
-    shapes = (obj_a.geometry, obj_b.geometry)
+        end_a, end_b = end_b, end_a
+    links, Pb = in_a_frame(end_a[1], links, end_b[1])
+    shapes = (end_a[0], end_b[0])
     key = (id(shapes[0]), id(shapes[1]), Pb.tobytes(), float(limit),
            tuple((M.tobytes(), axis.tobytes()) for M, axis in links))
     hit = _KNOWN.get(key)
@@ -263,10 +271,12 @@ def never_collides(model, obj_a, obj_b, limit: float) -> bool:
     proven = far <= REACH_MAX and chain_clears(_PairDistance(shapes[0], eye, shapes[1], Pb, links),
                                                chain_arms(links, (shapes[0], eye), (shapes[1], Pb)),
                                                float(limit) + ALLOWANCE)
+    if len(_KNOWN) >= KEPT:
+        _KNOWN.pop(next(iter(_KNOWN)))
     _KNOWN[key] = (shapes, proven)
     return proven
 
 
-__all__ = ["ALLOWANCE", "BUDGET", "DIGITS", "MAX_CHAIN", "REACH_MAX", "START", "arm", "chain", "chain_arms",
+__all__ = ["ALLOWANCE", "BUDGET", "DIGITS", "KEPT", "MAX_CHAIN", "REACH_MAX", "START", "arm", "chain", "chain_arms",
            "chain_clears", "chain_poses", "in_a_frame", "never_collides", "reach",
            "worth_proving"]
