@@ -10,7 +10,10 @@ their distance does not clear:
 * every robot geometry is bounded by a sphere (:func:`tight_sphere`: the shape's own circumscribed sphere where its
   type gives one, else its local AABB's centre and half diagonal; plus coal's swept-sphere radius), its centre from
   the joint poses of the state;
-* a self pair is cleared when its spheres lie farther apart than the pair's security margin;
+* a self pair is cleared when its spheres lie farther apart than the pair's security margin, and for good once
+  :mod:`.pair_clearance` has proven it farther apart than that at every configuration (tried on a robot with a
+  convex mesh when coal has been asked about the pair :data:`PROVE_AFTER` times; it is then switched off in
+  ``active``, like an inactive pair);
 * a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin: first by the
   distance to the obstacle's box (its local AABB in its frame, which contains it: the exact distance for a box),
   then, for another shape, by :class:`DistanceField`: the exact distance (coal) from the centre of the grid cell
@@ -31,7 +34,7 @@ from typing import Any, Dict, Iterable, List, Optional, Sequence, Tuple, cast
 import numpy as np
 import pinocchio as pin
 
-from robodesign.model import geometry_kernel
+from robodesign.model import geometry_kernel, pair_clearance
 from robodesign.model.batch_fk import batch_kinematics
 from robodesign.model.pair_scratch import PairScratch
 
@@ -46,6 +49,8 @@ REACH = 0.5
 GRID_CELLS_MAX = 1 << 22
 #: the dense grids' cells kept in all (64 MB; the oldest fields are dropped beyond)
 GRID_CELLS_KEPT = 1 << 23
+#: the asks of a self pair of coal after which the culler tries to prove it never collides (:mod:`.pair_clearance`)
+PROVE_AFTER = 8
 
 
 def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
@@ -313,18 +318,24 @@ class CollisionCuller:
         gm = robot.geom_model
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
-        parent, centres, radii = [], [], []
+        parent, centres, radii, shapes = [], [], [], []
         for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
-            c, r = tight_sphere(o.geometry)
+            shapes.append(o.geometry)
+            c, r = tight_sphere(shapes[-1])
             P = o.placement
             centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
             radii.append(r)
             parent.append(o.parentJoint)
         self.parent = np.array(parent, dtype=int).reshape(n_robot)
+        self.shapes = shapes
+        self.provable = pair_clearance.worth_proving(shapes)   # (else its pairs are not counted nor proven)
+        self._chains: Dict[Tuple[int, int], object] = {}    # pair_clearance.chain's, by joint pair (the proofs')
         self.local = np.array(centres).reshape(-1, 3)
         self.radius = np.array(radii)
         first, second = pair_ends(gm, n_robot)
-        margin, self.active = pair_settings(robot)
+        margin, active = pair_settings(robot)
+        self.active = np.array(active, dtype=np.bool_)   # (its own: proven pairs are switched off in it, in place)
+        self.margin, self.first, self.second = margin, first, second
         self.n_pairs = len(first)
         selfp = (first < n_robot) & (second < n_robot)
         self.self_k = np.flatnonzero(selfp)
@@ -341,6 +352,8 @@ class CollisionCuller:
             geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
+        self.asks: Dict[int, int] = {}   # per pair asked: how often (until :data:`PROVE_AFTER`)
+        self.proven = 0   # self pairs proven never to collide (:mod:`.pair_clearance`), dropped since
         self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
         self._last_hit = -1                  # the pair collides found colliding last
@@ -385,6 +398,8 @@ class CollisionCuller:
         that collided last is asked first: consecutive queries tend to share it)."""
         r = self.robot
         ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
+        if self.provable:
+            self._count(ks)
         last = self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
@@ -405,6 +420,30 @@ class CollisionCuller:
                 return True
         self.narrow += len(ks)
         return False
+
+    def _count(self, ks: List[int]) -> None:
+        """Count the asks of the pairs ``ks``; a self pair asked for the :data:`PROVE_AFTER`-th time is given to
+        :func:`~robodesign.model.pair_clearance.never_collides` and, proven, switched off in ``active`` (the
+        bounds clear it from then on: coal would not find it colliding at any configuration)."""
+        asks = self.asks
+        for k in ks:
+            n = asks.get(k, 0) + 1
+            if n <= PROVE_AFTER:
+                asks[k] = n
+                if n == PROVE_AFTER:
+                    self._prove(k)
+
+    def _prove(self, k: int) -> None:
+        """Switch pair ``k`` off in ``active`` when it is a self pair proven never closer than its margin +
+        :data:`SLACK`."""
+        a, b = int(self.first[k]), int(self.second[k])
+        if b >= len(self.parent):
+            return
+        objs = self.robot.geom_model.geometryObjects
+        a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
+        if pair_clearance.never_collides(self.robot.model, a_end, b_end, float(self.margin[k]) + SLACK, self._chains):
+            self.active[k] = False
+            self.proven += 1
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
     def _kernel_args(self) -> tuple:
@@ -443,7 +482,7 @@ class CollisionCuller:
               self.self_k.astype(np.int64))
         work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
         out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
-        return (*tree, *sp, *obs, self.active.astype(np.bool_), *work, out, unknown), grids
+        return (*tree, *sp, *obs, self.active, *work, out, unknown), grids
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
