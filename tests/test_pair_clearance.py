@@ -215,3 +215,36 @@ def test_a_pair_on_the_base_is_seen_alike_from_every_base_pose():
                 assert np.allclose(M, M0, rtol=0, atol=1e-9) and np.array_equal(axis, axis0)
             assert pair_clearance.never_collides(robot.model, ends(a), ends(b), SLACK) == verdicts[k]
     assert len(base) >= 5 and any(verdicts.values())
+
+
+def test_a_builds_next_robots_start_with_its_proven_pairs_off(geometry_paths):
+    """The pairs a culler of a robot with a convex mesh proved, both bodies beyond the first joint, are off in the next
+    culler of the same build (module set, assembly, shapes) before its first query, at another base pose; each is
+    what ``never_collides`` answers for the new robot itself, pairs on the base are left to be proven again, and the
+    new culler's verdicts are pinocchio's computeCollisions over every pair at random configurations."""
+    rng = np.random.default_rng(8)
+    ms = load_module_set(IMPROV)
+    carried = 0
+    for _ in range(4):
+        order = random_serial_order(ms, rng, dof=6)
+        first = CollisionCuller(Robot.from_order(ms, order))
+        for k, *_ in self_pairs(first.robot):
+            first._prove(k)
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = pin.exp3(rng.normal(0.0, 1.0, 3)), rng.uniform(-1.0, 1.0, 3)
+        robot = Robot.from_order(ms, order, base_pose=T)
+        c = CollisionCuller(robot)
+        objs = robot.geom_model.geometryObjects
+        expected = {k for k, a, b, _ in self_pairs(robot) if not first.active[k] and a.parentJoint > 0
+                    and b.parentJoint > 0} if first.provable else set()   # (primitives only: no proofs in use)
+        assert set(np.flatnonzero(~c.active).tolist()) == expected and c.proven == len(expected)
+        for k in expected:
+            cp = robot.geom_model.collisionPairs[k]
+            assert pair_clearance.never_collides(robot.model, ends(objs[cp.first]), ends(objs[cp.second]),
+                                                 float(c.margin[k]) + SLACK)
+        carried += len(expected)
+        for q in [robot.random_configuration(rng) for _ in range(40)] + [wide_configuration(robot, rng)
+                                                                      for _ in range(20)]:
+            ref = bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
+            assert c.in_collision(q) == ref
+    assert carried > 10

@@ -354,6 +354,12 @@ class CollisionCuller:
         self.narrow = 0   # narrow-phase queries asked (statistics)
         self.asks: Dict[int, int] = {}   # per pair asked: how often (until :data:`PROVE_AFTER`)
         self.proven = 0   # self pairs proven never to collide (:mod:`.pair_clearance`), dropped since
+        self._known = _known_proofs(robot, shapes) if self.provable else None
+        if self._known is not None:   # the proofs of this build's earlier robots: off before the first query
+            for k, ends in self._known.items():
+                if (int(first[k]), int(second[k]), float(margin[k]) + SLACK) == ends and self.active[k]:
+                    self.active[k] = False
+                    self.proven += 1
         self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
         self._last_hit = -1                  # the pair collides found colliding last
@@ -437,13 +443,16 @@ class CollisionCuller:
         """Switch pair ``k`` off in ``active`` when it is a self pair proven never closer than its margin +
         :data:`SLACK`."""
         a, b = int(self.first[k]), int(self.second[k])
-        if b >= len(self.parent):
+        if b >= len(self.parent) or not self.active[k]:
             return
         objs = self.robot.geom_model.geometryObjects
         a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
-        if pair_clearance.never_collides(self.robot.model, a_end, b_end, float(self.margin[k]) + SLACK, self._chains):
+        limit = float(self.margin[k]) + SLACK
+        if pair_clearance.never_collides(self.robot.model, a_end, b_end, limit, self._chains):
             self.active[k] = False
             self.proven += 1
+            if self._known is not None and a_end[2] > 0 and b_end[2] > 0:
+                self._known[k] = (a, b, limit)
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
     def _kernel_args(self) -> tuple:
@@ -525,6 +534,29 @@ class CollisionCuller:
 
 
 _CULLERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+#: per robot build (module set, assembly, collision shapes), the self pairs proven never to collide whose two bodies
+#: lie beyond the first joint: pair → (its two objects, the limit proven). Such a pair's proof reads only what the
+#: build fixes (the shapes, their placements in their joints, the placements and axes of the joints between them),
+#: never the base pose, so :func:`~robodesign.model.pair_clearance.never_collides` answers every robot of the build
+#: as it answered the first; the build's next cullers switch those pairs off when they are made.
+_PROOFS: Dict[tuple, Tuple[tuple, Dict[int, Tuple[int, int, float]]]] = {}
+
+
+def _known_proofs(robot, shapes: List[object]) -> Optional[Dict[int, Tuple[int, int, float]]]:
+    """The proven pairs of ``robot``'s build (:data:`_PROOFS`; a new empty record for a new build), or None for a
+    robot without a module set and assembly."""
+    ms, asm = getattr(robot, "module_set", None), getattr(robot, "assembly", None)
+    if ms is None or asm is None:
+        return None
+    key = (id(ms), asm.key(), tuple(map(id, shapes)))
+    hit = _PROOFS.get(key)
+    if hit is not None and hit[0][0] is ms and all(a is b for a, b in zip(hit[0][1], shapes)):
+        return hit[1]
+    if len(_PROOFS) >= 4096:
+        _PROOFS.clear()
+    _PROOFS[key] = ((ms, tuple(shapes)), {})   # (held: their ids are not reused while the entry lives)
+    return _PROOFS[key][1]
 
 
 def culler_of(robot) -> CollisionCuller:
