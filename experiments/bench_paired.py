@@ -104,16 +104,19 @@ def main() -> None:
     args = ap.parse_args()
     only = [s for s in args.only.split(",") if s]
     if args.worker:
-        worker(args.worker, only, args.feasible, args.candidates)
+        try:
+            worker(args.worker, only, args.feasible, args.candidates)
+        except (KeyboardInterrupt, BrokenPipeError):   # (Ctrl-C reaches the workers too: the parent reports)
+            pass
         return
     cmd = [sys.executable, __file__, "--a", args.a, "--b", args.b, "--only", args.only,
            "--feasible", str(args.feasible), "--candidates", str(args.candidates), "--worker"]
     procs = [subprocess.Popen(cmd + [src], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
              for src in (args.a, args.b)]
+    pairs: list = []
     try:
         n = [json.loads(p.stdout.readline())["jobs"] for p in procs]   # type: ignore[union-attr]
         assert n[0] == n[1], n
-        pairs = []
         for i in range(n[0]):
             out = [None, None]
             for k in ((0, 1) if i % 2 == 0 else (1, 0)):
@@ -124,6 +127,8 @@ def main() -> None:
             if (a["stage"], a["feasible"]) != (b["stage"], b["feasible"]):
                 sys.exit(f"job {i}: A stopped at {a['stage']}, B at {b['stage']}: not the same results")
             pairs.append((a, b))
+    except KeyboardInterrupt:   # Ctrl-C: the jobs paired so far are reported
+        print(f"# stopped after {len(pairs)} jobs")
     finally:
         for p in procs:
             p.kill()
