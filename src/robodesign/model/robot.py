@@ -33,7 +33,7 @@ from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
 from robodesign.model.rnea_batch import rnea_rows
-from robodesign.model.robot_build import add_body_frames, chain_to, finish, walk
+from robodesign.model.robot_build import add_bodies, add_body_frames, chain_to, finish, walk
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
@@ -125,12 +125,12 @@ class Robot(RobotGeometry):
         self.module_set = module_set
         self.assembly = assembly
         self._build(convex_meshes)
-        self.model.gravity = _DEFAULT_GRAVITY if gravity is _G else pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0],
-                                                                                        dtype=float))
+        self.kinematic_model.gravity = _DEFAULT_GRAVITY if gravity is _G else \
+            pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
         self.data: "pin.Data"
         if base_pose is None:   # (else set_base_pose below makes them)
             self.base_pose = np.eye(4)
-            self.data = pin.Data(self.model)
+            self.data = pin.Data(self.kinematic_model)
         self._sync_link_model()
         self._geom_data = None  # built on first use (many candidates never reach a collision query)
         self._geometry_changed()
@@ -172,13 +172,27 @@ class Robot(RobotGeometry):
         self._chain = chain_to(w, tcp_joint)   # (tcp_chain's)
         if Mc is not None:
             self._root_items.append(("frame", self.tcp_frame, Mc))
-        self.model = model
+        # the pinocchio model for kinematics (joints, frames, limits): model's object, its bodies perhaps not added
+        self.kinematic_model = model
+        self._bodies_of: Optional[_rb.Walk] = w
         self._frames: Optional[list] = w.bodies   # (the bodies' frames; None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
         self._geoms, self._n_geoms, self._root_geoms, self._placed = w.geoms, w.n_geoms, w.root_geoms, False
         self._specs: Optional[list] = None   # (_geom_specs, _geom_body: made of _geoms on first use)
         self._bodies_of_geoms: Optional[list] = None
         self._direct_joint_pairs, self._self_map = w.direct_joint_pairs, None   # (the map: on first use)
+
+    @property
+    def model(self) -> "pin.Model":
+        """The pinocchio model. A new robot's has its joints, their limits and its frames; its bodies' inertias are
+        added at the first ask for it (:func:`~robodesign.model.robot_build.add_bodies`): the robot's own
+        kinematics (forward kinematics, Jacobians, reach bound, collision placements) reads its joints and frames
+        without asking, so a design that fails before any other use never adds them."""
+        w = self._bodies_of
+        if w is not None:
+            self._bodies_of = None
+            add_bodies(w, self.tcp_frame)
+        return self.kinematic_model
 
     def _set_joint_limits(self, model: "pin.Model", columns: np.ndarray) -> None:
         """The joints' limits and drivetrains (rows of ``columns`` in joint order: lower, upper, velocity,
@@ -198,7 +212,7 @@ class Robot(RobotGeometry):
         if T.shape != (4, 4) or not all(map(math.isfinite, T.ravel().tolist())):
             raise InputError("base pose must be a finite 4x4 matrix")
         self.base_pose = T.copy()
-        model, geom, SE3 = self.model, self._geom_model, pin.SE3
+        model, geom, SE3 = self.kinematic_model, self._geom_model, pin.SE3
         for kind, idx, M in self._root_items:
             if kind == "joint":
                 model.jointPlacements[idx] = SE3(T @ M)
@@ -217,7 +231,7 @@ class Robot(RobotGeometry):
         self._geometry_changed()
 
     def set_gravity(self, g: Sequence[float]) -> None:
-        self.model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+        self.kinematic_model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
         self._sync_link_model()
 
     def _sync_link_model(self) -> None:
@@ -238,7 +252,7 @@ class Robot(RobotGeometry):
 
     def fk(self, q, frame: Optional[int] = None) -> np.ndarray:
         """World pose (4x4) of a frame (default: TCP)."""
-        pin.framesForwardKinematics(self.model, self.data, self._q(q))
+        pin.framesForwardKinematics(self.kinematic_model, self.data, self._q(q))
         return self.data.oMf[self.tcp_frame if frame is None else frame].homogeneous
 
     def fk_batch(self, Q, frame: Optional[int] = None) -> np.ndarray:
@@ -286,7 +300,7 @@ class Robot(RobotGeometry):
     def jacobian(self, q, frame: Optional[int] = None, reference=pin.LOCAL_WORLD_ALIGNED) -> np.ndarray:
         """6×dof frame Jacobian (linear rows first), world-aligned at the frame origin by default."""
         f = self.tcp_frame if frame is None else frame
-        return pin.computeFrameJacobian(self.model, self.data, self._q(q), f, reference)
+        return pin.computeFrameJacobian(self.kinematic_model, self.data, self._q(q), f, reference)
 
     def generic_rank(self, samples: int = 4, rtol: float = 1e-8) -> int:
         """How many independent directions (of the 6 of a pose) the TCP can move in at a generic configuration:
@@ -332,7 +346,7 @@ class Robot(RobotGeometry):
         prismatic ones) and the TCP offset from its joint. Cached until the base pose changes.
         """
         if self._reach is None:
-            m, d = self.model, self.data    # (scratch space: the joint poses at the neutral configuration)
+            m, d = self.kinematic_model, self.data    # (scratch space: the joint poses at the neutral configuration)
             chain = self._chain
             pin.forwardKinematics(m, d, pin.neutral(m))
             if not chain:

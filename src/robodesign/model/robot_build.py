@@ -297,18 +297,35 @@ def geometry_bodies(geoms: List[tuple]) -> List[Tuple[int, str]]:
 
 
 def _model(w: Walk) -> None:
-    """The walk's joints (with their frames), then its bodies, added to the model. A joint's inertia is the sum of
-    what is added to it, in order, and nothing else reads it: the other joints' additions may come between."""
+    """The walk's joints (with their frames) added to the model. Its bodies are added later (:func:`add_bodies`):
+    kinematics reads none of them, and many designs of a search never use more."""
     model, SE3 = w.model, pin.SE3
-    add_joint, add_frame, append_body = model.addJoint, model.addJointFrame, model.appendBodyToJoint
+    add_joint, add_frame = model.addJoint, model.addJointFrame
     for n, (parent, jm, placement, name) in enumerate(w.joint_ops, 1):
         if add_joint(parent, jm, SE3(placement), name) != n or add_frame(n, -1) != n:
             raise AssertionError("pinocchio numbers joints and their frames in order")
+
+
+def add_bodies(w: Walk, tcp_frame: int) -> None:
+    """The walk's bodies added to its model (after :func:`finish`): each body's inertia appended to its joint, then
+    the zero inertias of the frames (:func:`_zero_inertias`), then the TCP frame's, as pinocchio's ``addFrame`` adds
+    it. A joint's inertia is the sum of what is added to it, in that order, and nothing else reads it: the model's
+    joints, frames and scratch space (``pin.Data``) are the same before, and its inertias are those of a build that
+    adds each when it comes."""
+    model, SE3 = w.model, pin.SE3
+    append_body = model.appendBodyToJoint
     for jid, Y, M in w.body_ops:
         if Y is not None:
             append_body(jid, Y, SE3(M))
         else:
             _add_zeros(model, jid, M)
+    pending, masses = w.pending, w.masses
+    for j in list(pending):
+        _zero_inertias(model, pending, masses, j)
+    frame = model.frames[tcp_frame]
+    Y = model.inertias[frame.parentJoint]
+    Y += frame.placement.act(frame.inertia)
+    model.inertias[frame.parentJoint] = Y
 
 
 def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[bool], o: int,
@@ -337,21 +354,15 @@ def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[b
 
 def finish(w: Walk) -> Tuple[int, int, Optional[np.ndarray]]:
     """The TCP frame (the free ``eef`` connector; else the last free connector in walk order; else the base frame),
-    added after the zero inertias of every joint's frames: (its frame id, its joint, its placement on joint 0 or
-    None)."""
-    model, pending, free = w.model, w.pending, w.free
+    added without its zero inertia (:func:`add_bodies` adds it after the bodies): (its frame id, its joint, its
+    placement on joint 0 or None)."""
+    model, free = w.model, w.free
     eefs = [f for f in free if f[0].type == "eef"]
     tcp = eefs[0] if len(eefs) == 1 else free[-1] if free else None
-    masses = w.masses
-    for j in list(pending):
-        m = masses[j] if j in masses else 0.0
-        if m * (1.0 / max(m, _EPS)) != 1.0:   # (else _zero_inertias changes nothing)
-            _zero_inertias(model, pending, masses, j)
-    pending.clear()
     if tcp is None:
-        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME)), 0, np.eye(4)
+        return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME), False), 0, np.eye(4)
     tj, Mc = tcp[1], tcp[3]   # (M @ the connector's pose)
-    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME))
+    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME), False)
     return fid, tj, (Mc.copy() if tj == 0 else None)
 
 

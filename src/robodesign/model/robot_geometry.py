@@ -32,7 +32,7 @@ class Obstacle:
 class RobotGeometry:
     """The collision part of :class:`~robodesign.model.robot.Robot` (what its ``_build`` sets is declared here)."""
 
-    model: "pin.Model"
+    kinematic_model: "pin.Model"   # (Robot.model, its bodies perhaps not added yet: no collision query reads them)
     data: "pin.Data"
     module_set: "ModuleSet"
     base_pose: np.ndarray
@@ -94,7 +94,7 @@ class RobotGeometry:
         """Every pair of robot objects on different joints, but those the module set ignores (a boolean map, set
         in one call, row-major)."""
         mode = self.module_set.ignore_collisions
-        parents = np.asarray(self.model.parents, dtype=int)
+        parents = np.asarray(self.kinematic_model.parents, dtype=int)
         J = np.array([spec[1] for spec in self._geom_specs], dtype=int).reshape(-1)
         keep = np.triu(J[:, None] != J[None, :], 1)  # rigidly connected: same joint
         if mode == "rigid_via_joint":
@@ -256,7 +256,8 @@ class RobotGeometry:
         return self._n_self_pairs
 
     def _update_geometry(self, q) -> None:
-        pin.updateGeometryPlacements(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+        pin.updateGeometryPlacements(self.kinematic_model, self.data, self.geom_model, self.geom_data,
+                                     self._q(q))
 
     def _check_pairs(self, start: int, stop: int, first: bool = True) -> List[int]:
         hits = []
@@ -279,8 +280,8 @@ class RobotGeometry:
         if culler is None:
             self._plain_queries += 1
             if self._plain_queries <= 0 or (culler := self._single_culler()) is None:
-                return bool(pin.computeCollisions(self.model, self.data, self.geom_model, self.geom_data, self._q(q),
-                                                  True))
+                return bool(pin.computeCollisions(self.kinematic_model, self.data, self.geom_model, self.geom_data,
+                                                  self._q(q), True))
         return bool(culler.in_collision(self._q(q)))
 
     def _single_culler(self):
@@ -325,7 +326,7 @@ class RobotGeometry:
         pairs = [self._n_self_pairs + j * n + a for j, a in near]
         if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
             gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
-            pin.updateGeometryPlacements(self.model, self.data, gm, gd, np.zeros(self.dof))
+            pin.updateGeometryPlacements(self.kinematic_model, self.data, gm, gd, np.zeros(self.dof))
             hit = [pin.computeCollision(gm, gd, i) for i in range(len(pairs))]
         else:
             self._update_geometry(np.zeros(self.dof))
@@ -359,7 +360,7 @@ class RobotGeometry:
 
     def min_distances(self, q) -> Tuple[float, float]:
         """(minimum self distance, minimum robot–obstacle distance); inf where there are no pairs."""
-        pin.computeDistances(self.model, self.data, self.geom_model, self.geom_data, self._q(q))
+        pin.computeDistances(self.kinematic_model, self.data, self.geom_model, self.geom_data, self._q(q))
         d = [r.min_distance for r in self.geom_data.distanceResults]
         s = min(d[: self._n_self_pairs], default=math.inf)
         o = min(d[self._n_self_pairs:], default=math.inf)
