@@ -2,6 +2,8 @@
 the robot's own kinematics before that ask reads ``kinematic_model`` (the same object, without the bodies' inertias)
 and gives the numbers of a robot whose model was asked first, and the model asked later is the plain walk's bit for
 bit (test_robot_build's reference: pinocchio adding each body, frame and the TCP with its zero inertia as it comes)."""
+import copy
+
 import coal
 import numpy as np
 import pinocchio as pin
@@ -97,3 +99,14 @@ def test_a_pool_robot_taken_back_is_a_fresh_build():
         q = again.random_configuration(rng)
         assert _same(again.gravity_torque(q), fresh.gravity_torque(q))
         assert isinstance(again.model, pin.Model)
+
+
+def test_a_shallow_copy_shares_the_one_addition():
+    """A shallow copy of a robot made before its model was asked for (as test_topp_kernel's scaled robots are)
+    shares the model: asked through the copy, then through the original, the bodies are added once, and both have
+    the twin's model and gravity torques."""
+    for ms, asm, robot, twin, rng in _pairs("robodesign_arm", 8, 41):
+        other = copy.copy(robot)
+        assert other.model == twin.model and robot.model == twin.model and robot.model is other.model
+        q = robot.random_configuration(rng)
+        assert _same(robot.gravity_torque(q), twin.gravity_torque(q))

@@ -187,6 +187,7 @@ class Walk:
         self.pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
         self.masses: Dict[int, float] = {}  # joint → its mass so far
         self.mass = 0.0
+        self.bodies_added = False   # (add_bodies: once per model, also for shallow copies of its robot)
 
 
 _LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their instance_labels
@@ -311,7 +312,10 @@ def add_bodies(w: Walk, tcp_frame: int) -> None:
     the zero inertias of the frames (:func:`_zero_inertias`), then the TCP frame's, as pinocchio's ``addFrame`` adds
     it. A joint's inertia is the sum of what is added to it, in that order, and nothing else reads it: the model's
     joints, frames and scratch space (``pin.Data``) are the same before, and its inertias are those of a build that
-    adds each when it comes."""
+    adds each when it comes. Once per walk: a second call adds nothing."""
+    if w.bodies_added:
+        return
+    w.bodies_added = True
     model, SE3 = w.model, pin.SE3
     append_body = model.appendBodyToJoint
     for jid, Y, M in w.body_ops:
