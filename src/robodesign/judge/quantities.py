@@ -30,6 +30,7 @@ Timed follow poses read q interpolated linearly between samples (:meth:`~Traject
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Dict, Optional, Tuple
@@ -131,6 +132,33 @@ def _world_axis(J: np.ndarray, j: int, ax: np.ndarray) -> list:
         return [R[:, i, c[0]] * ax[c[0]] for i in range(3)]
     z = R @ ax
     return [np.ascontiguousarray(z[:, i]) for i in range(3)]
+
+
+def _kernel() -> Any:
+    """The judge's compiled kernels (:mod:`~robodesign.judge.interval_kernel`) when they run in this process (numba
+    already imported, the kernels compiled), else None. Both paths give the same numbers."""
+    if "numba" not in sys.modules:
+        return None
+    from robodesign.judge import interval_kernel
+    return interval_kernel if interval_kernel.ready() else None
+
+
+def _twists_compiled(J: np.ndarray, T: np.ndarray, dq: np.ndarray, axes: list) -> Optional[np.ndarray]:
+    """:attr:`TrajectoryQuantities.tcp_twists` by the compiled kernel (the numpy path's operations per sample, bit
+    for bit) from the joint poses J, the TCP poses T, the velocities and :func:`_chain_axes`; None without the
+    kernel, when a joint of the chain is not along ±(a coordinate axis) or a rotation entry is no finite number
+    (:func:`_world_axis` takes the matrix product then)."""
+    kernel = _kernel()
+    cols = [np.flatnonzero(ax) for *_, ax in axes]
+    if kernel is None or any(len(c) != 1 or abs(ax[c[0]]) != 1.0 for c, (*_, ax) in zip(cols, axes)):
+        return None
+    out = kernel.tcp_twists(np.ascontiguousarray(J, dtype=float), np.ascontiguousarray(T, dtype=float),
+                            np.ascontiguousarray(dq[:, [iv for _, iv, _, _ in axes]], dtype=float),
+                            np.array([j for j, *_ in axes], dtype=np.int64),
+                            np.array([pr for _, _, pr, _ in axes], dtype=np.bool_),
+                            np.array([c[0] for c in cols], dtype=np.int64),
+                            np.array([ax[c[0]] for c, (*_, ax) in zip(cols, axes)], dtype=float))
+    return out if len(out) == len(J) else None
 
 
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
@@ -323,6 +351,11 @@ class TrajectoryQuantities:
         J = self.joint_poses
         if J is None:
             J = r.joint_poses_batch(self.q)
+        fast = _twists_compiled(J, self.tcp_poses, self.dq, axes)
+        return fast if fast is not None else self._tcp_twists_numpy(J, axes)
+
+    def _tcp_twists_numpy(self, J: np.ndarray, axes: list) -> np.ndarray:
+        """:attr:`tcp_twists` by numpy passes over the samples (J: the joint poses, ``axes``: :func:`_chain_axes`)."""
         p = [np.ascontiguousarray(self.tcp_poses[:, i, 3]) for i in range(3)]
         v, w = [np.zeros(self.n) for _ in range(3)], [np.zeros(self.n) for _ in range(3)]
         for j, iv, prismatic, ax in axes:
