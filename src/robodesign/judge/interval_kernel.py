@@ -1,7 +1,8 @@
 """The interval RNEA of :mod:`robodesign.judge.interval_rnea`, compiled (numba): one loop over the rows instead of
 a few thousand small numpy operations per pass; and the judge's TCP twists
 (:attr:`TrajectoryQuantities.tcp_twists <robodesign.judge.quantities.TrajectoryQuantities.tcp_twists>`: one loop
-over the samples instead of ~25 numpy passes per joint).
+over the samples instead of ~25 numpy passes per joint), and the extremes of the judged motion's positions and
+velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes).
 
 The kernel makes **the same floating-point operations in the same order** as the numpy path
 (:meth:`IntervalDynamics.link_torques <robodesign.judge.interval_rnea.IntervalDynamics.link_torques>`: the
@@ -266,6 +267,65 @@ def tcp_twists(J, T, dq, jid, prismatic, col, sign):  # pragma: no cover - compi
     return out
 
 
+@njit(cache=True, nogil=True)
+def _first_extreme(c, largest):  # pragma: no cover - compiled
+    """numpy.argmin (argmax with ``largest``) of the 1-D array c: the first NaN, else the first smallest (largest)."""
+    best, idx = c[0], 0
+    if best != best:
+        return 0
+    for i in range(1, len(c)):
+        x = c[i]
+        if x != x:
+            return i
+        if (x > best) if largest else (x < best):
+            best, idx = x, i
+    return idx
+
+
+@njit(cache=True, nogil=True)
+def position_extremes(q, v, a1, a2, tau, h, qs, vs):  # pragma: no cover - compiled
+    """(4, N − 1, dof): min q, its time, max q, its time per step and joint of the two-arc motion (q, v at the
+    samples, arcs a1, a2 switching at tau, steps h (N − 1, 1), q and q̇ at the switch qs, vs), as
+    StepMotion._position_extremes' numpy path: the candidates (q at both ends, at the switch, at each arc's vertex
+    inside it) and their times, the first of the smallest and largest (a NaN first)."""
+    m, dof = tau.shape
+    out = np.empty((4, m, dof))
+    cand, times = np.empty(5), np.empty(5)
+    for k in range(m):
+        H = h[k, 0]
+        for j in range(dof):
+            q0, v0, A1, A2, T, QS, VS = q[k, j], v[k, j], a1[k, j], a2[k, j], tau[k, j], qs[k, j], vs[k, j]
+            s1 = -v0 / A1 if A1 != 0 else -1.0
+            u2 = -VS / A2 if A2 != 0 else -1.0
+            in1 = (s1 > 0) and (s1 < T)
+            in2 = (u2 > 0) and (u2 < H - T)
+            cand[0], cand[1], cand[2] = q0, q[k + 1, j], QS
+            cand[3] = (q0 + v0 * s1) + A1 * (s1 * s1) / 2 if in1 else q0
+            cand[4] = (QS + VS * u2) + A2 * (u2 * u2) / 2 if in2 else q0
+            times[0], times[1], times[2] = 0.0, H, T
+            times[3] = s1 if in1 else 0.0
+            times[4] = T + u2 if in2 else 0.0
+            lo, hi = _first_extreme(cand, False), _first_extreme(cand, True)
+            out[0, k, j], out[1, k, j], out[2, k, j], out[3, k, j] = cand[lo], times[lo], cand[hi], times[hi]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def velocity_extremes(v, vs, tau, h):  # pragma: no cover - compiled
+    """(2, N − 1, dof): the largest |q̇| per step and joint and its time (at the start, the switch tau or the end h),
+    as StepMotion._velocity_extremes' numpy path (the first largest; a NaN first)."""
+    m, dof = tau.shape
+    out = np.empty((2, m, dof))
+    c = np.empty(3)
+    for k in range(m):
+        for j in range(dof):
+            c[0], c[1], c[2] = abs(v[k, j]), abs(vs[k, j]), abs(v[k + 1, j])
+            i = _first_extreme(c, True)
+            out[0, k, j] = c[i]
+            out[1, k, j] = 0.0 if i == 0 else tau[k, j] if i == 1 else h[k, 0]
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -281,10 +341,13 @@ def _warm() -> None:
                      np.ones(n), m3, m3, np.ones(n), m3, m3)
     i = np.zeros(1, np.int64)
     tcp_twists(np.zeros((1, 1, 4, 4)), np.zeros((1, 4, 4)), np.zeros((1, 1)), i, np.zeros(1, np.bool_), i, np.ones(1))
+    a, b = np.zeros((2, 1)), np.zeros((1, 1))
+    position_extremes(a, a, b, b, b, b, b, b)
+    velocity_extremes(a, b, b, b)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
-                       ("link_torques", "tcp_twists"), _warm)
+                       ("link_torques", "tcp_twists", "position_extremes", "velocity_extremes"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

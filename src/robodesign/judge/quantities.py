@@ -30,7 +30,6 @@ Timed follow poses read q interpolated linearly between samples (:meth:`~Traject
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Dict, Optional, Tuple
@@ -40,7 +39,7 @@ import pinocchio as pin
 
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Goal, JointLimitsConstraint, Task
-from robodesign.judge.motion import StepMotion, witness_velocities
+from robodesign.judge.motion import StepMotion, judge_kernels, witness_velocities
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
@@ -134,21 +133,12 @@ def _world_axis(J: np.ndarray, j: int, ax: np.ndarray) -> list:
     return [np.ascontiguousarray(z[:, i]) for i in range(3)]
 
 
-def _kernel() -> Any:
-    """The judge's compiled kernels (:mod:`~robodesign.judge.interval_kernel`) when they run in this process (numba
-    already imported, the kernels compiled), else None. Both paths give the same numbers."""
-    if "numba" not in sys.modules:
-        return None
-    from robodesign.judge import interval_kernel
-    return interval_kernel if interval_kernel.ready() else None
-
-
 def _twists_compiled(J: np.ndarray, T: np.ndarray, dq: np.ndarray, axes: list) -> Optional[np.ndarray]:
     """:attr:`TrajectoryQuantities.tcp_twists` by the compiled kernel (the numpy path's operations per sample, bit
     for bit) from the joint poses J, the TCP poses T, the velocities and :func:`_chain_axes`; None without the
     kernel, when a joint of the chain is not along ±(a coordinate axis) or a rotation entry is no finite number
     (:func:`_world_axis` takes the matrix product then)."""
-    kernel = _kernel()
+    kernel = judge_kernels()
     cols = [np.flatnonzero(ax) for *_, ax in axes]
     if kernel is None or any(len(c) != 1 or abs(ax[c[0]]) != 1.0 for c, (*_, ax) in zip(cols, axes)):
         return None
