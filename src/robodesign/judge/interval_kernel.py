@@ -2,7 +2,8 @@
 a few thousand small numpy operations per pass; and the judge's TCP twists
 (:attr:`TrajectoryQuantities.tcp_twists <robodesign.judge.quantities.TrajectoryQuantities.tcp_twists>`: one loop
 over the samples instead of ~25 numpy passes per joint), and the extremes of the judged motion's positions and
-velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes).
+velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes), and the
+whole-step torque bounds of :mod:`robodesign.judge.arc_torques` (its prefilter's last ~40 numpy passes).
 
 The kernel makes **the same floating-point operations in the same order** as the numpy path
 (:meth:`IntervalDynamics.link_torques <robodesign.judge.interval_rnea.IntervalDynamics.link_torques>`: the
@@ -326,6 +327,102 @@ def velocity_extremes(v, vs, tau, h):  # pragma: no cover - compiled
     return out
 
 
+@njit(cache=True, nogil=True)
+def _nmin(a, b):  # pragma: no cover - compiled
+    """numpy.minimum of two floats: a NaN (the first) if either is one."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+@njit(cache=True, nogil=True)
+def _nmax(a, b):  # pragma: no cover - compiled
+    """numpy.maximum of two floats: a NaN (the first) if either is one."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+@njit(cache=True, nogil=True)
+def _dsig(x, k):  # pragma: no cover - compiled
+    """σ'(x) of the Coulomb smoothing k, as arc_torques._with_friction writes it: k / (1 + (kx)²)^1.5."""
+    y = k * x
+    return k / (1.0 + y * y) ** 1.5
+
+
+@njit(cache=True, nogil=True)
+def _friction_rates(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, d_lo, d_hi):  # pragma: no cover - compiled
+    """[d_lo, d_hi] of arc_torques._with_friction per group and joint (finite inputs), the same operations."""
+    for g in range(dm.shape[0]):
+        for j in range(dm.shape[1]):
+            vlo, vhi = V0[g, j] - V1[g, j], V0[g, j] + V1[g, j]
+            m = 0.0 if 0.0 > vlo else vlo  # numpy.clip(0.0, vlo, vhi) (finite)
+            near = m if m < vhi else vhi
+            far = vlo if abs(vlo) > abs(vhi) else vhi
+            sn, sf = fc[j] * _dsig(near, k), fc[j] * _dsig(far, k)
+            f_lo, f_hi = fv[j] + _nmin(sn, sf), fv[j] + _nmax(sn, sf)
+            p0, p1, p2, p3 = f_lo * a_lo[g, j], f_lo * a_hi[g, j], f_hi * a_lo[g, j], f_hi * a_hi[g, j]
+            d_lo[g, j] = (dm[g, j] - dr[g, j]) + _nmin(_nmin(_nmin(p0, p1), p2), p3)
+            d_hi[g, j] = (dm[g, j] + dr[g, j]) + _nmax(_nmax(_nmax(p0, p1), p2), p3)
+
+
+_FLOAT_MAX = 1.7976931348623157e308  # what numpy.nan_to_num puts for +inf
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _crossing(num, den, delta):  # pragma: no cover - compiled
+    """numpy.clip(numpy.nan_to_num(num / den), 0, delta) (delta finite; a division by 0 is IEEE's, as numpy's)."""
+    x = num / den
+    if x != x:
+        x = 0.0
+    elif x == np.inf:
+        x = _FLOAT_MAX
+    elif x == -np.inf:
+        x = -_FLOAT_MAX
+    x = x if x > 0.0 else 0.0
+    return x if x < delta else delta
+
+
+@njit(cache=True, nogil=True)
+def steps_certified(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, group, ta, tb, J, h, lim):  # pragma: no cover
+    """(S, dof) bool: step s (of group group[s], length h[s]) certified for joint j by arc_torques._step_prefilter's
+    bounds: the groups' rate enclosures with friction (:func:`_friction_rates` of the link-side rates dm ± dr, q̇ in
+    V0 ± V1, accelerations in [a_lo, a_hi]), then _upper of (ta + J, tb + J) ≤ lim and _lower of (ta − J, tb − J)
+    ≥ −lim, the same operations as the numpy path. (0, dof) when an input is not finite or not below 1e100 in
+    size: the numpy path decides those (no intermediate here overflows otherwise)."""
+    for x in (dm, dr, V0, V1, a_lo, a_hi, ta, tb, J):
+        for v in x.flat:
+            if not abs(v) < 1e100:
+                return np.empty((0, dm.shape[1]), np.bool_)
+    for v in h:
+        if not abs(v) < 1e100:
+            return np.empty((0, dm.shape[1]), np.bool_)
+    d_lo, d_hi = np.empty(dm.shape), np.empty(dm.shape)
+    _friction_rates(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, d_lo, d_hi)
+    S, dof = ta.shape
+    out = np.empty((S, dof), np.bool_)
+    for s in range(S):
+        delta = h[s]
+        for j in range(dof):
+            lo, hi = d_lo[group[s], j], d_hi[group[s], j]
+            a, b = ta[s, j] + J[s, j], tb[s, j] + J[s, j]
+            ts = _crossing(b - a - lo * delta, hi - lo, delta)
+            ub = _nmin(a + hi * 0.0, b - lo * (delta - 0.0))
+            ub = _nmax(ub, _nmin(a + hi * (delta + 0.0), b - lo * (delta - (delta + 0.0))))
+            ub = _nmax(ub, _nmin(a + hi * ts, b - lo * (delta - ts)))
+            a, b = ta[s, j] - J[s, j], tb[s, j] - J[s, j]
+            tl = _crossing(b - a - hi * delta, lo - hi, delta)
+            lb = _nmax(a + lo * 0.0, b - hi * (delta - 0.0))
+            lb = _nmin(lb, _nmax(a + lo * (delta + 0.0), b - hi * (delta - (delta + 0.0))))
+            lb = _nmin(lb, _nmax(a + lo * tl, b - hi * (delta - tl)))
+            out[s, j] = (ub <= lim[j]) and (lb >= -lim[j])
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -344,10 +441,13 @@ def _warm() -> None:
     a, b = np.zeros((2, 1)), np.zeros((1, 1))
     position_extremes(a, a, b, b, b, b, b, b)
     velocity_extremes(a, b, b, b)
+    f = np.zeros(1)
+    steps_certified(b, b, b, b, b, b, f, f, 1.0, i, b, b, b, f, f)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
-                       ("link_torques", "tcp_twists", "position_extremes", "velocity_extremes"), _warm)
+                       ("link_torques", "tcp_twists", "position_extremes", "velocity_extremes",
+                        "steps_certified"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 
