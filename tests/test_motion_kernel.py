@@ -67,3 +67,28 @@ def test_the_kernels_run_in_the_judge(kernels):
     assert np.all(mn <= np.minimum(m.q[:-1], m.q[1:])) and np.all(mx >= np.maximum(m.q[:-1], m.q[1:]))
     vmax, when = m.velocity_extremes()
     assert np.all(vmax >= np.abs(m.v[:-1])) and np.all((when >= 0) & (when <= m.h))
+
+
+def test_arcs_compiled_are_the_numpy_path(kernels, monkeypatch):
+    """StepMotion.through's arcs (a1, a2, tau) by the kernel: every entry the numpy path's, zeros' signs included,
+    also with repeated times (h = 0), resting joints and non-finite samples."""
+    rng = np.random.default_rng(9)
+    for i in range(200):
+        n, dof = int(rng.integers(1, 60)), int(rng.integers(1, 8))
+        t = np.cumsum(np.r_[0.0, rng.uniform(1e-4, 0.05, n - 1)])
+        if i % 5 == 0 and n > 2:
+            t[2] = t[1]  # a step of no duration
+        q = np.cumsum(rng.normal(0, 0.02, (n, dof)), axis=0) * 10.0 ** rng.integers(-3, 3)
+        v = rng.normal(0, 1, (n, dof)) * 10.0 ** rng.integers(-3, 3)
+        v[rng.random((n, dof)) < 0.2] = rng.choice([0.0, -0.0])
+        q[rng.random((n, dof)) < 0.1] = q[0, 0]
+        if i % 4 == 1:
+            for x in (q, v):
+                x[rng.integers(0, n), rng.integers(0, dof)] = rng.choice([np.inf, -np.inf, np.nan, 1e300, -0.0])
+        with np.errstate(all="ignore"):
+            got = StepMotion.through(t, q, v)
+            monkeypatch.setattr(motion, "judge_kernels", lambda: None)
+            want = StepMotion.through(t, q, v)
+            monkeypatch.undo()
+        for name in ("h", "a1", "a2", "tau"):
+            assert _same_numbers(getattr(got, name), getattr(want, name)), name

@@ -1,7 +1,7 @@
 """The interval RNEA of :mod:`robodesign.judge.interval_rnea`, compiled (numba): one loop over the rows instead of
 a few thousand small numpy operations per pass; and the judge's TCP twists
 (:attr:`TrajectoryQuantities.tcp_twists <robodesign.judge.quantities.TrajectoryQuantities.tcp_twists>`: one loop
-over the samples instead of ~25 numpy passes per joint), and the extremes of the judged motion's positions and
+over the samples instead of ~25 numpy passes per joint), the arcs of the judged motion and the extremes of its positions and
 velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes), and the
 whole-step torque bounds of :mod:`robodesign.judge.arc_torques` (its prefilter's last ~40 numpy passes).
 
@@ -268,6 +268,32 @@ def tcp_twists(J, T, dq, jid, prismatic, col, sign):  # pragma: no cover - compi
     return out
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_arcs(q, v, h):  # pragma: no cover - compiled
+    """(3, N − 1, dof): the arcs a1, a2 and the switch instant tau per step and joint of the least-acceleration
+    motion through q, v (N, dof) with steps h (N − 1,), as StepMotion.through's numpy path: the same operations,
+    numpy.clip's and numpy.where's choices (a division by 0 IEEE's, as numpy's)."""
+    m, dof = len(h), q.shape[1]
+    out = np.empty((3, m, dof))
+    for k in range(m):
+        H = h[k]
+        for j in range(dof):
+            v0, v1 = v[k, j], v[k + 1, j]
+            D = q[k + 1, j] - q[k, j]
+            dv = v1 - v0
+            r2 = 2 * D - (v0 + v1) * H
+            w = H * (v1 - v0)
+            a = (abs(r2) + np.sqrt(r2 * r2 + w * w)) / (H * H)
+            sigma = 1.0 if r2 >= 0 else -1.0
+            tau = (H + sigma * dv / a) / 2 if a > 0 else H / 2
+            if tau == tau:  # numpy.clip(tau, 0.0, H): a NaN stays
+                tau = tau if tau > 0.0 else 0.0
+                tau = tau if tau < H else H
+            tau = 0.0 if tau < 1e-9 * H else (H if tau > (1 - 1e-9) * H else tau)
+            out[0, k, j], out[1, k, j], out[2, k, j] = sigma * a, -sigma * a, tau
+    return out
+
+
 @njit(cache=True, nogil=True)
 def _first_extreme(c, largest):  # pragma: no cover - compiled
     """numpy.argmin (argmax with ``largest``) of the 1-D array c: the first NaN, else the first smallest (largest)."""
@@ -440,13 +466,14 @@ def _warm() -> None:
     tcp_twists(np.zeros((1, 1, 4, 4)), np.zeros((1, 4, 4)), np.zeros((1, 1)), i, np.zeros(1, np.bool_), i, np.ones(1))
     a, b = np.zeros((2, 1)), np.zeros((1, 1))
     position_extremes(a, a, b, b, b, b, b, b)
+    step_arcs(a, a, np.ones(1))
     velocity_extremes(a, b, b, b)
     f = np.zeros(1)
     steps_certified(b, b, b, b, b, b, f, f, 1.0, i, b, b, b, f, f)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
-                       ("link_torques", "tcp_twists", "position_extremes", "velocity_extremes",
+                       ("link_torques", "tcp_twists", "step_arcs", "position_extremes", "velocity_extremes",
                         "steps_certified"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache

@@ -69,6 +69,10 @@ class StepMotion:
     def through(cls, t, q, v) -> "StepMotion":
         t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
         h = np.diff(t)[:, None]
+        kernel = judge_kernels()
+        if kernel is not None and q.ndim == 2 and q.shape == v.shape and len(q) == len(t):
+            arcs = kernel.step_arcs(*_contiguous(q, v, h[:, 0]))
+            return cls(t, q, v, h, arcs[0], arcs[1], arcs[2])
         D = np.diff(q, axis=0)
         v0, v1 = v[:-1], v[1:]
         dv = v1 - v0
