@@ -49,7 +49,7 @@ def _numpy(T, robot, V, acc, c, ends, h, lim):
 
 def test_kernel_decides_as_numpy(kernels):
     rng = np.random.default_rng(3)
-    decided = edges = 0
+    decided = mixed = 0
     for i in range(300):
         dof = int(rng.integers(1, 8))
         args = _case(rng, int(rng.integers(1, 25)), int(rng.integers(1, 120)), dof)
@@ -68,8 +68,8 @@ def test_kernel_decides_as_numpy(kernels):
         assert got.shape == want.shape and np.array_equal(got, want)
         assert np.array_equal(arc_torques._steps_within(*args, lim), want)
         decided += got.size
-        edges += int(np.count_nonzero(want)) and int(np.count_nonzero(~want))
-    assert decided > 10000 and edges > 50
+        mixed += bool(want.any() and not want.all())
+    assert decided > 10000 and mixed > 50  # cases with both certified and open steps
 
 
 def test_inputs_left_to_numpy(kernels):

@@ -134,10 +134,10 @@ def _world_axis(J: np.ndarray, j: int, ax: np.ndarray) -> list:
 
 
 def _twists_compiled(J: np.ndarray, T: np.ndarray, dq: np.ndarray, axes: list) -> Optional[np.ndarray]:
-    """:attr:`TrajectoryQuantities.tcp_twists` by the compiled kernel (the numpy path's operations per sample, bit
-    for bit) from the joint poses J, the TCP poses T, the velocities and :func:`_chain_axes`; None without the
-    kernel, when a joint of the chain is not along ±(a coordinate axis) or a rotation entry is no finite number
-    (:func:`_world_axis` takes the matrix product then)."""
+    """:attr:`TrajectoryQuantities.tcp_twists` by the compiled kernel (the numpy path's operations per sample: the
+    same numbers, a NaN's sign bit aside, which no reader sees) from the joint poses J, the TCP poses T, the
+    velocities and :func:`_chain_axes`; None without the kernel, when a joint of the chain is not along ±(a
+    coordinate axis) or a rotation entry is no finite number (:func:`_world_axis` takes the matrix product then)."""
     kernel = judge_kernels()
     cols = [np.flatnonzero(ax) for *_, ax in axes]
     if kernel is None or any(len(c) != 1 or abs(ax[c[0]]) != 1.0 for c, (*_, ax) in zip(cols, axes)):
