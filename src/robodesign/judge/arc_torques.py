@@ -37,6 +37,7 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from robodesign.judge.interval_rnea import IntervalDynamics
+from robodesign.judge.motion import judge_kernels
 from robodesign.model.robot import COULOMB_SMOOTHING
 
 MAX_DEPTH = 12  # pieces are split down to h / 4096
@@ -108,8 +109,13 @@ def _rate_bounds(dyn, robot, Q, V, acc_lo, acc_hi, wr):
     """[d_lo, d_hi] (P, dof) enclosing dτ/dt of the drivetrain torque along any arc with q in Q, q̇ in V and a
     constant q̈ in [acc_lo, acc_hi]: the link-side rate (interval RNEA) plus the friction term's
     (f_v + f_c·σ'(q̇))·q̈, σ'(x) = k / (1 + (kx)²)^1.5 (largest at the q̇ nearest 0); k²I_m·q̈ is constant."""
+    return _with_friction(_link_rates(dyn, Q, V, acc_lo, acc_hi, wr), robot, V, acc_lo, acc_hi)
+
+
+def _link_rates(dyn, Q, V, acc_lo, acc_hi, wr):
+    """The link-side enclosure of :func:`_rate_bounds` (interval RNEA; its fields dm ± dr bound the rate)."""
     am, ar = (acc_lo + acc_hi) / 2, (acc_hi - acc_lo) / 2
-    return _with_friction(dyn.link_torques(Q, V, (am, ar), wr if np.any(wr) else None), robot, V, acc_lo, acc_hi)
+    return dyn.link_torques(Q, V, (am, ar), wr if np.any(wr) else None)
 
 
 def _with_friction(T, robot, V, acc_lo, acc_hi):
@@ -159,17 +165,34 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
     need = np.unique(c[np.any(dA != 0, axis=1)])  # the groups with a switch inside a step: their mass matrix
     if len(need) and not np.any(wr):  # the rate and the mass matrix in one interval pass
         T, Mb = dyn.rates_and_mass_bound(Q, V, ((a_lo + a_hi) / 2, (a_hi - a_lo) / 2), need)
-        d_lo, d_hi = _with_friction(T, robot, V, a_lo, a_hi)
     else:
-        d_lo, d_hi = _rate_bounds(dyn, robot, Q, V, a_lo, a_hi, wr)
+        T = _link_rates(dyn, Q, V, a_lo, a_hi, wr)
         Mb = dyn.mass_matrix_bound((Q[0][need], Q[1][need])) if len(need) else None
     if Mb is not None:
         M_all = np.zeros((len(starts),) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
         M_all[need] = Mb
         J = np.einsum("sji,si->sj", M_all[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
+    return _steps_within(T, robot, V, (a_lo, a_hi), c, (ta, tb, J), h, lim) & same[c][:, None]
+
+
+def _steps_within(T, robot, V, acc: tuple, c: np.ndarray, ends: tuple, h: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """(steps, dof) True where τ over the whole step stays within ±lim: the groups' rate bounds (:func:`_with_friction`
+    of the link-side enclosure T, q̇ in V, q̈ in acc = (lo, hi)) on each step of group c, from τ just after and just
+    before its samples ± the switch jumps, ``ends`` = (ta, tb, J); h (steps, 1). The compiled kernel (the same
+    operations, judge.interval_kernel.steps_certified) where it runs and the inputs are finite and below 1e100."""
+    ta, tb, J = ends
+    kernel = judge_kernels()
+    if kernel is not None:
+        f = lambda x: np.ascontiguousarray(x, dtype=float)  # noqa: E731
+        ok = kernel.steps_certified(f(T.dm), f(T.dr), f(V[0]), f(V[1]), f(acc[0]), f(acc[1]),
+                                    f(robot.friction_viscous), f(robot.friction_coulomb), COULOMB_SMOOTHING,
+                                    np.ascontiguousarray(c, dtype=np.int64), f(ta), f(tb), f(J), f(h[:, 0]), f(lim))
+        if len(ok) == len(ta):
+            return ok
+    d_lo, d_hi = _with_friction(T, robot, V, acc[0], acc[1])
     lo_c, hi_c = d_lo[c], d_hi[c]
     ub, lb = _upper(ta + J, tb + J, lo_c, hi_c, h), _lower(ta - J, tb - J, lo_c, hi_c, h)
-    return (ub <= lim) & (lb >= -lim) & same[c][:, None]
+    return (ub <= lim) & (lb >= -lim)
 
 
 def certify_arc_torques(robot, motion, wrenches: np.ndarray, steps: np.ndarray, limit: np.ndarray,

@@ -1,5 +1,9 @@
 """The interval RNEA of :mod:`robodesign.judge.interval_rnea`, compiled (numba): one loop over the rows instead of
-a few thousand small numpy operations per pass.
+a few thousand small numpy operations per pass; and the judge's TCP twists
+(:attr:`TrajectoryQuantities.tcp_twists <robodesign.judge.quantities.TrajectoryQuantities.tcp_twists>`: one loop
+over the samples instead of ~25 numpy passes per joint), the arcs of the judged motion and the extremes of its positions and
+velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes), and the
+whole-step torque bounds of :mod:`robodesign.judge.arc_torques` (its prefilter's last ~40 numpy passes).
 
 The kernel makes **the same floating-point operations in the same order** as the numpy path
 (:meth:`IntervalDynamics.link_torques <robodesign.judge.interval_rnea.IntervalDynamics.link_torques>`: the
@@ -231,6 +235,220 @@ def link_torques(Q0, Q1, V0, V1, am, ar, acc0, C, S, parents, kinds, signs, R, S
     return out
 
 
+@njit(cache=True, nogil=True)
+def tcp_twists(J, T, dq, jid, prismatic, col, sign):  # pragma: no cover - compiled
+    """(n, 6) TCP twists [v; ω] as TrajectoryQuantities.tcp_twists' numpy path, sample by sample: the chain's joints
+    (pinocchio ids jid, velocities dq (n, len(jid)) in the chain's order) along ±(coordinate axis col) of their frame
+    (sign ±1.0), so world axis z = column col of the joint's rotation in J (n, njoints, 4, 4) times sign; each
+    component summed from +0 over the joints in order, v += z·q̇ (prismatic) or ω += z·q̇ and v += (z × (p − o))·q̇
+    (revolute; p the TCP position of T (n, 4, 4), o the joint's origin). (0, 6) when a rotation entry of a chain
+    joint is no finite number (the numpy path's product then differs from the column)."""
+    n, m = J.shape[0], len(jid)
+    for t in range(m):
+        for k in range(n):
+            for a in range(3):
+                for b in range(3):
+                    if not np.isfinite(J[k, jid[t], a, b]):
+                        return np.empty((0, 6))
+    out = np.empty((n, 6))
+    for k in range(n):
+        v0, v1, v2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        for t in range(m):
+            j, c, s, qd = jid[t], col[t], sign[t], dq[k, t]
+            z0, z1, z2 = J[k, j, 0, c] * s, J[k, j, 1, c] * s, J[k, j, 2, c] * s
+            if prismatic[t]:
+                v0, v1, v2 = v0 + z0 * qd, v1 + z1 * qd, v2 + z2 * qd
+                continue
+            w0, w1, w2 = w0 + z0 * qd, w1 + z1 * qd, w2 + z2 * qd
+            b0, b1, b2 = T[k, 0, 3] - J[k, j, 0, 3], T[k, 1, 3] - J[k, j, 1, 3], T[k, 2, 3] - J[k, j, 2, 3]
+            v0 = v0 + (z1 * b2 - z2 * b1) * qd
+            v1 = v1 + (z2 * b0 - z0 * b2) * qd
+            v2 = v2 + (z0 * b1 - z1 * b0) * qd
+        out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5] = v0, v1, v2, w0, w1, w2
+    return out
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_arcs(q, v, h):  # pragma: no cover - compiled
+    """(3, N − 1, dof): the arcs a1, a2 and the switch instant tau per step and joint of the least-acceleration
+    motion through q, v (N, dof) with steps h (N − 1,), as StepMotion.through's numpy path: the same operations,
+    numpy.clip's and numpy.where's choices (a division by 0 IEEE's, as numpy's)."""
+    m, dof = len(h), q.shape[1]
+    out = np.empty((3, m, dof))
+    for k in range(m):
+        H = h[k]
+        for j in range(dof):
+            v0, v1 = v[k, j], v[k + 1, j]
+            D = q[k + 1, j] - q[k, j]
+            dv = v1 - v0
+            r2 = 2 * D - (v0 + v1) * H
+            w = H * (v1 - v0)
+            a = (abs(r2) + np.sqrt(r2 * r2 + w * w)) / (H * H)
+            sigma = 1.0 if r2 >= 0 else -1.0
+            tau = (H + sigma * dv / a) / 2 if a > 0 else H / 2
+            if tau == tau:  # numpy.clip(tau, 0.0, H): a NaN stays
+                tau = tau if tau > 0.0 else 0.0
+                tau = tau if tau < H else H
+            tau = 0.0 if tau < 1e-9 * H else (H if tau > (1 - 1e-9) * H else tau)
+            out[0, k, j], out[1, k, j], out[2, k, j] = sigma * a, -sigma * a, tau
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _first_extreme(c, largest):  # pragma: no cover - compiled
+    """numpy.argmin (argmax with ``largest``) of the 1-D array c: the first NaN, else the first smallest (largest)."""
+    best, idx = c[0], 0
+    if best != best:
+        return 0
+    for i in range(1, len(c)):
+        x = c[i]
+        if x != x:
+            return i
+        if (x > best) if largest else (x < best):
+            best, idx = x, i
+    return idx
+
+
+@njit(cache=True, nogil=True)
+def position_extremes(q, v, a1, a2, tau, h, qs, vs):  # pragma: no cover - compiled
+    """(4, N − 1, dof): min q, its time, max q, its time per step and joint of the two-arc motion (q, v at the
+    samples, arcs a1, a2 switching at tau, steps h (N − 1, 1), q and q̇ at the switch qs, vs), as
+    StepMotion._position_extremes' numpy path: the candidates (q at both ends, at the switch, at each arc's vertex
+    inside it) and their times, the first of the smallest and largest (a NaN first)."""
+    m, dof = tau.shape
+    out = np.empty((4, m, dof))
+    cand, times = np.empty(5), np.empty(5)
+    for k in range(m):
+        H = h[k, 0]
+        for j in range(dof):
+            q0, v0, A1, A2, T, QS, VS = q[k, j], v[k, j], a1[k, j], a2[k, j], tau[k, j], qs[k, j], vs[k, j]
+            s1 = -v0 / A1 if A1 != 0 else -1.0
+            u2 = -VS / A2 if A2 != 0 else -1.0
+            in1 = (s1 > 0) and (s1 < T)
+            in2 = (u2 > 0) and (u2 < H - T)
+            cand[0], cand[1], cand[2] = q0, q[k + 1, j], QS
+            cand[3] = (q0 + v0 * s1) + A1 * (s1 * s1) / 2 if in1 else q0
+            cand[4] = (QS + VS * u2) + A2 * (u2 * u2) / 2 if in2 else q0
+            times[0], times[1], times[2] = 0.0, H, T
+            times[3] = s1 if in1 else 0.0
+            times[4] = T + u2 if in2 else 0.0
+            lo, hi = _first_extreme(cand, False), _first_extreme(cand, True)
+            out[0, k, j], out[1, k, j], out[2, k, j], out[3, k, j] = cand[lo], times[lo], cand[hi], times[hi]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def velocity_extremes(v, vs, tau, h):  # pragma: no cover - compiled
+    """(2, N − 1, dof): the largest |q̇| per step and joint and its time (at the start, the switch tau or the end h),
+    as StepMotion._velocity_extremes' numpy path (the first largest; a NaN first)."""
+    m, dof = tau.shape
+    out = np.empty((2, m, dof))
+    c = np.empty(3)
+    for k in range(m):
+        for j in range(dof):
+            c[0], c[1], c[2] = abs(v[k, j]), abs(vs[k, j]), abs(v[k + 1, j])
+            i = _first_extreme(c, True)
+            out[0, k, j] = c[i]
+            out[1, k, j] = 0.0 if i == 0 else tau[k, j] if i == 1 else h[k, 0]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _nmin(a, b):  # pragma: no cover - compiled
+    """numpy.minimum of two floats: a NaN (the first) if either is one."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+@njit(cache=True, nogil=True)
+def _nmax(a, b):  # pragma: no cover - compiled
+    """numpy.maximum of two floats: a NaN (the first) if either is one."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+@njit(cache=True, nogil=True)
+def _dsig(x, k):  # pragma: no cover - compiled
+    """σ'(x) of the Coulomb smoothing k, as arc_torques._with_friction writes it: k / (1 + (kx)²)^1.5."""
+    y = k * x
+    return k / (1.0 + y * y) ** 1.5
+
+
+@njit(cache=True, nogil=True)
+def _friction_rates(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, d_lo, d_hi):  # pragma: no cover - compiled
+    """[d_lo, d_hi] of arc_torques._with_friction per group and joint (finite inputs), the same operations."""
+    for g in range(dm.shape[0]):
+        for j in range(dm.shape[1]):
+            vlo, vhi = V0[g, j] - V1[g, j], V0[g, j] + V1[g, j]
+            m = 0.0 if 0.0 > vlo else vlo  # numpy.clip(0.0, vlo, vhi) (finite)
+            near = m if m < vhi else vhi
+            far = vlo if abs(vlo) > abs(vhi) else vhi
+            sn, sf = fc[j] * _dsig(near, k), fc[j] * _dsig(far, k)
+            f_lo, f_hi = fv[j] + _nmin(sn, sf), fv[j] + _nmax(sn, sf)
+            p0, p1, p2, p3 = f_lo * a_lo[g, j], f_lo * a_hi[g, j], f_hi * a_lo[g, j], f_hi * a_hi[g, j]
+            d_lo[g, j] = (dm[g, j] - dr[g, j]) + _nmin(_nmin(_nmin(p0, p1), p2), p3)
+            d_hi[g, j] = (dm[g, j] + dr[g, j]) + _nmax(_nmax(_nmax(p0, p1), p2), p3)
+
+
+_FLOAT_MAX = 1.7976931348623157e308  # what numpy.nan_to_num puts for +inf
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _crossing(num, den, delta):  # pragma: no cover - compiled
+    """numpy.clip(numpy.nan_to_num(num / den), 0, delta) (delta finite; a division by 0 is IEEE's, as numpy's)."""
+    x = num / den
+    if x != x:
+        x = 0.0
+    elif x == np.inf:
+        x = _FLOAT_MAX
+    elif x == -np.inf:
+        x = -_FLOAT_MAX
+    x = x if x > 0.0 else 0.0
+    return x if x < delta else delta
+
+
+@njit(cache=True, nogil=True)
+def steps_certified(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, group, ta, tb, J, h, lim):  # pragma: no cover
+    """(S, dof) bool: step s (of group group[s], length h[s]) certified for joint j by arc_torques._step_prefilter's
+    bounds: the groups' rate enclosures with friction (:func:`_friction_rates` of the link-side rates dm ± dr, q̇ in
+    V0 ± V1, accelerations in [a_lo, a_hi]), then _upper of (ta + J, tb + J) ≤ lim and _lower of (ta − J, tb − J)
+    ≥ −lim, the same operations as the numpy path. (0, dof) when an input is not finite or not below 1e100 in
+    size: the numpy path decides those (no intermediate here overflows otherwise)."""
+    for x in (dm, dr, V0, V1, a_lo, a_hi, ta, tb, J):
+        for v in x.flat:
+            if not abs(v) < 1e100:
+                return np.empty((0, dm.shape[1]), np.bool_)
+    for v in h:
+        if not abs(v) < 1e100:
+            return np.empty((0, dm.shape[1]), np.bool_)
+    d_lo, d_hi = np.empty(dm.shape), np.empty(dm.shape)
+    _friction_rates(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, d_lo, d_hi)
+    S, dof = ta.shape
+    out = np.empty((S, dof), np.bool_)
+    for s in range(S):
+        delta = h[s]
+        for j in range(dof):
+            lo, hi = d_lo[group[s], j], d_hi[group[s], j]
+            a, b = ta[s, j] + J[s, j], tb[s, j] + J[s, j]
+            ts = _crossing(b - a - lo * delta, hi - lo, delta)
+            ub = _nmin(a + hi * 0.0, b - lo * (delta - 0.0))
+            ub = _nmax(ub, _nmin(a + hi * (delta + 0.0), b - lo * (delta - (delta + 0.0))))
+            ub = _nmax(ub, _nmin(a + hi * ts, b - lo * (delta - ts)))
+            a, b = ta[s, j] - J[s, j], tb[s, j] - J[s, j]
+            tl = _crossing(b - a - hi * delta, lo - hi, delta)
+            lb = _nmax(a + lo * 0.0, b - hi * (delta - 0.0))
+            lb = _nmin(lb, _nmax(a + lo * (delta + 0.0), b - hi * (delta - (delta + 0.0))))
+            lb = _nmin(lb, _nmax(a + lo * tl, b - hi * (delta - tl)))
+            out[s, j] = (ub <= lim[j]) and (lb >= -lim[j])
+    return out
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -244,10 +462,19 @@ def _warm() -> None:
         acc0.flags.writeable = writeable
         link_torques(z, z, z, z, z, z, acc0, z, z, np.zeros(n, np.int64), np.array([0, 1], np.int64),
                      np.ones(n), m3, m3, np.ones(n), m3, m3)
+    i = np.zeros(1, np.int64)
+    tcp_twists(np.zeros((1, 1, 4, 4)), np.zeros((1, 4, 4)), np.zeros((1, 1)), i, np.zeros(1, np.bool_), i, np.ones(1))
+    a, b = np.zeros((2, 1)), np.zeros((1, 1))
+    position_extremes(a, a, b, b, b, b, b, b)
+    step_arcs(a, a, np.ones(1))
+    velocity_extremes(a, b, b, b)
+    f = np.zeros(1)
+    steps_certified(b, b, b, b, b, b, f, f, 1.0, i, b, b, b, f, f)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
-                       ("link_torques",), _warm)
+                       ("link_torques", "tcp_twists", "step_arcs", "position_extremes", "velocity_extremes",
+                        "steps_certified"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -24,13 +24,28 @@ a faster motion.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Optional, Tuple
+from typing import Any, Optional, Tuple
 
 import numpy as np
 
 ACC_RTOL = 1e-6  # relative slack on the acceleration (rounding: a motion exactly at the limit has a one-point witness)
+
+
+def judge_kernels() -> Any:
+    """The judge's compiled kernels (:mod:`~robodesign.judge.interval_kernel`) when they run in this process (numba
+    already imported, the kernels compiled), else None: the numpy paths they replace give the same numbers."""
+    if "numba" not in sys.modules:
+        return None
+    from robodesign.judge import interval_kernel
+    return interval_kernel if interval_kernel.ready() else None
+
+
+def _contiguous(*arrays: np.ndarray) -> Tuple[np.ndarray, ...]:
+    """The arrays as C-contiguous float arrays (what the kernels take; no copy of one that is)."""
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
 
 
 def least_acceleration(h, dq_, v0, v1) -> np.ndarray:
@@ -54,6 +69,10 @@ class StepMotion:
     def through(cls, t, q, v) -> "StepMotion":
         t, q, v = (np.asarray(x, dtype=float) for x in (t, q, v))
         h = np.diff(t)[:, None]
+        kernel = judge_kernels()
+        if kernel is not None and q.ndim == 2 and q.shape == v.shape and len(q) == len(t):
+            arcs = kernel.step_arcs(*_contiguous(q, v, h[:, 0]))
+            return cls(t, q, v, h, arcs[0], arcs[1], arcs[2])
         D = np.diff(q, axis=0)
         v0, v1 = v[:-1], v[1:]
         dv = v1 - v0
@@ -95,6 +114,10 @@ class StepMotion:
 
     @cached_property
     def _velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
+        kernel = judge_kernels()
+        if kernel is not None:
+            out = kernel.velocity_extremes(*_contiguous(self.v, self.v_switch, self.tau, self.h))
+            return out[0], out[1]
         c = np.stack([np.abs(self.v[:-1]), np.abs(self.v_switch), np.abs(self.v[1:])])
         i = np.argmax(c, axis=0)
         when = np.choose(i, [np.zeros_like(self.tau), self.tau, np.broadcast_to(self.h, self.tau.shape)])
@@ -106,6 +129,11 @@ class StepMotion:
 
     @cached_property
     def _position_extremes(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        kernel = judge_kernels()
+        if kernel is not None:
+            out = kernel.position_extremes(*_contiguous(self.q, self.v, self.a1, self.a2, self.tau, self.h,
+                                                        self.q_switch, self.v_switch))
+            return out[0], out[1], out[2], out[3]
         q0, v0, a1, a2, tau = self.q[:-1], self.v[:-1], self.a1, self.a2, self.tau
         qs, vs = self.q_switch, self.v_switch
         with np.errstate(divide="ignore", invalid="ignore"):

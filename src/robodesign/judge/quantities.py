@@ -39,7 +39,7 @@ import pinocchio as pin
 
 from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Goal, JointLimitsConstraint, Task
-from robodesign.judge.motion import StepMotion, witness_velocities
+from robodesign.judge.motion import StepMotion, judge_kernels, witness_velocities
 from robodesign.model.robot import Robot
 
 TIME_ATOL = 1e-8  # goal times match a sample by numpy.isclose with these tolerances (the reference's rule)
@@ -131,6 +131,24 @@ def _world_axis(J: np.ndarray, j: int, ax: np.ndarray) -> list:
         return [R[:, i, c[0]] * ax[c[0]] for i in range(3)]
     z = R @ ax
     return [np.ascontiguousarray(z[:, i]) for i in range(3)]
+
+
+def _twists_compiled(J: np.ndarray, T: np.ndarray, dq: np.ndarray, axes: list) -> Optional[np.ndarray]:
+    """:attr:`TrajectoryQuantities.tcp_twists` by the compiled kernel (the numpy path's operations per sample: the
+    same numbers, a NaN's sign bit aside, which no reader sees) from the joint poses J, the TCP poses T, the
+    velocities and :func:`_chain_axes`; None without the kernel, when a joint of the chain is not along ±(a
+    coordinate axis) or a rotation entry is no finite number (:func:`_world_axis` takes the matrix product then)."""
+    kernel = judge_kernels()
+    cols = [np.flatnonzero(ax) for *_, ax in axes]
+    if kernel is None or any(len(c) != 1 or abs(ax[c[0]]) != 1.0 for c, (*_, ax) in zip(cols, axes)):
+        return None
+    out = kernel.tcp_twists(np.ascontiguousarray(J, dtype=float), np.ascontiguousarray(T, dtype=float),
+                            np.ascontiguousarray(dq[:, [iv for _, iv, _, _ in axes]], dtype=float),
+                            np.array([j for j, *_ in axes], dtype=np.int64),
+                            np.array([pr for _, _, pr, _ in axes], dtype=np.bool_),
+                            np.array([c[0] for c in cols], dtype=np.int64),
+                            np.array([ax[c[0]] for c, (*_, ax) in zip(cols, axes)], dtype=float))
+    return out if len(out) == len(J) else None
 
 
 def find_time_index(t: np.ndarray, value: float) -> Optional[int]:
@@ -323,6 +341,11 @@ class TrajectoryQuantities:
         J = self.joint_poses
         if J is None:
             J = r.joint_poses_batch(self.q)
+        fast = _twists_compiled(J, self.tcp_poses, self.dq, axes)
+        return fast if fast is not None else self._tcp_twists_numpy(J, axes)
+
+    def _tcp_twists_numpy(self, J: np.ndarray, axes: list) -> np.ndarray:
+        """:attr:`tcp_twists` by numpy passes over the samples (J: the joint poses, ``axes``: :func:`_chain_axes`)."""
         p = [np.ascontiguousarray(self.tcp_poses[:, i, 3]) for i in range(3)]
         v, w = [np.zeros(self.n) for _ in range(3)], [np.zeros(self.n) for _ in range(3)]
         for j, iv, prismatic, ax in axes:
