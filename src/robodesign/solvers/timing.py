@@ -496,6 +496,45 @@ def _same_tangents(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.array_equal(a, b))
 
 
+class _ToppraMotion:
+    """The motion of a TOPP-RA profile along its path: on grid interval i (from time T_grid[i], dt_i[i] long) the
+    path parameter s moves from grid[i] at speed sd[i] with the constant acceleration u[i]; its joint velocity
+    and position at given times (1-d arrays)."""
+
+    def __init__(self, path, grid, sd, dt_i, u, T_grid):
+        self.path, self.grid, self.sd, self.dt_i, self.u, self.T_grid = path, grid, sd, dt_i, u, T_grid
+
+    def s_of_t(self, t: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(s(t), ṡ(t))."""
+        grid, sd, dt_i, u, T_grid = self.grid, self.sd, self.dt_i, self.u, self.T_grid
+        i = np.clip(np.searchsorted(T_grid, t, side="right") - 1, 0, len(dt_i) - 1)
+        tau_ = np.clip(t - T_grid[i], 0.0, dt_i[i])
+        sdot = np.maximum(sd[i] + u[i] * tau_, 0.0)
+        s = np.minimum(grid[i] + sd[i] * tau_ + 0.5 * u[i] * tau_ ** 2, grid[i + 1])
+        return s, sdot
+
+    def _at(self, t, order: int) -> np.ndarray:
+        """q'(s(t))·ṡ(t) (``order`` 1) or q(s(t)) (0): on a BlendedPolyline by the compiled
+        topp_kernel.profile_rows once it is ready (the same numbers as these numpy calls)."""
+        from robodesign.solvers import topp_kernel
+        t = np.asarray(t, float)
+        path = self.path
+        if isinstance(path, BlendedPolyline) and t.ndim == 1 and topp_kernel.ready():
+            out = np.empty((len(t), path.dof))
+            topp_kernel.profile_rows(self.T_grid, self.dt_i, self.sd, self.u, self.grid, path.breaks, path.p0,
+                                     path.d0, path.c, float(path.length), path.points[-1], np.ascontiguousarray(t),
+                                     order, out)
+            return out
+        s, sdot = self.s_of_t(t)
+        return path(s, 1) * sdot[:, None] if order == 1 else path(s, 0)
+
+    def velocity(self, t) -> np.ndarray:
+        return self._at(t, 1)
+
+    def position(self, t) -> np.ndarray:
+        return self._at(t, 0)
+
+
 def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: bool, grid_step: float,
                     torque_passes: int) -> Tuple[_Profile, dict]:
     global _DYN_CLS
@@ -543,22 +582,9 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     dt_i = 2 * ds / denom
     u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2 * ds)
     T_grid = np.concatenate([[0.0], np.cumsum(dt_i)])
-
-    def s_of_t(t):
-        i = np.clip(np.searchsorted(T_grid, t, side="right") - 1, 0, len(ds) - 1)
-        tau_ = np.clip(t - T_grid[i], 0.0, dt_i[i])
-        sdot = np.maximum(sd[i] + u[i] * tau_, 0.0)
-        s = np.minimum(grid[i] + sd[i] * tau_ + 0.5 * u[i] * tau_ ** 2, grid[i + 1])
-        return s, sdot
-
-    def velocity(t):
-        s, sdot = s_of_t(np.asarray(t, float))
-        return path(s, 1) * sdot[:, None]
-
-    def position(t):
-        return path(s_of_t(np.asarray(t, float))[0], 0)
-
-    prof = _Profile(float(T_grid[-1]), velocity, path.points[0].copy(), path.points[-1].copy(), position)
+    motion = _ToppraMotion(path, grid, sd, dt_i, u, T_grid)
+    prof = _Profile(float(T_grid[-1]), motion.velocity, path.points[0].copy(), path.points[-1].copy(),
+                    motion.position)
     return prof, {"gridpoints": len(grid), "toppra_duration": float(T_grid[-1]), "torque_passes": p}
 
 

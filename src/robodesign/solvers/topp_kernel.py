@@ -357,6 +357,56 @@ def constraint_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, amax, tmax, fv, fc, u
     return True
 
 
+@njit(cache=True, nogil=True)
+def _right_of(a, x):  # pragma: no cover - compiled
+    """np.searchsorted(a, x, side="right") for a sorted, x not NaN."""
+    lo, hi = 0, len(a)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x < a[mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def profile_rows(T_grid, dt_i, sd, u, grid, breaks, p0, d0, c, length, end, t, order,
+                 out):  # pragma: no cover - compiled
+    """The time scaling's TOPP-RA profile on a BlendedPolyline at the times ``t``, into ``out`` (len(t), dof): with
+    ``order`` 1 the velocity q'(s(t))·ṡ(t), with 0 the position q(s(t)) (timing._toppra_profile's ``velocity`` and
+    ``position``: its s_of_t, then the path's _locate and _order). The same operations in the same order as those
+    numpy calls, element by element: np.clip as max-then-min with NaN kept, np.maximum/np.minimum as numpy's
+    vector loops (the second operand when both are zeros), ``x ** 2`` as x·x; so the same numbers bit for bit
+    (tests/test_timing_profile_rows.py)."""
+    last_i, last_k = len(dt_i) - 1, len(p0) - 1
+    dof = p0.shape[1]
+    for j in range(len(t)):
+        tj = t[j]
+        i = _right_of(T_grid, tj) - 1
+        i = min(max(i, 0), last_i)
+        tau = tj - T_grid[i]
+        tau = tau if (tau > 0.0 or tau != tau) else 0.0
+        tau = tau if (tau < dt_i[i] or tau != tau) else dt_i[i]
+        s = grid[i] + sd[i] * tau + 0.5 * u[i] * (tau * tau)
+        s = s if (s < grid[i + 1] or s != s) else grid[i + 1]
+        s = s if (s > 0.0 or s != s) else 0.0          # the path's own clip to [0, length]
+        s = s if (s < length or s != s) else length
+        k = min(max(_right_of(breaks, s) - 1, 0), last_k)
+        sig = s - breaks[k]
+        if order == 1:
+            sdot = sd[i] + u[i] * tau
+            sdot = sdot if (sdot > 0.0 or sdot != sdot) else 0.0
+            for q in range(dof):
+                out[j, q] = (d0[k, q] + c[k, q] * sig) * sdot
+        elif s >= length:
+            for q in range(dof):
+                out[j, q] = end[q]
+        else:
+            for q in range(dof):
+                out[j, q] = p0[k, q] + d0[k, q] * sig + 0.5 * c[k, q] * (sig * sig)
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -371,11 +421,15 @@ def _warm() -> None:
         x0.flags.writeable = one.flags.writeable = writeable
         constraint_rows(z, z, z, z, z, z, z, x0, one, one, one, one, True, np.ones(1), np.zeros((2, 2)),
                         np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
+    two, line = np.array([0.0, 1.0]), np.zeros((1, 1))
+    for order in (0, 1):
+        profile_rows(two, np.ones(1), np.ones(2), np.zeros(1), two, two, line, line + 1.0, line, 1.0, np.ones(1),
+                     two, order, np.empty((2, 1)))
 
 
 KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest,
                        ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows",
-                        "_point_rows"), _warm)
+                        "_point_rows", "_right_of", "profile_rows"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -1,0 +1,79 @@
+"""The time scaling's profile sampled by the compiled topp_kernel.profile_rows (issue 25, round 8): the velocity and
+the position of a TOPP-RA profile along a blended path at given times are those of the numpy path
+(timing._ToppraMotion.s_of_t, then the path's own evaluation), bit for bit, on random paths, profiles and times."""
+import numpy as np
+import pytest
+from conftest import COBRA
+
+from robodesign import Robot, load_module_set
+from robodesign.solvers import timing, topp_kernel
+
+
+def _random_path(rng, dof):
+    """A random blended path: straight runs, sharp and shallow corners, reversals, one piece or many."""
+    W = np.cumsum(rng.normal(0, 0.4, (int(rng.integers(2, 9)), dof)), axis=0)
+    return timing.BlendedPolyline(W, float(rng.choice([0.0, 0.01, 0.05, 0.3])))
+
+
+def _random_motion(rng, path):
+    """A random rest-to-rest profile on the path's grid, built as _toppra_profile builds it from toppra's ṡ."""
+    grid = path.gridpoints(float(rng.uniform(0.005, 0.05)))
+    sd = rng.uniform(0.0, 3.0, len(grid)) * rng.choice([1.0, 1e-3], len(grid), p=[0.9, 0.1])
+    sd[0] = sd[-1] = 0.0
+    ds = np.diff(grid)
+    dt_i = 2 * ds / (sd[:-1] + sd[1:])
+    u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2 * ds)
+    T_grid = np.concatenate([[0.0], np.cumsum(dt_i)])
+    return timing._ToppraMotion(path, grid, sd, dt_i, u, T_grid)
+
+
+def _times(rng, m):
+    """Sample times as _sample and _fit_limits make them (k·h/λ clipped to the duration), every grid time, times
+    beyond both ends, between grid times and a -0.0."""
+    T = m.T_grid[-1]
+    n = int(rng.integers(1, 300))
+    h = T / n * float(rng.uniform(1.0, 1.01))
+    lam = n * h / T
+    return np.concatenate([np.minimum(h * np.arange(n + 1) / lam, T),
+                           np.minimum(np.maximum(h * np.arange(n + 2)[1:] - h, 0.0) / lam, T),
+                           m.T_grid, [-0.0, -1e-9, T + 1e-9, 2 * T], rng.uniform(0, T, 40)])
+
+
+@pytest.fixture(scope="module", autouse=True)
+def kernel():
+    topp_kernel.warm_up()
+    if not topp_kernel.ready():
+        pytest.skip("the TOPP-RA kernel is not compiled")
+
+
+def test_profile_rows_are_the_numpy_profile():
+    rng = np.random.default_rng(25)
+    for _ in range(300):
+        path = _random_path(rng, int(rng.integers(1, 8)))
+        m = _random_motion(rng, path)
+        t = _times(rng, m)
+        s, sdot = m.s_of_t(t)
+        for order, want in ((1, path(s, 1) * sdot[:, None]), (0, path(s, 0))):
+            got = m._at(t, order)
+            assert got.shape == want.shape and got.tobytes() == want.tobytes()
+
+
+def test_time_parameterize_with_and_without_the_kernel(monkeypatch):
+    """End to end on random paths of an IMPROV arm, torque limits on: the trajectories are the same bit for bit
+    whether the profile is sampled by the kernel or by numpy."""
+    rng = np.random.default_rng(3)
+    robot = Robot.from_order(load_module_set(COBRA / "modules" / "IMPROV"), ["1", "21", "4", "22", "5", "23", "12"])
+    paths = [np.cumsum(rng.normal(0, 0.5, (int(rng.integers(2, 5)), robot.dof)), axis=0) for _ in range(12)]
+    fast = [timing.time_parameterize(robot, P) for P in paths]
+    monkeypatch.setattr(timing._ToppraMotion, "_at", _numpy_at)
+    for P, a in zip(paths, fast):
+        b = timing.time_parameterize(robot, P)
+        for x, y in ((a.t, b.t), (a.q, b.q), (a.dq, b.dq), (a.ddq, b.ddq)):
+            assert x.tobytes() == y.tobytes()
+        assert a.info["max_path_error"] == b.info["max_path_error"] and a.info["method"] == b.info["method"]
+
+
+def _numpy_at(self, t, order):
+    """_ToppraMotion._at without the kernel."""
+    s, sdot = self.s_of_t(np.asarray(t, float))
+    return self.path(s, 1) * sdot[:, None] if order == 1 else self.path(s, 0)
