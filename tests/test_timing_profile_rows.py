@@ -1,6 +1,7 @@
-"""The time scaling's profile sampled by the compiled topp_kernel.profile_rows (issue 25, round 8): the velocity and
-the position of a TOPP-RA profile along a blended path at given times are those of the numpy path
-(timing._ToppraMotion.s_of_t, then the path's own evaluation), bit for bit, on random paths, profiles and times."""
+"""The time scaling's profile sampled by the compiled kernels (issue 25, round 8): topp_kernel.profile_rows' velocity
+and position of a TOPP-RA profile along a blended path at given times are those of the numpy path
+(timing._ToppraMotion.s_of_t, then the path's own evaluation), and topp_kernel.zoh_rows' samples those of
+timing._zoh_from_velocity's numpy calls, bit for bit, on random paths, profiles, times and velocities."""
 import numpy as np
 import pytest
 from conftest import COBRA
@@ -58,6 +59,32 @@ def test_profile_rows_are_the_numpy_profile():
             assert got.shape == want.shape and got.tobytes() == want.tobytes()
 
 
+def _random_velocities(rng):
+    """Velocity rows as _sample makes them, and harder ones: 1–12 joints, 2–3000 rows, magnitudes over ten decades,
+    zero rows and -0.0 entries."""
+    n, dof = int(rng.choice([2, 3, 9, 130, 300, 3000])) - int(rng.integers(0, 2)), int(rng.integers(1, 13))
+    V = rng.normal(size=(n, dof)) * 10.0 ** rng.integers(-5, 5, size=(n, dof))
+    V[rng.random(n) < 0.1] = 0.0
+    V[rng.random((n, dof)) < 0.05] = -0.0
+    return V
+
+
+def test_zoh_rows_are_the_numpy_samples(monkeypatch):
+    rng = np.random.default_rng(8)
+    cases = []
+    for _ in range(400):
+        V = _random_velocities(rng)
+        q0 = rng.normal(size=V.shape[1])
+        q1 = q0 + rng.choice([0.0, 1.0, 1e-9]) * rng.normal(size=V.shape[1])
+        cases.append((q0, q1, V, float(rng.uniform(1e-4, 0.05))))
+    fast = [timing._zoh_from_velocity(q0, q1, V, h) for q0, q1, V, h in cases]
+    monkeypatch.setattr(topp_kernel, "ready", lambda: False)
+    for (q0, q1, V, h), got in zip(cases, fast):
+        want = timing._zoh_from_velocity(q0, q1, V, h)
+        for x, y in zip(got, want):
+            assert x.shape == y.shape and x.tobytes() == y.tobytes()
+
+
 def test_time_parameterize_with_and_without_the_kernel(monkeypatch):
     """End to end on random paths of an IMPROV arm, torque limits on: the trajectories are the same bit for bit
     whether the profile is sampled by the kernel or by numpy."""
@@ -66,6 +93,7 @@ def test_time_parameterize_with_and_without_the_kernel(monkeypatch):
     paths = [np.cumsum(rng.normal(0, 0.5, (int(rng.integers(2, 5)), robot.dof)), axis=0) for _ in range(12)]
     fast = [timing.time_parameterize(robot, P) for P in paths]
     monkeypatch.setattr(timing._ToppraMotion, "_at", _numpy_at)
+    monkeypatch.setattr(timing, "_zoh_from_velocity", _numpy_zoh)
     for P, a in zip(paths, fast):
         b = timing.time_parameterize(robot, P)
         for x, y in ((a.t, b.t), (a.q, b.q), (a.dq, b.dq), (a.ddq, b.ddq)):
@@ -77,3 +105,16 @@ def _numpy_at(self, t, order):
     """_ToppraMotion._at without the kernel."""
     s, sdot = self.s_of_t(np.asarray(t, float))
     return self.path(s, 1) * sdot[:, None] if order == 1 else self.path(s, 0)
+
+
+_ZOH = timing._zoh_from_velocity
+
+
+def _numpy_zoh(q0, q1, V, h):
+    """timing._zoh_from_velocity without the kernel."""
+    ready = topp_kernel.ready
+    topp_kernel.ready = lambda: False
+    try:
+        return _ZOH(q0, q1, V, h)
+    finally:
+        topp_kernel.ready = ready

@@ -205,12 +205,18 @@ def jerk_limited_time(distance: float, v_max: float, a_max: float, j_max: float)
 # sampling a continuous profile
 # ==============================================================================================
 def _zoh_from_velocity(q0: np.ndarray, q1: np.ndarray, V: np.ndarray, h: float):
-    """Samples (q, dq, ddq) obeying the integration rule with dq ≈ V, q[0]=q0 and q[-1]=q1 exactly."""
+    """Samples (q, dq, ddq) obeying the integration rule with dq ≈ V, q[0]=q0 and q[-1]=q1 exactly (by the compiled
+    topp_kernel.zoh_rows once it is ready: the same numbers as the numpy calls here)."""
+    from robodesign.solvers import topp_kernel
     V = np.array(V, dtype=float)
     n = len(V) - 1
     dof = len(q0)
     if n <= 0:
         return q0.reshape(1, dof).copy(), np.zeros((1, dof)), np.zeros((1, dof))
+    if dof > 0 and topp_kernel.ready():
+        Q, A = np.empty_like(V), np.empty_like(V)
+        topp_kernel.zoh_rows(np.array(q0, dtype=float), np.array(q1, dtype=float), V, float(h), Q, A)
+        return Q, V, A
     V[0] = 0.0
     V[-1] = 0.0
     inc = 0.5 * h * (V[:-1] + V[1:])
