@@ -59,6 +59,35 @@ def test_profile_rows_are_the_numpy_profile():
             assert got.shape == want.shape and got.tobytes() == want.tobytes()
 
 
+def test_path_orders_are_the_numpy_orders():
+    """BlendedPolyline.eval_orders by the kernel (topp_kernel.path_orders) against its numpy _locate and _order, both
+    sides, at grid points, every piece boundary, points beyond both ends and a -0.0."""
+    rng = np.random.default_rng(17)
+    for _ in range(200):
+        path = _random_path(rng, int(rng.integers(1, 8)))
+        s = np.concatenate([path.gridpoints(float(rng.uniform(0.005, 0.05))), path.breaks,
+                            [-0.0, -1e-9, path.length + 1e-9, 2 * path.length], rng.uniform(0, path.length, 50)])
+        for left in (False, True):
+            got = path.eval_orders(s, (0, 1, 2), left=left)
+            at = path._locate(s, left)
+            for order in (0, 1, 2):
+                want = path._order(*at, order)
+                assert got[order].shape == want.shape and got[order].tobytes() == want.tobytes()
+        assert path.eval_orders(s, (2, 0))[1].tobytes() == path(s, 0).tobytes()
+
+
+def test_path_terms_without_blends_take_the_right_limits():
+    """A path without blends has q'' = 0 on both sides: _PathTerms' left limits (the right ones, unevaluated) are
+    the numbers eval_left gives."""
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        path = timing.BlendedPolyline(rng.normal(size=(int(rng.integers(2, 5)), 6)), 0.0)
+        assert not path.is_blend.any()
+        grid = path.gridpoints(0.02)
+        tm = timing._PathTerms(None, path, grid, False)
+        assert tm.qss_l.tobytes() == path.eval_left(grid, 2).tobytes()
+
+
 def _random_velocities(rng):
     """Velocity rows as _sample makes them, and harder ones: 1–12 joints, 2–3000 rows, magnitudes over ten decades,
     zero rows and -0.0 entries."""

@@ -387,9 +387,11 @@ class _PathTerms:
         self.path, self.grid = path, np.array(grid, dtype=float)
         if isinstance(path, BlendedPolyline):  # (the grid located once: the same numbers as a call per order)
             q, self.qs, self.qss_r = path.eval_orders(grid, (0, 1, 2))
+            # without blends q'' is 0 everywhere, from either side: the left limits are the same numbers
+            self.qss_l = path.eval_orders(grid, (2,), left=True)[0] if path.is_blend.any() else self.qss_r
         else:
             q, self.qs, self.qss_r = path(grid, 0), path(grid, 1), path(grid, 2)
-        self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
+            self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
         self.g = self.a = self.bR = self.bL = None
         if not use_torque:
             return
@@ -528,7 +530,7 @@ class _ToppraMotion:
         if isinstance(path, BlendedPolyline) and t.ndim == 1 and topp_kernel.ready():
             out = np.empty((len(t), path.dof))
             topp_kernel.profile_rows(self.T_grid, self.dt_i, self.sd, self.u, self.grid, path.breaks, path.p0,
-                                     path.d0, path.c, float(path.length), path.points[-1], np.ascontiguousarray(t),
+                                     path.d0, path.c, float(path.length), path.points[-1], np.array(t, dtype=float),
                                      order, out)
             return out
         s, sdot = self.s_of_t(t)

@@ -372,6 +372,39 @@ def _right_of(a, x):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _left_of(a, x):  # pragma: no cover - compiled
+    """np.searchsorted(a, x, side="left") for a sorted, x not NaN."""
+    lo, hi = 0, len(a)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def path_orders(breaks, p0, d0, c, length, end, s, left, Q, Q1, Q2):  # pragma: no cover - compiled
+    """A BlendedPolyline's q, q' and q'' at the points ``s`` into Q, Q1, Q2 (len(s), dof): its _locate (s clipped to
+    [0, length] as np.clip, the piece by searchsorted, on the ``left`` side or the right) and _order, the same
+    operations in the same order, so the same numbers bit for bit (tests/test_timing_profile_rows.py)."""
+    last_k = len(p0) - 1
+    dof = p0.shape[1]
+    for j in range(len(s)):
+        x = s[j]
+        x = x if (x > 0.0 or x != x) else 0.0
+        x = x if (x < length or x != x) else length
+        k = (_left_of(breaks, x) if left else _right_of(breaks, x)) - 1
+        k = min(max(k, 0), last_k)
+        sig = x - breaks[k]
+        for q in range(dof):
+            Q[j, q] = end[q] if x >= length else p0[k, q] + d0[k, q] * sig + 0.5 * c[k, q] * (sig * sig)
+            Q1[j, q] = d0[k, q] + c[k, q] * sig
+            Q2[j, q] = c[k, q]
+
+
+@njit(cache=True, nogil=True)
 def profile_rows(T_grid, dt_i, sd, u, grid, breaks, p0, d0, c, length, end, t, order,
                  out):  # pragma: no cover - compiled
     """The time scaling's TOPP-RA profile on a BlendedPolyline at the times ``t``, into ``out`` (len(t), dof): with
@@ -538,13 +571,16 @@ def _warm() -> None:
     for order in (0, 1):
         profile_rows(two, np.ones(1), np.ones(2), np.zeros(1), two, two, line, line + 1.0, line, 1.0, np.ones(1),
                      two, order, np.empty((2, 1)))
+    for left in (True, False):
+        path_orders(two, line, line + 1.0, line, 1.0, np.ones(1), two, left, np.empty((2, 1)), np.empty((2, 1)),
+                    np.empty((2, 1)))
     for dof in (1, 2):
         zoh_rows(np.zeros(dof), np.ones(dof), np.ones((3, dof)), 0.1, np.empty((3, dof)), np.empty((3, dof)))
 
 
 KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest,
                        ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows",
-                        "_point_rows", "_right_of", "profile_rows", "_pairwise_block",
+                        "_point_rows", "_right_of", "_left_of", "path_orders", "profile_rows", "_pairwise_block",
                         "_pairwise", "zoh_rows"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
