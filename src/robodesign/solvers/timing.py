@@ -537,9 +537,11 @@ class _ToppraMotion:
         return path(s, 1) * sdot[:, None] if order == 1 else path(s, 0)
 
     def velocity(self, t) -> np.ndarray:
+        """(len(t), dof) the joint velocities q'(s(t))·ṡ(t) (the _Profile's ``velocity``)."""
         return self._at(t, 1)
 
     def position(self, t) -> np.ndarray:
+        """(len(t), dof) the joint positions q(s(t)) (the _Profile's ``position``, for the path-error report)."""
         return self._at(t, 0)
 
 
