@@ -104,9 +104,18 @@ class BlendedPolyline:
         out = self._order(*self._locate(s, left), order)
         return out[0] if np.ndim(s) == 0 else out
 
-    def eval_orders(self, s, orders: Sequence[int]) -> List[np.ndarray]:
-        """``[self(s, order) for order in orders]`` for 1-d ``s``, the points located once."""
-        at = self._locate(s, False)
+    def eval_orders(self, s, orders: Sequence[int], left: bool = False) -> List[np.ndarray]:
+        """``[self(s, order) for order in orders]`` for 1-d ``s`` (``left``: ``[self.eval_left(s, order) ...]``),
+        the points located once; orders up to 2 by the compiled topp_kernel.path_orders once it is ready (the same
+        numbers)."""
+        from robodesign.solvers import topp_kernel
+        s = np.asarray(s, float)
+        if s.ndim == 1 and max(orders, default=0) <= 2 and topp_kernel.ready():
+            out = [np.empty((len(s), self._dof)) for _ in range(3)]
+            topp_kernel.path_orders(self.breaks, self.p0, self.d0, self.c, float(self.length), self._end,
+                                    np.array(s, dtype=float), left, *out)
+            return [out[order] for order in orders]
+        at = self._locate(s, left)
         return [self._order(*at, order) for order in orders]
 
     def __call__(self, s, order: int = 0) -> np.ndarray:

@@ -205,12 +205,18 @@ def jerk_limited_time(distance: float, v_max: float, a_max: float, j_max: float)
 # sampling a continuous profile
 # ==============================================================================================
 def _zoh_from_velocity(q0: np.ndarray, q1: np.ndarray, V: np.ndarray, h: float):
-    """Samples (q, dq, ddq) obeying the integration rule with dq ≈ V, q[0]=q0 and q[-1]=q1 exactly."""
+    """Samples (q, dq, ddq) obeying the integration rule with dq ≈ V, q[0]=q0 and q[-1]=q1 exactly (by the compiled
+    topp_kernel.zoh_rows once it is ready: the same numbers as the numpy calls here)."""
+    from robodesign.solvers import topp_kernel
     V = np.array(V, dtype=float)
     n = len(V) - 1
     dof = len(q0)
     if n <= 0:
         return q0.reshape(1, dof).copy(), np.zeros((1, dof)), np.zeros((1, dof))
+    if dof > 0 and topp_kernel.ready():
+        Q, A = np.empty_like(V), np.empty_like(V)
+        topp_kernel.zoh_rows(np.array(q0, dtype=float), np.array(q1, dtype=float), V, float(h), Q, A)
+        return Q, V, A
     V[0] = 0.0
     V[-1] = 0.0
     inc = 0.5 * h * (V[:-1] + V[1:])
@@ -381,9 +387,11 @@ class _PathTerms:
         self.path, self.grid = path, np.array(grid, dtype=float)
         if isinstance(path, BlendedPolyline):  # (the grid located once: the same numbers as a call per order)
             q, self.qs, self.qss_r = path.eval_orders(grid, (0, 1, 2))
+            # without blends q'' is 0 everywhere, from either side: the left limits are the same numbers
+            self.qss_l = path.eval_orders(grid, (2,), left=True)[0] if path.is_blend.any() else self.qss_r
         else:
             q, self.qs, self.qss_r = path(grid, 0), path(grid, 1), path(grid, 2)
-        self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
+            self.qss_l = path.eval_left(grid, 2) if hasattr(path, "eval_left") else self.qss_r
         self.g = self.a = self.bR = self.bL = None
         if not use_torque:
             return
@@ -496,6 +504,47 @@ def _same_tangents(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.array_equal(a, b))
 
 
+class _ToppraMotion:
+    """The motion of a TOPP-RA profile along its path: on grid interval i (from time T_grid[i], dt_i[i] long) the
+    path parameter s moves from grid[i] at speed sd[i] with the constant acceleration u[i]; its joint velocity
+    and position at given times (1-d arrays)."""
+
+    def __init__(self, path, grid, sd, dt_i, u, T_grid):
+        self.path, self.grid, self.sd, self.dt_i, self.u, self.T_grid = path, grid, sd, dt_i, u, T_grid
+
+    def s_of_t(self, t: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """(s(t), ṡ(t))."""
+        grid, sd, dt_i, u, T_grid = self.grid, self.sd, self.dt_i, self.u, self.T_grid
+        i = np.clip(np.searchsorted(T_grid, t, side="right") - 1, 0, len(dt_i) - 1)
+        tau_ = np.clip(t - T_grid[i], 0.0, dt_i[i])
+        sdot = np.maximum(sd[i] + u[i] * tau_, 0.0)
+        s = np.minimum(grid[i] + sd[i] * tau_ + 0.5 * u[i] * tau_ ** 2, grid[i + 1])
+        return s, sdot
+
+    def _at(self, t, order: int) -> np.ndarray:
+        """q'(s(t))·ṡ(t) (``order`` 1) or q(s(t)) (0): on a BlendedPolyline by the compiled
+        topp_kernel.profile_rows once it is ready (the same numbers as these numpy calls)."""
+        from robodesign.solvers import topp_kernel
+        t = np.asarray(t, float)
+        path = self.path
+        if isinstance(path, BlendedPolyline) and t.ndim == 1 and topp_kernel.ready():
+            out = np.empty((len(t), path.dof))
+            topp_kernel.profile_rows(self.T_grid, self.dt_i, self.sd, self.u, self.grid, path.breaks, path.p0,
+                                     path.d0, path.c, float(path.length), path.points[-1], np.array(t, dtype=float),
+                                     order, out)
+            return out
+        s, sdot = self.s_of_t(t)
+        return path(s, 1) * sdot[:, None] if order == 1 else path(s, 0)
+
+    def velocity(self, t) -> np.ndarray:
+        """(len(t), dof) the joint velocities q'(s(t))·ṡ(t) (the _Profile's ``velocity``)."""
+        return self._at(t, 1)
+
+    def position(self, t) -> np.ndarray:
+        """(len(t), dof) the joint positions q(s(t)) (the _Profile's ``position``, for the path-error report)."""
+        return self._at(t, 0)
+
+
 def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: bool, grid_step: float,
                     torque_passes: int) -> Tuple[_Profile, dict]:
     global _DYN_CLS
@@ -543,22 +592,9 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
     dt_i = 2 * ds / denom
     u = (sd[1:] ** 2 - sd[:-1] ** 2) / (2 * ds)
     T_grid = np.concatenate([[0.0], np.cumsum(dt_i)])
-
-    def s_of_t(t):
-        i = np.clip(np.searchsorted(T_grid, t, side="right") - 1, 0, len(ds) - 1)
-        tau_ = np.clip(t - T_grid[i], 0.0, dt_i[i])
-        sdot = np.maximum(sd[i] + u[i] * tau_, 0.0)
-        s = np.minimum(grid[i] + sd[i] * tau_ + 0.5 * u[i] * tau_ ** 2, grid[i + 1])
-        return s, sdot
-
-    def velocity(t):
-        s, sdot = s_of_t(np.asarray(t, float))
-        return path(s, 1) * sdot[:, None]
-
-    def position(t):
-        return path(s_of_t(np.asarray(t, float))[0], 0)
-
-    prof = _Profile(float(T_grid[-1]), velocity, path.points[0].copy(), path.points[-1].copy(), position)
+    motion = _ToppraMotion(path, grid, sd, dt_i, u, T_grid)
+    prof = _Profile(float(T_grid[-1]), motion.velocity, path.points[0].copy(), path.points[-1].copy(),
+                    motion.position)
     return prof, {"gridpoints": len(grid), "toppra_duration": float(T_grid[-1]), "torque_passes": p}
 
 

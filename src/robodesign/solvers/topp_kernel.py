@@ -1,6 +1,7 @@
 """toppra's rest-to-rest TOPP-RA passes with its seidel LP solver, compiled (numba): the controllable sets (backward)
 and the forward pass of :func:`robodesign.solvers.toppra_loop.rest_to_rest` in one call, without a Python call per
-stage LP (issue 25: the seidel calls were the time scaling's largest part).
+stage LP (issue 25: the seidel calls were the time scaling's largest part); and the time scaling's sampling of the
+profile that comes out (:func:`profile_rows`, :func:`zoh_rows`: the numbers of its numpy calls, issue 25, round 8).
 
 Adapted from toppra (MIT licence, © Hung Pham; https://github.com/hungpham2511/toppra):
 ``toppra/solverwrapper/cy_seidel_solverwrapper.pyx`` (``cy_solve_lp1d``, ``cy_solve_lp2d``,
@@ -357,6 +358,201 @@ def constraint_rows(qs, qss_r, qss_l, g, ai, bri, bli, x0, amax, tmax, fv, fc, u
     return True
 
 
+@njit(cache=True, nogil=True)
+def _right_of(a, x):  # pragma: no cover - compiled
+    """np.searchsorted(a, x, side="right") for a sorted, x not NaN."""
+    lo, hi = 0, len(a)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x < a[mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def _left_of(a, x):  # pragma: no cover - compiled
+    """np.searchsorted(a, x, side="left") for a sorted, x not NaN."""
+    lo, hi = 0, len(a)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def path_orders(breaks, p0, d0, c, length, end, s, left, Q, Q1, Q2):  # pragma: no cover - compiled
+    """A BlendedPolyline's q, q' and q'' at the points ``s`` into Q, Q1, Q2 (len(s), dof): its _locate (s clipped to
+    [0, length] as np.clip, the piece by searchsorted, on the ``left`` side or the right) and _order, the same
+    operations in the same order, so the same numbers bit for bit (tests/test_timing_profile_rows.py)."""
+    last_k = len(p0) - 1
+    dof = p0.shape[1]
+    for j in range(len(s)):
+        x = s[j]
+        x = x if (x > 0.0 or x != x) else 0.0
+        x = x if (x < length or x != x) else length
+        k = (_left_of(breaks, x) if left else _right_of(breaks, x)) - 1
+        k = min(max(k, 0), last_k)
+        sig = x - breaks[k]
+        for q in range(dof):
+            Q[j, q] = end[q] if x >= length else p0[k, q] + d0[k, q] * sig + 0.5 * c[k, q] * (sig * sig)
+            Q1[j, q] = d0[k, q] + c[k, q] * sig
+            Q2[j, q] = c[k, q]
+
+
+@njit(cache=True, nogil=True)
+def profile_rows(T_grid, dt_i, sd, u, grid, breaks, p0, d0, c, length, end, t, order,
+                 out):  # pragma: no cover - compiled
+    """The time scaling's TOPP-RA profile on a BlendedPolyline at the times ``t``, into ``out`` (len(t), dof): with
+    ``order`` 1 the velocity q'(s(t))·ṡ(t), with 0 the position q(s(t)) (timing._toppra_profile's ``velocity`` and
+    ``position``: its s_of_t, then the path's _locate and _order). The same operations in the same order as those
+    numpy calls, element by element: np.clip as max-then-min with NaN kept, np.maximum/np.minimum as numpy's
+    vector loops (the second operand when both are zeros), ``x ** 2`` as x·x; so the same numbers bit for bit
+    (tests/test_timing_profile_rows.py)."""
+    last_i, last_k = len(dt_i) - 1, len(p0) - 1
+    dof = p0.shape[1]
+    for j in range(len(t)):
+        tj = t[j]
+        i = _right_of(T_grid, tj) - 1
+        i = min(max(i, 0), last_i)
+        tau = tj - T_grid[i]
+        tau = tau if (tau > 0.0 or tau != tau) else 0.0
+        tau = tau if (tau < dt_i[i] or tau != tau) else dt_i[i]
+        s = grid[i] + sd[i] * tau + 0.5 * u[i] * (tau * tau)
+        s = s if (s < grid[i + 1] or s != s) else grid[i + 1]
+        s = s if (s > 0.0 or s != s) else 0.0          # the path's own clip to [0, length]
+        s = s if (s < length or s != s) else length
+        k = min(max(_right_of(breaks, s) - 1, 0), last_k)
+        sig = s - breaks[k]
+        if order == 1:
+            sdot = sd[i] + u[i] * tau
+            sdot = sdot if (sdot > 0.0 or sdot != sdot) else 0.0
+            for q in range(dof):
+                out[j, q] = (d0[k, q] + c[k, q] * sig) * sdot
+        elif s >= length:
+            for q in range(dof):
+                out[j, q] = end[q]
+        else:
+            for q in range(dof):
+                out[j, q] = p0[k, q] + d0[k, q] * sig + 0.5 * c[k, q] * (sig * sig)
+
+
+@njit(cache=True, nogil=True)
+def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
+    """numpy's pairwise summation of the n ≤ 128 contiguous a[lo:lo + n]: sequential from +0 below 8 terms, else
+    eight accumulators, combined in pairs, then the rest in sequence."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True)
+def _pairwise(a, lo, n):  # pragma: no cover - compiled
+    """numpy's pairwise summation of the n contiguous a[lo:lo + n] (np.sum adds it to +0): blocks of ≤ 128 terms,
+    a longer run split at half its length rounded down to a multiple of 8, the two halves' sums added; the same
+    additions in the same order (without recursion, which numba's cache does not load safely)."""
+    if n <= 128:
+        return _pairwise_block(a, lo, n)
+    task_lo = np.empty(192, np.int64)     # a stack of runs to sum; length −1: add the last two sums
+    task_n = np.empty(192, np.int64)
+    sums = np.empty(96)
+    task_lo[0], task_n[0] = lo, n
+    nt, ns = 1, 0
+    while nt > 0:
+        nt -= 1
+        start, m = task_lo[nt], task_n[nt]
+        if m < 0:
+            ns -= 1
+            sums[ns - 1] = sums[ns - 1] + sums[ns]
+        elif m <= 128:
+            sums[ns] = _pairwise_block(a, start, m)
+            ns += 1
+        else:
+            half = m // 2
+            half -= half % 8
+            task_lo[nt], task_n[nt] = 0, -1
+            task_lo[nt + 1], task_n[nt + 1] = start + half, m - half
+            task_lo[nt + 2], task_n[nt + 2] = start, half
+            nt += 3
+    return sums[0]
+
+
+@njit(cache=True, nogil=True)
+def zoh_rows(q0, q1, V, h, Q, A):  # pragma: no cover - compiled
+    """timing._zoh_from_velocity's samples for n = len(V) − 1 ≥ 1 steps, in place: V (its ends set to 0, then the
+    end-point bump added), Q and A (n + 1, dof). The same operations in the same order as its numpy calls
+    (np.sum's pairwise summation of the bump's weights and, for one joint, of the increments; a column sum of
+    several joints and np.linalg.norm's row sums in sequence; cumsum in sequence), so the same numbers bit for bit
+    (tests/test_timing_profile_rows.py)."""
+    m, dof = V.shape
+    n = m - 1
+    hh = 0.5 * h
+    for j in range(dof):
+        V[0, j] = 0.0
+        V[n, j] = 0.0
+    r = np.empty(dof)
+    col = np.empty(n)
+    for j in range(dof):
+        for k in range(n):
+            col[k] = hh * (V[k, j] + V[k + 1, j])
+        if dof == 1:
+            tot = 0.0 + _pairwise(col, 0, n)
+        else:
+            tot = 0.0
+            for k in range(n):
+                tot += col[k]
+        r[j] = (q1[j] - q0[j]) - tot
+    w = np.empty(m)
+    sq = np.empty(dof)
+    for k in range(m):
+        for j in range(dof):
+            sq[j] = V[k, j] * V[k, j]
+        w[k] = np.sqrt(0.0 + _pairwise(sq, 0, dof))
+    for k in range(n):
+        col[k] = hh * (w[k] + w[k + 1])
+    W = 0.0 + _pairwise(col, 0, n)
+    if W > 0:
+        for k in range(m):
+            f = w[k] / W
+            for j in range(dof):
+                V[k, j] += f * r[j]
+    for j in range(dof):
+        acc = 0.0
+        for k in range(n):
+            a = (V[k + 1, j] - V[k, j]) / h
+            A[k, j] = a
+            step = V[k, j] * h + 0.5 * a * h * h
+            acc = step if k == 0 else acc + step
+            Q[k + 1, j] = q0[j] + acc
+        A[n, j] = 0.0
+        Q[0, j] = q0[j]
+        Q[n, j] = q1[j]
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -371,11 +567,21 @@ def _warm() -> None:
         x0.flags.writeable = one.flags.writeable = writeable
         constraint_rows(z, z, z, z, z, z, z, x0, one, one, one, one, True, np.ones(1), np.zeros((2, 2)),
                         np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 10)), np.zeros((2, 2)), np.zeros((2, 2)))
+    two, line = np.array([0.0, 1.0]), np.zeros((1, 1))
+    for order in (0, 1):
+        profile_rows(two, np.ones(1), np.ones(2), np.zeros(1), two, two, line, line + 1.0, line, 1.0, np.ones(1),
+                     two, order, np.empty((2, 1)))
+    for left in (True, False):
+        path_orders(two, line, line + 1.0, line, 1.0, np.ones(1), two, left, np.empty((2, 1)), np.empty((2, 1)),
+                    np.empty((2, 1)))
+    for dof in (1, 2):
+        zoh_rows(np.zeros(dof), np.ones(dof), np.ones((3, dof)), 0.1, np.empty((3, dof)), np.empty((3, dof)))
 
 
 KERNELS = KernelModule("robodesign.solvers.topp_kernel", __file__, rest_to_rest,
                        ("rest_to_rest", "_controllable", "_forward", "_lp2d", "_projected", "constraint_rows",
-                        "_point_rows"), _warm)
+                        "_point_rows", "_right_of", "_left_of", "path_orders", "profile_rows", "_pairwise_block",
+                        "_pairwise", "zoh_rows"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -140,16 +140,26 @@ def _compiled_rows(dyn, tm, deltas, xbound):
     k = 4 * dof if use_torque else 2 * dof
     a, b, c = np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k)), np.zeros((N1, 2 + 2 * k))
     low, high = np.empty((N1, 2)), np.empty((N1, 2))
-    f64 = np.float64
-    tmax = np.broadcast_to(np.asarray(dyn.tau_max, f64), (dof,))
-    amax = np.broadcast_to(np.asarray(dyn.amax, f64), (dof,))
-    fv = np.broadcast_to(np.asarray(dyn.robot.friction_viscous, f64), (dof,))
-    fc = np.broadcast_to(np.asarray(dyn.robot.friction_coulomb, f64), (dof,))
+    robot = dyn.robot
+    tmax, amax, fv, fc = (_read_only(x, dof) for x in (dyn.tau_max, dyn.amax, robot.friction_viscous,
+                                                         robot.friction_coulomb))
     g, ai, bri, bli = (tm.g, tm.a, tm.bR, tm.bL) if use_torque else (tm.qs,) * 4
-    x0 = np.broadcast_to(np.asarray(dyn.x0, f64), (N1,)) if use_torque else np.ones(N1)
+    x0 = _read_only(dyn.x0, N1) if use_torque else np.ones(N1)
     ok = topp_kernel.constraint_rows(tm.qs, tm.qss_r, tm.qss_l, g, ai, bri, bli, np.ascontiguousarray(x0), amax,
-                                     tmax, fv, fc, use_torque, deltas, np.asarray(xbound, f64), a, b, c, low, high)
+                                     tmax, fv, fc, use_torque, deltas, np.asarray(xbound, np.float64), a, b, c, low,
+                                     high)
     return (a, b, c, low, high) if ok else None
+
+
+def _read_only(x, n: int) -> np.ndarray:
+    """``np.broadcast_to(np.asarray(x, np.float64), (n,))``: a read-only float64 vector of length n (the kernel's
+    argument types), without broadcast_to's cost where x already is such a vector (a read-only view of it)."""
+    a = np.asarray(x, np.float64)
+    if a.shape != (n,) or not a.flags.c_contiguous:
+        return np.broadcast_to(a, (n,))
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 def pass_velocities(tp, vel, dyn, path, grid, xbound):
