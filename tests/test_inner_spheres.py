@@ -72,7 +72,7 @@ def test_placed_spheres_are_the_shapes_spheres_in_the_joint_frame():
     rng = np.random.default_rng(2)
     shapes = random_primitives(3, 3)
     placed = [(s, pin.SE3.Random().rotation, rng.normal(size=3)) for s in shapes]
-    start, C, r = placed_inner_spheres(placed)
+    start, C, r = placed_inner_spheres([s for s, _, _ in placed], [R for _, R, _ in placed], [t for _, _, t in placed])
     assert start[0] == 0 and start[-1] == len(r) == len(C)
     for g, (shape, R, t) in enumerate(placed):
         c0, r0 = inner_spheres(shape)

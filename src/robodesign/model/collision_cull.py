@@ -319,7 +319,7 @@ class CollisionCuller:
         gm = robot.geom_model
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
-        parent, centres, radii, shapes, placed = [], [], [], [], []
+        parent, centres, radii, shapes, rotations, offsets = [], [], [], [], [], []
         for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
             shapes.append(o.geometry)
             c, r = tight_sphere(shapes[-1])
@@ -328,7 +328,8 @@ class CollisionCuller:
             centres.append(Rp @ c + tp)   # in the parent joint's frame
             radii.append(r)
             parent.append(o.parentJoint)
-            placed.append((shapes[-1], Rp, tp))
+            rotations.append(Rp)
+            offsets.append(tp)
         self.parent = np.array(parent, dtype=int).reshape(n_robot)
         self.shapes = shapes
         self.provable = pair_clearance.worth_proving(shapes)   # (else its pairs are not counted nor proven)
@@ -344,9 +345,8 @@ class CollisionCuller:
         self.self_k = np.flatnonzero(selfp)
         self.self_a, self.self_b = first[self.self_k], second[self.self_k]
         self.self_limit = self.radius[self.self_a] + self.radius[self.self_b] + margin[self.self_k] + SLACK
-        # the inner spheres; two overlapping by more than the slack beyond the margin prove a collision
-        self.inner_start, self.inner_local, self.inner_radius = placed_inner_spheres(placed)
-        self.self_proof = margin[self.self_k] - SLACK
+        self.inner_start, self.inner_local, self.inner_radius = placed_inner_spheres(shapes, rotations, offsets)
+        self.self_proof = margin[self.self_k] - SLACK   # inner spheres overlapping beyond it prove a self collision
         # robot–obstacle pairs, grouped by obstacle (in the order of each obstacle's first pair)
         self.obstacles: List[Tuple[DistanceField, np.ndarray, np.ndarray, np.ndarray]] = []
         obp = np.flatnonzero((first < n_robot) & (second >= n_robot))

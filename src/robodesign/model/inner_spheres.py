@@ -96,17 +96,19 @@ def inner_spheres(shape) -> Tuple[np.ndarray, np.ndarray]:
     return hit[1], hit[2]
 
 
-def placed_inner_spheres(placed) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(start, centres, radii) of the inner spheres of ``placed`` shapes ((shape, R, t): its placement in its joint's
-    frame), in that frame: geometry ``g``'s are rows ``start[g]`` to ``start[g + 1]``."""
-    start, centres, radii = [0], [np.zeros((0, 3))], [np.zeros(0)]
-    for shape, R, t in placed:
-        c, r = inner_spheres(shape)
-        centres.append(c @ np.asarray(R).T + np.asarray(t))
-        radii.append(r)
-        start.append(start[-1] + len(r))
-    return (np.array(start, dtype=np.int64), np.ascontiguousarray(np.concatenate(centres), dtype=float),
-            np.ascontiguousarray(np.concatenate(radii), dtype=float))
+def placed_inner_spheres(shapes, rotations, offsets) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(start, centres, radii) of the inner spheres of ``shapes`` placed at ``rotations[g]``, ``offsets[g]`` in their
+    joints' frames, in those frames: geometry ``g``'s are rows ``start[g]`` to ``start[g + 1]``."""
+    R = np.array(rotations, dtype=float).reshape(-1, 3, 3)
+    t = np.array(offsets, dtype=float).reshape(-1, 3)
+    spheres = [inner_spheres(s) for s in shapes]
+    counts = np.array([len(r) for _, r in spheres], dtype=np.int64)
+    start = np.zeros(len(spheres) + 1, dtype=np.int64)
+    np.cumsum(counts, out=start[1:])
+    owner = np.repeat(np.arange(len(spheres)), counts)
+    C = np.concatenate([c for c, _ in spheres] + [np.zeros((0, 3))])
+    centres = np.einsum("mij,mj->mi", R[owner], C) + t[owner]
+    return start, np.ascontiguousarray(centres), np.concatenate([r for _, r in spheres] + [np.zeros(0)])
 
 
 __all__ = ["inner_spheres", "placed_inner_spheres", "MAX_SPHERES", "GRID"]
