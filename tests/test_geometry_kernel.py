@@ -51,7 +51,7 @@ def check_cell(robot, Q):
     gm = robot.geom_model
     objs = gm.geometryObjects
     for q in Q[np.flatnonzero(verdicts)[:60]]:
-        n, _ = geometry_kernel.survivors(q, *args)
+        n, _, _ = geometry_kernel.survivors(q, *args)
         kept = {int(k) for k in args[-2][:n]}
         names = {(objs[gm.collisionPairs[k].first].name, objs[gm.collisionPairs[k].second].name) for k in kept}
         assert set(robot.colliding_pairs(q)) <= names
@@ -190,7 +190,7 @@ def test_unknown_cells_are_filled_for_the_next_queries(robot):
     args, _ = robot._culler._one
     for q in Q:
         robot.in_collision(q)
-        n, nu = geometry_kernel.survivors(q, *args)
+        n, nu, _ = geometry_kernel.survivors(q, *args)
         assert nu == 0                            # the cells this state asked about are known now
         pin.updateGeometryPlacements(robot.model, robot.data, robot.geom_model, robot.geom_data, q)
         assert set(args[-2][:n].tolist()) >= {k for k in range(len(robot.geom_model.collisionPairs))

@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from robodesign.model import geometry_kernel, pair_clearance
 from robodesign.model.batch_fk import batch_kinematics
+from robodesign.model.inner_spheres import placed_inner_spheres
 from robodesign.model.pair_scratch import PairScratch
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
@@ -318,14 +319,17 @@ class CollisionCuller:
         gm = robot.geom_model
         objs = gm.geometryObjects
         n_robot = robot.n_collision_geometries
-        parent, centres, radii, shapes = [], [], [], []
+        parent, centres, radii, shapes, rotations, offsets = [], [], [], [], [], []
         for o, _ in zip(objs, range(n_robot)):   # (iterating: one wrapper per object)
             shapes.append(o.geometry)
             c, r = tight_sphere(shapes[-1])
             P = o.placement
-            centres.append(P.rotation @ c + P.translation)   # in the parent joint's frame
+            Rp, tp = P.rotation, P.translation
+            centres.append(Rp @ c + tp)   # in the parent joint's frame
             radii.append(r)
             parent.append(o.parentJoint)
+            rotations.append(Rp)
+            offsets.append(tp)
         self.parent = np.array(parent, dtype=int).reshape(n_robot)
         self.shapes = shapes
         self.provable = pair_clearance.worth_proving(shapes)   # (else its pairs are not counted nor proven)
@@ -341,6 +345,8 @@ class CollisionCuller:
         self.self_k = np.flatnonzero(selfp)
         self.self_a, self.self_b = first[self.self_k], second[self.self_k]
         self.self_limit = self.radius[self.self_a] + self.radius[self.self_b] + margin[self.self_k] + SLACK
+        self.inner_start, self.inner_local, self.inner_radius = placed_inner_spheres(shapes, rotations, offsets)
+        self.self_proof = margin[self.self_k] - SLACK   # inner spheres overlapping beyond it prove a self collision
         # robot–obstacle pairs, grouped by obstacle (in the order of each obstacle's first pair)
         self.obstacles: List[Tuple[DistanceField, np.ndarray, np.ndarray, np.ndarray]] = []
         obp = np.flatnonzero((first < n_robot) & (second >= n_robot))
@@ -488,21 +494,26 @@ class CollisionCuller:
             assert f.cell == CELL
         sp = (self.parent.astype(np.int64), np.ascontiguousarray(self.local, dtype=float),
               self.self_a.astype(np.int64), self.self_b.astype(np.int64), self.self_limit.astype(float),
-              self.self_k.astype(np.int64))
+              self.self_k.astype(np.int64), self.inner_start, self.inner_local, self.inner_radius,
+              self.self_proof.astype(float))
         work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
         out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
         return (*tree, *sp, *obs, self.active, *work, out, unknown), grids
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
-        (:func:`robodesign.model.geometry_kernel.survivors`); the grid cells it asked about unknown are computed
-        afterwards, for the next queries."""
+        (:func:`robodesign.model.geometry_kernel.survivors`) unless their inner spheres prove one colliding; the grid
+        cells it asked about unknown are computed afterwards, for the next queries."""
         one = self._one
         if one is None:
             one = self._one = self._kernel_args()
         args, grids = one
-        n, nu = geometry_kernel.survivors(q, *args)
-        hit = bool(n) and self.collides(q, args[-2][:n].tolist())
+        n, nu, proven = geometry_kernel.survivors(q, *args)
+        if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding (the asks counted all the same)
+            self._last_hit = proven
+            if self.provable:
+                self._count(args[-2][:n].tolist())
+        hit = proven >= 0 or (bool(n) and self.collides(q, args[-2][:n].tolist()))
         if nu:
             self._fill(grids, args[-1][:nu].copy())
         return hit

@@ -15,7 +15,9 @@ centre from the joint poses of this configuration):
   bound) and, for an obstacle with a distance grid (:class:`~.collision_cull.DistanceField`), within the limit
   of the grid's lower bound: the exact distance from the centre of the point's cell minus the point's distance
   to that centre. A cell not computed yet lets the pair survive (coal decides) and is reported, so that the
-  caller can fill it for the next queries.
+  caller can fill it for the next queries;
+* a surviving self pair whose inner spheres (:mod:`.inner_spheres`) overlap by more than the slack beyond its
+  margin is reported as proven colliding: coal would find it so, and the culler then asks coal nothing.
 
 Every bound is conservative (slack on top of the margin far above coal's tolerances), so the verdict is the
 one ``pin.computeCollisions`` gives (tests/test_geometry_kernel.py compares them state by state). Without numba
@@ -98,18 +100,53 @@ def joint_poses(Q, parents, Rl, tl, kind, axis, iq, R, p, out):  # pragma: no co
 
 
 @njit(cache=True, nogil=True)
-def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
-              oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown):  # pragma: no cover
+def _inner_overlap(a, b, lim, gpar, istart, ilocal, irad, R, p):  # pragma: no cover
+    """Whether an inner sphere of geometry ``a`` and one of ``b`` (centres ``ilocal`` in their joints' frames,
+    ``istart``: each geometry's first) lie closer than their radii + ``lim`` (the pair's margin − slack)."""
+    ja, jb = gpar[a], gpar[b]
+    for u in range(istart[a], istart[a + 1]):
+        x0 = p[ja, 0] + R[ja, 0, 0] * ilocal[u, 0] + R[ja, 0, 1] * ilocal[u, 1] + R[ja, 0, 2] * ilocal[u, 2]
+        x1 = p[ja, 1] + R[ja, 1, 0] * ilocal[u, 0] + R[ja, 1, 1] * ilocal[u, 1] + R[ja, 1, 2] * ilocal[u, 2]
+        x2 = p[ja, 2] + R[ja, 2, 0] * ilocal[u, 0] + R[ja, 2, 1] * ilocal[u, 1] + R[ja, 2, 2] * ilocal[u, 2]
+        for v in range(istart[b], istart[b + 1]):
+            reach = irad[u] + irad[v] + lim
+            if reach <= 0.0:
+                continue
+            d0 = x0 - (p[jb, 0] + R[jb, 0, 0] * ilocal[v, 0] + R[jb, 0, 1] * ilocal[v, 1] + R[jb, 0, 2] * ilocal[v, 2])
+            d1 = x1 - (p[jb, 1] + R[jb, 1, 0] * ilocal[v, 0] + R[jb, 1, 1] * ilocal[v, 1] + R[jb, 1, 2] * ilocal[v, 2])
+            d2 = x2 - (p[jb, 2] + R[jb, 2, 0] * ilocal[v, 0] + R[jb, 2, 1] * ilocal[v, 1] + R[jb, 2, 2] * ilocal[v, 2])
+            if d0 * d0 + d1 * d1 + d2 * d2 < reach * reach:
+                return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
+              oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
+              unknown):  # pragma: no cover
+    """:func:`_bounds` at ``q``, with the proof of collision of its surviving self pairs: returns (surviving pairs,
+    unknown cells, the first surviving self pair whose inner spheres overlap (:mod:`.inner_spheres`), or -1)."""
+    return _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
+                   oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
+                   unknown, True)
+
+
+@njit(cache=True, nogil=True)
+def _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
+            oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown,
+            prove):  # pragma: no cover
     """The pairs (indices: the self pairs' in their order, then the robot–obstacle pairs') that the bounds do not
     clear at ``q``, written to ``out``; the grid cells (flat indices into ``grid``) asked but not known, written to
-    ``unknown``; ``R``, ``p`` (the joints' world poses) and ``C`` (the spheres' centres) are scratch space.
-    Returns (surviving pairs, unknown cells)."""
+    ``unknown``; ``R``, ``p`` (the joints' world poses) and ``C`` (the spheres' centres) are scratch space. With
+    ``prove``, the first surviving self pair ``sk[i]`` whose inner spheres lie closer than their radii +
+    ``sproof[i]`` (it collides). Returns (surviving pairs, unknown cells, that pair or -1)."""
     _joint_poses(q, parents, Rl, tl, kind, axis, iq, R, p)
     for g in range(len(gpar)):
         jg = gpar[g]
         for r in range(3):
             C[g, r] = p[jg, r] + R[jg, r, 0] * glocal[g, 0] + R[jg, r, 1] * glocal[g, 1] + R[jg, r, 2] * glocal[g, 2]
     n = 0
+    hit = -1
     for i in range(len(sa)):
         if not active[sk[i]]:
             continue
@@ -119,6 +156,8 @@ def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk
         if d0 * d0 + d1 * d1 + d2 * d2 <= slim[i] * slim[i]:
             out[n] = sk[i]
             n += 1
+            if prove and hit < 0 and _inner_overlap(sa[i], sb[i], sproof[i], gpar, istart, ilocal, irad, R, p):
+                hit = sk[i]
     nu = 0
     for i in range(len(oa)):
         if not active[ok[i]]:
@@ -156,20 +195,21 @@ def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk
                     continue         # the cell's exact distance clears it
         out[n] = ok[i]
         n += 1
-    return n, nu
+    return n, nu, hit
 
 
 @njit(cache=True, nogil=True)
-def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
-                   oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown,
-                   S, unknown_all):  # pragma: no cover
-    """:func:`survivors` of every row of ``Q``: ``S[i, k]`` set for the pairs ``k`` that survive at row ``i``
-    (``S`` all False on entry); the unknown cells of all rows in ``unknown_all`` (room for ``len(ok)`` per row).
-    Returns the number of unknown cells."""
+def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
+                   oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
+                   unknown, S, unknown_all):  # pragma: no cover
+    """:func:`_bounds` of every row of ``Q`` (no proofs): ``S[i, k]`` set for the pairs ``k`` that survive at row
+    ``i`` (``S`` all False on entry); the unknown cells of all rows in ``unknown_all`` (room for ``len(ok)`` per
+    row). Returns the number of unknown cells."""
     nu_all = 0
     for i in range(len(Q)):
-        n, nu = survivors(Q[i], parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, oa, ob, olim, ok,
-                          oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out, unknown)
+        n, nu, _ = _bounds(Q[i], parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal,
+                           irad, sproof, oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid,
+                           active, R, p, C, out, unknown, False)
         for k in range(n):
             S[i, out[k]] = True
         for k in range(nu):
@@ -186,7 +226,8 @@ def _warm() -> None:
     second while the cache is cold: the culler and batched FK ask often."""
     i1, f1 = np.zeros(1, np.int64), np.zeros(1)
     args = (i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1, np.zeros((1, 3)), i1, i1, f1, i1,
-            i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)),
+            np.zeros(2, np.int64), np.zeros((1, 3)), f1, f1, i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)),
+            np.zeros((1, 3)), np.zeros((1, 3)),
             np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0, f1, np.ones(1, np.bool_),
             np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
     survivors(np.zeros(1), *args)

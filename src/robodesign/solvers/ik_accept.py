@@ -3,7 +3,7 @@ collision, whole turns towards the seed and distinctness from the solutions foun
 
 Each test decides exactly as its plain form (issue 25: the same solutions bit for bit, faster):
 
-* the limits on Python floats (``lo ≤ q ≤ hi`` per joint; NaN fails as in numpy);
+* the limits on Python floats (``lo ≤ q`` for every joint, then ``q ≤ hi``; NaN fails as in numpy);
 * :meth:`Robot.nearest_equivalent <robodesign.model.robot.Robot.nearest_equivalent>` is asked only when a joint
   lies more than half a turn from its reference (``|ref − q|/2π > 0.5``, the quotient it rounds): within that
   every whole-turn shift rounds to 0 and it returns q itself (a q within the limits);
@@ -12,6 +12,7 @@ Each test decides exactly as its plain form (issue 25: the same solutions bit fo
 from __future__ import annotations
 
 import math
+from operator import le
 from typing import Any, Dict, List, Optional
 
 import numpy as np
@@ -46,7 +47,7 @@ class Acceptance:
                  check_collision: bool, canonical: bool, distinct_tol: float, stats: Dict[str, Any],
                  sols: List[np.ndarray]) -> None:
         self.robot, self.valid, self.q_seed = robot, valid, q_seed
-        self.bounds = list(zip(lo.tolist(), hi.tolist()))
+        self.lo, self.hi = lo.tolist(), hi.tolist()
         self.in_collision = robot.in_collision if check_collision else None
         self.canonical, self.distinct_tol, self.stats, self.sols = canonical, distinct_tol, stats, sols
         # Robot.nearest_equivalent's reference point
@@ -55,7 +56,7 @@ class Acceptance:
 
     def __call__(self, q: np.ndarray) -> str:
         ql = q.tolist()
-        if not all(a <= v <= b for v, (a, b) in zip(ql, self.bounds)):   # guaranteed by the clamping: a guard
+        if not (all(map(le, self.lo, ql)) and all(map(le, ql, self.hi))):   # guaranteed by the clamping: a guard
             self.stats["rejected_limits"] += 1
             return "limits"
         if self.in_collision is not None and self.in_collision(q):
