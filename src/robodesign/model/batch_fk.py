@@ -160,7 +160,7 @@ class _BatchKinematics:
 def batch_kinematics(robot) -> _BatchKinematics:
     """The robot's :class:`_BatchKinematics` (kept on the robot, ``_batch_chain``, until its base pose changes)."""
     if robot._batch_chain is None:
-        robot._batch_chain = _BatchKinematics(robot.model)
+        robot._batch_chain = _BatchKinematics(robot.kinematic_model)
     return robot._batch_chain
 
 

@@ -418,14 +418,14 @@ class CollisionCuller:
             ks.insert(0, last)
         sc, q = self.scratch, np.asarray(q, dtype=float)
         local, gm, gd = sc.local, sc.model, sc.data
-        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        pin.updateGeometryPlacements(r.kinematic_model, r.data, gm, gd, q)
         compute = pin.computeCollision
         for i, k in enumerate(ks):
             j = local.get(k)
             if j is None:   # a pair not asked before: it and the rest of this query's enter the scratch space
                 sc.add(ks[i:])
                 j, gd = local[k], sc.data
-                pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+                pin.updateGeometryPlacements(r.kinematic_model, r.data, gm, gd, q)
             if compute(gm, gd, j):
                 self.narrow += i + 1
                 self._last_hit = k
@@ -454,7 +454,7 @@ class CollisionCuller:
         objs = self.robot.geom_model.geometryObjects
         a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
         limit = float(self.margin[k]) + SLACK
-        if pair_clearance.never_collides(self.robot.model, a_end, b_end, limit, self._chains):
+        if pair_clearance.never_collides(self.robot.kinematic_model, a_end, b_end, limit, self._chains):
             self.active[k] = False
             self.proven += 1
             if self._known is not None and a_end[2] > 0 and b_end[2] > 0:

@@ -622,7 +622,7 @@ class ChainBounds:
         self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
         self.o, self.R = robot.reach_bound()
         self.circle = None
-        m = robot.model
+        m = robot.kinematic_model
         chain = robot.tcp_chain()
         P = m.frames[robot.tcp_frame].placement
         t_tcp = np.asarray(P.translation, float)
@@ -845,7 +845,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     if max_restarts < 1 or max_iter < 1:
         raise InputError("max_restarts and max_iter must be at least 1")
     rng = _as_rng(rng)
-    model, data, fid = robot.model, robot.data, robot.tcp_frame
+    model, data, fid = robot.kinematic_model, robot.data, robot.tcp_frame
     n = robot.dof
     lo = np.asarray(robot.q_lower, dtype=float)
     hi = np.asarray(robot.q_upper, dtype=float)

@@ -482,7 +482,7 @@ class ChainKernel:
     __slots__ = ("chain", "kind", "sign", "iq", "tcp", "key")
 
     def __init__(self, robot):
-        m = robot.model
+        m = robot.kinematic_model
         fr = m.frames[robot.tcp_frame]
         js = robot.tcp_chain()
         kinds, signs, iqs = [], [], []
