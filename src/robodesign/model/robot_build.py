@@ -168,7 +168,9 @@ class Walk:
 
     def __init__(self, model: "pin.Model", labels: Tuple[str, ...]):
         self.model, self.labels = model, labels
-        self.bodies: List[tuple] = []   # per body in walk order: (name, joint, joint's frame, placement, connectors)
+        # per body in walk order: (name, joint, joint's frame, placement, connectors, inertia or None for a massless
+        # body, mass, number of its frames): what add_frames places and what add_bodies adds to the joints
+        self.bodies: List[tuple] = []
         # per body with collision geometry, in walk order: (name, joint, joint's frame, its products, its table's
         # (n, name suffix, shape) per shape, instance, body id); the objects' specs are made of them on first use
         # (geometry_specs)
@@ -182,10 +184,6 @@ class Walk:
         self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
         self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
-        self.body_ops: List[tuple] = []    # (joint, inertia, placement) per body appended to a joint, in walk order,
-        #                                    or (joint, None, k) where k zero inertias are added to it
-        self.pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
-        self.masses: Dict[int, float] = {}  # joint → its mass so far
         self.mass = 0.0
         self.bodies_added = False   # (add_bodies: once per model, also for shallow copies of its robot)
 
@@ -212,8 +210,8 @@ def instance_labels(module_ids) -> Tuple[str, ...]:
 
 
 def walk(ms, asm, convex_meshes: bool) -> Walk:
-    """The breadth-first walk from the base connector over the bodies of ``asm``: each body appended to its joint
-    (after the zero inertias of the frames on the joint so far), each joint added when first met."""
+    """The breadth-first walk from the base connector over the bodies of ``asm``: each joint added when first met,
+    each body recorded in walk order (:func:`add_bodies` appends them to their joints when the model is asked for)."""
     tabs = _tables(ms, asm.module_ids, convex_meshes)
     model = pin.Model()
     model.name = "robodesign:" + ",".join(asm.module_ids)
@@ -230,8 +228,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     brec, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
     queue = deque([(bi, brec, 0, entry)])
     pop, push = queue.popleft, queue.append
-    labels, ops = w.labels, w.body_ops
-    pending, masses, joint_frame = w.pending, w.masses, w.joint_frame
+    labels, joint_frame = w.labels, w.joint_frame
     bodies, placed, root, free = w.bodies, w.geoms, w.root_items, w.free
     total_mass, n_geoms = 0.0, 0
     while queue:
@@ -242,18 +239,9 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
             continue
         seen[s] = True
         total_mass += mass
-        if Y is not None:
-            if jid in pending:   # (_zero_inertias: nothing to do where m·(1/m) is 1)
-                m = masses[jid] if jid in masses else 0.0
-                if m * (1.0 / max(m, _EPS)) != 1.0:
-                    ops.append((jid, None, pending[jid]))
-                del pending[jid]
-            ops.append((jid, Y, M))
-            masses[jid] = masses[jid] + mass if jid in masses else 0.0 + mass
         name = labels[i] + bsuffix
         jf = joint_frame[jid]
-        bodies.append((name, jid, jf, M, conns))
-        pending[jid] = pending[jid] + nframes if jid in pending else nframes
+        bodies.append((name, jid, jf, M, conns, Y, mass, nframes))
         # M @ pose of each connector, then of each collision geometry (numpy multiplies each matrix of the stack with
         # the BLAS call it makes for one pair with the same strides: the same numbers)
         Ps = M @ stack if stack is not None else [M @ P for P in poses]
@@ -308,22 +296,26 @@ def _model(w: Walk) -> None:
 
 
 def add_bodies(w: Walk, tcp_frame: int) -> None:
-    """The walk's bodies added to its model (after :func:`finish`): each body's inertia appended to its joint, then
-    the zero inertias of the frames (:func:`_zero_inertias`), then the TCP frame's, as pinocchio's ``addFrame`` adds
-    it. A joint's inertia is the sum of what is added to it, in that order, and nothing else reads it: the model's
-    joints, frames and scratch space (``pin.Data``) are the same before, and its inertias are those of a build that
-    adds each when it comes. Once per walk: a second call adds nothing."""
+    """The walk's bodies added to its model (after :func:`finish`), in walk order: each body's inertia appended to
+    its joint after the zero inertias of the frames on the joint so far (:func:`_zero_inertias`); then the zero
+    inertias of the frames left, then the TCP frame's, as pinocchio's ``addFrame`` adds it. A joint's inertia is the
+    sum of what is added to it, in that order, and nothing else reads it: the model's joints, frames and scratch
+    space (``pin.Data``) are the same before, and its inertias are those of a build that adds each when it comes.
+    Once per walk: a second call adds nothing."""
     if w.bodies_added:
         return
     w.bodies_added = True
     model, SE3 = w.model, pin.SE3
     append_body = model.appendBodyToJoint
-    for jid, Y, M in w.body_ops:
+    pending: Dict[int, int] = {}   # joint → zero-inertia additions of frames not made yet
+    masses: Dict[int, float] = {}  # joint → its mass so far
+    for _, jid, _, M, _, Y, mass, nframes in w.bodies:
         if Y is not None:
+            if jid in pending:
+                _zero_inertias(model, pending, masses, jid)
             append_body(jid, Y, SE3(M))
-        else:
-            _add_zeros(model, jid, M)
-    pending, masses = w.pending, w.masses
+            masses[jid] = masses[jid] + mass if jid in masses else 0.0 + mass
+        pending[jid] = pending[jid] + nframes if jid in pending else nframes
     for j in list(pending):
         _zero_inertias(model, pending, masses, j)
     frame = model.frames[tcp_frame]
@@ -387,7 +379,7 @@ def add_body_frames(model: "pin.Model", bodies: List[tuple], base_pose: Optional
     (None: not placed yet), each also added to ``root_items``."""
     add, Frame, SE3 = model.addFrame, pin.Frame, pin.SE3
     BODY, OP = pin.FrameType.BODY, pin.FrameType.OP_FRAME
-    for name, jid, jf, M, conns in bodies:
+    for name, jid, jf, M, conns, _, _, _ in bodies:
         on_root = jid == 0
         fid = add(Frame(name, jid, jf, SE3(base_pose @ M if on_root and base_pose is not None else M), BODY), False)
         if on_root:
