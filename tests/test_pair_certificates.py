@@ -1,6 +1,8 @@
 """solvers/pair_certificates.py: a pair's distance at one configuration proves it free at others, and the planner's
 segment checks with these certificates give every state coal's own verdict (random IMPROV arms in the PTP_3 cell,
 with its mesh, and among random boxes; seeded)."""
+from types import SimpleNamespace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -14,7 +16,7 @@ from robodesign.model.cell import build_robot
 from robodesign.model.robot import Robot
 from robodesign.model.sweep import pair_arms
 from robodesign.solvers import planning
-from robodesign.solvers.pair_certificates import SLACK
+from robodesign.solvers.pair_certificates import ANCHORS, SLACK, PairCertificates
 from robodesign.solvers.schedule import static_cell
 
 
@@ -160,3 +162,37 @@ def test_the_certified_pairs_kept_per_geometry_model_follow_its_changes():
             assert np.array_equal(got, want)
         seen += int((~want).sum())
     assert len(models) >= 2 and seen > 0   # a model changed in place and models made anew; mesh pairs left out
+
+
+def test_pending_bounds_only_the_rows_it_changes():
+    """``PairCertificates.pending`` (only the rows with a certified pair in ``S`` bounded) equals the formula over
+    every row: random certificates (1–32 kept, of 40 made at most; clearances with NaN where not computed, some just
+    above and below the slack) of 1–9 joints and 1–60 pairs, random blocks of 0–150 rows and survivor masks of
+    several densities; the bounds of a row subset are the full bounds' rows bit for bit; seeded."""
+    rng = np.random.default_rng(2025)
+    cleared = kept = 0
+    for _ in range(400):
+        dof, k, n = int(rng.integers(1, 10)), int(rng.integers(1, 61)), int(rng.integers(0, 151))
+        certs = PairCertificates(SimpleNamespace(dof=dof), rng.random(k) < 0.7, rng.random((dof, k)) * 0.5,
+                                 rng.random(k) * 0.01)
+        certs.count = int(rng.integers(0, 41))
+        certs.anchors[:] = rng.uniform(-3, 3, certs.anchors.shape)
+        certs.free[:] = np.where(rng.random(certs.free.shape) < 0.3, np.nan,
+                                 rng.choice([0.05, 1.0, SLACK], size=certs.free.shape) * rng.random(certs.free.shape))
+        R = certs.anchors[rng.integers(0, len(certs.anchors), n)] + rng.normal(size=(n, dof)) * rng.choice([1e-3, 0.1, 1])
+        S = rng.random((n, k)) < rng.choice([0.01, 0.1, 0.5])
+        S0 = S.copy()
+        m = min(certs.count, ANCHORS)
+        want = S.copy()
+        cols = np.flatnonzero(S.any(axis=0) & certs.certified)
+        if m and len(cols):
+            bound = np.abs(R[:, None, :] - certs.anchors[None, :m]) @ certs.W[:, cols]
+            want[:, cols] &= ~(certs.free[:m, cols] - bound > SLACK).any(axis=1)
+            rows = np.flatnonzero(S[:, cols].any(axis=1))
+            sub = np.abs(R[rows, None, :] - certs.anchors[None, :m]) @ certs.W[:, cols]
+            assert sub.tobytes() == bound[rows].tobytes()
+        got = certs.pending(R, S)
+        assert got.dtype == bool and np.array_equal(got, want)
+        assert np.array_equal(S, S0)   # (S itself not changed)
+        cleared, kept = cleared + int((S & ~got).sum()), kept + int(got.sum())
+    assert cleared > 1000 and kept > 1000   # (certificates clearing some pairs and leaving others)

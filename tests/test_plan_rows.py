@@ -91,3 +91,20 @@ def test_block_verdicts_are_the_state_by_state_ones(robots, gated):
             invalid += i >= 0
             visited += 1
     assert 0.2 * visited < invalid < 0.9 * visited   # segments that pass and that fail
+
+
+def test_row_keys_are_each_rows_bytes():
+    """``planning._row_keys`` gives ``q.tobytes()`` of every row (the keys ``_Memoized.__call__`` remembers):
+    random rows of 1–9 columns with zeros, −0.0, NaN, infinities, subnormals and rows ending in zero bytes, also
+    strided and transposed views and empty blocks; seeded."""
+    rng = np.random.default_rng(25)
+    specials = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 5e-324, 1.0, 2.0, -1.5])
+    for _ in range(300):
+        n, d = int(rng.integers(0, 40)), int(rng.integers(1, 10))
+        Q = rng.normal(size=(n, d)) * 10.0 ** rng.integers(-8, 8)
+        mask = rng.random((n, d)) < 0.3
+        Q[mask] = rng.choice(specials, size=int(mask.sum()))
+        for rows in (Q, Q[::2], np.asfortranarray(Q), Q.T.copy().T):
+            keys = planning._row_keys(rows)
+            assert keys == [q.tobytes() for q in rows]
+            assert all(type(k) is bytes and len(k) == 8 * d for k in keys)

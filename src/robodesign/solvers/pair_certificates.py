@@ -81,13 +81,15 @@ class PairCertificates:
 
     def pending(self, R: np.ndarray, S: np.ndarray) -> np.ndarray:
         """(N, pairs) booleans: ``S`` (the pairs the culler's bounds do not clear at the rows of ``R``) without the
-        pairs the kept certificates prove free."""
+        pairs the kept certificates prove free. Only the rows with one of these pairs in ``S`` are bounded (each
+        row's bounds are its own (m, dof) @ (dof, pairs) product, the same numbers with or without the other rows)."""
         P = S.copy()
         m = min(self.count, ANCHORS)
         cols = np.flatnonzero(S.any(axis=0) & self.certified)
         if m and len(cols):
-            bound = np.abs(R[:, None, :] - self.anchors[None, :m]) @ self.W[:, cols]   # (N, m, pairs)
-            P[:, cols] &= ~(self.free[:m, cols] - bound > SLACK).any(axis=1)
+            rows = np.flatnonzero(S[:, cols].any(axis=1))
+            bound = np.abs(R[rows, None, :] - self.anchors[None, :m]) @ self.W[:, cols]   # (rows, m, pairs)
+            P[np.ix_(rows, cols)] &= ~(self.free[:m, cols] - bound > SLACK).any(axis=1)
         return P
 
     @classmethod

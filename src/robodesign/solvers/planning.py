@@ -52,6 +52,7 @@ Decisions:
 """
 from __future__ import annotations
 
+import bisect
 import difflib
 import functools
 import math
@@ -217,14 +218,10 @@ class _Memoized:
         in row order and counted up to the first invalid row (its index, or -1)."""
         memo, static_ok, certs = self.memo, self.static_ok, self.certificates
         assert static_ok is not None  # a culler only with _config_validator's valid
-        keys = [q.tobytes() for q in rows]
-        new, bad = [], []     # rows not remembered; remembered invalid
-        for i, k in enumerate(keys):
-            v = memo.get(k)
-            if v is None:
-                new.append(i)
-            elif not v:
-                bad.append(i)
+        keys = _row_keys(rows)
+        seen = list(map(memo.get, keys))
+        new = [i for i, v in enumerate(seen) if v is None]               # rows not remembered
+        bad = [i for i, v in enumerate(seen) if v is not None and not v]  # remembered invalid
         R = rows[new]
         S = culler.survivors(R)
         if certs is not None:     # (the self pairs a distance certifies free not asked)
@@ -261,11 +258,16 @@ class _Memoized:
                 counter[0] += 1
             gate()   # (False: the work limit is spent, the planner's solve ends)
             stop = limit
-        for i in new:
-            if i >= n:
-                break
-            memo.setdefault(keys[i], got.get(keys[i], True))
+        memo.update(dict.fromkeys([keys[i] for i in new[:bisect.bisect_left(new, n)]], True))
+        memo.update(got)   # (the rows visited: each one of those just remembered)
         return stop
+
+
+def _row_keys(rows: np.ndarray) -> List[bytes]:
+    """``[q.tobytes() for q in rows]`` (the memo's keys) in one pass: each row's bytes as a void scalar of its
+    length (kept whole, trailing zero bytes included)."""
+    rows = np.ascontiguousarray(rows)
+    return rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel().tolist()
 
 
 #: the row blocks :meth:`_Memoized.first_invalid` bounds at once (the last one takes the rest)
