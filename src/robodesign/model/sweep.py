@@ -33,7 +33,6 @@ geometries' bounding spheres).
 """
 from __future__ import annotations
 
-import heapq
 import math
 import threading
 from dataclasses import dataclass
@@ -45,7 +44,7 @@ import pinocchio as pin
 
 from robodesign.model.robot import Robot
 from robodesign.model.sweep_bounds import PosedArms, StaticSteps
-from robodesign.model.sweep_clearance import due_pairs, open_steps, robot_spheres
+from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
 
 
 @dataclass(frozen=True)
@@ -445,22 +444,16 @@ class SweepChecker:
         seg, sched, cum, cum_rows, TG = self._bounds(Q, path, poses)
         posed: Optional[PosedArms] = getattr(self, "_posed", None)  # (RobotPairSweep has none)
         ext = 4 * self.tolerance
-        mov, ref = (np.array(getattr(self, a, ()), dtype=np.int64) for a in ("_mov", "_ref"))
         margins, is_env = self.margins.tolist(), self.is_env.tolist()
         events: List[CollisionEvent] = []
-        # priority queue of (sample index where the pair must be re-checked, pair)
-        heap = [(0, c) for c in range(P)]
-        heapq.heapify(heap)
         skip = open_steps(self, TG, sched, seg.dQ, ext) if not first_only else None  # (sweep_clearance)
-        while heap:
-            k = heap[0][0]
-            due = due_pairs(heap, k, n, skip)
-            if not due:
-                continue
+        queue = DueQueue(self, n, skip, cum_rows, TG, sched, ext, _EXTEND_SELF)  # every pair due at sample 0
+        while True:
+            k, due = queue.batch()
+            if k < 0:
+                break
             d = self.distances(Q[k], due)
-            certified = (posed.certify(due, d, k, self.margins, self.is_env, cum_rows, TG, mov, ref, sched, ext,
-                                       _EXTEND_SELF) if posed is not None else [-2] * len(due))
-            for c, dist, nxt in zip(due, d.tolist(), certified):
+            for c, dist, nxt in queue.settle(k, due, d):  # the pairs the queue does not reschedule itself
                 free = dist - margins[c]
                 if free <= 0:
                     events.append(CollisionEvent(k, 0.0, *self.pair_names[c], dist, bool(self.is_env[c])))
@@ -468,7 +461,7 @@ class SweepChecker:
                         return events
                     again = self._rearm(Q, k, c, cum)
                     if again is not None:
-                        heapq.heappush(heap, (again, c))
+                        queue.push(c, again)
                     continue
                 # the pair is certified free until the accumulated bound exceeds `free`
                 row = cum_rows[c]
@@ -482,7 +475,7 @@ class SweepChecker:
                     ahead = is_env[c] and (skip is None or skip[c, nxt] == nxt)  # (not where the bounds go on)
                     nxt2 = self._ahead(Q, k, c, free, row, nxt) if ahead else nxt
                     if nxt2 is not None:
-                        heapq.heappush(heap, (nxt2, c))
+                        queue.push(c, nxt2)
                     continue
                 # nxt == k: the very next segment moves more than the clearance → advance inside it
                 hit = self._advance(Q[k], Q[k + 1], seg[k, c], c, free,
@@ -494,9 +487,9 @@ class SweepChecker:
                         continue  # another pair of this batch may touch earlier inside the same step
                     again = self._rearm(Q, k + 1, c, cum)
                     if again is not None:
-                        heapq.heappush(heap, (again, c))
+                        queue.push(c, again)
                 else:
-                    heapq.heappush(heap, (k + 1, c))
+                    queue.push(c, k + 1)
             if first_only and events:  # every pair was certified free up to sample k: the earliest is here
                 return [min(events, key=lambda e: e.s)]
         events.sort(key=lambda e: (e.sample, e.s))

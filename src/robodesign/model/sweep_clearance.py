@@ -23,7 +23,6 @@ their compilation) nothing is skipped.
 """
 from __future__ import annotations
 
-import heapq
 from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -107,19 +106,92 @@ def open_steps(checker, TG: Optional[np.ndarray], sched: np.ndarray, dQ: np.ndar
     return out
 
 
-def due_pairs(heap: list, k: int, n: int, skip: Optional[np.ndarray]) -> List[int]:
-    """Pop the pairs due at sample k from the sweep's ``heap`` ((sample, pair), the earliest first): those to query
-    there; a pair whose clearance bounds certify from k (``skip``: :func:`open_steps`) is pushed back at the first
-    step they do not certify (to query its first sample), or dropped when they certify it to the end."""
-    due = []
-    while heap and heap[0][0] == k:
-        c = heapq.heappop(heap)[1]
-        j = int(skip[c, k]) if skip is not None and k < n - 1 else k
-        if j == k:
-            due.append(c)
-        elif j < n - 1:
-            heapq.heappush(heap, (j, c))
-    return due
+class DueQueue:
+    """The sweep's queue of pair queries (:meth:`SweepChecker.check <robodesign.model.sweep.SweepChecker.check>`):
+    per pair the sample where it is due next (``nxt``, n: never again). The batch at sample k is the pairs due at
+    the earliest such sample, in ascending order, less those whose clearance bounds certify from k (``skip``:
+    :func:`open_steps`), which move to the first step they do not certify, or drop when they certify it to the end.
+    After the batch's queries :meth:`settle` certifies its pairs (:meth:`PosedArms.certify
+    <robodesign.model.sweep_bounds.PosedArms.certify>`) and reschedules those it can; the rest go back to the
+    sweep. Compiled (:func:`~robodesign.model.sweep_kernel.settle`) when the kernels run, else in Python: the same
+    batches."""
+
+    def __init__(self, checker, n: int, skip: Optional[np.ndarray], rows: np.ndarray, TG: Optional[np.ndarray],
+                 sched: np.ndarray, ext: float, self_too: bool):
+        P = len(checker.pairs)
+        self.n, self.nxt = n, np.zeros(P, np.int64)
+        self.skip = skip if skip is not None else np.zeros((0, 0), np.int64)
+        self.due, self._left = np.empty(P, np.int64), np.empty((2, P), np.int64)
+        self._next: Optional[Tuple[int, int]] = None  # the next batch when settle found it
+        posed = getattr(checker, "_posed", None)  # (RobotPairSweep has none)
+        cen, rad = (posed.box_centre, posed.box_radius) if posed is not None else (np.zeros((0, 3)), np.zeros(0))
+        mov, ref = (np.array(getattr(checker, a, ()), dtype=np.int64) for a in ("_mov", "_ref"))
+        self._posed = posed
+        self._args = (checker.margins, checker.is_env, rows, TG if TG is not None else np.zeros((0, 1, 3, 4)), mov,
+                      ref, cen, rad, sched, ext, BOUND_SLACK, self_too)
+        self._kernel = _kernel(count=False)
+
+    def push(self, c: int, k: int) -> None:
+        """Pair c is due at sample k."""
+        self.nxt[c] = k
+
+    def batch(self) -> Tuple[int, List[int]]:
+        """(k, the pairs to query at sample k), (−1, []) when none is left."""
+        if self._next is None:
+            self._next = (self._kernel.next_due(self.nxt, self.n, self.skip, self.due) if self._kernel is not None
+                          else self._next_due())
+        k, cnt = self._next
+        self._next = None
+        return k, self.due[:cnt].tolist()
+
+    def settle(self, k: int, due: List[int], d: np.ndarray) -> List[Tuple[int, float, int]]:
+        """After the queries of the batch ``due`` at sample k (distances d): (pair, distance, certificate) of the
+        pairs left to the sweep (certificate: certify's value, −2 without posed bounds; the sweep reschedules
+        them), the others rescheduled."""
+        kernel = self._kernel
+        if kernel is None:
+            return self._settle(k, due, d)
+        nl, k2, cnt2 = kernel.settle(self.nxt, self.n, self.skip, self.due, len(due), d, k, self._left,
+                                     self._posed is not None, *self._args)
+        if not nl:
+            self._next = (k2, cnt2)
+            return []
+        i, v = self._left[0, :nl].tolist(), self._left[1, :nl].tolist()
+        return [(due[a], float(d[a]), b) for a, b in zip(i, v)]
+
+    def _next_due(self) -> Tuple[int, int]:
+        """:meth:`batch` in Python (as the kernel): (k, count) with the pairs in ``due``."""
+        n, nxt, skip = self.n, self.nxt, self.skip
+        while True:
+            k = int(nxt.min())
+            if k >= n:
+                return -1, 0
+            cnt = 0
+            for c in np.flatnonzero(nxt == k).tolist():
+                j = int(skip[c, k]) if len(skip) and k < n - 1 else k
+                if j == k:
+                    self.due[cnt] = c
+                    cnt += 1
+                else:
+                    nxt[c] = j if j < n - 1 else n
+            if cnt:
+                return k, cnt
+
+    def _settle(self, k: int, due: List[int], d: np.ndarray) -> List[Tuple[int, float, int]]:
+        """:meth:`settle` in Python (as the kernel)."""
+        n, skip, (margins, is_env, rows, TG, mov, ref, _, _, sched, ext, _, self_too) = self.n, self.skip, self._args
+        certified = (self._posed.certify(due, d, k, margins, is_env, rows, TG, mov, ref, sched, ext,
+                                         self_too) if self._posed is not None else [-2] * len(due))
+        left = []
+        for c, dist, v in zip(due, d.tolist(), certified):
+            self.nxt[c] = n
+            if v >= n - 1:
+                continue
+            if v > k and not (is_env[c] and (not len(skip) or skip[c, v] == v)):
+                self.nxt[c] = v
+                continue
+            left.append((c, dist, v))
+        return left
 
 
-__all__ = ["ADVANCE_SHARE", "clearance_bounds", "due_pairs", "open_steps", "robot_spheres", "self_bounds"]
+__all__ = ["ADVANCE_SHARE", "DueQueue", "clearance_bounds", "open_steps", "robot_spheres", "self_bounds"]

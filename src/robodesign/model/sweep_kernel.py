@@ -316,6 +316,63 @@ def open_steps(F, sched, fastest, wsum, ext, slack, share, out):  # pragma: no c
             out[c, k] = nxt
 
 
+@njit(cache=True, nogil=True)
+def next_due(nxt, n, skip, due):  # pragma: no cover - compiled
+    """model.sweep_clearance.DueQueue's next batch: the earliest sample k any pair is due at (nxt: per pair, n: none)
+    and the pairs due there in ascending order, written to ``due``; a pair whose clearance bounds certify from k
+    (``skip[c, k]``, none when ``skip`` is empty) is moved to the first step they do not certify, or dropped (n) when
+    they certify it to the end. Returns (k, count), (−1, 0) when no pair is left."""
+    P = len(nxt)
+    while True:
+        k = n
+        for c in range(P):
+            if nxt[c] < k:
+                k = nxt[c]
+        if k >= n:
+            return -1, 0
+        cnt = 0
+        for c in range(P):
+            if nxt[c] == k:
+                j = skip[c, k] if skip.shape[0] > 0 and k < n - 1 else k
+                if j == k:
+                    due[cnt] = c
+                    cnt += 1
+                else:
+                    nxt[c] = j if j < n - 1 else n
+        if cnt:
+            return k, cnt
+
+
+@njit(cache=True, nogil=True)
+def settle(nxt, n, skip, due, cnt, d, k, left, posed, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext,
+           slack, self_too):  # pragma: no cover - compiled
+    """model.sweep_clearance.DueQueue.settle: the pairs due[:cnt] queried at sample k (distances d) certified
+    (:func:`certify` with ``posed``, else −2 for each); a pair certified to the end dropped (nxt n), one certified to
+    a later sample where no look-ahead query is made (not a robot–obstacle pair, or its clearance bounds do not
+    certify that sample's step) due there; the others (their index into ``due`` and certify's value in ``left``'s
+    two rows) left to the sweep's Python loop, with nxt n. Then, if none is left, :func:`next_due`. Returns
+    (how many are left, the next k, its count): (l, −1, 0) when some are left."""
+    nl = 0
+    if cnt:
+        out = certify(due[:cnt], d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext, slack,
+                      self_too) if posed else np.full(cnt, -2, np.int64)
+        for i in range(cnt):
+            c, v = due[i], out[i]
+            nxt[c] = n
+            if v >= n - 1:
+                continue
+            if v > k and not (is_env[c] and (skip.shape[0] == 0 or skip[c, v] == v)):
+                nxt[c] = v
+                continue
+            left[0, nl] = i
+            left[1, nl] = v
+            nl += 1
+    if nl:
+        return nl, -1, 0
+    k2, cnt2 = next_due(nxt, n, skip, due)
+    return 0, k2, cnt2
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -333,11 +390,14 @@ def _warm() -> None:
                     np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64))
     sphere_gaps(TG, np.zeros((1, 3)), i, i, f, np.zeros((2, 1)))
     open_steps(np.zeros((2, 1)), np.zeros((1, 1)), f, f, 1e-6, 1.0, 500.0, np.zeros((1, 1), np.int64))
+    settle(np.zeros(1, np.int64), 2, np.zeros((1, 1), np.int64), np.zeros(1, np.int64), 1, f, 0,
+           np.zeros((2, 1), np.int64), True, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f,
+           np.zeros((1, 1)), 1e-6, 1.0, False)
 
 
 KERNELS = KernelModule("robodesign.model.sweep_kernel", __file__, posed_arms,
                        ("posed_arms", "gather", "running_sums", "geometry_poses", "extend", "certify",
-                        "obstacle_bounds", "sphere_gaps", "open_steps"), _warm)
+                        "obstacle_bounds", "sphere_gaps", "open_steps", "next_due", "settle"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 
