@@ -194,7 +194,7 @@ class RobotGeometry:
             self._apply_margins(gd)
             probe, self._base_probe = self._base_probe, None
             if probe is not None:  # the base contacts were queried on the probe: their GJK guesses carry over
-                for k, req in zip(probe[2], probe[1].collisionRequests):
+                for k, req in zip(self._base_pair_indices(probe[2]), probe[1].collisionRequests):
                     to = gd.collisionRequests[k]
                     to.cached_gjk_guess, to.cached_support_func_guess = req.cached_gjk_guess, req.cached_support_func_guess
                     to.distance_upper_bound = req.distance_upper_bound  # (pinocchio sets it at every query)
@@ -316,25 +316,30 @@ class RobotGeometry:
         collides at every configuration."""
         if not self._obstacle_ids:
             return []
-        n = self._n_geoms
-        # set_obstacles' pairs: (robot object a, obstacle j) at n_self_pairs + j·n + a; those that a certified bound
-        # clears are not asked (their answer is no)
+        # the pairs of an obstacle and an object fixed to the world; those that a certified bound clears are not asked
+        # (their answer is no)
         near = self._base_pairs_near()
         if not near:
             return []
         ab = [(a, self._obstacle_ids[j]) for j, a in near]
-        pairs = [self._n_self_pairs + j * n + a for j, a in near]
         if self._geom_data is None:  # the same queries on a probe of just these pairs (no scratch space for all)
-            gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, pairs)
+            gm, gd, _ = self._base_probe = self._base_probe or _probe(self, ab, near)
             pin.updateGeometryPlacements(self.kinematic_model, self.data, gm, gd, np.zeros(self.dof))
-            hit = [pin.computeCollision(gm, gd, i) for i in range(len(pairs))]
+            hit = [pin.computeCollision(gm, gd, i) for i in range(len(near))]
         else:
             self._update_geometry(np.zeros(self.dof))
-            hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in pairs]
+            hit = [pin.computeCollision(self.geom_model, self.geom_data, k) for k in self._base_pair_indices(near)]
         if not any(hit):
             return []
         names = [s[0] for s in self._geom_specs] + ["obstacle:" + ob.name for ob in self.obstacles]
         return [(names[a], names[ob]) for (a, ob), h in zip(ab, hit) if h]
+
+    def _base_pair_indices(self, near: List[Tuple[int, int]]) -> List[int]:
+        """The collision pair index of each (obstacle j, robot object a) of ``near``: set_obstacles' pairs come after
+        the self pairs, (a, j) at n_self_pairs + j·n + a (n: the robot's objects). Asked only with a scratch space for
+        every pair, so that a design whose base contacts are queried on a probe never makes its self-pair map."""
+        start, n = self._n_self_pairs, self._n_geoms
+        return [start + j * n + a for j, a in near]
 
     def _base_pairs_near(self) -> List[Tuple[int, int]]:
         """(obstacle j, robot object a), obstacle by obstacle, of every pair of an obstacle and an object fixed to
@@ -418,9 +423,10 @@ def _fresh_guesses(gd: "pin.GeometryData") -> None:
         r.cached_gjk_guess, r.cached_support_func_guess = _GUESS, _SUPPORT_GUESS
 
 
-def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], pairs: List[int]) -> tuple:
-    """(geometry model, its scratch space, the robot's pair indices) of just the robot–obstacle pairs ``ab``, with
-    the requests of the robot's own scratch space (contacts on, the safety margin)."""
+def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], near: List[Tuple[int, int]]) -> tuple:
+    """(geometry model, its scratch space, ``near``) of just the robot–obstacle pairs ``ab`` (``near``: their
+    (obstacle, robot object), :meth:`RobotGeometry._base_pair_indices`), with the requests of the robot's own scratch
+    space (contacts on, the safety margin)."""
     gm, n, made = pin.GeometryModel(), robot._n_geoms, robot._geom_model
     index: Dict[int, int] = {}
     for a, ob in ab:
@@ -433,4 +439,4 @@ def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], pairs: List[int]) ->
     for req in gd.collisionRequests:
         req.enable_contact = True
         req.security_margin = robot.safety_margin
-    return gm, gd, pairs
+    return gm, gd, near
