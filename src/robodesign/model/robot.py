@@ -353,9 +353,10 @@ class Robot(RobotGeometry):
         lower-dimensional set of poses. Cached (independent of the base pose).
 
         The configurations are ``np.random.default_rng(0).uniform(lo, hi)`` drawn ``samples`` times
-        (:func:`_rank_samples`); the first one's rank decides when it is full, else the others' Jacobians go
-        through one SVD call (numpy's SVD of a stack is each matrix's own LAPACK call: the same singular values),
-        and the scratch space is left as the one-by-one loop that stops at the first full rank leaves it."""
+        (:func:`_rank_samples`); the first one's rank decides when :func:`_certainly_full_rank` shows it full, else
+        all Jacobians go through one SVD call (numpy's SVD of a stack is each matrix's own LAPACK call: the same
+        singular values), and the scratch space is left as the one-by-one loop that stops at the first full rank
+        leaves it."""
         if self._generic_rank is None:
             lo = np.maximum(np.asarray(self.q_lower, float), -math.pi)
             hi = np.minimum(np.asarray(self.q_upper, float), math.pi)
@@ -363,16 +364,24 @@ class Robot(RobotGeometry):
             Q = _rank_samples(lo, hi, max(1, samples))
             J = self._scaled_jacobian(Q[0], scale)
             full = min(J.shape)
-            best = full if _certainly_full_rank(J, rtol) else _rank(_svd_values(J) if J.size else np.zeros(0), rtol)
-            if best < full and len(Q) > 1:
-                Js = np.stack([self._scaled_jacobian(q, scale) for q in Q[1:]])
-                ranks = [_rank(s, rtol) for s in _svd_values(Js)]
-                best = max(best, *ranks)
-                first_full = next((k for k, r in enumerate(ranks, 1) if r >= full), len(Q) - 1)
-                if first_full < len(Q) - 1:   # (where the loop stopped: its Jacobian was the last one made)
-                    self.jacobian(Q[first_full])
-            self._generic_rank = best
+            if _certainly_full_rank(J, rtol):
+                self._generic_rank = full
+            elif J.ndim < 2 or not J.size or len(Q) == 1:   # (a vector: numpy's SVD raises, as the loop's did)
+                self._generic_rank = _rank(_svd_values(J) if J.size else np.zeros(0), rtol)
+            else:
+                self._generic_rank = self._stacked_rank(J, Q, scale, rtol)
         return self._generic_rank
+
+    def _stacked_rank(self, J: np.ndarray, Q: np.ndarray, scale: float, rtol: float) -> int:
+        """The largest rank of the scaled Jacobians at the rows of ``Q`` (``J``: the first one's), from one SVD call;
+        the scratch space left at the first row of full rank (the last row without one), as the loop left it."""
+        Js = np.stack([J] + [self._scaled_jacobian(q, scale) for q in Q[1:]])
+        ranks = [_rank(s, rtol) for s in _svd_values(Js)]
+        full = min(J.shape)
+        first_full = next((k for k, r in enumerate(ranks) if r >= full), len(Q) - 1)
+        if first_full < len(Q) - 1:   # (where the loop stopped: its Jacobian was the last one made)
+            self.jacobian(Q[first_full])
+        return max(ranks)
 
     def _scaled_jacobian(self, q: np.ndarray, scale: float) -> np.ndarray:
         """The TCP Jacobian at ``q`` with its angular rows times ``scale`` (:meth:`generic_rank`'s)."""
