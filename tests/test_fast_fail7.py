@@ -121,3 +121,115 @@ def test_base_collisions_on_a_probe_equal_plain_queries_without_the_self_pairs()
         assert got == _plain_base_collisions(plain)
         hits += bool(got)
     assert hits >= 5
+
+
+def _old_unreachable(cb, gm) -> str:
+    """ChainBounds._unreachable as it was, every term made afresh."""
+    from robodesign.solvers.ik import _circle_distance
+    if gm.unconstrained:
+        return ""
+    if gm.position_lower_bound(cb.o) > cb.R + 1e-9:
+        return "out_of_reach"
+    if cb.circle is None:
+        return ""
+    rp = gm.position_radius()
+    if not np.isfinite(rp):
+        return ""
+    N = gm.goal.nominal
+    pn = np.asarray(N[:3, 3], float)
+    c, a, rho = cb.circle
+    if _circle_distance(pn, c, a, rho) - rp > cb.R1 + 1e-9:
+        return "out_of_reach"
+    rs = gm.rotation_slack(cb.c_tcp)
+    if np.isfinite(rs):
+        w = pn - np.asarray(N[:3, :3], float) @ cb.c_tcp
+        if _circle_distance(w, c, a, rho) - (rp + rs) > cb.R2 + 1e-9:
+            return "out_of_orientation_reach"
+    return ""
+
+
+def test_chain_bounds_with_kept_goal_terms_equal_the_former_formula():
+    """whitman2020 and bpo2024 profile tasks: every goal pose against random candidates' robots (many share their
+    tool, so kept terms are met again), at their base poses and at poses moved towards the goals."""
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "experiments"))
+    from profile_evaluator import family_tasks
+    from robodesign.design.goal_planner import goal_poses
+    from robodesign.solvers.ik import ChainBounds, goal_model
+    rng = np.random.default_rng(11)
+    verdicts = {}
+    for fam in ("whitman2020_g5o5", "bpo2024"):
+        problem = Problem.build(family_tasks(fam, 1, 0)[0], "robodesign_arm", "cyc")
+        ms, poses = problem.module_set, [p for g in problem.task.goals for p in goal_poses(g)]
+        for _ in range(40):
+            c = problem.space.random_candidate(rng)
+            T = problem.base_pose(c)
+            robot = build_robot(None, ms, Assembly.from_order(ms, c.order), T)
+            for k in range(2):
+                if k:
+                    T = T.copy()
+                    T[:3, 3] = 0.5 * (T[:3, 3] + poses[int(rng.integers(len(poses)))].nominal[:3, 3])
+                    robot.set_base_pose(T)
+                cb = ChainBounds(robot)
+                for p in poses:
+                    gm = goal_model(p)
+                    got = cb._unreachable(gm)
+                    assert got == _old_unreachable(cb, gm)
+                    verdicts[got] = verdicts.get(got, 0) + 1
+    assert len(verdicts) == 3 and min(verdicts.values()) >= 10, verdicts
+
+
+def _old_near(bounds, centres, radii, margin):
+    """ObstacleBounds.near as it was: the box bound (numpy) for every pair, then the fields'."""
+    from robodesign.model.collision_cull import SLACK
+    limit = np.asarray(radii, dtype=float) + (float(margin) + SLACK)
+    x = np.einsum("oij,omj->omi", bounds.R_inv, np.asarray(centres, dtype=float)[None] - bounds.t)
+    e = np.maximum(np.maximum(bounds.lo - x, x - bounds.hi), 0.0)
+    near = np.sqrt(np.einsum("omi,omi->om", e, e)) <= limit
+    for o in np.flatnonzero(near.any(axis=1)).tolist():
+        bounds.fields[o].field_near(np.asarray(centres, dtype=float), limit, near[o])
+    return near
+
+
+def test_box_screen_clears_only_spheres_the_bounds_clear():
+    """Random cells of boxes, cylinders and spheres (rotations exact, or rounded to 3 decimals as a file may give
+    them), random spheres from far off to inside: where the screen clears every sphere, ``near`` (as it was) keeps
+    none; both answers of the screen are met."""
+    import coal
+    from robodesign.model.box_screen import all_clear, boxes_of
+    from robodesign.model.collision_cull import SLACK, DistanceField, ObstacleBounds
+    rng = np.random.default_rng(4)
+    clear = kept = 0
+    for k in range(150):
+        fields = []
+        for _ in range(int(rng.integers(1, 6))):
+            T = np.eye(4)
+            T[:3, :3] = pin.Quaternion(*rng.normal(size=4)).normalized().toRotationMatrix()
+            if k % 3 == 0:
+                T[:3, :3] = np.round(T[:3, :3], 3)
+            T[:3, 3] = rng.uniform(-1.5, 1.5, 3)
+            kind = rng.integers(3)
+            shape = coal.Box(*rng.uniform(0.05, 1.0, 3)) if kind == 0 else \
+                coal.Cylinder(rng.uniform(0.05, 0.3), rng.uniform(0.1, 0.8)) if kind == 1 else coal.Sphere(0.2)
+            fields.append(DistanceField(shape, T))
+        bounds = ObstacleBounds(fields)
+        for _ in range(4):
+            m = int(rng.integers(1, 9))
+            C = rng.uniform(-1.5, 1.5, (m, 3)) * rng.choice([0.5, 1.0, 3.0])
+            r = rng.uniform(0.0, 0.3, m)
+            margin = float(rng.choice([0.0, 0.01]))
+            want = _old_near(bounds, C, r, margin)
+            assert (bounds.near(C, r, margin) == want).all()
+            if all_clear(boxes_of(bounds), C, r + (margin + SLACK)):
+                clear += 1
+                assert not want.any()
+            else:
+                kept += 1
+    assert clear >= 50 and kept >= 50, (clear, kept)
+    # NaN is never cleared; an infinite centre is cleared, as near clears it
+    boxes = boxes_of(bounds)
+    assert not all_clear(boxes, np.array([[np.nan, 0.0, 0.0]]), np.zeros(1))
+    assert not all_clear(boxes, np.zeros((1, 3)) + 100.0, np.full(1, np.nan))
+    C = np.array([[np.inf, 0.0, 0.0]])
+    assert all_clear(boxes, C, np.zeros(1)) and not _old_near(bounds, C, np.zeros(1), 0.0).any()

@@ -345,8 +345,10 @@ class RobotGeometry:
         """(obstacle j, robot object a), obstacle by obstacle, of every pair of an obstacle and an object fixed to
         the world (the bodies before the first joint) that the bounds of the collision culler do not clear: the
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
-        field; :class:`robodesign.model.collision_cull.ObstacleBounds`)."""
-        from robodesign.model.collision_cull import distance_field, obstacle_bounds
+        field; :class:`robodesign.model.collision_cull.ObstacleBounds`, after the quick screen of
+        :mod:`robodesign.model.box_screen`)."""
+        from robodesign.model.box_screen import all_clear, boxes_of
+        from robodesign.model.collision_cull import SLACK, distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
             root = [k for k, _, _ in self._root_geoms]   # (parentJoint 0, in index order)
             self._root_spheres = (root, *_placed_spheres([(P, shape) for _, P, shape in self._root_geoms]))
@@ -360,7 +362,10 @@ class RobotGeometry:
             fields = [distance_field(ob.shape, T) for ob, T in zip(self.obstacles, poses)]
             self._obstacle_bounds = obstacle_bounds(fields)
         T = self.base_pose
-        near = self._obstacle_bounds.near(C @ T[:3, :3].T + T[:3, 3], r, self.safety_margin)
+        C = C @ T[:3, :3].T + T[:3, 3]
+        if all_clear(boxes_of(self._obstacle_bounds), C, r + (self.safety_margin + SLACK)):   # (near's limits)
+            return []
+        near = self._obstacle_bounds.near(C, r, self.safety_margin)
         return [(j, root[i]) for j, i in zip(*(x.tolist() for x in np.nonzero(near)))]
 
     def min_distances(self, q) -> Tuple[float, float]:

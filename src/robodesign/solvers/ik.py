@@ -618,6 +618,8 @@ class ChainBounds:
 
     ``circle`` is None when the first joint is not revolute or the chain has fewer than two joints."""
 
+    _AXES = {name: np.array(v) for name, v in _REVOLUTE_AXES.items()}   # (read, never written)
+
     def __init__(self, robot):
         self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
         self.o, self.R = robot.reach_bound()
@@ -632,8 +634,8 @@ class ChainBounds:
         j1, j2 = chain[0], chain[1]
         jm = m.joints[j1]
         name = jm.shortname()
-        if name in _REVOLUTE_AXES:
-            ax = np.array(_REVOLUTE_AXES[name])
+        if name in self._AXES:
+            ax = self._AXES[name]
         elif name == "JointModelRevoluteUnaligned":
             ax = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float)
         else:
@@ -660,23 +662,21 @@ class ChainBounds:
         return why
 
     def _unreachable(self, gm: "GoalModel") -> str:
+        from robodesign.solvers.goal_terms import goal_terms, tcp_terms  # (what the goal gives, kept per goal)
         if gm.unconstrained:
             return ""
         if gm.position_lower_bound(self.o) > self.R + 1e-9:
             return "out_of_reach"
         if self.circle is None:
             return ""
-        rp = gm.position_radius()
+        rp, pn, _ = goal_terms(gm)
         if not math.isfinite(rp):
             return ""
-        N = gm.goal.nominal
-        pn = np.asarray(N[:3, 3], float)
         c, a, rho = self.circle
         if _circle_distance(pn, c, a, rho) - rp > self.R1 + 1e-9:
             return "out_of_reach"
-        rs = gm.rotation_slack(self.c_tcp)
+        rs, w = tcp_terms(gm, self.c_tcp)
         if math.isfinite(rs):
-            w = pn - np.asarray(N[:3, :3], float) @ self.c_tcp
             slack = rp + rs
             if _circle_distance(w, c, a, rho) - slack > self.R2 + 1e-9:
                 return "out_of_orientation_reach"
