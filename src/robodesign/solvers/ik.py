@@ -73,6 +73,7 @@ from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
 from robodesign.model.robot import vector_norm
 from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.ik_proof import valid_provable
 from robodesign.solvers.lazy_rng import LazyGenerator
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
@@ -388,7 +389,7 @@ class GoalModel:
             prog = None
             if not self.fallback and not self.unconstrained:
                 from robodesign.solvers import ik_kernel
-                prog = ik_kernel.compile_goal(self.term_specs)
+                prog = ik_kernel.compile_goal(self.term_specs, valid_provable(self.goal, self.N_inv))
             self._program = prog if prog is not None else False
         return self._program or None
 
@@ -777,15 +778,16 @@ class _Kernel:
         self._batch_args = (self.max_iter, self.lo, self.hi) + tail + (self.q,)
 
     def descend(self, q: np.ndarray, iters: int):
-        """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result."""
+        """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result (asked unless the
+        kernel proves it true)."""
         q = np.array(q, dtype=float)     # the kernel works in place
         status, its = self._descend(q, iters, *self._descend_args)
-        return (q if status == 1 and self.valid(self.T) else None), its
+        return (q if status == 2 or (status == 1 and self.valid(self.T)) else None), its
 
     def batch(self, starts: np.ndarray, a: int, stop: int):
         """(index, q or None, iterations): descents from starts[a:stop] until one lands in the goal."""
-        idx, its = self._batch(starts, a, stop, *self._batch_args)
-        if idx < stop and self.valid(self.T):
+        idx, its, proven = self._batch(starts, a, stop, *self._batch_args)
+        if idx < stop and (proven or self.valid(self.T)):
             return idx, self.q.copy(), its
         return idx, None, its
 
