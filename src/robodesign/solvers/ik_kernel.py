@@ -51,7 +51,7 @@ import numpy as np
 from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
 
 __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacobian", "goal_rows", "lm_descend",
-           "lm_batch", "warm_up"]
+           "lm_repair", "lm_batch", "warm_up"]
 
 # term kinds of the goal program
 K_P_ROW, K_R_ROW, K_SPH, K_THETA, K_CYL = 0, 1, 2, 3, 4
@@ -339,10 +339,8 @@ def proven_valid(T, Rd, pd, tkind, tvec):
     is the angle ``atan2(s, c)`` as ``valid`` computes it, asked ``s² + c² ≥ 1/4``. ``valid``'s values then lie
     within its slack (1e-12) of the kernel's (:mod:`.ik_proof`)."""
     for r in range(3):
-        for c in range(3):
-            if not abs(T[r, c]) <= PROOF_ROT:
-                return False
-        if not abs(T[r, 3]) <= PROOF_POS:
+        if not (abs(T[r, 0]) <= PROOF_ROT and abs(T[r, 1]) <= PROOF_ROT and abs(T[r, 2]) <= PROOF_ROT
+                and abs(T[r, 3]) <= PROOF_POS):
             return False
     for t in range(tkind.shape[0]):
         k = tkind[t]
@@ -404,6 +402,16 @@ def lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, 
     −1 = non-finite step."""
     ws = Workspace(q.shape[0], E.shape[0], chain.shape[0])
     return lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, ws)
+
+@njit(cache=True, nogil=True)
+def lm_repair(found, noise, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, q):
+    """:func:`lm_descend` from numpy's ``clip(found + noise, lo, hi)`` made in q (the start, then the result): per value
+    the sum, then ``x if x > lo else lo`` and ``x if x < hi else hi``, NaN kept (numpy's clip loop for floats)."""
+    for j in range(q.shape[0]):
+        x = found[j] + noise[j]
+        x = x if x != x or x > lo[j] else lo[j]
+        q[j] = x if x != x or x < hi[j] else hi[j]
+    return lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params)
 
 @njit(cache=True, nogil=True)
 def Workspace(n, m, nk):
@@ -513,7 +521,7 @@ def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, t
 def _kernels():
     """The compiled functions by name (for tests and tools)."""
     return {"fk_jacobian": fk_jacobian, "goal_rows": goal_rows, "lm_descend": lm_descend, "lm_batch": lm_batch,
-            "log3": log3, "jlog3": jlog3, "proven_valid": proven_valid}
+            "lm_repair": lm_repair, "log3": log3, "jlog3": jlog3, "proven_valid": proven_valid}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -641,9 +649,9 @@ def _warm_up_kernels() -> None:
     lm_batch(np.zeros((1, n)), 0, 1, 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
              np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
              np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
-    lm_descend(np.zeros(n), 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
-               np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
-               np.array([0.02, 1e-6, 1.0, 0.9, 3.0]))
+    lm_repair(np.zeros(n), np.zeros(n), 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
+              np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
+              np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -651,7 +659,7 @@ def _warm_up_kernels() -> None:
 # ---------------------------------------------------------------------------------------------------------
 _STATE: Optional[str] = None   # None (not decided yet) | "python" (cold cache: compiling elsewhere) | "ready" | "failed"
 _COMPILER: Optional[subprocess.Popen] = None
-_KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are compiled into them)
+_KERNELS = ("lm_batch", "lm_repair")   # what solve_ik calls (the others are compiled into them)
 
 
 def _cache() -> KernelCache:
