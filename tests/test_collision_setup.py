@@ -139,7 +139,7 @@ def test_culler_arrays_are_those_read_pair_by_pair(robot):
         assert c.self_k.tolist() == ref["self_k"] and c.self_a.tolist() == ref["self_a"]
         # (the pairs this build's earlier cullers proved never to collide start switched off: collision_cull._PROOFS)
         carried = {k for k, ends in (c._known or {}).items()
-                   if ref["active"][k] and ends == (c.first[k], c.second[k], ref["margin"][k] + 1e-4)}
+                   if ref["active"][k] and ends == (c.first[k], c.second[k], ref["margin"][k] + 1e-4, True)}
         assert c.self_b.tolist() == ref["self_b"] and not c.active[3] and c.proven == len(carried)
         assert c.active.tolist() == [a and k not in carried for k, a in enumerate(ref["active"])]
         assert np.array_equal(c.self_limit, c.radius[c.self_a] + c.radius[c.self_b] + ref["margin"][c.self_k] + 1e-4)

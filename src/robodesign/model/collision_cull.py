@@ -363,7 +363,7 @@ class CollisionCuller:
         self._known = _known_proofs(robot, shapes) if self.provable else None
         if self._known is not None:   # the proofs of this build's earlier robots: off before the first query
             for k, ends in self._known.items():
-                if (int(first[k]), int(second[k]), float(margin[k]) + SLACK) == ends and self.active[k]:
+                if (int(first[k]), int(second[k]), float(margin[k]) + SLACK, True) == ends and self.active[k]:
                     self.active[k] = False
                     self.proven += 1
         self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
@@ -447,18 +447,19 @@ class CollisionCuller:
 
     def _prove(self, k: int) -> None:
         """Switch pair ``k`` off in ``active`` when it is a self pair proven never closer than its margin +
-        :data:`SLACK`."""
+        :data:`SLACK` (not asked again when this build's earlier robots found it not proven: :data:`_PROOFS`)."""
         a, b = int(self.first[k]), int(self.second[k])
-        if b >= len(self.parent) or not self.active[k]:
+        limit = float(self.margin[k]) + SLACK
+        if b >= len(self.parent) or not self.active[k] or (self._known or {}).get(k) == (a, b, limit, False):
             return
         objs = self.robot.geom_model.geometryObjects
         a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
-        limit = float(self.margin[k]) + SLACK
-        if pair_clearance.never_collides(self.robot.kinematic_model, a_end, b_end, limit, self._chains):
+        proven = pair_clearance.never_collides(self.robot.kinematic_model, a_end, b_end, limit, self._chains)
+        if proven:
             self.active[k] = False
             self.proven += 1
-            if self._known is not None and a_end[2] > 0 and b_end[2] > 0:
-                self._known[k] = (a, b, limit)
+        if self._known is not None and a_end[2] > 0 and b_end[2] > 0:
+            self._known[k] = (a, b, limit, proven)
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
     def _kernel_args(self) -> tuple:
@@ -490,8 +491,7 @@ class CollisionCuller:
                np.array([f.box_lo for f in fields]).reshape(O, 3), np.array([f.box_hi for f in fields]).reshape(O, 3),
                np.array([f.grid_lo for f in fields], np.int64).reshape(O, 3),
                np.array([f.grid_dim for f in fields], np.int64).reshape(O, 3), offsets, CELL, grid)
-        for f in fields:
-            assert f.cell == CELL
+        assert all(f.cell == CELL for f in fields)
         sp = (self.parent.astype(np.int64), np.ascontiguousarray(self.local, dtype=float),
               self.self_a.astype(np.int64), self.self_b.astype(np.int64), self.self_limit.astype(float),
               self.self_k.astype(np.int64), self.inner_start, self.inner_local, self.inner_radius,
@@ -536,8 +536,7 @@ class CollisionCuller:
         collision, or -1."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         S = self.survivors(Q)
-        rows = range(len(Q)) if order is None else order
-        for i in rows:
+        for i in (range(len(Q)) if order is None else order):
             ks = np.flatnonzero(S[i])
             if len(ks) and self.collides(Q[i], ks):
                 return int(i)
@@ -546,16 +545,17 @@ class CollisionCuller:
 
 _CULLERS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
-#: per robot build (module set, assembly, collision shapes), the self pairs proven never to collide whose two bodies
-#: lie beyond the first joint: pair → (its two objects, the limit proven). Such a pair's proof reads only what the
-#: build fixes (the shapes, their placements in their joints, the placements and axes of the joints between them),
-#: never the base pose, so :func:`~robodesign.model.pair_clearance.never_collides` answers every robot of the build
-#: as it answered the first; the build's next cullers switch those pairs off when they are made.
-_PROOFS: Dict[tuple, Tuple[tuple, Dict[int, Tuple[int, int, float]]]] = {}
+#: per robot build (module set, assembly, collision shapes), the self pairs whose two bodies lie beyond the first joint
+#: that a proof was tried on: pair → (its two objects, the limit, whether proven never to collide). Such a pair's
+#: proof reads only what the build fixes (the shapes, their placements in their joints, the placements and axes of
+#: the joints between them), never the base pose, so :func:`~robodesign.model.pair_clearance.never_collides` answers
+#: every robot of the build as it answered the first: the build's next cullers switch the proven pairs off when they
+#: are made, and do not try the others again.
+_PROOFS: Dict[tuple, Tuple[tuple, Dict[int, Tuple[int, int, float, bool]]]] = {}
 
 
-def _known_proofs(robot, shapes: List[object]) -> Optional[Dict[int, Tuple[int, int, float]]]:
-    """The proven pairs of ``robot``'s build (:data:`_PROOFS`; a new empty record for a new build), or None for a
+def _known_proofs(robot, shapes: List[object]) -> Optional[Dict[int, Tuple[int, int, float, bool]]]:
+    """The pairs tried in ``robot``'s build (:data:`_PROOFS`; a new empty record for a new build), or None for a
     robot without a module set and assembly."""
     ms, asm = getattr(robot, "module_set", None), getattr(robot, "assembly", None)
     if ms is None or asm is None:

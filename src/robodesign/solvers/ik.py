@@ -73,6 +73,7 @@ from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
 from robodesign.model.robot import vector_norm
 from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.ik_proof import valid_provable
 from robodesign.solvers.lazy_rng import LazyGenerator
 
 __all__ = ["IKResult", "solve_ik", "goal_model", "GoalModel", "DISTINCT_TOL", "ChainBounds", "chain_bounds",
@@ -388,7 +389,7 @@ class GoalModel:
             prog = None
             if not self.fallback and not self.unconstrained:
                 from robodesign.solvers import ik_kernel
-                prog = ik_kernel.compile_goal(self.term_specs)
+                prog = ik_kernel.compile_goal(self.term_specs, valid_provable(self.goal, self.N_inv))
             self._program = prog if prog is not None else False
         return self._program or None
 
@@ -770,22 +771,23 @@ class _Kernel:
         self.lo = np.ascontiguousarray(lo, dtype=float)
         self.hi = np.ascontiguousarray(hi, dtype=float)
         self.valid, self.max_iter = valid, int(max_iter)
-        self._descend, self._batch = kmod.lm_descend, kmod.lm_batch
+        self._repair, self._batch = kmod.lm_repair, kmod.lm_batch
         # the kernels' arguments after the start(s), in their order, put together once
         tail = (ck.chain, ck.kind, ck.sign, ck.iq, ck.tcp, Ninv, tkind, tvec, self.E, self.JJ, self.T, self.params)
         self._descend_args = (self.lo, self.hi) + tail
         self._batch_args = (self.max_iter, self.lo, self.hi) + tail + (self.q,)
 
-    def descend(self, q: np.ndarray, iters: int):
-        """(q or None, iterations) of one descent from q; ``valid`` stays the judge of the result."""
-        q = np.array(q, dtype=float)     # the kernel works in place
-        status, its = self._descend(q, iters, *self._descend_args)
-        return (q if status == 1 and self.valid(self.T) else None), its
+    def repair(self, found: np.ndarray, noise: np.ndarray, iters: int):
+        """(q or None, iterations) of one descent from ``clip(found + noise, lo, hi)`` (numpy's, made in the kernel);
+        ``valid`` stays the judge of the result (asked unless the kernel proves it true)."""
+        q = np.empty(len(found))
+        status, its = self._repair(found, noise, iters, *self._descend_args, q)
+        return (q if status == 2 or (status == 1 and self.valid(self.T)) else None), its
 
     def batch(self, starts: np.ndarray, a: int, stop: int):
         """(index, q or None, iterations): descents from starts[a:stop] until one lands in the goal."""
-        idx, its = self._batch(starts, a, stop, *self._batch_args)
-        if idx < stop and self.valid(self.T):
+        idx, its, proven = self._batch(starts, a, stop, *self._batch_args)
+        if idx < stop and (proven or self.valid(self.T)):
             return idx, self.q.copy(), its
         return idx, None, its
 
@@ -937,14 +939,14 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             trace.append((found is not None, it + 1, hist))
         return found
 
-    def kernel_descend(q: np.ndarray, iters: int):
-        """The same descent in the compiled loop."""
+    def repair(found: np.ndarray, noise: np.ndarray):
+        """A re-solve from ``clip(found + noise, lo, hi)`` (in the compiled loop: the same start, made there)."""
         nonlocal total_iter
-        found, its = cast(_Kernel, kernel).descend(q, iters)   # chosen only when kernel is not None
+        if kernel is None:
+            return py_descend(_clip(found + noise, lo, hi), _REPAIR_ITER)
+        q2, its = kernel.repair(found, noise, _REPAIR_ITER)
         total_iter += its
-        return found
-
-    descend = py_descend if kernel is None else kernel_descend
+        return q2
 
     accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
 
@@ -966,7 +968,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             total_iter += its
             attempt = min(idx + 1, stop)
         else:
-            found = descend(starts[attempt].copy(), max_iter)
+            found = py_descend(starts[attempt].copy(), max_iter)
             attempt += 1
         stats["attempts"] = attempt
         if found is None:
@@ -977,7 +979,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
             # collisions are the bottleneck: the valid set around this IK branch may hold
             # collision-free configurations (a few 0.01 rad away), so look there before restarting
             for _ in range(_REPAIR_TRIES):
-                q2 = descend(_clip(found + normal(0.0, _REPAIR_SIGMA, n), lo, hi), _REPAIR_ITER)
+                q2 = repair(found, normal(0.0, _REPAIR_SIGMA, n))
                 if q2 is None:
                     continue
                 stats["repairs"] += 1

@@ -14,6 +14,9 @@ What it covers (everything else keeps the Python loop, which is the reference):
   frame), ``r_sph``, ``Theta_R`` and ``r_cyl``; not the periodic ``phi_*``/``theta`` rows, multi-piece
   tolerances or the R/P/Y, Euler and quaternion fall-backs.
 
+The proof of validity (:func:`proven_valid`): a converged descent whose values prove ``ToleratedPose.valid`` true
+spares the caller that call (the conditions and the margin: :mod:`.ik_proof`).
+
 ``ROBODESIGN_JIT=0`` in the environment switches the kernel off (the Python loop then runs everything);
 tests compare both on the same inputs (same solutions to 1e-8).
 
@@ -48,10 +51,12 @@ import numpy as np
 from robodesign.core.jit_cache import NUMBA_IMPORTED, KernelCache, background_compile, njit
 
 __all__ = ["available", "ChainKernel", "chain_kernel", "compile_goal", "fk_jacobian", "goal_rows", "lm_descend",
-           "lm_batch", "warm_up"]
+           "lm_repair", "lm_batch", "warm_up"]
 
 # term kinds of the goal program
 K_P_ROW, K_R_ROW, K_SPH, K_THETA, K_CYL = 0, 1, 2, 3, 4
+#: the bounds on the entries of T's (and Ninv's) rotation and position (m) under which :func:`proven_valid` holds
+PROOF_ROT, PROOF_POS = 1.01, 16.0
 _ROWS = {K_P_ROW: 1, K_R_ROW: 1, K_SPH: 3, K_THETA: 3, K_CYL: 2}
 
 _IMPORTED = NUMBA_IMPORTED  # without numba the Python loop runs
@@ -219,7 +224,8 @@ def dead(v, ta, tb):
 def goal_rows(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work):
     """The residual rows E and their Jacobian JJ (rows × n) of the goal program at pose T;
     True when every term's value lies in its exact interval. ``tvec[t]`` = (a, b, ta, tb, Q row 0..2,
-    Q row 1 0..2) — the exact interval, the target interval and the frame rows used by the term."""
+    Q row 1 0..2, proof interval) — the exact interval, the target interval, the frame rows used by the term and
+    :func:`proven_valid`'s interval."""
     n = Jv.shape[1]
     return goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, np.empty((3, 3)), np.empty((3, n)),
                         np.empty((3, n)), np.empty((3, 3)), np.empty((3, 3)))
@@ -325,6 +331,41 @@ def goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, Rd, Jp, Jr, JL, G):
     return ok
 
 @njit(cache=True, nogil=True)
+def proven_valid(T, Rd, pd, tkind, tvec):
+    """True when the tolerance's own test (``ToleratedPose.valid(T)``) is sure to hold at the TCP pose T, from the
+    kernel's Δ = (Rd, pd) of T: T's rotation entries within ±:data:`PROOF_ROT`, its position within
+    ±:data:`PROOF_POS`, and every term's value inside its proof interval ``tvec[t, 10:12]`` (the goal's own
+    interval where :meth:`~robodesign.solvers.ik.GoalModel.program` allows the proof, else empty). A Theta_R value
+    is the angle ``atan2(s, c)`` as ``valid`` computes it, asked ``s² + c² ≥ 1/4``. ``valid``'s values then lie
+    within its slack (1e-12) of the kernel's (:mod:`.ik_proof`)."""
+    for r in range(3):
+        if not (abs(T[r, 0]) <= PROOF_ROT and abs(T[r, 1]) <= PROOF_ROT and abs(T[r, 2]) <= PROOF_ROT
+                and abs(T[r, 3]) <= PROOF_POS):
+            return False
+    for t in range(tkind.shape[0]):
+        k = tkind[t]
+        if k == K_P_ROW:
+            v = tvec[t, 4] * pd[0] + tvec[t, 5] * pd[1] + tvec[t, 6] * pd[2]
+        elif k == K_SPH:
+            v = math.sqrt(pd[0] * pd[0] + pd[1] * pd[1] + pd[2] * pd[2])
+        elif k == K_CYL:
+            x = tvec[t, 4] * pd[0] + tvec[t, 5] * pd[1] + tvec[t, 6] * pd[2]
+            y = tvec[t, 7] * pd[0] + tvec[t, 8] * pd[1] + tvec[t, 9] * pd[2]
+            v = math.sqrt(x * x + y * y)
+        elif k == K_THETA:
+            c = 0.5 * (Rd[0, 0] + Rd[1, 1] + Rd[2, 2] - 1.0)
+            wx, wy, wz = 0.5 * (Rd[2, 1] - Rd[1, 2]), 0.5 * (Rd[0, 2] - Rd[2, 0]), 0.5 * (Rd[1, 0] - Rd[0, 1])
+            s2 = wx * wx + wy * wy + wz * wz
+            if not s2 + c * c >= 0.25:
+                return False
+            v = math.atan2(math.sqrt(s2), c)
+        else:
+            return False
+        if not tvec[t, 10] <= v <= tvec[t, 11]:
+            return False
+    return True
+
+@njit(cache=True, nogil=True)
 def chol_solve(A, b, x):
     """x = A⁻¹ b for a symmetric positive definite A (in place on A)."""
     m = A.shape[0]
@@ -356,10 +397,21 @@ def chol_solve(A, b, x):
 @njit(cache=True, nogil=True)
 def lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params):
     """One LM descent from q (modified in place). Returns (status, iterations): status 1 = every
-    analytic constraint holds at q (T holds its TCP pose), 0 = stalled / out of iterations / zero
-    residual outside the exact set, −1 = non-finite step."""
+    analytic constraint holds at q (T holds its TCP pose), 2 = they hold and :func:`proven_valid` proves the
+    tolerance's own test true at T, 0 = stalled / out of iterations / zero residual outside the exact set,
+    −1 = non-finite step."""
     ws = Workspace(q.shape[0], E.shape[0], chain.shape[0])
     return lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, ws)
+
+@njit(cache=True, nogil=True)
+def lm_repair(found, noise, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params, q):
+    """:func:`lm_descend` from numpy's ``clip(found + noise, lo, hi)`` made in q (the start, then the result): per value
+    the sum, then ``x if x > lo else lo`` and ``x if x < hi else hi``, NaN kept (numpy's clip loop for floats)."""
+    for j in range(q.shape[0]):
+        x = found[j] + noise[j]
+        x = x if x != x or x > lo[j] else lo[j]
+        q[j] = x if x != x or x < hi[j] else hi[j]
+    return lm_descend(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params)
 
 @njit(cache=True, nogil=True)
 def Workspace(n, m, nk):
@@ -383,7 +435,7 @@ def lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tve
         fk_jacobian_ws(q, chain, kind, sign, iq, tcp, T, Jv, Jw, M4, tmp4, origins, axes)
         ok = goal_rows_ws(T, Jv, Jw, Ninv, tkind, tvec, E, JJ, work, Rd, Jp, Jr, JL, G)
         if ok:
-            return 1, it + 1
+            return (2 if proven_valid(T, Rd, work[0], tkind, tvec) else 1), it + 1
         err = 0.0
         for i in range(m):
             err += E[i] * E[i]
@@ -451,8 +503,8 @@ def lm_descend_ws(q, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tve
 def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T, params,
              q_out):
     """Descents from ``starts[a]``, ``starts[a+1]``, … up to ``stop`` (exclusive) until one satisfies the
-    analytic constraints: returns (its index or ``stop``, iterations of all descents); the configuration
-    is left in ``q_out`` and its TCP pose in T."""
+    analytic constraints: returns (its index or ``stop``, iterations of all descents, whether
+    :func:`proven_valid` holds at its pose); the configuration is left in ``q_out`` and its TCP pose in T."""
     total = 0
     ws = Workspace(q_out.shape[0], E.shape[0], chain.shape[0])
     for r in range(a, stop):
@@ -461,15 +513,15 @@ def lm_batch(starts, a, stop, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, t
         status, its = lm_descend_ws(q_out, iters, lo, hi, chain, kind, sign, iq, tcp, Ninv, tkind, tvec, E, JJ, T,
                                     params, ws)
         total += its
-        if status == 1:
-            return r, total
-    return stop, total
+        if status >= 1:
+            return r, total, status == 2
+    return stop, total, False
 
 
 def _kernels():
     """The compiled functions by name (for tests and tools)."""
     return {"fk_jacobian": fk_jacobian, "goal_rows": goal_rows, "lm_descend": lm_descend, "lm_batch": lm_batch,
-            "log3": log3, "jlog3": jlog3}
+            "lm_repair": lm_repair, "log3": log3, "jlog3": jlog3, "proven_valid": proven_valid}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -537,16 +589,18 @@ def chain_kernel(robot) -> Optional[ChainKernel]:
     return ck
 
 
-def compile_goal(terms) -> Optional[tuple]:
+def compile_goal(terms, provable: bool = False) -> Optional[tuple]:
     """``(tkind, tvec)`` from ``[(projection, Q or None, pieces, target), …]`` or None if a term is not
-    supported (periodic, several pieces, or a projection without a kernel row)."""
+    supported (periodic, several pieces, or a projection without a kernel row). ``provable``: the terms' proof
+    intervals (``tvec[:, 10:12]``, :func:`proven_valid`) are their own intervals, else empty."""
     kinds, vecs = [], []
     for name, Q, pieces, target, periodic in terms:
         if periodic or len(pieces) != 1 or len(target) != 1:
             return None
         (a, b), (ta, tb) = pieces[0], target[0]
-        v = np.zeros(10)
+        v = np.zeros(12)
         v[:4] = (a - 1e-12, b + 1e-12, ta, tb)
+        v[10:12] = (a, b) if provable else (math.inf, -math.inf)
         Qm = np.eye(3) if Q is None else np.asarray(Q, float)
         if name in ("x", "y", "z"):
             kinds.append(K_P_ROW)
@@ -591,13 +645,13 @@ def _warm_up_kernels() -> None:
     q = np.zeros(n)
     T = np.eye(4)
     tkind = np.array([K_P_ROW, K_SPH, K_THETA, K_CYL], dtype=np.int64)
-    tvec = np.zeros((4, 10))
+    tvec = np.zeros((4, 12))
     lm_batch(np.zeros((1, n)), 0, 1, 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
              np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
              np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
-    lm_descend(np.zeros(n), 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
-               np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
-               np.array([0.02, 1e-6, 1.0, 0.9, 3.0]))
+    lm_repair(np.zeros(n), np.zeros(n), 1, -np.ones(n), np.ones(n), chain, np.zeros(2, np.int64), np.ones(2),
+              np.arange(2, dtype=np.int64), np.eye(4), np.eye(4), tkind, tvec, np.zeros(9), np.zeros((9, n)), T,
+              np.array([0.02, 1e-6, 1.0, 0.9, 3.0]), q)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -605,7 +659,7 @@ def _warm_up_kernels() -> None:
 # ---------------------------------------------------------------------------------------------------------
 _STATE: Optional[str] = None   # None (not decided yet) | "python" (cold cache: compiling elsewhere) | "ready" | "failed"
 _COMPILER: Optional[subprocess.Popen] = None
-_KERNELS = ("lm_batch", "lm_descend")   # what solve_ik calls (the others are compiled into them)
+_KERNELS = ("lm_batch", "lm_repair")   # what solve_ik calls (the others are compiled into them)
 
 
 def _cache() -> KernelCache:
