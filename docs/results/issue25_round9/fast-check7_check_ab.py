@@ -1,7 +1,8 @@
 """In-process A/B of judge.check on the good IMPROV arm's 20 PTP_3 solutions (study seeds 0-19), branch fast-check7.
-Side A puts back the former code of this branch's three cuts: the prefilter's boxes by numpy (arc_torques._boxes with
+Side A puts back the former code of this branch's four cuts: the prefilter's boxes by numpy (arc_torques._boxes with
 the kernel off), both RNEA pools made at a model's first ask (rnea_batch as at 67dfe23), the cost terms computed at
-every ask and named_costs built at every call; side B runs this branch. A and B alternate check by check, so the
+every ask and named_costs built at every call, SweepChecker.subset item by item (as at 67dfe23); side B runs this
+branch. A and B alternate check by check, so the
 machine's swings hit both alike; the verdicts (violations, costs, goals) must be equal.
 usage (from /work/main): OPENBLAS_NUM_THREADS=1 flock /tmp/robodesign-bench.lock .venv/bin/python
        fast-check7_check_ab.py SRC [rounds]"""
@@ -23,7 +24,7 @@ from robodesign.design.problem import Problem  # noqa: E402
 from robodesign.design.search_space import Candidate  # noqa: E402
 from robodesign.formats import costs  # noqa: E402
 from robodesign.judge import arc_torques as at, checker as ck  # noqa: E402
-from robodesign.model import rnea_batch as rb  # noqa: E402
+from robodesign.model import rnea_batch as rb, sweep as sw  # noqa: E402
 
 S = "/work/shared/cobra"
 p = Problem.build(f"{S}/tasks/simple/PTP_3.json", f"{S}/modules/IMPROV", "cyc")
@@ -64,7 +65,25 @@ def former_boxes(motion, steps):
         at.judge_kernels = kern
 
 
-NEW = {"pool": rb._pool, "named": ck.named_costs, "term": costs.CostContext.term_value, "boxes": at._boxes}
+def former_subset(self, cols):
+    """SweepChecker.subset as at 67dfe23."""
+    out = object.__new__(type(self))
+    out.__dict__.update(self.__dict__)
+    cols = list(cols)
+    out.pairs = [self.pairs[c] for c in cols]
+    out.W = self.W[:, cols]
+    if getattr(self, "_owner", None) is not None:
+        out._owner = self._owner[:, cols]
+    out.margins, out.is_env = self.margins[cols], self.is_env[cols]
+    out.pair_names = [self.pair_names[c] for c in cols]
+    if getattr(self, "_mov", None):
+        out._mov, out._ref, out._obst = ([x[c] for c in cols] for x in (self._mov, self._ref, self._obst))
+    out.queries = 0
+    return out
+
+
+NEW = {"subset": sw.SweepChecker.subset, "pool": rb._pool, "named": ck.named_costs,
+       "term": costs.CostContext.term_value, "boxes": at._boxes}
 
 
 def set_side(side):
@@ -73,6 +92,7 @@ def set_side(side):
     ck.named_costs = former_named if a else NEW["named"]
     costs.CostContext.term_value = (lambda self, n: float(costs._REGISTRY[n].fn(self))) if a else NEW["term"]
     at._boxes = former_boxes if a else NEW["boxes"]
+    sw.SweepChecker.subset = former_subset if a else NEW["subset"]
 
 
 def key(v):
