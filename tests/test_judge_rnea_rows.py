@@ -7,7 +7,7 @@ import pytest
 
 from robodesign.judge.quantities import TrajectoryQuantities
 from robodesign.model.cell import solution_robot
-from robodesign.model.rnea_batch import _pools, rnea_rows
+from robodesign.model.rnea_batch import _pool, rnea_rows
 
 
 @pytest.fixture(params=["batched", "per row"])
@@ -66,6 +66,6 @@ def test_the_pool_model_has_no_armature_and_the_robot_keeps_its_own(ptp3_solved)
     TrajectoryQuantities.from_solution(robot, sol, task).motion_torques
     armature = robot.model.armature.copy()
     assert np.any(armature != 0)
-    pool = _pools(robot.model)[2]   # the link side's
+    pool = _pool(robot.model, True)   # the link side's
     assert np.all(pool.getModel(0).armature == 0)
     assert np.array_equal(robot.model.armature, armature)

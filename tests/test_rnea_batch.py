@@ -116,3 +116,34 @@ def test_path_terms_are_the_per_point_ones(robots):
             assert tm.bR[i].tobytes() == br.tobytes()
             bl = br if np.all(ql[i] == qr[i]) else pin.rnea(r.model, data, q[i], qs[i], ql[i]) - g
             assert tm.bL[i].tobytes() == bl.tobytes()
+
+
+def test_each_pool_is_made_at_its_first_ask_from_the_kept_copy(robots):
+    """The two pools of a model are made one at a time, in either order, from the copy kept when the model was first
+    seen: whichever side is asked first, later, or again after the model changed, the torques are pinocchio's calls
+    per sample on the model as it is (with and without armature), bit for bit; a side never asked has no pool."""
+    from robodesign.core.spatial import homogeneous, rpy_to_matrix
+    from robodesign.model import rnea_batch
+    rng = np.random.default_rng(11)
+    for first in (True, False):
+        for r0 in robots:
+            r = Robot(r0.module_set, r0.assembly, base_pose=r0.base_pose)   # (a model not seen before)
+            Q, V, A = (rng.uniform(-2.5, 2.5, (30, r.dof)) for _ in range(3))
+            rnea_batch._POOLS.pop(id(r.model), None)   # (an earlier model's entry at the same id)
+            data = r.model.createData()
+            ref = {False: np.array([pin.rnea(r.model, data, Q[k], V[k], A[k]) for k in range(len(Q))]).tobytes(),
+                   True: _link_per_row(r, Q, V, A).tobytes()}
+            assert rnea_rows(r.model, Q, V, A, link_side=first).tobytes() == ref[first]
+            assert rnea_batch._POOLS[id(r.model)][1 if first else 2] is None   # the other side: not made
+            for side in (not first, first, not first):
+                assert rnea_rows(r.model, Q, V, A, link_side=side).tobytes() == ref[side]
+            base = r.base_pose.copy()
+            try:   # a changed model: a new copy, no pool until asked
+                r.set_base_pose(homogeneous(rpy_to_matrix(0.1, 0.2, -0.4), [0.3, -0.2, 0.1]))
+                data = r.model.createData()
+                moved = np.array([pin.rnea(r.model, data, Q[k], V[k], A[k]) for k in range(len(Q))]).tobytes()
+                assert rnea_rows(r.model, Q, V, A, link_side=True).tobytes() == _link_per_row(r, Q, V, A).tobytes()
+                assert rnea_batch._POOLS[id(r.model)][1] is None
+                assert rnea_rows(r.model, Q, V, A).tobytes() == moved
+            finally:
+                r.set_base_pose(base)

@@ -52,7 +52,7 @@ import difflib
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -87,6 +87,7 @@ class CostContext:
     goals_achieved: Optional[int] = None
     num_goals: Optional[int] = None
     _cache: Dict[str, Any] = field(default_factory=dict, init=False, repr=False)
+    _terms: Dict[str, Tuple["CostTerm", float]] = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self):
         self.t = np.asarray(self.t, dtype=float).reshape(-1)
@@ -127,6 +128,15 @@ class CostContext:
 
     def is_evaluated(self, name: str) -> bool:
         return name in self._cache
+
+    def term_value(self, name: str) -> float:
+        """The value of the registered term ``name`` here, ``float(fn(ctx))``: computed at the first ask and kept with
+        the term it came from (a term registered anew since is asked again). A term that raises is not kept."""
+        term = _REGISTRY[name]
+        hit = self._terms.get(name)
+        if hit is None or hit[0] is not term:
+            hit = self._terms[name] = (term, float(term.fn(self)))
+        return hit[1]
 
 
 _QUANTITY_NAMES = {"tau": "drivetrain joint torques (tau)", "tau_link": "link-side joint torques (tau_link)",
@@ -192,6 +202,7 @@ class CostTerm:
 _REGISTRY: Dict[str, CostTerm] = {}
 _COMPOUNDS: Dict[str, Tuple[Tuple[str, float], ...]] = {}
 _COMPOUND_DESCRIPTIONS: Dict[str, str] = {}
+_NAMED: List[Optional[tuple]] = [None]  # named_costs' last (state of the registry, answer)
 MAX_WEIGHT = 1e6  # |weight| above this is refused: cyc_1e308 or fulfillN_-1e308 would overflow to ±inf
 _NAME_RE = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
 _NUMBER_RE = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
@@ -352,11 +363,11 @@ class CostFunction:
 
     def raw_values(self, ctx: CostContext) -> Dict[str, float]:
         """Unweighted value of each term with non-zero weight."""
-        return {n: float(_REGISTRY[n].fn(ctx)) for n, w in self.terms if w != 0}
+        return {n: ctx.term_value(n) for n, w in self.terms if w != 0}
 
     def breakdown(self, ctx: CostContext) -> Dict[str, float]:
         """term → weight · value (terms with weight 0 give 0 without being evaluated). Sums to ``evaluate``."""
-        return {n: (w * float(_REGISTRY[n].fn(ctx)) if w != 0 else 0.0) for n, w in self.terms}
+        return {n: (w * ctx.term_value(n) if w != 0 else 0.0) for n, w in self.terms}
 
     def evaluate(self, ctx: CostContext) -> float:
         return float(sum(self.breakdown(ctx).values()))
@@ -388,10 +399,15 @@ class CostFunction:
 
 def named_costs() -> Dict[str, CostFunction]:
     """name → :class:`CostFunction` of every registered term (weight 1) and compound (its terms, named), the
-    costs :func:`known_costs` lists, built from the registry without parsing text."""
-    out = {n: CostFunction(((n, 1.0),)) for n in _REGISTRY}
-    out.update({n: CostFunction(terms, name=n) for n, terms in _COMPOUNDS.items()})
-    return out
+    costs :func:`known_costs` lists, built from the registry without parsing text (once per state of the registry:
+    the judge asks at every check; a new dict each time, of the same frozen costs)."""
+    key = (tuple(_REGISTRY.items()), tuple(_COMPOUNDS.items()))
+    hit = _NAMED[0]
+    if hit is None or hit[0] != key:
+        out = {n: CostFunction(((n, 1.0),)) for n in _REGISTRY}
+        out.update({n: CostFunction(terms, name=n) for n, terms in _COMPOUNDS.items()})
+        hit = _NAMED[0] = (key, out)
+    return dict(hit[1])
 
 
 def _restore_cost(terms, name, defs) -> "CostFunction":

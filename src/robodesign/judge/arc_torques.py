@@ -130,6 +130,36 @@ def _with_friction(T, robot, V, acc_lo, acc_hi):
     return T.dm - T.dr + prods.min(axis=0), T.dm + T.dr + prods.max(axis=0)
 
 
+def _boxes(motion, steps) -> tuple:
+    """The groups of :func:`_step_prefilter` (the sorted ``steps`` cut every CHUNK_STEPS from the first) and their
+    boxes: (each step's group, Q and V (mid, radius) of q and q̇ over the group's steps, (a_lo, a_hi) of all its
+    accelerations, h (S, 1), |a2 − a1| where a joint's acceleration switches inside a step (0 elsewhere), the groups
+    with such a switch). The compiled kernel (the same operations, interval_kernel.prefilter_boxes) where it runs."""
+    kernel = judge_kernels()
+    mn, _, mx, _ = motion.position_extremes()
+    if kernel is not None:
+        f = lambda x: np.ascontiguousarray(x, dtype=float)  # noqa: E731
+        c, q0, q1, v0, v1, a_lo, a_hi, h, dA, need = kernel.prefilter_boxes(
+            np.ascontiguousarray(steps, dtype=np.int64), CHUNK_STEPS, f(mn), f(mx), f(motion.v), f(motion.v_switch),
+            f(motion.a1), f(motion.a2), f(motion.h[:, 0]), f(motion.tau), ROUND_RTOL)
+        return c, (q0, q1), (v0, v1), (a_lo, a_hi), h, dA, np.nonzero(need)[0]
+    first = int(steps[0])
+    ch_of_step = (steps - first) // CHUNK_STEPS
+    starts = np.nonzero(np.r_[True, np.diff(ch_of_step) != 0])[0]
+    v_all = np.stack([motion.v[:-1], motion.v_switch, motion.v[1:]])
+    red = lambda f, x: f.reduceat(x[steps], starts, axis=0)  # noqa: E731
+    q_lo, q_hi = red(np.minimum, mn), red(np.maximum, mx)
+    v_lo, v_hi = red(np.minimum, v_all.min(axis=0)), red(np.maximum, v_all.max(axis=0))
+    a_lo = red(np.minimum, np.minimum(motion.a1, motion.a2))
+    a_hi = red(np.maximum, np.maximum(motion.a1, motion.a2))
+    c = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(steps)]))  # each step's group
+    h = motion.h[steps]
+    tau = motion.tau[steps]
+    dA = np.where((tau > 0) & (tau < h) & (motion.a1[steps] != motion.a2[steps]),
+                  np.abs(motion.a2[steps] - motion.a1[steps]), 0.0)
+    return c, _interval(q_lo, q_hi), _interval(v_lo, v_hi), (a_lo, a_hi), h, dA, np.unique(c[np.any(dA != 0, axis=1)])
+
+
 def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
     """(len(steps), dof) True where the whole step is certified at once. The steps are grouped by CHUNK_STEPS;
     one interval RNEA pass over each group's box (q and q̇ extremes of the motion over its steps, all its
@@ -137,39 +167,25 @@ def _step_prefilter(dyn, robot, motion, W, steps, ta, tb, lim):
     where a joint's acceleration switches inside a step: |Δτ_j| ≤ Σ_i (|M_ji| + k²I_m·δ_ij)·|a2_i − a1_i|, J_j
     in all. From τ just after sample k (ta) and just before k + 1 (tb), τ over the step is within the
     mean-value bounds of the pieces moved by J. Groups whose wrench changes are not prefiltered."""
-    first = int(steps[0])
-    ch_of_step = (steps - first) // CHUNK_STEPS
-    starts = np.nonzero(np.r_[True, np.diff(ch_of_step) != 0])[0]
-    mn, _, mx, _ = motion.position_extremes()
-    v_all = np.stack([motion.v[:-1], motion.v_switch, motion.v[1:]])
-    red = lambda f, x: f.reduceat(x[steps], starts, axis=0)  # noqa: E731
-    q_lo, q_hi = red(np.minimum, mn), red(np.maximum, mx)
-    v_lo, v_hi = red(np.minimum, v_all.min(axis=0)), red(np.maximum, v_all.max(axis=0))
-    a_lo = red(np.minimum, np.minimum(motion.a1, motion.a2))
-    a_hi = red(np.maximum, np.maximum(motion.a1, motion.a2))
-    ends = np.r_[starts[1:], len(steps)]
-    wr = np.zeros((len(starts), 6))
-    same = np.ones(len(starts), dtype=bool)
-    for c, (i0, i1) in enumerate(zip(starts, ends)) if np.any(W) else ():  # (no wrench: all the same, zero)
-        rows = W[steps[i0]:steps[i1 - 1] + 2]
-        same[c] = bool(np.all(rows == rows[0]))
-        wr[c] = rows[0]
-    Q, V = _interval(q_lo, q_hi), _interval(v_lo, v_hi)
-    c = np.repeat(np.arange(len(starts)), np.diff(np.r_[starts, len(steps)]))  # each step's group
-    h = motion.h[steps]
-    tau = motion.tau[steps]
-    dA = np.where((tau > 0) & (tau < h) & (motion.a1[steps] != motion.a2[steps]),
-                  np.abs(motion.a2[steps] - motion.a1[steps]), 0.0)
+    c, Q, V, (a_lo, a_hi), h, dA, need = _boxes(motion, steps)
+    G = len(a_lo)
+    wr = np.zeros((G, 6))
+    same = np.ones(G, dtype=bool)
+    if np.any(W):  # (no wrench: all the same, zero)
+        starts = np.searchsorted(c, np.arange(G))
+        for g, (i0, i1) in enumerate(zip(starts, np.r_[starts[1:], len(steps)])):
+            rows = W[steps[i0]:steps[i1 - 1] + 2]
+            same[g] = bool(np.all(rows == rows[0]))
+            wr[g] = rows[0]
     J = np.zeros_like(dA)
     wr = np.where(same[:, None], wr, 0.0)
-    need = np.unique(c[np.any(dA != 0, axis=1)])  # the groups with a switch inside a step: their mass matrix
     if len(need) and not np.any(wr):  # the rate and the mass matrix in one interval pass
         T, Mb = dyn.rates_and_mass_bound(Q, V, ((a_lo + a_hi) / 2, (a_hi - a_lo) / 2), need)
     else:
         T = _link_rates(dyn, Q, V, a_lo, a_hi, wr)
         Mb = dyn.mass_matrix_bound((Q[0][need], Q[1][need])) if len(need) else None
     if Mb is not None:
-        M_all = np.zeros((len(starts),) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
+        M_all = np.zeros((G,) + Mb.shape[1:])  # groups without a switch: J = 0 (dA = 0 there)
         M_all[need] = Mb
         J = np.einsum("sji,si->sj", M_all[c], dA) + np.asarray(robot.model.armature, dtype=float) * dA
     return _steps_within(T, robot, V, (a_lo, a_hi), c, (ta, tb, J), h, lim) & same[c][:, None]

