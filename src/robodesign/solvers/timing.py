@@ -163,8 +163,15 @@ def time_optimal_bounds(robot, D: np.ndarray) -> np.ndarray:
     """``time_optimal_bound`` for many moves at once: ``D`` holds joint distances |q_b - q_a| on its last
     axis; returns the bound of each move (the slowest joint's trapezoid/bang-bang time)."""
     D = np.abs(np.asarray(D, dtype=float))
-    v = np.broadcast_to(np.asarray(robot.dq_max, dtype=float), D.shape)
-    a = np.broadcast_to(np.asarray(robot.ddq_max, dtype=float), D.shape)
+    v, a = np.asarray(robot.dq_max, dtype=float), np.asarray(robot.ddq_max, dtype=float)
+    if v.shape == a.shape == D.shape[-1:] and D.shape[-1] and bool(np.all((v > 0) & (a > 0) & (v < np.inf)
+                                                                         & (a < np.inf))):
+        # positive finite limits: the same elementwise numbers (v/a and v·v/a per joint, as on every broadcast
+        # element), without the infinite cases and with no division to warn about
+        t = np.where(D <= v * v / a, 2.0 * np.sqrt(D / a), D / v + v / a)
+        return np.where(D == 0.0, 0.0, t).max(axis=-1)
+    v = np.broadcast_to(v, D.shape)
+    a = np.broadcast_to(a, D.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         bang = 2.0 * np.sqrt(D / a)                      # never reaches v (a finite)
         trap = D / v + v / a                             # reaches v
