@@ -283,6 +283,15 @@ STALL_DOUBLINGS = 2
 MAX_STRETCH = 100.0
 
 
+def _limit_ratio(X: np.ndarray, limit: np.ndarray) -> float:
+    """The largest X/limit over the columns (joints) whose limit is finite, 0 without any. With every limit finite
+    the whole of X is divided (the same elements, so the same maximum, without the column copy)."""
+    m = np.isfinite(limit)
+    if not m.any():
+        return 0.0
+    return float(np.max(X / limit if m.all() else X[:, m] / limit[m]))
+
+
 def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> Trajectory:
     if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
         tr = Trajectory.at_rest(prof.q_goal)
@@ -296,15 +305,9 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
     doublings = 0
     for it in range(max_iter):
         tr, lam = _sample(prof, n, h)
-        m = np.isfinite(vmax)
-        rv = float(np.max(np.abs(tr.dq[:, m]) / vmax[m])) if m.any() else 0.0
-        m = np.isfinite(amax)
-        ra = float(np.max(np.abs(tr.ddq[:, m]) / amax[m])) if m.any() else 0.0
-        rt = 0.0
-        if torque_limits:
-            m = np.isfinite(tmax)
-            if m.any():
-                rt = float(np.max(sample_torques(robot, tr)[:, m] / tmax[m]))
+        rv = _limit_ratio(np.abs(tr.dq), vmax)
+        ra = _limit_ratio(np.abs(tr.ddq), amax)
+        rt = _limit_ratio(sample_torques(robot, tr), tmax) if torque_limits and np.isfinite(tmax).any() else 0.0
         if rv <= 1.0 + 1e-9 and ra <= 1.0 + 1e-12 and rt <= 1.0 + 1e-12:
             err = 0.0
             if prof.position is not None:
