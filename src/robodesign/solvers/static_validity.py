@@ -5,7 +5,8 @@ decisions are in :mod:`robodesign.solvers.planning`'s docstring).
 from __future__ import annotations
 
 import math
-from typing import Optional, Sequence
+import weakref
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -30,6 +31,13 @@ def gravity_bound(model) -> Optional[np.ndarray]:
     placements' lengths from j to b plus b's centre-of-mass lever (revolute joints do not move their origins).
     A root joint's axis is fixed in the world: only the weight's part across it counts, |g × axis|. The margin
     ``_BOUND_MARGIN`` of the whole weight's bound covers the rounding of pinocchio's sums."""
+    return _bound(model, _lever_sums(model))
+
+
+def _lever_sums(model) -> Optional[Tuple[List[str], List[int], List[float]]]:
+    """What :func:`gravity_bound` needs of the model besides its gravity and root placements: the joints' kinds,
+    their parents and per joint Σ m_b·(the bound of b's lever about it) over its subtree (index 0: the universe);
+    None unless every joint is revolute with one coordinate."""
     n = model.njoints
     if model.nq != model.nv or model.nv != n - 1:
         return None
@@ -37,28 +45,50 @@ def gravity_bound(model) -> Optional[np.ndarray]:
     bodies = [(y.mass, y.lever) for y in model.inertias]
     if any(k not in _REVOLUTE for k in kinds[1:]) or any(mass < 0 for mass, _ in bodies):
         return None
-    placements = list(model.jointPlacements)
     parents = model.parents.tolist()
-    gx, gy, gz = model.gravity.linear.tolist()
-    g = math.sqrt(gx * gx + gy * gy + gz * gz)
-    link = np.linalg.norm([M.translation for M in placements], axis=1).tolist()
+    link = np.linalg.norm([M.translation for M in model.jointPlacements], axis=1).tolist()
     lever = np.linalg.norm([c for _, c in bodies], axis=1).tolist()
-    whole = [0.0] * n          # per joint: Σ over its subtree's bodies of m_b·|g|·(the bound of b's lever about it)
+    sums = [0.0] * n
     for b in range(1, n):
-        weight, reach, j = bodies[b][0] * g, lever[b], b
+        mass, reach, j = bodies[b][0], lever[b], b
         while j > 0:           # up the tree from b: j's origin is reach away at most
-            whole[j] += weight * reach
+            sums[j] += mass * reach
             reach += link[j]
             j = parents[j]
-    out = np.empty(n - 1)
-    for j in range(1, n):
+    return kinds, parents, sums
+
+
+def _bound(model, lever_sums) -> Optional[np.ndarray]:
+    """:func:`gravity_bound` from the model's gravity and root placements and its :func:`_lever_sums`."""
+    if lever_sums is None:
+        return None
+    kinds, parents, sums = lever_sums
+    gx, gy, gz = model.gravity.linear.tolist()
+    g = math.sqrt(gx * gx + gy * gy + gz * gz)
+    out = np.empty(len(sums) - 1)
+    for j in range(1, len(sums)):
+        whole = g * sums[j]
+        part = whole
         axis = _REVOLUTE[kinds[j]]
-        part = whole[j]
         if axis is not None and parents[j] == 0 and g > 0:   # |g × axis| / |g|, the axis in the world
-            ax, ay, az = (placements[j].rotation @ axis).tolist()
+            ax, ay, az = (model.jointPlacements[j].rotation @ axis).tolist()
             part *= math.hypot(gy * az - gz * ay, gz * ax - gx * az, gx * ay - gy * ax) / g
-        out[j - 1] = part + _BOUND_MARGIN * (whole[j] + 1.0)
+        out[j - 1] = part + _BOUND_MARGIN * (whole + 1.0)
     return out
+
+
+def _robot_bound(robot: Robot) -> Optional[np.ndarray]:
+    """:func:`gravity_bound` of the robot's model, its :func:`_lever_sums` kept per robot and model: a robot's base
+    pose and gravity change only its root placements and gravity, read at each call (the zero inertias its frames
+    add change a lever by a rounding, far inside ``_BOUND_MARGIN``)."""
+    model = robot.model
+    hit = _LEVER_SUMS.get(robot)
+    if hit is None or hit[0] is not model:
+        hit = _LEVER_SUMS[robot] = (model, _lever_sums(model))
+    return _bound(model, hit[1])
+
+
+_LEVER_SUMS: "weakref.WeakKeyDictionary[Robot, tuple]" = weakref.WeakKeyDictionary()
 
 
 def static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
@@ -73,7 +103,7 @@ def static_validator(robot, static_torque: bool = False, rest: Sequence = ()):
     gravity = robot.gravity_torque if static_torque and np.isfinite(tau_max).any() else None
     moving_max = tau_max - np.asarray(getattr(robot, "friction_coulomb", np.zeros_like(tau_max)), dtype=float)
     if gravity is not None and isinstance(robot, Robot):   # no configuration needs more than the joints have
-        bound = gravity_bound(robot.model)
+        bound = _robot_bound(robot)
         if bound is not None and np.all(bound < np.minimum(tau_max, moving_max)):
             gravity = None
     R = np.vstack([np.asarray(q, dtype=float) for q in rest]) if len(rest) and gravity is not None else None
