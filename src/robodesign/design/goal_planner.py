@@ -275,7 +275,7 @@ class GoalPlanner:
         for i in range(len(self.actions)):
             kind, arg, goal = self.actions[i]  # an earlier move may have replaced a goal's configuration
             if kind == "move":
-                if np.allclose(arg, q, atol=1e-12):
+                if _same_configuration(arg, q):
                     self.paths.append(None)
                     continue
                 r = self._plan(q, arg, self.settings.plan_time)
@@ -514,6 +514,15 @@ class _SlowedRobot:
 
     def __getattr__(self, name):
         return getattr(self._robot, name)
+
+
+def _same_configuration(a: np.ndarray, b: np.ndarray) -> bool:
+    """``np.allclose(a, b, atol=1e-12)`` of two configurations (vectors of the same length) element by element in
+    Python floats: |a − b| ≤ 1e-12 + 1e-5·|b| where b is finite, or a == b (the same double operations)."""
+    if np.shape(a) != np.shape(b) or np.ndim(a) != 1:
+        return bool(np.allclose(a, b, atol=1e-12))
+    return all((abs(x - y) <= 1e-12 + 1e-05 * abs(y) and math.isfinite(y)) or x == y
+               for x, y in zip(np.asarray(a, dtype=float).tolist(), np.asarray(b, dtype=float).tolist()))
 
 
 def _ceil_to(x: float, dt: float) -> float:
