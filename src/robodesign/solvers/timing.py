@@ -122,14 +122,14 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     ddq[k−1] just before it (the samples are a piecewise-constant acceleration, so these are the motion's
     one-sided accelerations; the checker's ``joint.tau`` rule tests both)."""
     n = len(traj.t)
-    before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]]) if n >= 2 else traj.ddq[:0]
+    before_acc = np.concatenate((traj.ddq[:1], traj.ddq[:-1])) if n >= 2 else traj.ddq[:0]
     # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
     # the link-side RNEA of both in one batched call, 'before' only at the samples where q̈ changes: elsewhere the
     # same inputs (equal up to the sign of a zero, which changes no torque beyond the sign of a zero: |τ| is taken)
     differ = np.any(before_acc != traj.ddq[:len(before_acc)], axis=1)
-    link = robot.link_torques(np.vstack([traj.q, traj.q[:len(before_acc)][differ]]),
-                              np.vstack([traj.dq, traj.dq[:len(before_acc)][differ]]),
-                              np.vstack([traj.ddq, before_acc[differ]]))
+    link = robot.link_torques(np.concatenate((traj.q, traj.q[:len(before_acc)][differ])),
+                              np.concatenate((traj.dq, traj.dq[:len(before_acc)][differ])),
+                              np.concatenate((traj.ddq, before_acc[differ])))
     after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
     if n < 2:
         return np.abs(after)
@@ -411,8 +411,8 @@ class _PathTerms:
         zero = np.zeros_like(q)
         # per grid point rnea(q, 0, 0), rnea(q, 0, q'), rnea(q, q', q''⁺) and where it differs rnea(q, q', q''⁻):
         # one batched call (rnea_batch: the same numbers as a call each)
-        T = rnea_rows(robot.model, np.vstack([q, q, q, q[left]]), np.vstack([zero, zero, qs, qs[left]]),
-                      np.vstack([zero, qs, qss_r, qss_l[left]]))
+        T = rnea_rows(robot.model, np.concatenate((q, q, q, q[left])), np.concatenate((zero, zero, qs, qs[left])),
+                      np.concatenate((zero, qs, qss_r, qss_l[left])))
         G = T[:N1]
         BR = T[2 * N1:3 * N1] - G
         BL = BR
@@ -595,7 +595,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
         x0 = x_next
     assert sd is not None  # the loop ends after a feasible pass (or raises)
     sd[0] = sd[-1] = 0.0
-    ds = np.diff(grid)
+    ds = grid[1:] - grid[:-1]
     denom = sd[:-1] + sd[1:]
     if np.any(denom <= 0):
         raise TimingError("toppra returned a zero-velocity interval")
