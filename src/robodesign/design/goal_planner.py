@@ -460,7 +460,8 @@ class GoalPlanner:
         """``time_parameterize(robot, path, **options)``, remembered for the planner's own robot: a goal retry
         (solve._achieve_missed_goals) times every move again and slows only the missed goals' (a ``_SlowedRobot``),
         and a motion delayed as a whole is timed again without colliders: the same path, robot and options give
-        the same trajectory (a copy of it is returned)."""
+        the same trajectory. The remembered trajectory itself is returned: :meth:`timed_motion`, the only caller,
+        reads it (concatenating it makes new arrays), so it stays as it was timed."""
         if robot is not self.robot:
             return time_parameterize(robot, path, **options)
         p = np.asarray(path, dtype=float)
@@ -468,7 +469,7 @@ class GoalPlanner:
         memo = self._timed_memo
         if key not in memo:
             memo[key] = time_parameterize(robot, p, **options)
-        return memo[key].copy()
+        return memo[key]
 
     def _append_after_wait(self, traj, seg, g, colliders):
         """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to
