@@ -124,18 +124,19 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     n = len(traj.t)
     before_acc = np.concatenate((traj.ddq[:1], traj.ddq[:-1])) if n >= 2 else traj.ddq[:0]
     # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
-    # the link-side RNEA of both in one batched call, 'before' only at the samples where q̈ changes: elsewhere the
-    # same inputs (equal up to the sign of a zero, which changes no torque beyond the sign of a zero: |τ| is taken)
+    # the link-side RNEA and the drivetrain terms of both in one batched call each (row by row the same operations),
+    # 'before' only at the samples where q̈ changes: elsewhere the same inputs (equal up to the sign of a zero, which
+    # changes no torque beyond the sign of a zero: |τ| is taken)
     differ = np.any(before_acc != traj.ddq[:len(before_acc)], axis=1)
-    link = robot.link_torques(np.concatenate((traj.q, traj.q[:len(before_acc)][differ])),
-                              np.concatenate((traj.dq, traj.dq[:len(before_acc)][differ])),
-                              np.concatenate((traj.ddq, before_acc[differ])))
-    after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
+    Q = np.concatenate((traj.q, traj.q[:len(before_acc)][differ]))
+    DQ = np.concatenate((traj.dq, traj.dq[:len(before_acc)][differ]))
+    DDQ = np.concatenate((traj.ddq, before_acc[differ]))
+    tau = robot.drivetrain_torques(Q, DQ, DDQ, link_torques=robot.link_torques(Q, DQ, DDQ))
+    after = tau[:n]
     if n < 2:
         return np.abs(after)
-    link_before = link[:n].copy()
-    link_before[differ] = link[n:]
-    before = robot.drivetrain_torques(traj.q, traj.dq, before_acc, link_torques=link_before)
+    before = after.copy()
+    before[differ] = tau[n:]
     return np.maximum(np.abs(after), np.abs(before))
 
 
