@@ -51,3 +51,22 @@ def test_moves_are_timed_once_and_slowed_ones_again(planner, monkeypatch):
     planner._timed_memo.clear()
     slowed_fresh, _ = planner.timed_motion(slow={slow_goal: 0.5})
     assert _bytes(slowed) == _bytes(slowed_fresh)
+
+
+def test_the_remembered_moves_are_not_shared_with_the_motion(planner):
+    """The moves are returned from the memo itself (no copy): the whole motion is made of new arrays, so writing
+    into every array of it (and of the motion delayed as a whole) leaves every remembered move's bytes as they were,
+    and timing the motion again gives the first motion's bytes."""
+    planner._timed_memo.clear()
+    first, g2t = planner.timed_motion()
+    want = _bytes(first)
+    kept = {k: _bytes(v) for k, v in planner._timed_memo.items()}
+    assert kept
+    for x in (first.t, first.q, first.dq, first.ddq):
+        x[:] = -1.0
+    whole, _ = planner.time_parameterize()
+    for x in (whole.t, whole.q, whole.dq, whole.ddq):
+        x[:] = -2.0
+    assert {k: _bytes(v) for k, v in planner._timed_memo.items()} == kept
+    again, g2t_again = planner.timed_motion()
+    assert _bytes(again) == want and g2t_again == g2t

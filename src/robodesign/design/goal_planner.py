@@ -275,7 +275,7 @@ class GoalPlanner:
         for i in range(len(self.actions)):
             kind, arg, goal = self.actions[i]  # an earlier move may have replaced a goal's configuration
             if kind == "move":
-                if np.allclose(arg, q, atol=1e-12):
+                if _same_configuration(arg, q):
                     self.paths.append(None)
                     continue
                 r = self._plan(q, arg, self.settings.plan_time)
@@ -460,7 +460,8 @@ class GoalPlanner:
         """``time_parameterize(robot, path, **options)``, remembered for the planner's own robot: a goal retry
         (solve._achieve_missed_goals) times every move again and slows only the missed goals' (a ``_SlowedRobot``),
         and a motion delayed as a whole is timed again without colliders: the same path, robot and options give
-        the same trajectory (a copy of it is returned)."""
+        the same trajectory. The remembered trajectory itself is returned: :meth:`timed_motion`, the only caller,
+        reads it (concatenating it makes new arrays), so it stays as it was timed."""
         if robot is not self.robot:
             return time_parameterize(robot, path, **options)
         p = np.asarray(path, dtype=float)
@@ -468,7 +469,7 @@ class GoalPlanner:
         memo = self._timed_memo
         if key not in memo:
             memo[key] = time_parameterize(robot, p, **options)
-        return memo[key].copy()
+        return memo[key]
 
     def _append_after_wait(self, traj, seg, g, colliders):
         """``traj`` followed by the move ``seg``, after waiting at rest as long as needed for the move to
@@ -514,6 +515,15 @@ class _SlowedRobot:
 
     def __getattr__(self, name):
         return getattr(self._robot, name)
+
+
+def _same_configuration(a: np.ndarray, b: np.ndarray) -> bool:
+    """``np.allclose(a, b, atol=1e-12)`` of two configurations (vectors of the same length) element by element in
+    Python floats: |a − b| ≤ 1e-12 + 1e-5·|b| where b is finite, or a == b (the same double operations)."""
+    if np.shape(a) != np.shape(b) or np.ndim(a) != 1:
+        return bool(np.allclose(a, b, atol=1e-12))
+    return all((abs(x - y) <= 1e-12 + 1e-05 * abs(y) and math.isfinite(y)) or x == y
+               for x, y in zip(np.asarray(a, dtype=float).tolist(), np.asarray(b, dtype=float).tolist()))
 
 
 def _ceil_to(x: float, dt: float) -> float:

@@ -21,15 +21,16 @@ class BlendedPolyline:
         W = np.asarray(waypoints, dtype=float)
         keep = [0]
         for i in range(1, len(W)):
-            if np.linalg.norm(W[i] - W[keep[-1]]) > 1e-12:
+            x = W[i] - W[keep[-1]]
+            if math.sqrt(x.dot(x)) > 1e-12:   # (np.linalg.norm's own sum; so are L's below)
                 keep.append(i)
         W = W[keep]
         self.points = W
         self._dof = W.shape[1]
         if len(W) < 2:
             raise ValueError("a path needs two distinct waypoints")
-        D = np.diff(W, axis=0)
-        L = np.linalg.norm(D, axis=1)
+        D = W[1:] - W[:-1]
+        L = np.sqrt(np.add.reduce(D * D, axis=1))
         U = D / L[:, None]
         K = len(W)
         r = np.zeros(K)
@@ -136,11 +137,11 @@ class BlendedPolyline:
     def gridpoints(self, step: float, min_per_blend: int = 4, min_total: int = 100) -> np.ndarray:
         """Grid including every piece boundary; ≥ ``min_per_blend`` intervals per blend."""
         step = min(step, self.length / min_total)
-        pts = [0.0]
+        pts = [np.zeros(1)]
         for k in range(len(self.p0)):
             a, b = self.breaks[k], self.breaks[k + 1]
             m = max(int(math.ceil((b - a) / step - 1e-9)), min_per_blend if self.is_blend[k] else 1)
-            pts.extend(a + (b - a) * np.arange(1, m + 1) / m)
-        g = np.array(pts)
+            pts.append(a + (b - a) * np.arange(1, m + 1) / m)
+        g = np.concatenate(pts)
         g[-1] = self.length
         return g

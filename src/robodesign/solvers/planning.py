@@ -286,7 +286,7 @@ def _segment_ok(valid, a: np.ndarray, b: np.ndarray, resolution: float, counter:
     d = b - a
     n = max(1, int(math.ceil(float(np.max(np.abs(d))) / resolution - 1e-12))) if d.size else 1
     T = np.array(_bisection_order(n), dtype=float) / n   # (k / n, as Python's float division gives it)
-    states = np.vstack([a[None, :]] * include_start + [b[None, :], a[None, :] + d[None, :] * T[:, None]])
+    states = np.concatenate([a[None, :]] * include_start + [b[None, :], a[None, :] + d[None, :] * T[:, None]])
     if isinstance(valid, _Memoized):
         return valid.first_invalid(states, counter) < 0
     for q in states:

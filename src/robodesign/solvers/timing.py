@@ -122,20 +122,21 @@ def sample_torques(robot, traj: Trajectory) -> np.ndarray:
     ddq[k−1] just before it (the samples are a piecewise-constant acceleration, so these are the motion's
     one-sided accelerations; the checker's ``joint.tau`` rule tests both)."""
     n = len(traj.t)
-    before_acc = np.vstack([traj.ddq[:1], traj.ddq[:-1]]) if n >= 2 else traj.ddq[:0]
+    before_acc = np.concatenate((traj.ddq[:1], traj.ddq[:-1])) if n >= 2 else traj.ddq[:0]
     # torque is affine in q̈ at fixed (q, q̇): τ_before = τ_after + M(q)·(q̈_before − q̈_after), computed directly;
-    # the link-side RNEA of both in one batched call, 'before' only at the samples where q̈ changes: elsewhere the
-    # same inputs (equal up to the sign of a zero, which changes no torque beyond the sign of a zero: |τ| is taken)
+    # the link-side RNEA and the drivetrain terms of both in one batched call each (row by row the same operations),
+    # 'before' only at the samples where q̈ changes: elsewhere the same inputs (equal up to the sign of a zero, which
+    # changes no torque beyond the sign of a zero: |τ| is taken)
     differ = np.any(before_acc != traj.ddq[:len(before_acc)], axis=1)
-    link = robot.link_torques(np.vstack([traj.q, traj.q[:len(before_acc)][differ]]),
-                              np.vstack([traj.dq, traj.dq[:len(before_acc)][differ]]),
-                              np.vstack([traj.ddq, before_acc[differ]]))
-    after = robot.drivetrain_torques(traj.q, traj.dq, traj.ddq, link_torques=link[:n])
+    Q = np.concatenate((traj.q, traj.q[:len(before_acc)][differ]))
+    DQ = np.concatenate((traj.dq, traj.dq[:len(before_acc)][differ]))
+    DDQ = np.concatenate((traj.ddq, before_acc[differ]))
+    tau = robot.drivetrain_torques(Q, DQ, DDQ, link_torques=robot.link_torques(Q, DQ, DDQ))
+    after = tau[:n]
     if n < 2:
         return np.abs(after)
-    link_before = link[:n].copy()
-    link_before[differ] = link[n:]
-    before = robot.drivetrain_torques(traj.q, traj.dq, before_acc, link_torques=link_before)
+    before = after.copy()
+    before[differ] = tau[n:]
     return np.maximum(np.abs(after), np.abs(before))
 
 
@@ -163,8 +164,15 @@ def time_optimal_bounds(robot, D: np.ndarray) -> np.ndarray:
     """``time_optimal_bound`` for many moves at once: ``D`` holds joint distances |q_b - q_a| on its last
     axis; returns the bound of each move (the slowest joint's trapezoid/bang-bang time)."""
     D = np.abs(np.asarray(D, dtype=float))
-    v = np.broadcast_to(np.asarray(robot.dq_max, dtype=float), D.shape)
-    a = np.broadcast_to(np.asarray(robot.ddq_max, dtype=float), D.shape)
+    v, a = np.asarray(robot.dq_max, dtype=float), np.asarray(robot.ddq_max, dtype=float)
+    if v.shape == a.shape == D.shape[-1:] and D.shape[-1] and bool(np.all((v > 0) & (a > 0) & (v < np.inf)
+                                                                         & (a < np.inf))):
+        # positive finite limits: the same elementwise numbers (v/a and v·v/a per joint, as on every broadcast
+        # element), without the infinite cases and with no division to warn about
+        t = np.where(D <= v * v / a, 2.0 * np.sqrt(D / a), D / v + v / a)
+        return np.where(D == 0.0, 0.0, t).max(axis=-1)
+    v = np.broadcast_to(v, D.shape)
+    a = np.broadcast_to(a, D.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         bang = 2.0 * np.sqrt(D / a)                      # never reaches v (a finite)
         trap = D / v + v / a                             # reaches v
@@ -276,6 +284,15 @@ STALL_DOUBLINGS = 2
 MAX_STRETCH = 100.0
 
 
+def _limit_ratio(X: np.ndarray, limit: np.ndarray) -> float:
+    """The largest X/limit over the columns (joints) whose limit is finite, 0 without any. With every limit finite
+    the whole of X is divided (the same elements, so the same maximum, without the column copy)."""
+    m = np.isfinite(limit)
+    if not m.any():
+        return 0.0
+    return float(np.max(X / limit if m.all() else X[:, m] / limit[m]))
+
+
 def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: int = 60) -> Trajectory:
     if prof.duration <= 0 or np.max(np.abs(prof.q_goal - prof.q_start), initial=0.0) == 0.0:
         tr = Trajectory.at_rest(prof.q_goal)
@@ -289,15 +306,9 @@ def _fit_limits(robot, prof: _Profile, h: float, torque_limits: bool, max_iter: 
     doublings = 0
     for it in range(max_iter):
         tr, lam = _sample(prof, n, h)
-        m = np.isfinite(vmax)
-        rv = float(np.max(np.abs(tr.dq[:, m]) / vmax[m])) if m.any() else 0.0
-        m = np.isfinite(amax)
-        ra = float(np.max(np.abs(tr.ddq[:, m]) / amax[m])) if m.any() else 0.0
-        rt = 0.0
-        if torque_limits:
-            m = np.isfinite(tmax)
-            if m.any():
-                rt = float(np.max(sample_torques(robot, tr)[:, m] / tmax[m]))
+        rv = _limit_ratio(np.abs(tr.dq), vmax)
+        ra = _limit_ratio(np.abs(tr.ddq), amax)
+        rt = _limit_ratio(sample_torques(robot, tr), tmax) if torque_limits and np.isfinite(tmax).any() else 0.0
         if rv <= 1.0 + 1e-9 and ra <= 1.0 + 1e-12 and rt <= 1.0 + 1e-12:
             err = 0.0
             if prof.position is not None:
@@ -401,8 +412,8 @@ class _PathTerms:
         zero = np.zeros_like(q)
         # per grid point rnea(q, 0, 0), rnea(q, 0, q'), rnea(q, q', q''⁺) and where it differs rnea(q, q', q''⁻):
         # one batched call (rnea_batch: the same numbers as a call each)
-        T = rnea_rows(robot.model, np.vstack([q, q, q, q[left]]), np.vstack([zero, zero, qs, qs[left]]),
-                      np.vstack([zero, qs, qss_r, qss_l[left]]))
+        T = rnea_rows(robot.model, np.concatenate((q, q, q, q[left])), np.concatenate((zero, zero, qs, qs[left])),
+                      np.concatenate((zero, qs, qss_r, qss_l[left])))
         G = T[:N1]
         BR = T[2 * N1:3 * N1] - G
         BL = BR
@@ -585,7 +596,7 @@ def _toppra_profile(robot, path: BlendedPolyline, vmax, amax, torque_limits: boo
         x0 = x_next
     assert sd is not None  # the loop ends after a feasible pass (or raises)
     sd[0] = sd[-1] = 0.0
-    ds = np.diff(grid)
+    ds = grid[1:] - grid[:-1]
     denom = sd[:-1] + sd[1:]
     if np.any(denom <= 0):
         raise TimingError("toppra returned a zero-velocity interval")
