@@ -47,7 +47,7 @@ def check_cell(robot, Q):
     c = robot._culler
     assert c is not None, "the culled path took over"
     assert verdicts == [coal_verdict(robot, q) for q in Q]
-    args, _ = c._one
+    args, *_ = c._one
     gm = robot.geom_model
     objs = gm.geometryObjects
     for q in Q[np.flatnonzero(verdicts)[:60]]:
@@ -100,7 +100,7 @@ def test_several_gridded_obstacles_share_one_grid_array(robot, monkeypatch):
         Q = states(robot, 300, 22)
         v = check_cell(robot, Q)
         assert v.any() and not v.all()
-        (args, (fields, offsets, direct, grid)) = robot._culler._one
+        (args, (fields, offsets, direct, grid), _) = robot._culler._one
         assert direct is None and len(fields) == 3 and all(len(f.values) for f in fields)
         assert len(grid) == sum(len(f.values) for f in fields)
         for f, o in zip(fields, offsets):
@@ -109,7 +109,7 @@ def test_several_gridded_obstacles_share_one_grid_array(robot, monkeypatch):
         robot.set_base_pose(robot.base_pose)
         for q in Q[:1]:
             robot.in_collision(q)
-        args2, _ = robot._culler._one
+        args2, *_ = robot._culler._one
         assert all(geometry_kernel.survivors(q, *args2)[1] == 0 for q in Q[1:])   # (the culled ones)
     finally:
         robot.set_obstacles(obstacles, safety_margin=margin)
@@ -187,7 +187,7 @@ def test_unknown_cells_are_filled_for_the_next_queries(robot):
     Q = states(robot, 60, 12)
     for q in Q[:1]:
         robot.in_collision(q)
-    args, _ = robot._culler._one
+    args, *_ = robot._culler._one
     for q in Q:
         robot.in_collision(q)
         n, nu, _ = geometry_kernel.survivors(q, *args)

@@ -99,7 +99,7 @@ def check_proofs(robot, n, seed):
     c = culler_of(robot)
     if c._one is None:
         c._one = c._kernel_args()
-    args, _ = c._one
+    args, *_ = c._one
     proofs = colliding = 0
     for q in Q:
         n_surv, _, proven = geometry_kernel.survivors(q, *args)

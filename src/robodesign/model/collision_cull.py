@@ -387,7 +387,7 @@ class CollisionCuller:
         if geometry_kernel.ready():
             if self._one is None:
                 self._one = self._kernel_args()
-            args, grids = self._one
+            args, grids, _ = self._one
             unknown = np.empty(N * len(args[-1]), np.int64)   # each row's room (every robot–obstacle pair, + 1)
             nu = cast(Any, geometry_kernel.survivors_rows)(Q, *args, out, unknown)   # (numba's stub: one argument)
             if nu:
@@ -463,11 +463,11 @@ class CollisionCuller:
 
     # -- one configuration: the compiled broad phase (model/geometry_kernel.py) -------------------------------
     def _kernel_args(self) -> tuple:
-        """(the kernel's arguments, the grids): the joint tree, the spheres, the self pairs, the robot–obstacle
-        pairs, every obstacle's box and grid (one gridded obstacle's ``values`` themselves, several: a copy of each
-        in one array, :meth:`in_collision` writing the cells it fills to both), scratch space and the outputs
-        (surviving pairs, unknown cells: the last two arguments); the grids: (fields, their offsets in the grid
-        array, the one gridded field or None, the grid array)."""
+        """(the kernel's arguments: views into the third, their packed form (``geometry_kernel.pack``); the grids):
+        the joint tree, spheres, self pairs, robot–obstacle pairs, every obstacle's box and grid (one gridded
+        obstacle's ``values`` themselves, several: a copy of each in one array, :meth:`in_collision` writing the cells
+        it fills to both), scratch space, the outputs (surviving pairs, unknown cells: the last two arguments); the
+        grids: (fields, their offsets in the grid array, the one gridded field or None, the grid array)."""
         tree, _ = batch_kinematics(self.robot).arrays()   # (the culler keeps scratch space of its own below)
         J = len(tree[0])
         oa, ob, olim, ok = [], [], [], []
@@ -498,17 +498,15 @@ class CollisionCuller:
               self.self_proof.astype(float))
         work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
         out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
-        return (*tree, *sp, *obs, self.active, *work, out, unknown), grids
+        packed, args = geometry_kernel.pack((*tree, *sp, *obs, self.active, *work, out, unknown))
+        return args, grids, packed
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
         (:func:`robodesign.model.geometry_kernel.survivors`) unless their inner spheres prove one colliding; the grid
         cells it asked about unknown are computed afterwards, for the next queries."""
-        one = self._one
-        if one is None:
-            one = self._one = self._kernel_args()
-        args, grids = one
-        n, nu, proven = geometry_kernel.survivors(q, *args)
+        args, grids, packed = self._one = self._one or self._kernel_args()
+        n, nu, proven = geometry_kernel.survivors_packed(q, *packed)
         if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding (the asks counted all the same)
             self._last_hit = proven
             if self.provable:

@@ -198,6 +198,96 @@ def _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, 
     return n, nu, hit
 
 
+
+#: the positions, among :func:`survivors`' arguments after ``q``, of the integer arrays and of the float arrays (with
+#: ``h``) that :func:`pack` lays end to end for :func:`survivors_packed`; ``grid`` and ``active`` stay apart (the
+#: fields and the culler write to them in place)
+_INTS = (0, 3, 5, 6, 8, 9, 11, 12, 16, 17, 19, 24, 25, 26, 33, 34)
+_FLOATS = (1, 2, 4, 7, 10, 13, 14, 15, 18, 20, 21, 22, 23, 27, 30, 31, 32)
+_GRID, _ACTIVE = 28, 29
+
+
+def pack(args: tuple) -> tuple:
+    """(packed, views): :func:`survivors`' arguments after ``q`` as :func:`survivors_packed` takes them (an int64
+    array: the sizes J, G, S, U, P, O and len(out), then the integer arrays; a float array; ``grid``; ``active``),
+    and the same arguments as views into those arrays (``grid`` and ``active`` themselves): a kernel writing to the
+    scratch space or the outputs of one writes to the other's. Fewer arguments: numba's dispatcher types and
+    unboxes each one at every call."""
+    ints = [np.asarray(args[k], np.int64) for k in _INTS]
+    floats = [np.asarray(args[k], np.float64) for k in _FLOATS]
+    head = np.array([len(args[0]), len(args[6]), len(args[8]), len(args[14]), len(args[16]), len(args[20]),
+                     len(args[33])], np.int64)
+    packed = (np.concatenate([head] + [a.ravel() for a in ints]), np.concatenate([a.ravel() for a in floats]),
+              args[_GRID], args[_ACTIVE])
+    views = list(args)
+    for whole, ks, parts, off in ((packed[0], _INTS, ints, len(head)), (packed[1], _FLOATS, floats, 0)):
+        for k, a in zip(ks, parts):
+            views[k] = whole[off:off + a.size].reshape(a.shape) if a.ndim else float(whole[off])
+            off += a.size
+    return packed, tuple(views)
+
+
+@njit(cache=True, nogil=True)
+def _int_views(I):  # pragma: no cover
+    """The integer arrays of :func:`pack`'s first array, in :data:`_INTS`' order (views)."""
+    J, G, S, P, O, n_out = I[0], I[1], I[2], I[4], I[5], I[6]
+    i = 7
+    parents, kind, iq = I[i:i + J], I[i + J:i + 2 * J], I[i + 2 * J:i + 3 * J]
+    i += 3 * J
+    gpar = I[i:i + G]
+    i += G
+    sa, sb, sk = I[i:i + S], I[i + S:i + 2 * S], I[i + 2 * S:i + 3 * S]
+    i += 3 * S
+    istart = I[i:i + G + 1]
+    i += G + 1
+    oa, ob, ok = I[i:i + P], I[i + P:i + 2 * P], I[i + 2 * P:i + 3 * P]
+    i += 3 * P
+    grid_lo, grid_dim = I[i:i + 3 * O].reshape((O, 3)), I[i + 3 * O:i + 6 * O].reshape((O, 3))
+    i += 6 * O
+    grid_off = I[i:i + O]
+    i += O
+    return parents, kind, iq, gpar, sa, sb, sk, istart, oa, ob, ok, grid_lo, grid_dim, grid_off, I[i:i + n_out], \
+        I[i + n_out:i + n_out + P + 1]
+
+
+@njit(cache=True, nogil=True)
+def _float_views(F, I):  # pragma: no cover
+    """The float arrays of :func:`pack`'s second array (and ``h``), in :data:`_FLOATS`' order (views)."""
+    J, G, S, U, P, O = I[0], I[1], I[2], I[3], I[4], I[5]
+    Rl, tl, axis = F[:9 * J].reshape((J, 3, 3)), F[9 * J:12 * J].reshape((J, 3)), F[12 * J:15 * J].reshape((J, 3))
+    i = 15 * J
+    glocal = F[i:i + 3 * G].reshape((G, 3))
+    i += 3 * G
+    slim = F[i:i + S]
+    i += S
+    ilocal, irad = F[i:i + 3 * U].reshape((U, 3)), F[i + 3 * U:i + 4 * U]
+    i += 4 * U
+    sproof, olim = F[i:i + S], F[i + S:i + S + P]
+    i += S + P
+    oR = F[i:i + 9 * O].reshape((O, 3, 3))
+    i += 9 * O
+    ot, olo, ohi = F[i:i + 3 * O].reshape((O, 3)), F[i + 3 * O:i + 6 * O].reshape((O, 3)), \
+        F[i + 6 * O:i + 9 * O].reshape((O, 3))
+    i += 9 * O
+    h = F[i]
+    i += 1
+    R, p = F[i:i + 9 * (J + 1)].reshape((J + 1, 3, 3)), F[i + 9 * (J + 1):i + 12 * (J + 1)].reshape((J + 1, 3))
+    i += 12 * (J + 1)
+    return Rl, tl, axis, glocal, slim, ilocal, irad, sproof, olim, oR, ot, olo, ohi, h, R, p, \
+        F[i:i + 3 * G].reshape((G, 3))
+
+
+@njit(cache=True, nogil=True)
+def survivors_packed(q, I, F, grid, active):  # pragma: no cover
+    """:func:`survivors` at ``q`` on its arguments as :func:`pack` lays them out (the same bounds, the same
+    outputs: the views of ``out`` and ``unknown`` in ``I``)."""
+    parents, kind, iq, gpar, sa, sb, sk, istart, oa, ob, ok, grid_lo, grid_dim, grid_off, out, unknown = _int_views(I)
+    Rl, tl, axis, glocal, slim, ilocal, irad, sproof, olim, oR, ot, olo, ohi, h, R, p, C = _float_views(F, I)
+    return _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
+                   oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
+                   unknown, True)
+
+
 @njit(cache=True, nogil=True)
 def survivors_rows(Q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
                    oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
@@ -231,6 +321,7 @@ def _warm() -> None:
             np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0, f1, np.ones(1, np.bool_),
             np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
     survivors(np.zeros(1), *args)
+    survivors_packed(np.zeros(1), *pack(args)[0])
     survivors_rows(np.zeros((1, 1)), *args, np.zeros((1, 1), np.bool_), np.zeros(2, np.int64))
     tree = args[:6]
     for Rf in (np.eye(3), np.eye(3).T):   # the frame's rotation C- or F-ordered (a pinocchio matrix is the latter)
@@ -240,7 +331,8 @@ def _warm() -> None:
 
 
 KERNELS = KernelModule("robodesign.model.geometry_kernel", __file__, survivors,
-                       ("survivors", "survivors_rows", "frame_poses", "joint_poses"), _warm, every=1.0)
+                       ("survivors", "survivors_packed", "survivors_rows", "frame_poses", "joint_poses"), _warm,
+                       every=1.0)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 
