@@ -1,7 +1,9 @@
 """The collision bounds on packed arguments (geometry_kernel.pack, survivors_packed, which CollisionCuller.in_collision
 calls): pack's views are the arguments and share the packed arrays' memory, the kernel reads the same arrays in the
 same order, and on real cells (PTP_3's mesh, boxes around the arm) its outputs equal those of survivors on the
-separate arrays state by state, while the culler's verdicts equal coal's over every pair."""
+separate arrays state by state, while the culler's verdicts equal coal's over every pair; its count of the asks
+before a pair's proof takes the same pairs to their proof in the same order as a count per pair in a dictionary
+(the culler's before), with the same verdicts, pairs switched off and proofs."""
 from __future__ import annotations
 
 import numpy as np
@@ -12,7 +14,7 @@ from conftest import IMPROV, TASKS, boxes_around
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
-from robodesign.model import geometry_kernel
+from robodesign.model import collision_cull, geometry_kernel
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CollisionCuller
 from robodesign.solvers.schedule import static_cell
@@ -89,7 +91,8 @@ def test_the_packed_kernel_equals_the_separate_one_and_the_verdicts_coals():
         verdicts = []
         for q in Q:
             n, nu, proven = geometry_kernel.survivors(q, *separate)
-            assert geometry_kernel.survivors_packed(q, *packed) == (n, nu, proven)
+            left, due = np.zeros(0, np.int64), np.zeros(len(args[-2]), np.int64)
+            assert geometry_kernel.survivors_packed(q, *packed[:4], left, due) == (n, nu, proven, 0)
             assert np.array_equal(args[-2][:n], separate[-2][:n]) and np.array_equal(args[-1][:nu], separate[-1][:nu])
             verdicts.append(c.in_collision(q))
             checked += n
@@ -97,3 +100,56 @@ def test_the_packed_kernel_equals_the_separate_one_and_the_verdicts_coals():
                for q in Q]
         assert verdicts == ref and any(ref) and not all(ref)
     assert checked > 1000
+
+
+class DictCounting(CollisionCuller):
+    """The culler as it counted before: survivors on the separate arrays, then per pair in a dictionary (until
+    PROVE_AFTER asks) for every query whose pairs survive, the pairs reaching PROVE_AFTER proven in that order."""
+
+    def in_collision(self, q):
+        args, grids, _ = self._one = self._one or self._kernel_args()
+        n, nu, proven = geometry_kernel.survivors(q, *args)
+        ks = args[-2][:n].tolist()
+        if self.provable:
+            for k in ks:
+                c = self.asks.get(k, 0) + 1
+                if c <= collision_cull.PROVE_AFTER:
+                    self.asks[k] = c
+                    if c == collision_cull.PROVE_AFTER:
+                        self._prove(k)
+        if proven >= 0:
+            self._last_hit = proven
+        hit = proven >= 0 or (bool(n) and self._ask(q, ks))
+        if nu:
+            self._fill(grids, args[-1][:nu].copy())
+        return hit
+
+
+@pytest.mark.parametrize("order", ORDERS + [("1", "21", "7", "22", "5", "23", "16")])
+def test_the_kernels_count_takes_the_same_pairs_to_their_proof(order, monkeypatch):
+    assert geometry_kernel.warm_up() and geometry_kernel.ready()
+    task = load_task(TASKS / "simple" / "PTP_3.json")
+    ms = load_module_set(IMPROV)
+    rng = np.random.default_rng(int(order[2]))
+    robot = build_robot(static_cell(task), ms, Assembly.from_order(ms, order), task.nominal_base_pose)
+    Q = np.array([robot.random_configuration(rng) for _ in range(200)])
+    Q = np.vstack([Q, Q + rng.normal(0.0, 0.05, Q.shape)])
+    traces = []
+    for kind in (CollisionCuller, DictCounting):
+        tried = []
+        real = CollisionCuller._prove
+        monkeypatch.setattr(CollisionCuller, "_prove", lambda self, k, _r=real: (tried.append(k), _r(self, k))[1])
+        for record in (collision_cull._PROOFS, collision_cull._FIELDS, collision_cull._BOUNDS):
+            record.clear()   # (each culler from the same start: no proofs, no distance known in the grid cells)
+        c = kind(robot)
+        c.asks = {}
+        verdicts = [c.in_collision(q) for q in Q]
+        traces.append((verdicts, tried, c.active.tolist(), c.proven, c.narrow))
+        monkeypatch.undo()
+        if kind is CollisionCuller:
+            after = collision_cull.PROVE_AFTER
+            asked = {k: after - int(v) for k, v in enumerate(c.until_proof) if v < after}
+    assert traces[0] == traces[1] and len(traces[0][1]) >= 3 and traces[0][3] >= 1
+    assert asked == c.asks and len(asked) >= 10
+    ref = [bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True)) for q in Q]
+    assert traces[0][0] == ref

@@ -358,7 +358,8 @@ class CollisionCuller:
             geo = first[kk]
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
-        self.asks: Dict[int, int] = {}   # per pair asked: how often (until :data:`PROVE_AFTER`)
+        self.until_proof = np.full(self.n_pairs * self.provable, PROVE_AFTER, np.int64)   # asks left (to the proof)
+        self._due = np.zeros(self.n_pairs + 1, np.int64)   # the pairs whose count the kernel took to 0 (scratch)
         self.proven = 0   # self pairs proven never to collide (:mod:`.pair_clearance`), dropped since
         self._known = _known_proofs(robot, shapes) if self.provable else None
         if self._known is not None:   # the proofs of this build's earlier robots: off before the first query
@@ -385,9 +386,7 @@ class CollisionCuller:
         if self.n_pairs == 0 or N == 0:
             return out
         if geometry_kernel.ready():
-            if self._one is None:
-                self._one = self._kernel_args()
-            args, grids, _ = self._one
+            args, grids, _ = self._one = self._one or self._kernel_args()
             unknown = np.empty(N * len(args[-1]), np.int64)   # each row's room (every robot–obstacle pair, + 1)
             nu = cast(Any, geometry_kernel.survivors_rows)(Q, *args, out, unknown)   # (numba's stub: one argument)
             if nu:
@@ -407,12 +406,15 @@ class CollisionCuller:
 
     def collides(self, q: np.ndarray, pairs: Iterable) -> bool:
         """Whether any of ``pairs`` collides at ``q`` (coal, as ``in_collision`` asks it, on ``scratch``; the pair
-        that collided last is asked first: consecutive queries tend to share it)."""
-        r = self.robot
-        ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]   # (in_collision's: Python ints)
+        that collided last is asked first: consecutive queries tend to share it); the asks counted (:meth:`_count`)."""
+        ks = list(pairs) if type(pairs) is list else [int(k) for k in pairs]
         if self.provable:
             self._count(ks)
-        last = self._last_hit
+        return self._ask(q, ks)
+
+    def _ask(self, q: np.ndarray, ks: List[int]) -> bool:
+        """:meth:`collides` without counting the asks (``ks``: Python ints, reordered in place)."""
+        r, last = self.robot, self._last_hit
         if last >= 0 and last in ks:
             ks.remove(last)
             ks.insert(0, last)
@@ -434,15 +436,15 @@ class CollisionCuller:
         return False
 
     def _count(self, ks: List[int]) -> None:
-        """Count the asks of the pairs ``ks``; a self pair asked for the :data:`PROVE_AFTER`-th time is given to
-        :func:`~robodesign.model.pair_clearance.never_collides` and, proven, switched off in ``active`` (the
-        bounds clear it from then on: coal would not find it colliding at any configuration)."""
-        asks = self.asks
+        """Count down the asks left of the pairs ``ks`` (``until_proof``); a self pair asked for the
+        :data:`PROVE_AFTER`-th time is given to :func:`~robodesign.model.pair_clearance.never_collides` and, proven,
+        switched off in ``active`` (the bounds clear it from then on: coal would not find it colliding at any
+        configuration). :func:`~robodesign.model.geometry_kernel.survivors_packed` counts in_collision's the same."""
+        left = self.until_proof
         for k in ks:
-            n = asks.get(k, 0) + 1
-            if n <= PROVE_AFTER:
-                asks[k] = n
-                if n == PROVE_AFTER:
+            if left[k] > 0:
+                left[k] -= 1
+                if left[k] == 0:
                     self._prove(k)
 
     def _prove(self, k: int) -> None:
@@ -499,19 +501,19 @@ class CollisionCuller:
         work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
         out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
         packed, args = geometry_kernel.pack((*tree, *sp, *obs, self.active, *work, out, unknown))
-        return args, grids, packed
+        return args, grids, (*packed, self.until_proof, self._due)   # (+ the count of the asks before the proofs)
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
         (:func:`robodesign.model.geometry_kernel.survivors`) unless their inner spheres prove one colliding; the grid
         cells it asked about unknown are computed afterwards, for the next queries."""
         args, grids, packed = self._one = self._one or self._kernel_args()
-        n, nu, proven = geometry_kernel.survivors_packed(q, *packed)
-        if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding (the asks counted all the same)
+        n, nu, proven, due = geometry_kernel.survivors_packed(q, *packed)
+        for k in self._due[:due].tolist():   # the asks counted (by the kernel), the pairs due proven in their order
+            self._prove(k)
+        if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding
             self._last_hit = proven
-            if self.provable:
-                self._count(args[-2][:n].tolist())
-        hit = proven >= 0 or (bool(n) and self.collides(q, args[-2][:n].tolist()))
+        hit = proven >= 0 or (bool(n) and self._ask(q, args[-2][:n].tolist()))
         if nu:
             self._fill(grids, args[-1][:nu].copy())
         return hit

@@ -278,14 +278,27 @@ def _float_views(F, I):  # pragma: no cover
 
 
 @njit(cache=True, nogil=True)
-def survivors_packed(q, I, F, grid, active):  # pragma: no cover
+def survivors_packed(q, I, F, grid, active, left, due):  # pragma: no cover
     """:func:`survivors` at ``q`` on its arguments as :func:`pack` lays them out (the same bounds, the same
-    outputs: the views of ``out`` and ``unknown`` in ``I``)."""
+    outputs: the views of ``out`` and ``unknown`` in ``I``), then the asks of coal counted down: ``left[k]`` (the
+    asks left before pair ``k``'s proof; none when ``left`` is empty) lowered by one for each surviving pair above 0,
+    the pairs it takes to 0 written to ``due`` in their order. Returns (surviving pairs, unknown cells, the proven
+    colliding pair or -1, pairs due)."""
     parents, kind, iq, gpar, sa, sb, sk, istart, oa, ob, ok, grid_lo, grid_dim, grid_off, out, unknown = _int_views(I)
     Rl, tl, axis, glocal, slim, ilocal, irad, sproof, olim, oR, ot, olo, ohi, h, R, p, C = _float_views(F, I)
-    return _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
-                   oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
-                   unknown, True)
+    n, nu, hit = _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad,
+                         sproof, oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p,
+                         C, out, unknown, True)
+    m = 0
+    if len(left):
+        for i in range(n):
+            k = out[i]
+            if left[k] > 0:
+                left[k] -= 1
+                if left[k] == 0:
+                    due[m] = k
+                    m += 1
+    return n, nu, hit, m
 
 
 @njit(cache=True, nogil=True)
@@ -321,7 +334,8 @@ def _warm() -> None:
             np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0, f1, np.ones(1, np.bool_),
             np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
     survivors(np.zeros(1), *args)
-    survivors_packed(np.zeros(1), *pack(args)[0])
+    packed = (*pack(args)[0], np.zeros(1, np.int64), np.zeros(2, np.int64))   # (+ the asks left, the pairs due)
+    survivors_packed(np.zeros(1), *packed)
     survivors_rows(np.zeros((1, 1)), *args, np.zeros((1, 1), np.bool_), np.zeros(2, np.int64))
     tree = args[:6]
     for Rf in (np.eye(3), np.eye(3).T):   # the frame's rotation C- or F-ordered (a pinocchio matrix is the latter)
