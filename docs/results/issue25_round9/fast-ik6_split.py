@@ -1,6 +1,7 @@
 """The in_collision queries of 20 good PTP_3 evaluations (recorded), replayed on fresh cullers of the same robots:
-CPU µs per query of the whole in_collision, of its kernel call, of collides and of _count.
-Usage: python fast-ik6_split.py CHECKOUT"""
+CPU µs per query of the whole in_collision (and the cullers' builds), and, unless "plain", of collides and of
+_count inside it (their timers add to the whole).
+Usage: python fast-ik6_split.py CHECKOUT [plain]"""
 import sys
 import time
 
@@ -33,7 +34,7 @@ for s in range(20):
 CollisionCuller.in_collision = real
 print("queries", len(calls))
 tally = {}
-for name in ("collides", "_count"):
+for name in () if sys.argv[2:] == ["plain"] else ("collides", "_count"):
     f = getattr(CollisionCuller, name)
 
     def wrap(*a, _f=f, _n=name):
