@@ -106,6 +106,10 @@ class DictCounting(CollisionCuller):
     """The culler as it counted before: survivors on the separate arrays, then per pair in a dictionary (until
     PROVE_AFTER asks) for every query whose pairs survive, the pairs reaching PROVE_AFTER proven in that order."""
 
+    def __init__(self, robot):
+        super().__init__(robot)
+        self.asks = {}   # per pair asked: how often (until PROVE_AFTER)
+
     def in_collision(self, q):
         args, grids, _ = self._one = self._one or self._kernel_args()
         n, nu, proven = geometry_kernel.survivors(q, *args)
@@ -142,7 +146,6 @@ def test_the_kernels_count_takes_the_same_pairs_to_their_proof(order, monkeypatc
         for record in (collision_cull._PROOFS, collision_cull._FIELDS, collision_cull._BOUNDS):
             record.clear()   # (each culler from the same start: no proofs, no distance known in the grid cells)
         c = kind(robot)
-        c.asks = {}
         verdicts = [c.in_collision(q) for q in Q]
         traces.append((verdicts, tried, c.active.tolist(), c.proven, c.narrow))
         monkeypatch.undo()

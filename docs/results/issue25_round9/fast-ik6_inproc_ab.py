@@ -48,7 +48,6 @@ def replay(kind):
         c = cullers.get(id(robot))
         if c is None:
             c = cullers[id(robot)] = kind(robot)
-            c.asks = {}
         verdicts.append(c.in_collision(q))
     return (time.process_time() - t) / len(calls) * 1e6, verdicts, sum(c.narrow for c in cullers.values())
 
