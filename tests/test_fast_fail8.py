@@ -1,7 +1,9 @@
 """The walk's remembered products (model.robot_build._products, _placed): robots built from a warm memory, a cold
 one, and one cleared mid-walk are bit for bit the plain walk of tests/test_robot_build (every product made on the
-spot), on many random orders; the remembered products are shared read-only and are what ``M @ P`` gives alone."""
+spot), on many random orders (joint placements included: the remembered pin.SE3 of each); the remembered products
+are shared read-only and are what ``M @ P`` gives alone."""
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from robodesign import Assembly, Robot, load_module_set
@@ -20,13 +22,13 @@ def _orders(ms, seed: int, n: int, dofs=(3, 5, 6, 7)):
 @pytest.mark.parametrize("modules, dofs", [("robodesign_arm", (3, 5, 6, 7)), (IMPROV, (6,))])
 def test_builds_from_a_warm_memory_are_the_plain_walk(modules, dofs):
     ms = load_module_set(modules)
-    robot_build._PRODUCTS.clear()
-    robot_build._PLACED.clear()
+    for memo in (robot_build._PRODUCTS, robot_build._PLACED, robot_build._JOINT_SE3):
+        memo.clear()
     orders = _orders(ms, 11, 24, dofs)
     for order in orders + orders[::-1]:   # (the second time round every product is remembered)
         asm = Assembly.from_order(ms, order)
         _assert_equal_to_reference(Robot(ms, asm), ms, asm)
-    assert len(robot_build._PRODUCTS) > 24 and len(robot_build._PLACED) > 0
+    assert len(robot_build._PRODUCTS) > 24 and len(robot_build._PLACED) > 0 and len(robot_build._JOINT_SE3) > 0
 
 
 def test_a_memory_cleared_mid_walk_gives_the_plain_walk(monkeypatch):
@@ -36,7 +38,7 @@ def test_a_memory_cleared_mid_walk_gives_the_plain_walk(monkeypatch):
         asm = Assembly.from_order(ms, order)
         for _ in range(2):
             _assert_equal_to_reference(Robot(ms, asm), ms, asm)
-    assert len(robot_build._PRODUCTS) <= 3 and len(robot_build._PLACED) <= 3
+    assert max(len(robot_build._PRODUCTS), len(robot_build._PLACED), len(robot_build._JOINT_SE3)) <= 3
 
 
 def test_remembered_products_are_shared_read_only_and_each_plain_product():
@@ -45,6 +47,8 @@ def test_remembered_products_are_shared_read_only_and_each_plain_product():
     asm = Assembly.from_order(ms, order)
     a, b = robot_build.walk(ms, asm, False), robot_build.walk(ms, asm, False)
     assert len(a.geoms) == len(b.geoms) > 0
+    for oa, ob in zip(a.joint_ops, b.joint_ops):             # the joints' placements: one pin.SE3 each, shared
+        assert oa[2] is ob[2] and isinstance(oa[2], pin.SE3)
     for ga, gb in zip(a.geoms, b.geoms):
         Ps = ga[3]
         assert Ps is gb[3]                                    # the same objects, not made again

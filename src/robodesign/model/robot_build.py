@@ -185,7 +185,7 @@ class Walk:
         self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
         self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
-        self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
+        self.joint_ops: List[tuple] = []   # (parent, joint model, placement as an SE3, name) per joint, in joint order
         self.mass = 0.0
         self.bodies_added = False   # (add_bodies: once per model, also for shallow copies of its robot)
 
@@ -199,8 +199,18 @@ _LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their in
 # product, so a remembered product is bit for bit the one the walk would make. They are read-only: robots share them.
 _PRODUCTS: Dict[Tuple[int, int], tuple] = {}        # (token of M, id(rec)) → (M @ each of the body's poses)
 _PLACED: Dict[tuple, Tuple[np.ndarray, int]] = {}   # (token of M, id(rec), n, id(T)) → (Ps[n] @ T, its token)
+_JOINT_SE3: Dict[tuple, "pin.SE3"] = {}             # (token of M, id(rec), n) → pin.SE3(Ps[n]), a joint's placement
 _PRODUCTS_MAX = 1 << 16
 _TOKENS = count(-1, -1)   # (never reused, also after a clear)
+
+
+def _make_room(memo: dict) -> None:
+    """All three memories of the walk's products forgotten where ``memo`` holds ``_PRODUCTS_MAX`` entries (the
+    tokens are never reused, so a walk under way only makes its products again)."""
+    if len(memo) >= _PRODUCTS_MAX:
+        _PRODUCTS.clear()
+        _PLACED.clear()
+        _JOINT_SE3.clear()
 
 
 def _products(token: int, rec: tuple, M: np.ndarray):
@@ -212,8 +222,7 @@ def _products(token: int, rec: tuple, M: np.ndarray):
         Ps = M @ stack if stack is not None else tuple(M @ P for P in rec[10])
         for P in (Ps,) if stack is not None else Ps:
             P.setflags(write=False)
-        if len(_PRODUCTS) >= _PRODUCTS_MAX:
-            _PRODUCTS.clear()
+        _make_room(_PRODUCTS)
         _PRODUCTS[(token, id(rec))] = Ps
     return Ps
 
@@ -225,11 +234,20 @@ def _placed(token: int, rec: tuple, Ps, n: int, T: np.ndarray) -> Tuple[np.ndarr
     if hit is None:
         M = Ps[n] @ T
         M.setflags(write=False)
-        if len(_PLACED) >= _PRODUCTS_MAX:
-            _PRODUCTS.clear()
-            _PLACED.clear()
+        _make_room(_PLACED)
         hit = _PLACED[key] = (M, next(_TOKENS))
     return hit
+
+
+def _joint_se3(token: int, rec: tuple, Ps, n: int) -> "pin.SE3":
+    """``pin.SE3(Ps[n])``, the placement of a joint of the body ``rec`` placed at the token's M; remembered (pinocchio
+    copies it into the model it is added to, so robots share it)."""
+    key = (token, id(rec), n)
+    X = _JOINT_SE3.get(key)
+    if X is None:
+        _make_room(_JOINT_SE3)
+        X = _JOINT_SE3[key] = pin.SE3(Ps[n])
+    return X
 
 
 def instance_labels(module_ids) -> Tuple[str, ...]:
@@ -329,10 +347,10 @@ def geometry_bodies(geoms: List[tuple]) -> List[Tuple[int, str]]:
 def _model(w: Walk) -> None:
     """The walk's joints (with their frames) added to the model. Its bodies are added later (:func:`add_bodies`):
     kinematics reads none of them, and many designs of a search never use more."""
-    model, SE3 = w.model, pin.SE3
+    model = w.model
     add_joint, add_frame = model.addJoint, model.addJointFrame
     for n, (parent, jm, placement, name) in enumerate(w.joint_ops, 1):
-        if add_joint(parent, jm, SE3(placement), name) != n or add_frame(n, -1) != n:
+        if add_joint(parent, jm, placement, name) != n or add_frame(n, -1) != n:
             raise AssertionError("pinocchio numbers joints and their frames in order")
 
 
@@ -381,7 +399,7 @@ def _joints(w: Walk, i: int, body: tuple, Ps, jid: int, joints: tuple, seen: Lis
             continue
         name = label + jsuffix
         new_jid = len(w.joint_ops) + 1   # (its frame's id too: _model checks it)
-        w.joint_ops.append((jid, jm, placement, name))
+        w.joint_ops.append((jid, jm, _joint_se3(token, rec, Ps, n), name))
         w.joint_frame[new_jid] = new_jid
         if jid == 0:
             w.root_items.append(("joint", new_jid, placement.copy()))
