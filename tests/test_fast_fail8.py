@@ -64,3 +64,24 @@ def test_remembered_products_are_shared_read_only_and_each_plain_product():
         Ps = robot_build._products(next(robot_build._TOKENS), rec, M)
         for P, pose in zip(Ps, rec[10]):
             assert _same(P, M @ pose)
+
+
+def test_gravity_motions_remembered_per_tuple_are_the_plain_ones():
+    """A robot's gravity (at construction and by set_gravity) is bit for bit pinocchio's motion made of it on the
+    spot, for tuples met again, equal tuples of other zero signs, lists and numpy floats."""
+    from robodesign.model import robot as robot_mod
+    ms = load_module_set("robodesign_arm")
+    asm = Assembly.from_order(ms, _orders(ms, 15, 1, dofs=(6,))[0])
+    rng = np.random.default_rng(16)
+    gs = [(0.0, 0.0, -9.81), (-0.0, 0.0, -9.81), (0.0, -0.0, -9.81), [0.0, 0.0, -9.81], (np.float64(1.5), 0.0, -9.0)]
+    gs += [tuple(float(x) for x in rng.normal(size=3)) for _ in range(20)]
+    for g in gs + gs[::-1]:
+        plain = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float)).vector
+        robot = Robot(ms, asm, gravity=g)
+        assert _same(robot.kinematic_model.gravity.vector, plain)
+        robot.set_gravity(gs[3])
+        robot.set_gravity(g)
+        assert _same(robot.model.gravity.vector, plain)
+    kept = [g for g in gs if type(g) is tuple and all(type(x) is float for x in g)]
+    assert all(robot_mod._GRAVITIES[id(g)][0] is g for g in kept)
+    assert id(gs[3]) not in robot_mod._GRAVITIES and id(gs[4]) not in robot_mod._GRAVITIES
