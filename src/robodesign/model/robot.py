@@ -137,8 +137,22 @@ def _certainly_full_rank(J: np.ndarray, rtol: float) -> bool:
     return True
 
 
-_G = (0.0, 0.0, -9.81)   # the default gravity, and pinocchio's motion of it (the model keeps a copy)
-_DEFAULT_GRAVITY = pin.Motion(np.array([*_G, 0.0, 0.0, 0.0], dtype=float))
+_G = (0.0, 0.0, -9.81)   # the default gravity
+_GRAVITIES: Dict[int, Tuple[tuple, "pin.Motion"]] = {}   # id(a tuple of floats) → (it, pinocchio's motion of it)
+
+
+def _gravity_motion(g: Sequence[float]) -> "pin.Motion":
+    """pinocchio's motion of the gravity ``g`` (a model it is set on keeps a copy), made once per tuple of floats
+    object (immutable: the robots of a cell are given their task's)."""
+    hit = _GRAVITIES.get(id(g))
+    if hit is not None and hit[0] is g:
+        return hit[1]
+    motion = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+    if type(g) is tuple and all(type(x) is float for x in g):
+        if len(_GRAVITIES) >= 256:
+            _GRAVITIES.clear()
+        _GRAVITIES[id(g)] = (g, motion)   # (g held: its id is not reused while the entry lives)
+    return motion
 
 
 @dataclass(frozen=True)
@@ -167,8 +181,7 @@ class Robot(RobotGeometry):
         self.module_set = module_set
         self.assembly = assembly
         self._build(convex_meshes)
-        self.kinematic_model.gravity = _DEFAULT_GRAVITY if gravity is _G else \
-            pin.Motion(np.array([*gravity, 0.0, 0.0, 0.0], dtype=float))
+        self.kinematic_model.gravity = _gravity_motion(gravity)
         self.data: "pin.Data"
         if base_pose is None:   # (else set_base_pose below makes them)
             self.base_pose = np.eye(4)
@@ -273,7 +286,7 @@ class Robot(RobotGeometry):
         self._geometry_changed()
 
     def set_gravity(self, g: Sequence[float]) -> None:
-        self.kinematic_model.gravity = pin.Motion(np.array([*g, 0.0, 0.0, 0.0], dtype=float))
+        self.kinematic_model.gravity = _gravity_motion(g)
         self._sync_link_model()
 
     def _sync_link_model(self) -> None:

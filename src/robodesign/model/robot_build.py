@@ -6,11 +6,13 @@ joint entered backwards, its connectors' entry poses, the suffixes of the names.
 spec (:func:`module_table`, remembered per module object, which is immutable) and the breadth-first walk over
 the assembly's bodies (:func:`walk`) only places them: every matrix product is the one the walk always made, in
 the same order with the same operands, so the numbers are bit for bit those of a walk that makes everything
-itself (the tests check it against such a walk).
+itself (the tests check it against such a walk). The products themselves are remembered too (:func:`_products`,
+:func:`_placed`): a search builds the same module pairs again and again.
 """
 from __future__ import annotations
 
 from collections import deque
+from itertools import count
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
@@ -183,12 +185,69 @@ class Walk:
         self.free: List[tuple] = []   # free connectors: (connector, joint, body placement, connector placement)
         self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
-        self.joint_ops: List[tuple] = []   # (parent, joint model, placement, name) per joint, in joint order
+        self.joint_ops: List[tuple] = []   # (parent, joint model, placement as an SE3, name) per joint, in joint order
         self.mass = 0.0
         self.bodies_added = False   # (add_bodies: once per model, also for shallow copies of its robot)
 
 
 _LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their instance_labels
+
+# The walk's products, remembered. A body's placement M is made of table objects alone (module tables live as long
+# as their modules, so their ids are not reused): the base connector's entry pose, or a joint's Q, times the
+# products of the bodies since then. Such a placement is named by a token: the id of its table object, or a number
+# below zero given to ``Ps[n] @ T`` of the body named (token, id(rec)). The same operands give the same BLAS
+# product, so a remembered product is bit for bit the one the walk would make. They are read-only: robots share them.
+_PRODUCTS: Dict[Tuple[int, int], tuple] = {}        # (token of M, id(rec)) → (M @ each of the body's poses)
+_PLACED: Dict[tuple, Tuple[np.ndarray, int]] = {}   # (token of M, id(rec), n, id(T)) → (Ps[n] @ T, its token)
+_JOINT_SE3: Dict[tuple, "pin.SE3"] = {}             # (token of M, id(rec), n) → pin.SE3(Ps[n]), a joint's placement
+_PRODUCTS_MAX = 1 << 16
+_TOKENS = count(-1, -1)   # (never reused, also after a clear)
+
+
+def _make_room(memo: dict) -> None:
+    """All three memories of the walk's products forgotten where ``memo`` holds ``_PRODUCTS_MAX`` entries (the
+    tokens are never reused, so a walk under way only makes its products again)."""
+    if len(memo) >= _PRODUCTS_MAX:
+        _PRODUCTS.clear()
+        _PLACED.clear()
+        _JOINT_SE3.clear()
+
+
+def _products(token: int, rec: tuple, M: np.ndarray):
+    """``M @`` each pose of the body ``rec`` (its connectors', then its collision geometries', then its joints'):
+    one stacked product where the poses are a stack, else one per pose; remembered per token."""
+    Ps = _PRODUCTS.get((token, id(rec)))
+    if Ps is None:
+        stack = rec[9]
+        Ps = M @ stack if stack is not None else tuple(M @ P for P in rec[10])
+        for P in (Ps,) if stack is not None else Ps:
+            P.setflags(write=False)
+        _make_room(_PRODUCTS)
+        _PRODUCTS[(token, id(rec))] = Ps
+    return Ps
+
+
+def _placed(token: int, rec: tuple, Ps, n: int, T: np.ndarray) -> Tuple[np.ndarray, int]:
+    """``Ps[n] @ T`` (Ps: the products of the body ``rec`` placed at the token's M) and its token; remembered."""
+    key = (token, id(rec), n, id(T))
+    hit = _PLACED.get(key)
+    if hit is None:
+        M = Ps[n] @ T
+        M.setflags(write=False)
+        _make_room(_PLACED)
+        hit = _PLACED[key] = (M, next(_TOKENS))
+    return hit
+
+
+def _joint_se3(token: int, rec: tuple, Ps, n: int) -> "pin.SE3":
+    """``pin.SE3(Ps[n])``, the placement of a joint of the body ``rec`` placed at the token's M; remembered (pinocchio
+    copies it into the model it is added to, so robots share it)."""
+    key = (token, id(rec), n)
+    X = _JOINT_SE3.get(key)
+    if X is None:
+        _make_room(_JOINT_SE3)
+        X = _JOINT_SE3[key] = pin.SE3(Ps[n])
+    return X
 
 
 def instance_labels(module_ids) -> Tuple[str, ...]:
@@ -226,14 +285,14 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
     seen = [False] * off[-1]
     bi, bcon = asm.base
     brec, entry = tabs[bi].connectors[bcon]   # the base body in the base frame: the base connector flipped about x
-    queue = deque([(bi, brec, 0, entry)])
+    queue = deque([(bi, brec, 0, entry, id(entry))])
     pop, push = queue.popleft, queue.append
     labels, joint_frame = w.labels, w.joint_frame
     bodies, placed, root, free = w.bodies, w.geoms, w.root_items, w.free
     total_mass, n_geoms = 0.0, 0
     while queue:
-        i, rec, jid, M = pop()
-        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints, stack, poses = rec
+        i, rec, jid, M, token = pop()
+        k, bid, bsuffix, mass, Y, nframes, conns, geoms, joints = rec[:9]
         s = off[i] + k
         if seen[s]:
             continue
@@ -244,7 +303,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
         bodies.append((name, jid, jf, M, conns, Y, mass, nframes))
         # M @ pose of each connector, then of each collision geometry (numpy multiplies each matrix of the stack with
         # the BLAS call it makes for one pair with the same strides: the same numbers)
-        Ps = M @ stack if stack is not None else [M @ P for P in poses]
+        Ps = _products(token, rec, M)
         link = links[i]
         n = 0
         for cid, _, c, _ in conns:
@@ -252,7 +311,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                 j2, c2 = link[cid]
                 rec2, entry = tabs[j2].connectors[c2]
                 if not seen[off[j2] + rec2[0]]:
-                    push((j2, rec2, jid, Ps[n] @ entry))
+                    push((j2, rec2, jid) + _placed(token, rec, Ps, n, entry))
             elif i != bi or cid != bcon:
                 free.append((c, jid, M, Ps[n]))
             n += 1
@@ -264,7 +323,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
             placed.append((name, jid, jf, Ps, geoms, i, bid))
             n_geoms += len(geoms)
         if joints:
-            _joints(w, i, bid, Ps, jid, joints, seen, off[i], push, tabs[i].bodies)
+            _joints(w, i, (bid, rec, token), Ps, jid, joints, seen, off[i], push, tabs[i].bodies)
     w.mass, w.n_geoms = total_mass, n_geoms
     if not all(seen):
         missing = [(i, b[1]) for i, t in enumerate(tabs) for b in t.bodies if not seen[off[i] + b[0]]]
@@ -288,10 +347,10 @@ def geometry_bodies(geoms: List[tuple]) -> List[Tuple[int, str]]:
 def _model(w: Walk) -> None:
     """The walk's joints (with their frames) added to the model. Its bodies are added later (:func:`add_bodies`):
     kinematics reads none of them, and many designs of a search never use more."""
-    model, SE3 = w.model, pin.SE3
+    model = w.model
     add_joint, add_frame = model.addJoint, model.addJointFrame
     for n, (parent, jm, placement, name) in enumerate(w.joint_ops, 1):
-        if add_joint(parent, jm, SE3(placement), name) != n or add_frame(n, -1) != n:
+        if add_joint(parent, jm, placement, name) != n or add_frame(n, -1) != n:
             raise AssertionError("pinocchio numbers joints and their frames in order")
 
 
@@ -324,28 +383,29 @@ def add_bodies(w: Walk, tcp_frame: int) -> None:
     model.inertias[frame.parentJoint] = Y
 
 
-def _joints(w: Walk, i: int, bid: str, Ps, jid: int, joints: tuple, seen: List[bool], o: int,
+def _joints(w: Walk, i: int, body: tuple, Ps, jid: int, joints: tuple, seen: List[bool], o: int,
             push, recs: tuple) -> None:
-    """The joints at body ``bid`` of instance ``i`` (on joint ``jid``; ``Ps``: its products) to bodies not met yet
-    (``recs``: the instance's body records, ``o``: its offset in ``seen``)."""
-    label = w.labels[i]
+    """The joints at a body of instance ``i`` (``body``: its id, record and the token of its placement; on joint
+    ``jid``; ``Ps``: its products) to bodies not met yet (``recs``: the instance's body records, ``o``: its offset in
+    ``seen``)."""
+    label, (bid, rec, token) = w.labels[i], body
     for k2, other, rev, n, Q, jm, jsuffix, info, row, _ in joints:
         if seen[o + k2]:
             continue
         w.direct_joint_pairs.append(((i, bid), (i, other)))
         placement = Ps[n]   # (M @ P)
         if jm is None:
-            push((i, recs[k2], jid, placement @ Q))
+            push((i, recs[k2], jid) + _placed(token, rec, Ps, n, Q))
             continue
         name = label + jsuffix
         new_jid = len(w.joint_ops) + 1   # (its frame's id too: _model checks it)
-        w.joint_ops.append((jid, jm, placement, name))
+        w.joint_ops.append((jid, jm, _joint_se3(token, rec, Ps, n), name))
         w.joint_frame[new_jid] = new_jid
         if jid == 0:
             w.root_items.append(("joint", new_jid, placement.copy()))
         w.joints.append((name, i) + info)
         w.rows.append(row)
-        push((i, recs[k2], new_jid, Q))
+        push((i, recs[k2], new_jid, Q, id(Q)))
 
 
 def finish(w: Walk) -> Tuple[int, int, Optional[np.ndarray]]:
