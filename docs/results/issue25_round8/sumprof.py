@@ -1,6 +1,6 @@
 import glob,re,statistics as st,sys
 O=sys.argv[1]
-for who in ("base_s8","main"):
+for who in (sys.argv[2].split(",") if len(sys.argv) > 2 else ("base_s8","main")):
     rows={}
     for f in sorted(glob.glob(f"{O}/profile_r*_{who}.md")):
         sec=None
