@@ -71,8 +71,11 @@ import pinocchio as pin
 
 from robodesign.core.errors import InputError
 from robodesign.formats.tolerance import PROJECTIONS, ToleratedPose
-from robodesign.model.robot import vector_norm
 from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.ik_bounds import _BOUNDS_CACHE as _BOUNDS_CACHE  # (the bounds' names, kept here too)
+from robodesign.solvers.ik_bounds import _REVOLUTE_AXES as _REVOLUTE_AXES
+from robodesign.solvers.ik_bounds import ChainBounds, chain_bounds
+from robodesign.solvers.ik_bounds import _circle_distance as _circle_distance
 from robodesign.solvers.ik_proof import valid_provable
 from robodesign.solvers.lazy_rng import LazyGenerator
 
@@ -595,112 +598,8 @@ _GOAL_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Provable reachability bounds (decided before any restart)
+# Provable reachability bounds (decided before any restart; the bounds themselves: .ik_bounds)
 # ---------------------------------------------------------------------------------------------------------
-def _circle_distance(x: np.ndarray, center: np.ndarray, axis: np.ndarray, radius: float) -> float:
-    """Distance from point x to the circle (center, unit axis, radius)."""
-    v = x - center
-    h = float(v @ axis)
-    w = float(np.linalg.norm(v - h * axis))
-    return math.hypot(h, w - radius)
-
-
-_REVOLUTE_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
-
-
-class ChainBounds:
-    """What the TCP chain of a robot (at its base pose) can reach, as bounds that hold for every q.
-
-    * the sphere of :meth:`Robot.reach_bound` (centre o₁, the first joint's origin, radius R);
-    * when the first joint is revolute, the *torus*: the second joint's origin o₂ moves on a circle C₁
-      about the first joint's axis, and the TCP lies within R' = R − |o₁o₂| of o₂, so within R' of C₁;
-    * given the TCP's orientation (a goal bounding it), the origin of the last joint's moving frame is
-      ``p − R·c`` (c: that origin seen from the TCP, fixed), within R'' = R' − |c| of C₁.
-
-    ``circle`` is None when the first joint is not revolute or the chain has fewer than two joints."""
-
-    _AXES = {name: np.array(v) for name, v in _REVOLUTE_AXES.items()}   # (read, never written)
-
-    def __init__(self, robot):
-        self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
-        self.o, self.R = robot.reach_bound()
-        self.circle = None
-        m = robot.kinematic_model
-        chain = robot.tcp_chain()
-        P = m.frames[robot.tcp_frame].placement
-        t_tcp = np.asarray(P.translation, float)
-        self.c_tcp = np.asarray(P.rotation, float).T @ t_tcp
-        if len(chain) < 2 or not math.isfinite(self.R):
-            return
-        j1, j2 = chain[0], chain[1]
-        jm = m.joints[j1]
-        name = jm.shortname()
-        if name in self._AXES:
-            ax = self._AXES[name]
-        elif name == "JointModelRevoluteUnaligned":
-            ax = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float)
-        else:
-            return
-        F1 = m.jointPlacements[j1]            # the first joint's frame in the world (its parent is the world)
-        if m.parents[j1] != 0 or m.parents[j2] != j1:
-            return
-        R1, p1 = np.asarray(F1.rotation, float), np.asarray(F1.translation, float)
-        t2 = np.asarray(m.jointPlacements[j2].translation, float)
-        along = float(ax @ t2)
-        self.circle = (p1 + R1 @ (ax * along), R1 @ ax / vector_norm(ax), vector_norm(t2 - ax * along))
-        self.R1 = self.R - vector_norm(t2)       # R'
-        self.R2 = self.R1 - vector_norm(t_tcp)   # R''
-        self.key = robot.base_pose.tobytes()
-
-    def unreachable(self, gm: "GoalModel") -> str:
-        """Why no configuration can put the TCP into the goal ('' when the bounds allow it); remembered per goal
-        model (the bounds and the goal are fixed: the IK stage asks once per goal, solve_ik again)."""
-        hit = self._verdicts.get(id(gm))
-        if hit is not None and hit[0] is gm:
-            return hit[1]
-        why = self._unreachable(gm)
-        self._verdicts[id(gm)] = (gm, why)
-        return why
-
-    def _unreachable(self, gm: "GoalModel") -> str:
-        from robodesign.solvers.goal_terms import goal_terms, tcp_terms  # (what the goal gives, kept per goal)
-        if gm.unconstrained:
-            return ""
-        if gm.position_lower_bound(self.o) > self.R + 1e-9:
-            return "out_of_reach"
-        if self.circle is None:
-            return ""
-        rp, pn, _ = goal_terms(gm)
-        if not math.isfinite(rp):
-            return ""
-        c, a, rho = self.circle
-        if _circle_distance(pn, c, a, rho) - rp > self.R1 + 1e-9:
-            return "out_of_reach"
-        rs, w = tcp_terms(gm, self.c_tcp)
-        if math.isfinite(rs):
-            slack = rp + rs
-            if _circle_distance(w, c, a, rho) - slack > self.R2 + 1e-9:
-                return "out_of_orientation_reach"
-        return ""
-
-
-_BOUNDS_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
-def chain_bounds(robot) -> ChainBounds:
-    """The robot's :class:`ChainBounds` (cached per robot and base pose)."""
-    hit = _BOUNDS_CACHE.get(robot)
-    if hit is not None and hit.key == robot.base_pose.tobytes():
-        return hit
-    cb = ChainBounds(robot)
-    cb.key = robot.base_pose.tobytes()
-    try:
-        _BOUNDS_CACHE[robot] = cb
-    except TypeError:
-        pass
-    return cb
-
-
 def provably_unreachable(robot, goal: ToleratedPose) -> str:
     """'' or the reason ("out_of_reach", "out_of_orientation_reach") why no configuration of ``robot`` puts
     its TCP into ``goal``: the bounds of :class:`ChainBounds`, which hold for every q (joint limits and
