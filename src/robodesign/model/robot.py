@@ -366,7 +366,8 @@ class Robot(RobotGeometry):
         lower-dimensional set of poses. Cached (independent of the base pose).
 
         The configurations are ``np.random.default_rng(0).uniform(lo, hi)`` drawn ``samples`` times
-        (:func:`_rank_samples`); the first one's rank decides when :func:`_certainly_full_rank` shows it full, else
+        (:func:`_rank_samples`); the first one's rank decides when :func:`_certainly_full_rank` shows it full, else the
+        structure when it bounds the rank by what the first one certainly has (:meth:`_deficient_rank`), else
         all Jacobians go through one SVD call (numpy's SVD of a stack is each matrix's own LAPACK call: the same
         singular values), and the scratch space is left as the one-by-one loop that stops at the first full rank
         leaves it."""
@@ -382,8 +383,20 @@ class Robot(RobotGeometry):
             elif J.ndim < 2 or not J.size or len(Q) == 1:   # (a vector: numpy's SVD raises, as the loop's did)
                 self._generic_rank = _rank(_svd_values(J) if J.size else np.zeros(0), rtol)
             else:
-                self._generic_rank = self._stacked_rank(J, Q, scale, rtol)
+                self._generic_rank = self._deficient_rank(J, Q, scale, rtol)
         return self._generic_rank
+
+    def _deficient_rank(self, J: np.ndarray, Q: np.ndarray, scale: float, rtol: float) -> int:
+        """The largest rank of the scaled Jacobians at the rows of ``Q`` (``J``: the first one's, not shown full): the
+        structural rank when it decides (:func:`robodesign.model.rank_bound.structural_rank`: then no sample counts
+        more, and none counts full), with the scratch space left at the last row as the loop left it; else
+        :meth:`_stacked_rank`."""
+        from robodesign.model.rank_bound import structural_rank
+        r = structural_rank(self, J, scale, rtol)
+        if r is None:
+            return self._stacked_rank(J, Q, scale, rtol)
+        self.jacobian(Q[-1])
+        return r
 
     def _stacked_rank(self, J: np.ndarray, Q: np.ndarray, scale: float, rtol: float) -> int:
         """The largest rank of the scaled Jacobians at the rows of ``Q`` (``J``: the first one's), from one SVD call;

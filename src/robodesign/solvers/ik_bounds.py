@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Dict, Tuple
 import numpy as np
 
 from robodesign.model.robot import vector_norm
+from robodesign.solvers.goal_terms import goal_terms, tcp_terms  # (what the goal gives, kept per goal)
 
 if TYPE_CHECKING:  # pragma: no cover
     from robodesign.solvers.ik import GoalModel
@@ -23,8 +24,7 @@ def _circle_distance(x: np.ndarray, center: np.ndarray, axis: np.ndarray, radius
     """Distance from point x to the circle (center, unit axis, radius)."""
     v = x - center
     h = float(v @ axis)
-    w = float(np.linalg.norm(v - h * axis))
-    return math.hypot(h, w - radius)
+    return math.hypot(h, vector_norm(v - h * axis) - radius)
 
 
 _REVOLUTE_AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "JointModelRZ": (0.0, 0.0, 1.0)}
@@ -85,7 +85,6 @@ class ChainBounds:
         return why
 
     def _unreachable(self, gm: "GoalModel") -> str:
-        from robodesign.solvers.goal_terms import goal_terms, tcp_terms  # (what the goal gives, kept per goal)
         if gm.unconstrained:
             return ""
         if gm.position_lower_bound(self.o) > self.R + 1e-9:
