@@ -87,11 +87,11 @@ class ChainBounds:
     def _unreachable(self, gm: "GoalModel") -> str:
         if gm.unconstrained:
             return ""
-        if gm.position_lower_bound(self.o) > self.R + 1e-9:
+        rp, pn, _ = goal_terms(gm)
+        if not self._surely_within(gm, pn) and gm.position_lower_bound(self.o) > self.R + 1e-9:
             return "out_of_reach"
         if self.circle is None:
             return ""
-        rp, pn, _ = goal_terms(gm)
         if not math.isfinite(rp):
             return ""
         c, a, rho = self.circle
@@ -103,6 +103,30 @@ class ChainBounds:
             if _circle_distance(w, c, a, rho) - slack > self.R2 + 1e-9:
                 return "out_of_orientation_reach"
         return ""
+
+    def _surely_within(self, gm: "GoalModel", pn: np.ndarray) -> bool:
+        """Whether ``gm.position_lower_bound(o) > R + 1e-9`` is certainly False without computing it: the goal's
+        nominal position pn lies in each of its position sets (:func:`_nominal_inside`), so the bound (the distance
+        from o to a box, or |o − pn| − r) is at most |o − pn|, and that is at most R (< 100 m: the roundings of both
+        sides and a box frame's Q off a rotation by 1e-12 stay far below the 1e-9 m)."""
+        return _nominal_inside(gm) and vector_norm(self.o - pn) <= self.R < 100.0
+
+
+_INSIDE: Dict[int, Tuple["GoalModel", bool]] = {}   # id(goal model) → (it, _nominal_inside's answer)
+
+
+def _nominal_inside(gm: "GoalModel") -> bool:
+    """Whether the goal's nominal position lies in its position sets: every complete x/y/z box (in a frame whose Q
+    is a rotation to 1e-12, or the nominal's) holds 0 and the r_sph bound is not negative; kept per goal model."""
+    hit = _INSIDE.get(id(gm))
+    if hit is None or hit[0] is not gm:   # (the model is held: its id is not reused while the entry lives)
+        if len(_INSIDE) >= 4096:
+            _INSIDE.clear()
+        inside = not gm.sphere_hi < 0.0 and all(
+            (Q is None or np.abs(Q.T @ Q - np.eye(3)).max() <= 1e-12) and (lo <= 0.0).all() and (hi >= 0.0).all()
+            for Q, lo, hi in gm._position_boxes)
+        hit = _INSIDE[id(gm)] = (gm, bool(inside))
+    return hit[1]
 
 
 _BOUNDS_CACHE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
