@@ -45,34 +45,37 @@ class ChainBounds:
 
     def __init__(self, robot):
         self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
+        self.key = robot.base_pose.tobytes()   # (the base pose they hold for: chain_bounds' cache)
         self.o, self.R = robot.reach_bound()
         self.circle = None
         m = robot.kinematic_model
         chain = robot.tcp_chain()
         P = m.frames[robot.tcp_frame].placement
-        t_tcp = np.asarray(P.translation, float)
-        self.c_tcp = np.asarray(P.rotation, float).T @ t_tcp
+        t_tcp = P.translation
+        self.c_tcp = P.rotation.T @ t_tcp
         if len(chain) < 2 or not math.isfinite(self.R):
             return
         j1, j2 = chain[0], chain[1]
         jm = m.joints[j1]
         name = jm.shortname()
-        if name in self._AXES:
-            ax = self._AXES[name]
+        if name in self._AXES:   # (a unit axis: its norm is 1.0 exactly, dividing by it changes no bit)
+            ax, unit = self._AXES[name], True
         elif name == "JointModelRevoluteUnaligned":
-            ax = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float)
+            ax, unit = np.asarray(jm.extract().axis if hasattr(jm, "extract") else jm.axis, float), False
         else:
             return
-        F1 = m.jointPlacements[j1]            # the first joint's frame in the world (its parent is the world)
-        if m.parents[j1] != 0 or m.parents[j2] != j1:
+        parents = m.parents
+        if parents[j1] != 0 or parents[j2] != j1:
             return
-        R1, p1 = np.asarray(F1.rotation, float), np.asarray(F1.translation, float)
-        t2 = np.asarray(m.jointPlacements[j2].translation, float)
+        F1 = m.jointPlacements[j1]            # the first joint's frame in the world (its parent is the world)
+        R1 = F1.rotation
+        t2 = m.jointPlacements[j2].translation
         along = float(ax @ t2)
-        self.circle = (p1 + R1 @ (ax * along), R1 @ ax / vector_norm(ax), vector_norm(t2 - ax * along))
+        offset = ax * along
+        self.circle = (F1.translation + R1 @ offset, R1 @ ax if unit else R1 @ ax / vector_norm(ax),
+                       vector_norm(t2 - offset))
         self.R1 = self.R - vector_norm(t2)       # R'
         self.R2 = self.R1 - vector_norm(t_tcp)   # R''
-        self.key = robot.base_pose.tobytes()
 
     def unreachable(self, gm: "GoalModel") -> str:
         """Why no configuration can put the TCP into the goal ('' when the bounds allow it); remembered per goal
@@ -138,7 +141,6 @@ def chain_bounds(robot) -> ChainBounds:
     if hit is not None and hit.key == robot.base_pose.tobytes():
         return hit
     cb = ChainBounds(robot)
-    cb.key = robot.base_pose.tobytes()
     try:
         _BOUNDS_CACHE[robot] = cb
     except TypeError:
