@@ -1,7 +1,13 @@
-"""The reach bound from the walk's numbers (Robot.reach_bound, Robot._first_joint_origin): on many random orders and
-base poses (random ones, and ones with exact zeros, where pinocchio's forward kinematics is still run), (o, R) is bit
-for bit the former computation, which ran pinocchio's forward kinematics at the neutral configuration and read the
-model's joint and frame placements."""
+"""The cheap paths of round 10 for a candidate that fails at IK, each equal to what it replaced:
+
+* the reach bound from the walk's numbers (Robot.reach_bound, Robot._first_joint_origin): on many random orders and
+  base poses (random ones, and ones with exact zeros, where pinocchio's forward kinematics is still run), (o, R) is
+  bit for bit the former computation, which ran pinocchio's forward kinematics at the neutral configuration and read
+  the model's joint and frame placements;
+* the base stage's screen tests the spheres' AABB first, box by box (box_screen._group, _clear): all_clear answers as the
+  one-by-one test did, on random boxes and spheres;
+* the evaluator's settings with the candidate's seed (evaluator.with_seed) are ``dataclasses.replace``'s.
+"""
 import math
 
 import numpy as np
@@ -10,7 +16,7 @@ import pytest
 
 from robodesign import Assembly, Robot, load_module_set
 from robodesign.formats.assembly import random_serial_order
-from robodesign.model import robot_build
+from robodesign.model import box_screen, robot_build
 
 from conftest import IMPROV
 
@@ -105,4 +111,84 @@ def test_the_walk_remembers_each_joint_norm_with_its_placement():
             assert len(w.joint_norms) == len(w.joint_ops) == w.model.njoints - 1
             for (_, _, X, _), norm in zip(w.joint_ops, w.joint_norms):
                 assert np.float64(norm).tobytes() == np.float64(np.linalg.norm(X.translation)).tobytes()
+
+
+def _one_by_one(boxes, centres, limit) -> bool:
+    """box_screen.all_clear as it was: every sphere against every box."""
+    rows = list(zip(centres.tolist(), limit.tolist()))
+    for x0, y0, z0, x1, y1, z1, s in boxes:
+        for (x, y, z), lim in rows:
+            dx = x0 - x if x < x0 else (x - x1 if x > x1 else 0.0)
+            dy = y0 - y if y < y0 else (y - y1 if y > y1 else 0.0)
+            dz = z0 - z if z < z0 else (z - z1 if z > z1 else 0.0)
+            if not s * (dx * dx + dy * dy + dz * dz) ** 0.5 - box_screen.SLACK_M > lim:
+                return False
+    return True
+
+
+def test_the_group_screen_answers_as_the_one_by_one_screen():
+    """Random boxes (rotated, some rotations rounded; some singular) and sets of spheres from far off to inside, with
+    NaN and infinite numbers mixed in: all_clear answers as the one-by-one test, and where the group test clears the
+    spheres of a box, each of them passes the one-by-one test against it; both answers of the group test are met."""
+    rng = np.random.default_rng(94)
+    group_clear = fallback = 0
+    for k in range(3000):
+        boxes = []
+        for _ in range(int(rng.integers(1, 7))):
+            R = pin.Quaternion(*rng.normal(size=4)).normalized().toRotationMatrix()
+            R = np.round(R, 3) if k % 3 == 0 else R
+            R = np.zeros((3, 3)) if k % 97 == 0 else R
+            lo = rng.uniform(-0.5, 0.0, 3)
+            boxes.append(box_screen.box_aabb(R, rng.uniform(-1.5, 1.5, 3), lo, lo + rng.uniform(0.01, 1.0, 3)))
+        m = int(rng.integers(1, 10))
+        C = rng.normal(size=3) * rng.choice([0.5, 2.0, 5.0]) + rng.uniform(-0.3, 0.3, (m, 3)) * rng.choice([0.1, 1.0])
+        limit = rng.uniform(0.0, 0.3, m)
+        if k % 50 == 1:
+            C[int(rng.integers(m)), int(rng.integers(3))] = rng.choice([np.nan, np.inf, -np.inf])
+        if k % 50 == 2:
+            limit[int(rng.integers(m))] = rng.choice([np.nan, np.inf])
+        want = _one_by_one(boxes, C, limit)
+        assert box_screen.all_clear(boxes, C, limit) == want
+        group = box_screen._group(list(zip(C.tolist(), limit.tolist())))
+        assert (group is not None) == bool(np.isfinite(C).all() and np.isfinite(limit).all())
+        for box in boxes:
+            if group is not None and box_screen._clear(box, *group):
+                group_clear += 1
+                assert _one_by_one([box], C, limit)
+            elif _one_by_one([box], C, limit):
+                fallback += 1
+    assert group_clear > 1000 and fallback > 200, (group_clear, fallback)
+
+
+def test_with_seed_is_dataclasses_replace():
+    """Random settings (every field drawn), seeds: the same type, the same fields in the same order as ``replace``
+    gives, the original unchanged; a subclass and an object with an extra attribute go through ``replace``."""
+    import dataclasses
+
+    from robodesign.design.evaluator import with_seed
+    from robodesign.design.stages import SolveSettings
+    rng = np.random.default_rng(95)
+    for _ in range(200):
+        kw = {}
+        for f in dataclasses.fields(SolveSettings):
+            v = getattr(SolveSettings(), f.name)
+            kw[f.name] = (not v) if isinstance(v, bool) else int(rng.integers(1, 500)) if isinstance(v, int) else \
+                float(rng.uniform(0.001, 5.0)) if isinstance(v, float) else v
+        s = SolveSettings(**kw)
+        before = dict(s.__dict__)
+        seed = int(rng.integers(0, 2 ** 32))
+        got, want = with_seed(s, seed), dataclasses.replace(s, seed=seed)
+        assert type(got) is SolveSettings and list(got.__dict__.items()) == list(want.__dict__.items())
+        assert got == want and got is not s and s.__dict__ == before
+        assert dataclasses.asdict(got) == dataclasses.asdict(want)
+
+    @dataclasses.dataclass
+    class Sub(SolveSettings):
+        extra: int = 3
+
+    assert type(with_seed(Sub(extra=4), 9)) is Sub and with_seed(Sub(extra=4), 9).extra == 4
+    s = SolveSettings()
+    s.note = "kept by neither"
+    got = with_seed(s, 5)
+    assert got.seed == 5 and not hasattr(got, "note")
 

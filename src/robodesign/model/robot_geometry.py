@@ -15,6 +15,9 @@ from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import pinocchio as pin
 
+from robodesign.model import collision_cull, geometry_kernel
+from robodesign.model.box_screen import all_clear, boxes_of
+from robodesign.model.collision_cull import SLACK, bounding_sphere, distance_field, obstacle_bounds
 from robodesign.model.robot_build import geometry_bodies, geometry_specs
 
 if TYPE_CHECKING:
@@ -286,7 +289,6 @@ class RobotGeometry:
 
     def _single_culler(self):
         """The culler for :meth:`in_collision`, or None (kernel not compiled yet: asked again later)."""
-        from robodesign.model import collision_cull, geometry_kernel
         if not geometry_kernel.ready():
             self._plain_queries = -_CULL_RETRY   # (ready() reads the cache's stamp: not at every query)
             return None
@@ -347,8 +349,6 @@ class RobotGeometry:
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
         field; :class:`robodesign.model.collision_cull.ObstacleBounds`, after the quick screen of
         :mod:`robodesign.model.box_screen`)."""
-        from robodesign.model.box_screen import all_clear, boxes_of
-        from robodesign.model.collision_cull import SLACK, distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
             root = [k for k, _, _ in self._root_geoms]   # (parentJoint 0, in index order)
             self._root_spheres = (root, *_placed_spheres([(P, shape) for _, P, shape in self._root_geoms]))
@@ -390,7 +390,6 @@ def _placed_spheres(objects: List[Tuple[np.ndarray, object]]) -> Tuple[np.ndarra
     (placement P, coal shape), their centres placed by P (the base frame for the objects fixed to the world),
     read-only. Kept per shapes and placements: robots of one search share their first modules, so their roots'
     spheres are the same numbers."""
-    from robodesign.model.collision_cull import bounding_sphere
     key = tuple([(id(shape), P.tobytes()) for P, shape in objects])
     hit = _SPHERES.get(key)
     if hit is not None and all(a is shape for a, (_, shape) in zip(hit[0], objects)):
