@@ -192,3 +192,31 @@ def test_with_seed_is_dataclasses_replace():
     got = with_seed(s, 5)
     assert got.seed == 5 and not hasattr(got, "note")
 
+
+@pytest.mark.parametrize("modules, dofs", [("robodesign_arm", (3, 5, 6, 7)), (IMPROV, (6,))])
+def test_root_spheres_kept_by_the_walk_key_are_the_plain_ones(modules, dofs, monkeypatch):
+    """The base stage's spheres of the objects fixed to the world (kept per the walk's key of the root bodies: their
+    placement's token and record), for robots built from a cold memory, a warm one and one cleared mid-walk, at random
+    base poses: bit for bit each object's bounding sphere placed by its own placement."""
+    from robodesign.model import robot_geometry
+    from robodesign.model.collision_cull import bounding_sphere
+    ms = load_module_set(modules)
+    rng = np.random.default_rng(96)
+    robot_geometry._SPHERES.clear()
+    orders = [random_serial_order(ms, rng, dof=dofs[k % len(dofs)]) for k in range(16)]
+    kept = 0
+    for limit in (None, 3):
+        if limit is not None:
+            monkeypatch.setattr(robot_build, "_PRODUCTS_MAX", limit)
+        for order in orders + orders[::-1]:
+            robot = Robot(ms, Assembly.from_order(ms, order), base_pose=_random_pose(rng))
+            robot.set_obstacles([])
+            robot._base_pairs_near()
+            root, C, r = robot._root_spheres
+            assert root == [g for g, _, _ in robot._root_geoms] and len(root) > 0
+            for i, (_, P, shape) in enumerate(robot._root_geoms):
+                c, ri = bounding_sphere(shape)
+                assert C[i].tobytes() == (P[:3, :3] @ c + P[:3, 3]).tobytes() and r[i] == ri
+            kept += C is robot_geometry._SPHERES[robot._root_key][0]
+    assert kept == 64 and len(robot_geometry._SPHERES) < 64
+

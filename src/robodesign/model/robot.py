@@ -234,6 +234,7 @@ class Robot(RobotGeometry):
         self._frames: Optional[list] = w.bodies   # (the bodies' frames; None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
         self._geoms, self._n_geoms, self._root_geoms, self._placed = w.geoms, w.n_geoms, w.root_geoms, False
+        self._root_key = tuple(w.root_key)
         self._specs: Optional[list] = None   # (_geom_specs, _geom_body: made of _geoms on first use)
         self._bodies_of_geoms: Optional[list] = None
         self._direct_joint_pairs, self._self_map = w.direct_joint_pairs, None   # (the map: on first use)

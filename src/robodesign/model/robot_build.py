@@ -188,6 +188,9 @@ class Walk:
         self.geoms: List[tuple] = []
         self.n_geoms = 0
         self.root_geoms: List[Tuple[int, np.ndarray, object]] = []   # (index, placement, shape) on joint 0
+        # (token of its placement, id of its record) per body with those objects: they decide the objects' placements
+        # and shapes (the products' memory; module tables are never dropped, so the ids are not reused)
+        self.root_key: List[Tuple[int, int]] = []
         self.root_items: List[Tuple[str, int, np.ndarray]] = []
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
@@ -336,6 +339,7 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
                 for g, (n, _, shape) in enumerate(geoms, n_geoms):   # (g: the object's index)
                     root.append(("geom", g, Ps[n].copy()))
                     w.root_geoms.append((g, Ps[n], shape))
+                w.root_key.append((token, id(rec)))
             placed.append((name, jid, jf, Ps, geoms, i, bid))
             n_geoms += len(geoms)
         if joints:
