@@ -220,3 +220,31 @@ def test_root_spheres_kept_by_the_walk_key_are_the_plain_ones(modules, dofs, mon
             kept += C is robot_geometry._SPHERES[robot._root_key][0]
     assert kept == 64 and len(robot_geometry._SPHERES) < 64
 
+
+@pytest.mark.parametrize("modules, dofs", [("robodesign_arm", (3, 5, 6, 7)), (IMPROV, (6,))])
+def test_root_placements_shared_read_only_place_as_copies(modules, dofs):
+    """The walk's placements on joint 0 are the remembered products themselves (read-only, shared by robots); placed
+    at random base poses, the first joint, the root objects (geometry made before and after the pose) and the frames
+    are bit for bit ``pin.SE3(T @ copy)`` of a fresh copy of each."""
+    ms = load_module_set(modules)
+    rng = np.random.default_rng(97)
+    for k in range(12):
+        asm = Assembly.from_order(ms, random_serial_order(ms, rng, dof=dofs[k % len(dofs)]))
+        for geometry_first in (False, True):
+            robot = Robot(ms, asm)
+            if geometry_first:
+                robot.geom_model
+            robot.add_frames()
+            T = _random_pose(rng)
+            robot.set_base_pose(T)
+            gm, m = robot.geom_model, robot.kinematic_model
+            kinds = set()
+            for kind, idx, M in robot._root_items:
+                kinds.add(kind)
+                want = pin.SE3(T @ np.array(M)).homogeneous.tobytes()
+                got = (m.jointPlacements[idx] if kind == "joint" else m.frames[idx].placement if kind == "frame"
+                       else gm.geometryObjects[idx].placement)
+                assert got.homogeneous.tobytes() == want
+                if kind != "frame":
+                    assert not M.flags.writeable
+            assert kinds == {"joint", "geom", "frame"}

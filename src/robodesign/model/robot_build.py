@@ -191,6 +191,8 @@ class Walk:
         # (token of its placement, id of its record) per body with those objects: they decide the objects' placements
         # and shapes (the products' memory; module tables are never dropped, so the ids are not reused)
         self.root_key: List[Tuple[int, int]] = []
+        # (kind, index, base-frame placement) of the joints and objects on joint 0: the remembered products themselves
+        # (read-only, shared by robots: the base pose multiplies them, nothing writes them)
         self.root_items: List[Tuple[str, int, np.ndarray]] = []
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
@@ -337,8 +339,9 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
         if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
             if not jid:
                 for g, (n, _, shape) in enumerate(geoms, n_geoms):   # (g: the object's index)
-                    root.append(("geom", g, Ps[n].copy()))
-                    w.root_geoms.append((g, Ps[n], shape))
+                    P = Ps[n]
+                    root.append(("geom", g, P))
+                    w.root_geoms.append((g, P, shape))
                 w.root_key.append((token, id(rec)))
             placed.append((name, jid, jf, Ps, geoms, i, bid))
             n_geoms += len(geoms)
@@ -424,7 +427,7 @@ def _joints(w: Walk, i: int, body: tuple, Ps, jid: int, joints: tuple, seen: Lis
         w.joint_norms.append(norm)
         w.joint_frame[new_jid] = new_jid
         if jid == 0:
-            w.root_items.append(("joint", new_jid, placement.copy()))
+            w.root_items.append(("joint", new_jid, placement))
         w.joints.append((name, i) + info)
         w.rows.append(row)
         push((i, recs[k2], new_jid, Q, id(Q)))
