@@ -11,7 +11,8 @@ the limit by :data:`SLACK_M` on top, far above the rounding of either computatio
 """
 from __future__ import annotations
 
-from typing import Dict, List, Tuple
+import math
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -49,9 +50,14 @@ def boxes_of(bounds) -> List[tuple]:
 def all_clear(boxes: List[tuple], centres: np.ndarray, limit: np.ndarray) -> bool:
     """Whether every sphere (rows of ``centres``; ``limit``: the distance each must keep) lies farther than its limit
     from every box (:func:`box_aabb`). A NaN fails the test; an infinite centre passes it, and ``near``'s bound (an
-    infinite or NaN distance) clears it too."""
+    infinite or NaN distance) clears it too. Box by box, the spheres are first tested together (:func:`_group`), then
+    one by one where that does not clear them."""
     rows = list(zip(centres.tolist(), limit.tolist()))
-    for x0, y0, z0, x1, y1, z1, s in boxes:
+    group = _group(rows)
+    for box in boxes:
+        if group is not None and _clear(box, *group):
+            continue
+        x0, y0, z0, x1, y1, z1, s = box
         for (x, y, z), lim in rows:
             dx = x0 - x if x < x0 else (x - x1 if x > x1 else 0.0)
             dy = y0 - y if y < y0 else (y - y1 if y > y1 else 0.0)
@@ -59,3 +65,26 @@ def all_clear(boxes: List[tuple], centres: np.ndarray, limit: np.ndarray) -> boo
             if not s * (dx * dx + dy * dy + dz * dz) ** 0.5 - SLACK_M > lim:
                 return False
     return True
+
+
+def _group(rows: List[tuple]) -> Optional[tuple]:
+    """(lower corner, upper corner, largest limit) of the AABB of the sphere centres (``rows``: (centre, limit) each);
+    None unless every number is finite (such spheres are tested one by one)."""
+    if not rows:
+        return None
+    (cx, cy, cz), lims = zip(*[c for c, _ in rows]), [lim for _, lim in rows]
+    if not math.isfinite(sum(cx) + sum(cy) + sum(cz) + sum(lims)):
+        return None
+    return min(cx), min(cy), min(cz), max(cx), max(cy), max(cz), max(lims)
+
+
+def _clear(box: tuple, lx: float, ly: float, lz: float, hx: float, hy: float, hz: float, lim: float) -> bool:
+    """Whether the AABB [l, h] of sphere centres lies farther than ``lim`` (the largest limit) from ``box``, by
+    :func:`all_clear`'s test; then every sphere passes that test against the box. A centre in the AABB is no nearer
+    the box on any axis: its gap (``x0 − x`` or ``x − x1``, rounded) is at least the AABB's, as rounding keeps
+    subtraction monotone; so are the squares, the sum, the root and the product by s ≥ 0."""
+    x0, y0, z0, x1, y1, z1, s = box
+    dx = x0 - hx if hx < x0 else (lx - x1 if lx > x1 else 0.0)
+    dy = y0 - hy if hy < y0 else (ly - y1 if ly > y1 else 0.0)
+    dz = z0 - hz if hz < z0 else (lz - z1 if lz > z1 else 0.0)
+    return s * (dx * dx + dy * dy + dz * dz) ** 0.5 - SLACK_M > lim

@@ -33,7 +33,14 @@ from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
 from robodesign.model.rnea_batch import rnea_rows
-from robodesign.model.robot_build import add_bodies, add_body_frames, chain_to, finish, walk
+from robodesign.model.robot_build import (
+    add_bodies,
+    add_body_frames,
+    chain_to,
+    finish,
+    vector_norm,  # noqa: F401 - where solve and solvers.ik import it from
+    walk,
+)
 from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
 
 COULOMB_SMOOTHING = 100.0
@@ -45,13 +52,6 @@ def smooth_sign(x: np.ndarray) -> np.ndarray:
     """sin(atan(k·x)) = k·x / √(1 + (k·x)²), the reference's smooth sign (k = 100)."""
     s = COULOMB_SMOOTHING * np.asarray(x, dtype=float)
     return s / np.sqrt(1.0 + s * s)
-
-
-def vector_norm(t: np.ndarray) -> float:
-    """``float(np.linalg.norm(t))`` of a vector of floats: the square root of ``t.dot(t)`` (numpy's norm of a
-    1-D float array is exactly that)."""
-    t = t.ravel(order="K")
-    return math.sqrt(t.dot(t))
 
 
 _UNIFORMS: Dict[int, np.ndarray] = {}   # n → the first n standard uniforms of np.random.default_rng(0)
@@ -225,6 +225,7 @@ class Robot(RobotGeometry):
         self._set_joint_limits(model, columns)
         self.tcp_frame, tcp_joint, Mc = finish(w)
         self._chain = chain_to(w, tcp_joint)   # (tcp_chain's)
+        self._joint_norms, self._tcp_norm = w.joint_norms, w.tcp_norm   # (reach_bound's terms)
         if Mc is not None:
             self._root_items.append(("frame", self.tcp_frame, Mc))
         # the pinocchio model for kinematics (joints, frames, limits): model's object, its bodies perhaps not added
@@ -233,6 +234,7 @@ class Robot(RobotGeometry):
         self._frames: Optional[list] = w.bodies   # (the bodies' frames; None once add_frames has added them)
         self._geom_model: Optional[pin.GeometryModel] = None
         self._geoms, self._n_geoms, self._root_geoms, self._placed = w.geoms, w.n_geoms, w.root_geoms, False
+        self._root_key = tuple(w.root_key)
         self._specs: Optional[list] = None   # (_geom_specs, _geom_body: made of _geoms on first use)
         self._bodies_of_geoms: Optional[list] = None
         self._direct_joint_pairs, self._self_map = w.direct_joint_pairs, None   # (the map: on first use)
@@ -423,16 +425,16 @@ class Robot(RobotGeometry):
         prismatic ones) and the TCP offset from its joint. Cached until the base pose changes.
         """
         if self._reach is None:
-            m, d = self.kinematic_model, self.data    # (scratch space: the joint poses at the neutral configuration)
-            chain = self._chain
-            pin.forwardKinematics(m, d, pin.neutral(m))
+            m, chain = self.kinematic_model, self._chain
             if not chain:
+                d = self.data   # (scratch space: the frame's pose at the neutral configuration)
+                pin.forwardKinematics(m, d, pin.neutral(m))
                 o, R = pin.updateFramePlacement(m, d, self.tcp_frame).translation.copy(), 0.0
             else:
-                o = d.oMi[chain[0]].translation.copy()
-                placements = m.jointPlacements
-                R = sum(vector_norm(placements[b].translation) for b in chain[1:])
-                R += vector_norm(m.frames[self.tcp_frame].placement.translation)
+                o = self._first_joint_origin()
+                norms = self._joint_norms   # (vector_norm of each model.jointPlacements[b].translation: the walk's)
+                R = sum(norms[b - 1] for b in chain[1:])
+                R += self._tcp_norm          # (of model.frames[self.tcp_frame].placement.translation)
                 infos = self.joint_infos
                 for j in chain:
                     if infos[j - 1].type == "prismatic":   # (pinocchio's PZ or PrismaticUnaligned)
@@ -441,6 +443,20 @@ class Robot(RobotGeometry):
                         R += max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else math.inf
             self._reach = (o, R)
         return self._reach[0].copy(), self._reach[1]
+
+    def _first_joint_origin(self) -> np.ndarray:
+        """The world origin of the TCP chain's first joint at the neutral configuration: ``data.oMi`` of it after
+        ``pin.forwardKinematics(model, data, pin.neutral(model))``. On the world, that is its placement times the
+        joint's transform at q = 0 (rotation, translation 0): translation t + R·0, which is t wherever t is finite
+        and not zero (R·0 sums zeros; only a zero's sign could differ). There the placement's translation is taken;
+        else pinocchio's forward kinematics is run."""
+        m, j = self.kinematic_model, self._chain[0]
+        t = m.jointPlacements[j].translation.copy()   # (the bindings' array views the model)
+        if all(x != 0.0 and math.isfinite(x) for x in t.tolist()):
+            return t
+        d = self.data   # (scratch space)
+        pin.forwardKinematics(m, d, pin.neutral(m))
+        return d.oMi[j].translation.copy()
 
     # ------------------------------------------------------------------------------------------
     # dynamics

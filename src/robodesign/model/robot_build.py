@@ -11,6 +11,7 @@ itself (the tests check it against such a walk). The products themselves are rem
 """
 from __future__ import annotations
 
+import math
 from collections import deque
 from itertools import count
 from typing import Dict, List, Optional, Tuple
@@ -21,6 +22,14 @@ import pinocchio as pin
 from robodesign.core.errors import AssemblyError
 from robodesign.core.spatial import inv
 from robodesign.formats.geometry import coal_shapes
+
+
+def vector_norm(t: np.ndarray) -> float:
+    """``float(np.linalg.norm(t))`` of a vector of floats: the square root of ``t.dot(t)`` (numpy's norm of a
+    1-D float array is exactly that)."""
+    t = t.ravel(order="K")
+    return math.sqrt(t.dot(t))
+
 
 _MEMO: Dict[int, Tuple[object, object]] = {}  # id(spec) → (spec, what _build derives from it alone)
 
@@ -179,6 +188,11 @@ class Walk:
         self.geoms: List[tuple] = []
         self.n_geoms = 0
         self.root_geoms: List[Tuple[int, np.ndarray, object]] = []   # (index, placement, shape) on joint 0
+        # (token of its placement, id of its record) per body with those objects: they decide the objects' placements
+        # and shapes (the products' memory; module tables are never dropped, so the ids are not reused)
+        self.root_key: List[Tuple[int, int]] = []
+        # (kind, index, base-frame placement) of the joints and objects on joint 0: the remembered products themselves
+        # (read-only, shared by robots: the base pose multiplies them, nothing writes them)
         self.root_items: List[Tuple[str, int, np.ndarray]] = []
         self.joints: List[tuple] = []   # (name, instance, module id, joint id, type, reversed) per joint
         self.rows: List[tuple] = []     # their limits and drivetrains
@@ -186,6 +200,10 @@ class Walk:
         self.direct_joint_pairs: List[tuple] = []   # ((instance, body), (instance, body)) per joint met
         self.joint_frame: Dict[int, int] = {0: 0}
         self.joint_ops: List[tuple] = []   # (parent, joint model, placement as an SE3, name) per joint, in joint order
+        # per joint, in joint order: vector_norm of its placement's translation (a joint on the world is placed again
+        # by the base pose: its entry holds the walk's placement); of the TCP frame's (finish)
+        self.joint_norms: List[float] = []
+        self.tcp_norm = 0.0
         self.mass = 0.0
         self.bodies_added = False   # (add_bodies: once per model, also for shallow copies of its robot)
 
@@ -199,7 +217,8 @@ _LABELS: Dict[Tuple[str, ...], Tuple[str, ...]] = {}   # module ids → their in
 # product, so a remembered product is bit for bit the one the walk would make. They are read-only: robots share them.
 _PRODUCTS: Dict[Tuple[int, int], tuple] = {}        # (token of M, id(rec)) → (M @ each of the body's poses)
 _PLACED: Dict[tuple, Tuple[np.ndarray, int]] = {}   # (token of M, id(rec), n, id(T)) → (Ps[n] @ T, its token)
-_JOINT_SE3: Dict[tuple, "pin.SE3"] = {}             # (token of M, id(rec), n) → pin.SE3(Ps[n]), a joint's placement
+_JOINT_SE3: Dict[tuple, Tuple["pin.SE3", float]] = {}   # (token of M, id(rec), n) → (a joint's placement
+#                                                           pin.SE3(Ps[n]), vector_norm of its translation)
 _PRODUCTS_MAX = 1 << 16
 _TOKENS = count(-1, -1)   # (never reused, also after a clear)
 
@@ -239,15 +258,17 @@ def _placed(token: int, rec: tuple, Ps, n: int, T: np.ndarray) -> Tuple[np.ndarr
     return hit
 
 
-def _joint_se3(token: int, rec: tuple, Ps, n: int) -> "pin.SE3":
-    """``pin.SE3(Ps[n])``, the placement of a joint of the body ``rec`` placed at the token's M; remembered (pinocchio
-    copies it into the model it is added to, so robots share it)."""
+def _joint_se3(token: int, rec: tuple, Ps, n: int) -> Tuple["pin.SE3", float]:
+    """(``pin.SE3(Ps[n])``, the placement of a joint of the body ``rec`` placed at the token's M, and
+    :func:`vector_norm` of its translation, the joint's term of ``Robot.reach_bound``); remembered (pinocchio copies
+    the SE3 into the model it is added to, so robots share it; the model's copy has the same translation)."""
     key = (token, id(rec), n)
-    X = _JOINT_SE3.get(key)
-    if X is None:
+    hit = _JOINT_SE3.get(key)
+    if hit is None:
         _make_room(_JOINT_SE3)
-        X = _JOINT_SE3[key] = pin.SE3(Ps[n])
-    return X
+        X = pin.SE3(Ps[n])
+        hit = _JOINT_SE3[key] = (X, vector_norm(X.translation))
+    return hit
 
 
 def instance_labels(module_ids) -> Tuple[str, ...]:
@@ -318,8 +339,10 @@ def walk(ms, asm, convex_meshes: bool) -> Walk:
         if geoms:   # (n, name suffix, coal shape) per shape of the body's collision geometry
             if not jid:
                 for g, (n, _, shape) in enumerate(geoms, n_geoms):   # (g: the object's index)
-                    root.append(("geom", g, Ps[n].copy()))
-                    w.root_geoms.append((g, Ps[n], shape))
+                    P = Ps[n]
+                    root.append(("geom", g, P))
+                    w.root_geoms.append((g, P, shape))
+                w.root_key.append((token, id(rec)))
             placed.append((name, jid, jf, Ps, geoms, i, bid))
             n_geoms += len(geoms)
         if joints:
@@ -399,10 +422,12 @@ def _joints(w: Walk, i: int, body: tuple, Ps, jid: int, joints: tuple, seen: Lis
             continue
         name = label + jsuffix
         new_jid = len(w.joint_ops) + 1   # (its frame's id too: _model checks it)
-        w.joint_ops.append((jid, jm, _joint_se3(token, rec, Ps, n), name))
+        X, norm = _joint_se3(token, rec, Ps, n)
+        w.joint_ops.append((jid, jm, X, name))
+        w.joint_norms.append(norm)
         w.joint_frame[new_jid] = new_jid
         if jid == 0:
-            w.root_items.append(("joint", new_jid, placement.copy()))
+            w.root_items.append(("joint", new_jid, placement))
         w.joints.append((name, i) + info)
         w.rows.append(row)
         push((i, recs[k2], new_jid, Q, id(Q)))
@@ -418,7 +443,9 @@ def finish(w: Walk) -> Tuple[int, int, Optional[np.ndarray]]:
     if tcp is None:
         return model.addFrame(pin.Frame("TCP", 0, 0, pin.SE3.Identity(), _OP_FRAME), False), 0, np.eye(4)
     tj, Mc = tcp[1], tcp[3]   # (M @ the connector's pose)
-    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], pin.SE3(Mc), _OP_FRAME), False)
+    X = pin.SE3(Mc)
+    w.tcp_norm = vector_norm(X.translation)   # (the frame's placement is a copy of X; on joint 0, placed again)
+    fid = model.addFrame(pin.Frame("TCP", tj, w.joint_frame[tj], X, _OP_FRAME), False)
     return fid, tj, (Mc.copy() if tj == 0 else None)
 
 

@@ -15,6 +15,9 @@ from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple
 import numpy as np
 import pinocchio as pin
 
+from robodesign.model import collision_cull, geometry_kernel
+from robodesign.model.box_screen import all_clear, boxes_of
+from robodesign.model.collision_cull import SLACK, bounding_sphere, distance_field, obstacle_bounds
 from robodesign.model.robot_build import geometry_bodies, geometry_specs
 
 if TYPE_CHECKING:
@@ -44,6 +47,7 @@ class RobotGeometry:
     _geoms: List[tuple]   # the walk's bodies with collision geometry (robot_build.Walk.geoms)
     _n_geoms: int
     _root_geoms: List[Tuple[int, np.ndarray, object]]
+    _root_key: Tuple[Tuple[int, int], ...]   # (robot_build.Walk.root_key: what decides the root objects)
     _specs: Optional[List[Tuple[str, int, int, np.ndarray, object]]]
     _bodies_of_geoms: Optional[List[Tuple[int, str]]]
     _root_items: List[Tuple[str, int, np.ndarray]]
@@ -286,7 +290,6 @@ class RobotGeometry:
 
     def _single_culler(self):
         """The culler for :meth:`in_collision`, or None (kernel not compiled yet: asked again later)."""
-        from robodesign.model import collision_cull, geometry_kernel
         if not geometry_kernel.ready():
             self._plain_queries = -_CULL_RETRY   # (ready() reads the cache's stamp: not at every query)
             return None
@@ -347,11 +350,10 @@ class RobotGeometry:
         object's bounding sphere farther from the obstacle than the safety margin (its box, then its distance
         field; :class:`robodesign.model.collision_cull.ObstacleBounds`, after the quick screen of
         :mod:`robodesign.model.box_screen`)."""
-        from robodesign.model.box_screen import all_clear, boxes_of
-        from robodesign.model.collision_cull import SLACK, distance_field, obstacle_bounds
         if self._root_spheres is None:   # (root objects, sphere centres in the base frame, radii): once per build
             root = [k for k, _, _ in self._root_geoms]   # (parentJoint 0, in index order)
-            self._root_spheres = (root, *_placed_spheres([(P, shape) for _, P, shape in self._root_geoms]))
+            self._root_spheres = (root, *_placed_spheres([(P, shape) for _, P, shape in self._root_geoms],
+                                                         self._root_key))
         root, C, r = self._root_spheres
         if not root:
             return []
@@ -382,19 +384,18 @@ _GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32) 
 _NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
 
 
-_SPHERES: Dict[tuple, tuple] = {}   # ((id(shape), placement bytes) per root object) → (their shapes, C, r)
+_SPHERES: Dict[tuple, Tuple[np.ndarray, np.ndarray]] = {}   # the walk's key of the root objects → (C, r)
 
 
-def _placed_spheres(objects: List[Tuple[np.ndarray, object]]) -> Tuple[np.ndarray, np.ndarray]:
+def _placed_spheres(objects: List[Tuple[np.ndarray, object]], key: tuple) -> Tuple[np.ndarray, np.ndarray]:
     """(C, r): the bounding spheres (:func:`~robodesign.model.collision_cull.bounding_sphere`) of the ``objects``
     (placement P, coal shape), their centres placed by P (the base frame for the objects fixed to the world),
-    read-only. Kept per shapes and placements: robots of one search share their first modules, so their roots'
-    spheres are the same numbers."""
-    from robodesign.model.collision_cull import bounding_sphere
-    key = tuple([(id(shape), P.tobytes()) for P, shape in objects])
+    read-only. Kept per ``key``, the walk's key of the objects (``robot_build.Walk.root_key``: the token of each body's
+    placement and its record decide the placements' numbers and the shapes): robots of one search share their first
+    modules, so their roots' spheres are the same numbers."""
     hit = _SPHERES.get(key)
-    if hit is not None and all(a is shape for a, (_, shape) in zip(hit[0], objects)):
-        return hit[1], hit[2]
+    if hit is not None:
+        return hit
     C, r = np.zeros((len(objects), 3)), np.zeros(len(objects))
     for i, (P, shape) in enumerate(objects):
         c, r[i] = bounding_sphere(shape)
@@ -403,8 +404,8 @@ def _placed_spheres(objects: List[Tuple[np.ndarray, object]]) -> Tuple[np.ndarra
     r.setflags(write=False)
     if len(_SPHERES) >= 4096:
         _SPHERES.clear()
-    _SPHERES[key] = (tuple(shape for _, shape in objects), C, r)   # (the shapes held: their ids are not reused)
-    return C, r
+    hit = _SPHERES[key] = (C, r)
+    return hit
 
 
 _PAIR_COLUMNS: Dict[int, List["pin.CollisionPair"]] = {}   # object k → CollisionPair(a, k) for a = 0, 1, …
