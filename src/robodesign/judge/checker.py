@@ -488,7 +488,8 @@ def _sweep_events(tq: TrajectoryQuantities, k0: int, k1: int, env: bool, path, a
         r = tq.robot
         moving = set(moving_obstacle_indices(r, tq.task)) if tq.task is not None else set()
         static = [i for i in range(len(r.obstacles)) if i not in moving] if moving else None
-        cache["checker"] = SweepChecker(r, check_self=True, check_env=True, obstacles=static, posed_arms=True)
+        cache["checker"] = SweepChecker(r, check_self=True, check_env=True, obstacles=static, posed_arms=True,
+                                        scratch=judge_robots.scratch(r))
     full: SweepChecker = cache["checker"]
     n_self = tq.robot.n_self_collision_pairs
     checker = full.subset(range(n_self, len(full.pairs)) if env else range(n_self))

@@ -11,6 +11,9 @@ The first robot of a task is built as before, by :func:`~robodesign.model.cell.s
 task's pool is made only once a check has given a robot back (a task whose obstacles cannot be built fails
 exactly where it failed). A check gives its robot back only when it returns: a robot whose check raised is
 dropped.
+
+A robot lent to a check also keeps the scratch space of its sweep (:func:`scratch`,
+:class:`~robodesign.model.sweep_scratch.KeptScratch`: the answers of a new one), lent with the robot.
 """
 from __future__ import annotations
 
@@ -21,8 +24,12 @@ from robodesign.formats.solution import Solution
 from robodesign.formats.task_spec import Task
 from robodesign.model.cell import RobotPool, build_robot, resolve_module_set
 from robodesign.model.robot import Robot
+from robodesign.model.sweep_scratch import KeptScratch
 
 _POOLS: "weakref.WeakKeyDictionary[Task, RobotPool]" = weakref.WeakKeyDictionary()
+_LENT: "weakref.WeakKeyDictionary[Robot, bool]" = weakref.WeakKeyDictionary()   # robot lent to a check → its
+# scratch space not yet lent to that check's sweep
+_SCRATCH: "weakref.WeakKeyDictionary[Robot, KeptScratch]" = weakref.WeakKeyDictionary()
 
 
 def take(task: Task, solution: Solution, module_set=None) -> Robot:
@@ -32,14 +39,28 @@ def take(task: Task, solution: Solution, module_set=None) -> Robot:
     ms = resolve_module_set(solution, module_set)
     assembly = solution.assembly(ms)
     pool: Optional[RobotPool] = _POOLS.get(task)
-    if pool is None:
-        return build_robot(task, ms, assembly, solution.base_pose)
-    return pool.take(ms, assembly, solution.base_pose)
+    robot = build_robot(task, ms, assembly, solution.base_pose) if pool is None else \
+        pool.take(ms, assembly, solution.base_pose)
+    _LENT[robot] = True
+    return robot
 
 
 def give_back(task: Task, robot: Robot) -> None:
     """Keep ``robot`` (taken by :func:`take` for ``task``, its obstacles where they were) for the next check."""
+    _LENT.pop(robot, None)
     pool = _POOLS.get(task)
     if pool is None:
         pool = _POOLS.setdefault(task, RobotPool(task))
     pool.give_back(robot)
+
+
+def scratch(robot: Robot) -> Optional[KeptScratch]:
+    """The sweep's scratch space kept with ``robot``, for the one sweep of the check that holds the robot (None:
+    a robot not lent by :func:`take`, or asked again in the same check; that checker makes its own)."""
+    if not _LENT.get(robot, False):
+        return None
+    _LENT[robot] = False
+    kept, gm = _SCRATCH.get(robot), robot.geom_model
+    if kept is None or not kept.fits(gm):
+        kept = _SCRATCH[robot] = KeptScratch(gm)
+    return kept
