@@ -13,12 +13,14 @@ from conftest import IMPROV, PRIMITIVES
 from scipy.optimize import minimize_scalar
 
 import robodesign.judge.checker as checker
+import robodesign.judge.robots as judge_robots
 from robodesign import Robot, load_module_set
 from robodesign.formats.solution import SolutionTrajectory
 from robodesign.judge.arc_torques import certify_arc_torques
 from robodesign.judge.interval_rnea import IntervalDynamics
 from robodesign.judge.motion import StepMotion
 from robodesign.judge.quantities import TrajectoryQuantities
+from robodesign.model.cell import solution_robot
 from robodesign.solvers.timing import time_parameterize
 
 ARM = ["1", "21", "4", "22", "5", "23", "12"]
@@ -126,7 +128,7 @@ def _swing(task, ms, sol, frac):
     the step from sample 10 to 11 (other joints still): samples every task.dt, constant velocity (the file's
     dq, ddq = 0 are the motion exactly). Returns (solution, peak |τ_1| between the samples, largest |τ_1| at
     the samples)."""
-    robot = checker.solution_robot(task, sol, ms)
+    robot = solution_robot(task, sol, ms)
     q_base = sol.trajectory.q[0].copy()
     w, dt = 0.9, task.dt
 
@@ -152,14 +154,13 @@ def _swing(task, ms, sol, frac):
 
 
 def _tau_violations(task, ms, sol, monkeypatch, limit):
-    orig = checker.solution_robot
-
-    def weaker(task_, sol_, ms_):
-        r = orig(task_, sol_, ms_)
+    def weaker(task_, sol_, ms_):   # a robot of this check alone (never kept: judge.robots would lend it again)
+        r = solution_robot(task_, sol_, ms_)
         r.tau_max = r.tau_max.copy()
         r.tau_max[1] = limit
         return r
-    monkeypatch.setattr(checker, "solution_robot", weaker)
+    monkeypatch.setattr(judge_robots, "take", weaker)
+    monkeypatch.setattr(judge_robots, "give_back", lambda task_, robot: None)
     v = checker.check(task, sol, ms, checker.CheckSettings(all_costs=False))
     return [x for x in v.violations if x.constraint == "joint.tau"]
 
@@ -234,7 +235,7 @@ def test_refinement_work_is_bounded(ptp3, monkeypatch):
     import robodesign.judge.arc_torques as at
     task, ms, sol = ptp3
     s, peak, _ = _swing(task, ms, sol, 0.3)
-    robot = checker.solution_robot(task, s, ms)
+    robot = solution_robot(task, s, ms)
     tr = s.trajectory
     tq = TrajectoryQuantities(robot, tr.t, tr.q, tr.dq, tr.ddq)
     lim = np.full(robot.dof, 1e9)

@@ -235,7 +235,7 @@ def test_pair_arms_are_the_per_pair_definition(module_set):
 def test_setup_shared_by_robots_built_alike():
     """A second robot built alike (same assembly, base pose and cell) takes the first one's checker set-up: the
     same bounds and names, its own robot and scratch space, the same events and queries; a robot at another base
-    pose gets its own set-up."""
+    pose gets its own set-up (its bounds from the first's, its posed arms at its base pose: tests/test_sweep_rebase.py)."""
     from robodesign.model import sweep
     from robodesign.model.cell import build_robot
     from robodesign.formats.assembly import Assembly
@@ -257,5 +257,5 @@ def test_setup_shared_by_robots_built_alike():
     assert e1 == e2 and e1 and cb.queries == fresh.queries
     T = np.eye(4)
     T[:3, 3] = (0.1, -0.2, 0.0)
-    moved = SweepChecker(build(T), posed_arms=True)
-    assert len(sweep._SETUPS) == 2 and moved.W is not cb.W
+    moved = SweepChecker(build(T), posed_arms=True)   # its own set-up, the bounds taken from b's (sweep_rebase)
+    assert len(sweep._SETUPS) == 2 and moved.W is fresh.W and moved._posed.t_g is not fresh._posed.t_g

@@ -47,10 +47,11 @@ from robodesign.formats.task_spec import (
     TaskConstraint,
     describe_pose_violations,
 )
+from robodesign.judge import robots as judge_robots
 from robodesign.judge.arc_torques import MAX_DEPTH, arc_torque_steps, certify_arc_torques
 from robodesign.judge.motion import StepMotion
 from robodesign.judge.quantities import TrajectoryQuantities
-from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices, solution_robot
+from robodesign.model.cell import moving_obstacle_events, moving_obstacle_indices
 from robodesign.model.sweep import CollisionEvent, SweepChecker
 
 LIMIT_RTOL = 1e-9  # relative slack on velocity/acceleration/torque limits (float round-off)
@@ -146,10 +147,19 @@ def _check(task: Task, solution: Solution, module_set, settings: Optional[CheckS
     if solution.task_id != task.id:
         violations.append(Violation("taskID", f"solution is for task {solution.task_id!r}, not {task.id!r}"))
     try:
-        robot = solution_robot(task, solution, module_set)
+        robot = judge_robots.take(task, solution, module_set)
     except AssemblyError as e:
         violations.append(Violation("validAssembly", str(e)))
         return Verdict(False, violations, {}, None, cost_fn.descriptor(), samples=tr.n)
+    verdict = _judge(task, solution, robot, settings, cost_fn, violations, timings, t0)
+    judge_robots.give_back(task, robot)
+    return verdict
+
+
+def _judge(task: Task, solution: Solution, robot, settings: CheckSettings, cost_fn: CostFunction,
+           violations: List[Violation], timings: Dict[str, float], t0: float) -> Verdict:
+    """:func:`check` with the solution's robot (``violations`` and ``timings`` so far, the check's start t0)."""
+    tr = solution.trajectory
     if tr.q.shape[1] != robot.dof:
         violations.append(Violation("trajectory", f"q has {tr.q.shape[1]} columns but the robot has {robot.dof} joints"))
         return Verdict(False, violations, {}, None, cost_fn.descriptor(), samples=tr.n)
@@ -478,7 +488,8 @@ def _sweep_events(tq: TrajectoryQuantities, k0: int, k1: int, env: bool, path, a
         r = tq.robot
         moving = set(moving_obstacle_indices(r, tq.task)) if tq.task is not None else set()
         static = [i for i in range(len(r.obstacles)) if i not in moving] if moving else None
-        cache["checker"] = SweepChecker(r, check_self=True, check_env=True, obstacles=static, posed_arms=True)
+        cache["checker"] = SweepChecker(r, check_self=True, check_env=True, obstacles=static, posed_arms=True,
+                                        scratch=judge_robots.scratch(r))
     full: SweepChecker = cache["checker"]
     n_self = tq.robot.n_self_collision_pairs
     checker = full.subset(range(n_self, len(full.pairs)) if env else range(n_self))

@@ -180,11 +180,36 @@ def _kernel() -> Any:
     return interval_kernel if interval_kernel.ready() else None
 
 
+_TREES: Dict[tuple, tuple] = {}   # (id(module set), assembly key) → (module set, IntervalDynamics of such a robot)
+
+
 class IntervalDynamics:
-    """The robot's kinematic tree and inertias, read once from its pinocchio model, for :meth:`link_torques`."""
+    """The robot's kinematic tree and inertias, read once from its pinocchio model, for :meth:`link_torques`.
+
+    A base pose changes only the placements of the root joints (those on the base) in the model. So what the
+    last robot of the same module set and assembly read is kept (:data:`_TREES`): a robot of it reads just its
+    root joints' placements, the gravity and the TCP (the same numbers as a full read, tests/test_interval_trees.py).
+    """
 
     def __init__(self, robot):
         m = robot.model
+        key = (id(robot.module_set), robot.assembly.key()) if getattr(robot, "assembly", None) is not None else None
+        kept = _TREES.get(key) if key is not None else None
+        if kept is not None and kept[0] is robot.module_set:
+            self._adopt(kept[1], m)
+        else:
+            self._read(robot, m)
+            if key is not None:
+                if len(_TREES) >= 64:
+                    _TREES.clear()
+                _TREES[key] = (robot.module_set, self)
+        self.gravity = np.array(m.gravity.linear)
+        fr = m.frames[robot.tcp_frame]
+        self.tcp_joint = int(fr.parentJoint)
+        self.tcp_offset = np.array(fr.placement.translation)
+
+    def _read(self, robot, m) -> None:
+        """Every joint's parent, kind, sign, placement (R, p) and body inertia (mass, lever, inertia) from ``m``."""
         self.dof = robot.dof
         self.parents, self.kinds, self.signs, self.R, self.p = [], [], [], [], []
         self.mass, self.lever, self.inertia = [], [], []
@@ -209,10 +234,21 @@ class IntervalDynamics:
             self.mass.append(float(Y.mass))
             self.lever.append(np.array(Y.lever))
             self.inertia.append(np.array(Y.inertia))
-        self.gravity = np.array(m.gravity.linear)
-        fr = m.frames[robot.tcp_frame]
-        self.tcp_joint = int(fr.parentJoint)
-        self.tcp_offset = np.array(fr.placement.translation)
+
+    def _adopt(self, kept: "IntervalDynamics", m) -> None:
+        """:meth:`_read` of a model of ``kept``'s module set and assembly: ``kept``'s tree (its lists shared, never
+        changed) with the root joints' placements read from ``m``, and its kernel arguments with those rows."""
+        self.dof, self.parents, self.kinds, self.signs = kept.dof, kept.parents, kept.kinds, kept.signs
+        self.mass, self.lever, self.inertia = kept.mass, kept.lever, kept.inertia
+        self.R, self.p = list(kept.R), list(kept.p)
+        args = kept._kernel_args
+        R, Sp = args[3].copy(), args[4].copy()
+        for j, parent in enumerate(self.parents):
+            if parent == 0:
+                P = m.jointPlacements[j + 1]
+                self.R[j], self.p[j] = np.array(P.rotation), np.array(P.translation)
+                R[j], Sp[j] = self.R[j], _skew(self.p[j])
+        self.__dict__["_kernel_args"] = args[:3] + (R, Sp) + args[5:]
 
     def mass_matrix_bound(self, Q: Tuple[np.ndarray, np.ndarray]) -> np.ndarray:
         """(P, dof, dof) bounds of |M(q)[j, i]| (link side, no armature) over the boxes ``Q``: column i is RNEA

@@ -157,10 +157,45 @@ class _BatchKinematics:
         return out
 
 
+_TREES: Dict[tuple, tuple] = {}   # (id(module set), assembly key) → (module set, _BatchKinematics of such a robot)
+
+
+def _adopted(kept: _BatchKinematics, model: "pin.Model") -> _BatchKinematics:
+    """``_BatchKinematics(model)`` of a model of ``kept``'s module set and assembly: a base pose changes only the
+    root joints' placements (those on the base), so ``kept``'s tree (its lists shared, never changed) with those
+    read from ``model``, and its kernel arrays with those rows."""
+    out = object.__new__(_BatchKinematics)
+    out.parents, out.kind, out.axis, out.iq, out.z = kept.parents, kept.kind, kept.axis, kept.iq, kept.z
+    out.R, out.t = list(kept.R), list(kept.t)
+    tree, _ = kept.arrays()
+    R, t = tree[1].copy(), tree[2].copy()
+    for k, parent in enumerate(out.parents):
+        if parent == 0:
+            M = model.jointPlacements[k + 1]
+            out.R[k], out.t[k] = np.array(M.rotation, dtype=float), np.array(M.translation, dtype=float)
+            R[k], t[k] = out.R[k], out.t[k]
+    out.model, out.frames, out.njoints = model, {}, model.njoints
+    J = len(out.parents)
+    out._arrays = ((tree[0], R, t) + tree[3:], (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3))))
+    return out
+
+
 def batch_kinematics(robot) -> _BatchKinematics:
-    """The robot's :class:`_BatchKinematics` (kept on the robot, ``_batch_chain``, until its base pose changes)."""
+    """The robot's :class:`_BatchKinematics` (kept on the robot, ``_batch_chain``, until its base pose changes),
+    made of the last one of a robot of the same module set and assembly when there is one (:func:`_adopted`; the
+    same arrays, tests/test_fk_trees.py)."""
     if robot._batch_chain is None:
-        robot._batch_chain = _BatchKinematics(robot.kinematic_model)
+        ms, assembly = getattr(robot, "module_set", None), getattr(robot, "assembly", None)
+        key = (id(ms), assembly.key()) if ms is not None and assembly is not None else None
+        kept = _TREES.get(key) if key is not None else None
+        if kept is not None and kept[0] is ms:
+            robot._batch_chain = _adopted(kept[1], robot.kinematic_model)
+        else:
+            robot._batch_chain = _BatchKinematics(robot.kinematic_model)
+            if key is not None:
+                if len(_TREES) >= 64:
+                    _TREES.clear()
+                _TREES[key] = (ms, robot._batch_chain)
     return robot._batch_chain
 
 

@@ -45,6 +45,8 @@ import pinocchio as pin
 from robodesign.model.robot import Robot
 from robodesign.model.sweep_bounds import PosedArms, StaticSteps
 from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
+from robodesign.model.sweep_rebase import keep, rebased
+from robodesign.model.sweep_scratch import KeptScratch
 
 
 @dataclass(frozen=True)
@@ -338,8 +340,9 @@ def _cached_setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Op
                              posed_arms))
     hit = _SETUPS.get(key) if key is not None else None
     if hit is None or hit[0] is not robot.module_set:
-        hit = (getattr(robot, "module_set", None), _setup(robot, check_self, check_env, obstacles, symmetry,
-                                                          posed_arms))
+        setup = rebased(robot, key) if key is not None else None   # (a robot built alike at another base pose's)
+        hit = (getattr(robot, "module_set", None), setup if setup is not None else
+               keep(robot, key, _setup(robot, check_self, check_env, obstacles, symmetry, posed_arms)))
         if key is not None:
             with _SETUPS_LOCK:
                 _SETUPS[key] = hit
@@ -386,12 +389,12 @@ class SweepChecker:
 
     def __init__(self, robot: Robot, check_self: bool = True, check_env: bool = True, tolerance: float = 1e-6,
                  max_substeps: int = 2000, obstacles: Optional[Collection[int]] = None, symmetry: bool = True,
-                 posed_arms: bool = False):
+                 posed_arms: bool = False, scratch: Optional[KeptScratch] = None):
         """``obstacles``: indices into ``robot.obstacles`` whose robot–obstacle pairs are checked (None: all).
         ``symmetry``: use bodies of revolution to tighten the bounds (module docstring); False gives the plain
         lever-arm bounds (same verdicts, more distance queries). ``posed_arms``: schedule the distance queries
         with the lever arms of the motion's own poses (:class:`~robodesign.model.sweep_bounds.PosedArms`; the same
-        events, fewer queries)."""
+        events, fewer queries). ``scratch``: a kept scratch space of the robot's geometry, lent to this checker alone."""
         self.robot = robot
         self.tolerance = tolerance
         self.max_substeps = max_substeps
@@ -400,8 +403,8 @@ class SweepChecker:
         if self._posed is not None:  # the template's, bound to this robot (its motion caches empty)
             self._posed = self._posed.bound_to(robot)
         self._gm = gm  # (the robot's; its scratch space below)
-        self._req = pin.GeometryData(gm)
-        self._dreq = self._req.distanceRequests
+        self._req = pin.GeometryData(gm) if scratch is None else scratch.lend()
+        self._asked = None if scratch is None else scratch.asked   # (the pairs asked in a kept scratch space)
         self.queries = 0  # pair distances computed (a measure of the work, for benchmarks and tests)
 
     def subset(self, cols: Sequence[int]) -> "SweepChecker":
@@ -428,6 +431,8 @@ class SweepChecker:
         r, gm, gd, pairs = self.robot, self._gm, self._req, self.pairs
         pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
         distance = pin.computeDistance
+        if self._asked is not None:   # (a kept scratch space: sweep_scratch)
+            self._asked.update([pairs[c] for c in cols])
         out = np.array([distance(gm, gd, pairs[c]).min_distance for c in cols], dtype=float)
         self.queries += len(out)
         return out
