@@ -87,18 +87,21 @@ def stage_times(task, sol, ms, repeat: int) -> None:
     import collections
 
     from robodesign.judge import checker as judge
+    from robodesign.judge import robots as judge_robots
     from robodesign.model.sweep import SweepChecker
     acc: dict = collections.defaultdict(float)
-    stages = {"solution_robot": "model build", "check_goal": "goals", "_collision_violations": "collision rules",
-              "_arc_torque_violations": "torques between samples", "_costs": "costs"}
-    for name, key in stages.items():
-        def timed(*a, _f=getattr(judge, name), _k=key, **k):
+    # (module, function) → stage: the judge's robot (taken from its pool or built), then the checker's steps
+    stages = {(judge_robots, "take"): "model build", (judge, "check_goal"): "goals",
+              (judge, "_collision_violations"): "collision rules",
+              (judge, "_arc_torque_violations"): "torques between samples", (judge, "_costs"): "costs"}
+    for (module, name), key in stages.items():
+        def timed(*a, _f=getattr(module, name), _k=key, **k):
             t0 = time.process_time()
             try:
                 return _f(*a, **k)
             finally:
                 acc[_k] += time.process_time() - t0
-        setattr(judge, name, timed)
+        setattr(module, name, timed)
     queries = [0]
     distances = SweepChecker.distances
 
