@@ -17,7 +17,8 @@ centre from the joint poses of this configuration):
   to that centre. A cell not computed yet lets the pair survive (coal decides) and is reported, so that the
   caller can fill it for the next queries;
 * a surviving self pair whose inner spheres (:mod:`.inner_spheres`) overlap by more than the slack beyond its
-  margin is reported as proven colliding: coal would find it so, and the culler then asks coal nothing.
+  margin, or one of whose convex hulls holds a vertex of the other deeper than |margin − slack|, is reported as proven
+  colliding: coal would find it so, and the culler then asks coal nothing.
 
 Every bound is conservative (slack on top of the margin far above coal's tolerances), so the verdict is the
 one ``pin.computeCollisions`` gives (tests/test_geometry_kernel.py compares them state by state). Without numba
@@ -121,6 +122,35 @@ def _inner_overlap(a, b, lim, gpar, istart, ilocal, irad, R, p):  # pragma: no c
 
 
 @njit(cache=True, nogil=True)
+def _vertex_inside(a, b, lim, gpar, istart, ilocal, irad, R, p):  # pragma: no cover
+    """Whether a hull vertex of geometry ``a`` lies inside the hull of ``b`` with every face plane's ``n·x + d`` below
+    −|``lim``| (``lim``: the pair's margin − slack; the rows of :func:`~.inner_spheres.placed_inner_spheres`' second
+    and third blocks, in their joints' frames). Its depth δ (> |lim|, the distance to b's boundary) bounds the
+    penetration from below, so the pair's distance is at most −δ < lim: coal finds it colliding."""
+    top = -abs(lim)
+    G1 = len(gpar) + 1
+    f0, f1 = istart[2 * G1 + b], istart[2 * G1 + b + 1]
+    if f0 == f1:
+        return False
+    ja, jb = gpar[a], gpar[b]
+    for u in range(istart[G1 + a], istart[G1 + a + 1]):
+        e0 = p[ja, 0] + R[ja, 0, 0] * ilocal[u, 0] + R[ja, 0, 1] * ilocal[u, 1] + R[ja, 0, 2] * ilocal[u, 2] - p[jb, 0]
+        e1 = p[ja, 1] + R[ja, 1, 0] * ilocal[u, 0] + R[ja, 1, 1] * ilocal[u, 1] + R[ja, 1, 2] * ilocal[u, 2] - p[jb, 1]
+        e2 = p[ja, 2] + R[ja, 2, 0] * ilocal[u, 0] + R[ja, 2, 1] * ilocal[u, 1] + R[ja, 2, 2] * ilocal[u, 2] - p[jb, 2]
+        y0 = R[jb, 0, 0] * e0 + R[jb, 1, 0] * e1 + R[jb, 2, 0] * e2   # in b's joint frame
+        y1 = R[jb, 0, 1] * e0 + R[jb, 1, 1] * e1 + R[jb, 2, 1] * e2
+        y2 = R[jb, 0, 2] * e0 + R[jb, 1, 2] * e1 + R[jb, 2, 2] * e2
+        inside = True
+        for f in range(f0, f1):
+            if not ilocal[f, 0] * y0 + ilocal[f, 1] * y1 + ilocal[f, 2] * y2 + irad[f] < top:
+                inside = False
+                break
+        if inside:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
 def survivors(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, istart, ilocal, irad, sproof,
               oa, ob, olim, ok, oR, ot, olo, ohi, grid_lo, grid_dim, grid_off, h, grid, active, R, p, C, out,
               unknown):  # pragma: no cover
@@ -139,7 +169,8 @@ def _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, 
     clear at ``q``, written to ``out``; the grid cells (flat indices into ``grid``) asked but not known, written to
     ``unknown``; ``R``, ``p`` (the joints' world poses) and ``C`` (the spheres' centres) are scratch space. With
     ``prove``, the first surviving self pair ``sk[i]`` whose inner spheres lie closer than their radii +
-    ``sproof[i]`` (it collides). Returns (surviving pairs, unknown cells, that pair or -1)."""
+    ``sproof[i]``, or one of whose hull vertices lies inside the other's hull with every plane below ``sproof[i]``
+    (it collides). Returns (surviving pairs, unknown cells, that pair or -1)."""
     _joint_poses(q, parents, Rl, tl, kind, axis, iq, R, p)
     for g in range(len(gpar)):
         jg = gpar[g]
@@ -156,7 +187,9 @@ def _bounds(q, parents, Rl, tl, kind, axis, iq, gpar, glocal, sa, sb, slim, sk, 
         if d0 * d0 + d1 * d1 + d2 * d2 <= slim[i] * slim[i]:
             out[n] = sk[i]
             n += 1
-            if prove and hit < 0 and _inner_overlap(sa[i], sb[i], sproof[i], gpar, istart, ilocal, irad, R, p):
+            if prove and hit < 0 and (_inner_overlap(sa[i], sb[i], sproof[i], gpar, istart, ilocal, irad, R, p)
+                                      or _vertex_inside(sa[i], sb[i], sproof[i], gpar, istart, ilocal, irad, R, p)
+                                      or _vertex_inside(sb[i], sa[i], sproof[i], gpar, istart, ilocal, irad, R, p)):
                 hit = sk[i]
     nu = 0
     for i in range(len(oa)):
@@ -238,8 +271,8 @@ def _int_views(I):  # pragma: no cover
     i += G
     sa, sb, sk = I[i:i + S], I[i + S:i + 2 * S], I[i + 2 * S:i + 3 * S]
     i += 3 * S
-    istart = I[i:i + G + 1]
-    i += G + 1
+    istart = I[i:i + 3 * (G + 1)]
+    i += 3 * (G + 1)
     oa, ob, ok = I[i:i + P], I[i + P:i + 2 * P], I[i + 2 * P:i + 3 * P]
     i += 3 * P
     grid_lo, grid_dim = I[i:i + 3 * O].reshape((O, 3)), I[i + 3 * O:i + 6 * O].reshape((O, 3))
@@ -329,7 +362,7 @@ def _warm() -> None:
     second while the cache is cold: the culler and batched FK ask often."""
     i1, f1 = np.zeros(1, np.int64), np.zeros(1)
     args = (i1, np.zeros((1, 3, 3)), np.zeros((1, 3)), i1, np.zeros((1, 3)), i1, i1, np.zeros((1, 3)), i1, i1, f1, i1,
-            np.zeros(2, np.int64), np.zeros((1, 3)), f1, f1, i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)),
+            np.zeros(6, np.int64), np.zeros((1, 3)), f1, f1, i1, i1, f1, i1, np.zeros((1, 3, 3)), np.zeros((1, 3)),
             np.zeros((1, 3)), np.zeros((1, 3)),
             np.zeros((1, 3), np.int64), np.zeros((1, 3), np.int64), i1, 1.0, f1, np.ones(1, np.bool_),
             np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((1, 3)), np.zeros(2, np.int64), np.zeros(2, np.int64))
