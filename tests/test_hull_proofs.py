@@ -51,18 +51,15 @@ def test_placed_blocks_are_the_hulls_in_the_joint_frame():
         np.testing.assert_allclose((x @ R.T + t) @ rows[p].T + values[p], x @ P[:, :3].T + P[:, 3], atol=1e-12)
 
 
-def _without_hulls(args: list) -> list:
-    """The kernel's arguments with every hull block empty (the inner spheres alone prove)."""
-    out = list(args)
-    start = np.array(args[12])
-    G1 = len(start) // 3
-    start[G1:] = start[G1 - 1]
-    out[12] = start
-    return out
+def _packed(args: list) -> tuple:
+    """survivors_packed's arguments before ``last`` (no asks counted)."""
+    packed, _ = geometry_kernel.pack(tuple(args))
+    return (*packed, np.zeros(0, np.int64), np.zeros(len(args[-2]) + 1, np.int64))
 
 
 @pytest.mark.parametrize("margin", [-0.004, 0.0, 0.01])
 def test_hull_proofs_are_coals_verdicts(margin):
+    """Each surviving self pair given as ``last`` in turn: a proof the inner spheres do not give is coal's verdict."""
     assert geometry_kernel.warm_up() and geometry_kernel.ready()
     robot = ptp3_robot()
     c = culler_of(robot)
@@ -70,15 +67,23 @@ def test_hull_proofs_are_coals_verdicts(margin):
     assert np.all(c.self_proof == -SLACK)
     args[10] = args[10] + margin    # the survival limits (radii + margin + slack)
     args[15] = args[15] + margin    # the proof limits (margin − slack)
-    spheres_only = _without_hulls(args)
+    packed = _packed(args)
+    out = packed[0][-(len(args[-2]) + len(args[-1])):-len(args[-1])]   # the surviving pairs (a view in the ints)
     rng = np.random.default_rng(9)
     by_hull = 0
     for _ in range(600):
         q = robot.random_configuration(rng)
-        n, _, proven = geometry_kernel.survivors(q, *args)
+        n, _, proven, _ = geometry_kernel.survivors_packed(q, *packed, -1)
+        assert proven == geometry_kernel.survivors(q, *args)[2]   # no hull tested: the inner spheres' proof
         if proven >= 0:
-            assert pair_collides(robot, proven, q, margin)
-            by_hull += geometry_kernel.survivors(q, *spheres_only)[2] != proven
+            continue
+        for k in out[:n].tolist():
+            if k in c.self_k:
+                n2, _, hull_proof, _ = geometry_kernel.survivors_packed(q, *packed, k)
+                assert n2 == n and hull_proof in (-1, k)
+                if hull_proof == k:
+                    assert pair_collides(robot, k, q, margin)
+                    by_hull += 1
     assert by_hull >= (3 if margin > 0 else 10), by_hull
 
 
