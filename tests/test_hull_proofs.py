@@ -1,7 +1,7 @@
-"""The hull proofs of collision (model/inner_spheres.hull, geometry_kernel._vertex_inside; issue 25): every hull
-vertex of the IMPROV and primitive convex shapes lies on its shape (coal) and inside every face plane, the placed
-blocks are the hulls in the joints' frames, and on the PTP_3 arm the kernel proves collisions the inner spheres do
-not, each one coal's verdict (at other margins too), with the culler's verdicts coal's over every pair."""
+"""The hull proofs of collision (model/inner_spheres.hull, geometry_kernel._edge_inside; issue 25): the ends of every
+hull edge of the IMPROV and primitive convex shapes lie on their shape (coal) and inside every face plane, the
+placed blocks are the hulls in the joints' frames, and on the PTP_3 arm the kernel proves collisions the inner
+spheres do not, each one coal's verdict (at other margins too), with the culler's verdicts coal's over every pair."""
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -14,7 +14,7 @@ from robodesign.model.inner_spheres import hull, inner_spheres, placed_inner_sph
 pytestmark = pytest.mark.skipif(not geometry_kernel.available(), reason="numba unavailable or ROBODESIGN_JIT=0")
 
 
-def test_hull_vertices_lie_on_their_shapes_and_inside_every_plane():
+def test_hull_edges_ends_lie_on_their_shapes_and_inside_every_plane():
     convex = 0
     for shape in module_shapes() + random_primitives(2, 1):
         V, P = hull(shape)
@@ -22,12 +22,13 @@ def test_hull_vertices_lie_on_their_shapes_and_inside_every_plane():
             assert V.shape == (0, 3) and P.shape == (0, 4)
             continue
         convex += 1
-        assert len(V) >= 4 and len(P) >= 4
+        assert len(V) >= 12 and len(V) % 2 == 0 and len(P) >= 4   # (a tetrahedron's 6 edges at least)
+        assert not np.all(V[0::2] == V[1::2], axis=1).any()       # no edge of length 0
         np.testing.assert_allclose(np.linalg.norm(P[:, :3], axis=1), 1.0, atol=1e-12)
         points = np.asarray(shape.points()).reshape(-1, 3)
         assert (points @ P[:, :3].T + P[:, 3]).max() <= 1e-12   # every point of the shape within every plane
         for v in V:
-            assert abs(depth_inside(shape, v)) < 1e-6              # a vertex: on the shape's surface
+            assert abs(depth_inside(shape, v)) < 1e-6              # an edge's end (a vertex): on the shape's surface
     assert convex >= 5
 
 

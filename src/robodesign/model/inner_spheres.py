@@ -16,15 +16,16 @@ The spheres of a shape (in its own frame; coal's swept-sphere radius added to ea
   plane of that hull (scipy's), each new one not mostly inside one taken before;
 * any other shape: none.
 
-A convex polytope's hull (:func:`hull`: its points and the face planes of their convex hull, scipy's) proves a pair
-colliding too: a vertex of one shape inside the other's hull deeper than |margin − slack| (every face plane's
-``n·x + d`` below −|margin − slack|) is a point of both whose depth bounds the penetration from below, so the pair's
-distance is below margin − slack; the second's swept-sphere radius only adds to it. On the PTP_3 arm, 41 % of the
-collisions coal finds (pair 5.5.c0.2 – 12.12.c0.3, penetrating 0.01–5 mm) have such a vertex, and no inner sphere
-proves them.
+A convex polytope's hull (:func:`hull`: the edges and face planes of the convex hull of its points, scipy's) proves
+a pair colliding too: a point of an edge of one shape inside the other's hull deeper than |margin − slack| (every
+face plane's ``n·x + d`` below −|margin − slack|) is a point of both whose depth bounds the penetration from below,
+so the pair's distance is below margin − slack; the second's swept-sphere radius only adds to it. On the PTP_3 arm
+it proves 392 of 393 collisions coal finds between 5.5.c0.2 and 12.12.c0.3 (penetrating 0.01–5 mm; a vertex inside:
+163), which no inner sphere proves.
 
-``tests/test_inner_spheres.py`` checks that every sphere lies inside its shape (coal's distances), every vertex in
-its shape and every hull plane beyond it, and that the culler's verdicts stay coal's.
+``tests/test_inner_spheres.py`` checks that every sphere lies inside its shape (coal's distances) and that the
+culler's verdicts stay coal's; ``tests/test_hull_proofs.py`` that every edge's ends lie on its shape and every plane
+beyond it.
 """
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ MAX_SPHERES = 4
 GRID = 16
 
 _INNER: Dict[int, Tuple[object, np.ndarray, np.ndarray]] = {}   # id(shape) → (shape, centres, radii)
-_HULL: Dict[int, Tuple[object, np.ndarray, np.ndarray]] = {}    # id(shape) → (shape, vertices, planes)
+_HULL: Dict[int, Tuple[object, np.ndarray, np.ndarray]] = {}    # id(shape) → (shape, edges' ends, planes)
 
 
 def _on_axis(radius: float, half: float, axis: int, rounded: bool) -> List[Tuple[np.ndarray, float]]:
@@ -105,8 +106,9 @@ def inner_spheres(shape) -> Tuple[np.ndarray, np.ndarray]:
 
 
 def _hull(shape) -> Tuple[np.ndarray, np.ndarray]:
-    """(vertices k × 3, face planes f × 4: n (unit), d with n·x + d ≤ 0 inside) of a convex polytope's hull, in its
-    own frame; none for another shape or a flat one."""
+    """(the ends of the hull's edges, 2e × 3: rows 2i and 2i + 1 are edge i's; its face planes f × 4: n (unit), d with
+    n·x + d ≤ 0 inside) of a convex polytope, in its own frame; none for another shape or a flat one. The edges are
+    the sides of scipy's triangles (a face's diagonals too: segments of the shape all the same)."""
     if not (type(shape).__name__.startswith("Convex") and shape.num_points >= 4):
         return np.zeros((0, 3)), np.zeros((0, 4))
     from scipy.spatial import ConvexHull  # type: ignore[import-untyped]
@@ -115,7 +117,9 @@ def _hull(shape) -> Tuple[np.ndarray, np.ndarray]:
         hull_ = ConvexHull(points)
     except Exception:   # flat or degenerate: no volume
         return np.zeros((0, 3)), np.zeros((0, 4))
-    return points[hull_.vertices], np.asarray(hull_.equations, dtype=float).reshape(-1, 4)
+    edges = sorted({(min(a, b), max(a, b)) for tri in hull_.simplices.tolist() for a, b in zip(tri, tri[1:] + tri[:1])})
+    ends = points[np.array(edges, dtype=np.int64).reshape(-1)].reshape(-1, 3)
+    return ends, np.asarray(hull_.equations, dtype=float).reshape(-1, 4)
 
 
 def hull(shape) -> Tuple[np.ndarray, np.ndarray]:
@@ -134,10 +138,10 @@ def _rotated(parts: List[np.ndarray], R: np.ndarray) -> Tuple[np.ndarray, np.nda
 
 
 def placed_inner_spheres(shapes, rotations, offsets) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(start, rows, values): the inner spheres, hull vertices and hull planes of ``shapes`` placed at
+    """(start, rows, values): the inner spheres, hull edges and hull planes of ``shapes`` placed at
     ``rotations[g]``, ``offsets[g]`` in their joints' frames, in those frames, in three blocks. With G shapes,
     geometry ``g``'s spheres are rows ``start[g]`` to ``start[g + 1]`` (``rows``: centres, ``values``: radii), its
-    hull's vertices rows ``start[G + 1 + g]`` to ``start[G + 2 + g]`` (``values``: 0) and its hull's planes rows
+    hull's edges' ends rows ``start[G + 1 + g]`` to ``start[G + 2 + g]`` (in pairs; ``values``: 0) and its planes rows
     ``start[2G + 2 + g]`` to ``start[2G + 3 + g]`` (``rows``: unit normal n, ``values``: d; a point x of the joint
     frame lies inside when n·x + d ≤ 0)."""
     R = np.array(rotations, dtype=float).reshape(-1, 3, 3)
@@ -146,7 +150,7 @@ def placed_inner_spheres(shapes, rotations, offsets) -> Tuple[np.ndarray, np.nda
     spheres = [inner_spheres(s) for s in shapes]
     hulls = [hull(s) for s in shapes]
     centres, owner = _rotated([c for c, _ in spheres], R)
-    vertices, v_owner = _rotated([v for v, _ in hulls], R)
+    ends, v_owner = _rotated([v for v, _ in hulls], R)
     normals, p_owner = _rotated([p[:, :3] for _, p in hulls], R)
     offsets_d = np.concatenate([p[:, 3] for _, p in hulls] + [np.zeros(0)]) - np.einsum("mi,mi->m", normals, t[p_owner])
     start = np.zeros(3 * G + 3, dtype=np.int64)
@@ -154,8 +158,8 @@ def placed_inner_spheres(shapes, rotations, offsets) -> Tuple[np.ndarray, np.nda
     for b, own in enumerate((owner, v_owner, p_owner)):   # each block's starts, after the rows of the blocks before
         start[b * (G + 1):(b + 1) * (G + 1)] = base + np.searchsorted(own, np.arange(G + 1))
         base += len(own)
-    rows = np.concatenate([centres + t[owner], vertices + t[v_owner], normals])
-    values = np.concatenate([r for _, r in spheres] + [np.zeros(len(vertices)), offsets_d])
+    rows = np.concatenate([centres + t[owner], ends + t[v_owner], normals])
+    values = np.concatenate([r for _, r in spheres] + [np.zeros(len(ends)), offsets_d])
     return start, np.ascontiguousarray(rows), values
 
 
