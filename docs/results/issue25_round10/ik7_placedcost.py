@@ -1,5 +1,5 @@
 import sys, time
-sys.path.insert(0, sys.argv[1] + "/src"); sys.path.insert(0, sys.argv[1] + "/tests") if len(sys.argv) < 3 else sys.path.insert(0, sys.argv[2] + "/tests")
+sys.path.insert(0, sys.argv[1] + "/src"); sys.path.insert(0, "/work/h-ik7/tests")   # (ptp3_robot)
 import numpy as np
 from test_inner_spheres import ptp3_robot
 from robodesign.model.inner_spheres import placed_inner_spheres
