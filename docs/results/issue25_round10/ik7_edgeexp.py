@@ -1,5 +1,5 @@
 import sys
-exec(open('/tmp/ik7/innerexp.py').read().split("for ms, grid in")[0])
+import os; exec(open(os.path.join(os.path.dirname(os.path.abspath(__file__)), 'ik7_innerexp.py')).read().split("for ms, grid in")[0])
 from scipy.spatial import ConvexHull
 import robodesign.model.collision_cull as C
 def hullE(g):
