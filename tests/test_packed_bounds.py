@@ -29,7 +29,7 @@ def random_args(rng):
     J, G, S, U, P, O = (int(x) for x in rng.integers(0, 6, 6))
     J, G = J + 1, G + 1
     shapes = {0: (J,), 1: (J, 3, 3), 2: (J, 3), 3: (J,), 4: (J, 3), 5: (J,), 6: (G,), 7: (G, 3), 8: (S,), 9: (S,),
-              10: (S,), 11: (S,), 12: (G + 1,), 13: (U, 3), 14: (U,), 15: (S,), 16: (P,), 17: (P,), 18: (P,),
+              10: (S,), 11: (S,), 12: (3 * (G + 1),), 13: (U, 3), 14: (U,), 15: (S,), 16: (P,), 17: (P,), 18: (P,),
               19: (P,), 20: (O, 3, 3), 21: (O, 3), 22: (O, 3), 23: (O, 3), 24: (O, 3), 25: (O, 3), 26: (O,),
               28: (int(rng.integers(0, 9)),), 29: (int(rng.integers(0, 9)),), 30: (J + 1, 3, 3), 31: (J + 1, 3),
               32: (G, 3), 33: (int(rng.integers(1, 9)),), 34: (P + 1,)}
@@ -92,7 +92,7 @@ def test_the_packed_kernel_equals_the_separate_one_and_the_verdicts_coals():
         for q in Q:
             n, nu, proven = geometry_kernel.survivors(q, *separate)
             left, due = np.zeros(0, np.int64), np.zeros(len(args[-2]), np.int64)
-            assert geometry_kernel.survivors_packed(q, *packed[:4], left, due) == (n, nu, proven, 0)
+            assert geometry_kernel.survivors_packed(q, *packed[:4], left, due, -1) == (n, nu, proven, 0)
             assert np.array_equal(args[-2][:n], separate[-2][:n]) and np.array_equal(args[-1][:nu], separate[-1][:nu])
             verdicts.append(c.in_collision(q))
             checked += n
@@ -103,8 +103,9 @@ def test_the_packed_kernel_equals_the_separate_one_and_the_verdicts_coals():
 
 
 class DictCounting(CollisionCuller):
-    """The culler as it counted before: survivors on the separate arrays, then per pair in a dictionary (until
-    PROVE_AFTER asks) for every query whose pairs survive, the pairs reaching PROVE_AFTER proven in that order."""
+    """The culler as it counted before: survivors on the separate arrays (and the hull proof of the pair coal found
+    colliding last on a separate pack), then per pair in a dictionary (until PROVE_AFTER asks) for every query whose
+    pairs survive, the pairs reaching PROVE_AFTER proven in that order."""
 
     def __init__(self, robot):
         super().__init__(robot)
@@ -113,6 +114,9 @@ class DictCounting(CollisionCuller):
     def in_collision(self, q):
         args, grids, _ = self._one = self._one or self._kernel_args()
         n, nu, proven = geometry_kernel.survivors(q, *args)
+        if proven < 0 <= self._last_hit:   # the hull proof on the pair coal found colliding last (a separate pack)
+            packed = (*geometry_kernel.pack(args)[0], np.zeros(0, np.int64), np.zeros(self.n_pairs + 1, np.int64))
+            proven = geometry_kernel.survivors_packed(q, *packed, self._last_hit)[2]
         ks = args[-2][:n].tolist()
         if self.provable:
             for k in ks:

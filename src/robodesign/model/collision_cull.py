@@ -508,7 +508,7 @@ class CollisionCuller:
         (:func:`robodesign.model.geometry_kernel.survivors`) unless their inner spheres prove one colliding; the grid
         cells it asked about unknown are computed afterwards, for the next queries."""
         args, grids, packed = self._one = self._one or self._kernel_args()
-        n, nu, proven, due = geometry_kernel.survivors_packed(q, *packed)
+        n, nu, proven, due = cast(Any, geometry_kernel.survivors_packed)(q, *packed, self._last_hit)   # (hull proof: last hit)
         for k in self._due[:due].tolist():   # the asks counted (by the kernel), the pairs due proven in their order
             self._prove(k)
         if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding
