@@ -140,9 +140,12 @@ def placed_inner_spheres(shapes, rotations, offsets) -> Tuple[np.ndarray, np.nda
     key = (tuple(map(id, shapes)), R.tobytes(), t.tobytes())
     hit = _PLACED.get(key)
     if hit is None or any(a is not b for a, b in zip(hit[0], shapes)):
-        if len(_PLACED) >= 4096:
+        if len(_PLACED) >= 256:   # (a few thousand rows each: at most a few tens of MB)
             _PLACED.clear()
-        hit = _PLACED[key] = (tuple(shapes), _placed(shapes, R, t))   # (the shapes held: their ids not reused)
+        arrays = _placed(shapes, R, t)
+        for a in arrays:
+            a.setflags(write=False)
+        hit = _PLACED[key] = (tuple(shapes), arrays)   # (the shapes held: their ids not reused)
     return hit[1]
 
 
