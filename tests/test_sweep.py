@@ -168,7 +168,7 @@ def test_symmetry_needs_the_centre_on_the_axis_and_the_axis_aligned():
     """symmetric_about by hand: a sphere anywhere on the line, a cylinder/capsule/cone only when coaxial; a box
     or a convex mesh never; 1e-9 m or rad of misalignment is the limit."""
     import coal
-    from robodesign.model.sweep import symmetric_about
+    from robodesign.model.revolution import symmetric_about
 
     def obj(shape, xyz=(0, 0, 0), rot=np.eye(3)):
         return pin.GeometryObject("g", 0, pin.SE3(rot, np.array(xyz, float)), shape)

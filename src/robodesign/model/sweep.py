@@ -33,7 +33,6 @@ geometries' bounding spheres).
 """
 from __future__ import annotations
 
-import math
 import threading
 from dataclasses import dataclass
 from functools import cached_property
@@ -42,6 +41,7 @@ from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set
 import numpy as np
 import pinocchio as pin
 
+from robodesign.model.revolution import _revolute_axis, _symmetric
 from robodesign.model.robot import Robot
 from robodesign.model.sweep_bounds import PosedArms, StaticSteps
 from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
@@ -66,58 +66,10 @@ def _shape_radius(geometry) -> float:
     return float(np.linalg.norm(m))
 
 
-#: a primitive counts as a body of revolution about a line when its centre lies within this distance of
-#: the line and (cylinder, capsule, cone) its axis is within this angle of the line's direction: the
-#: occupied space then moves by less than 1e-9·(size + 1) m under any rotation about the line
-SYMMETRY_EPS = 1e-9
 #: how far SweepChecker._ahead queries: where the path bound from the last query reaches 1.6× its clearance (on
 #: the 350-sample PTP_3 check: mesh queries 150 → 117; with 1.2: 133, 2: 174, 3: 249; a failed try costs one query)
 _AHEAD = 1.6
 _EXTEND_SELF = True  # extend the certificates of self pairs too (PosedArms.certify)
-_ROTATIONAL = ("Cylinder", "Capsule", "Cone")  # bodies of revolution about their local z axis
-
-
-def revolute_axis(model, j: int) -> Optional[np.ndarray]:
-    """Unit axis of joint ``j`` in its own frame if it is a revolute joint (RX, RY, RZ, unaligned, and their
-    unbounded forms), else None."""
-    return _revolute_axis(model.joints[j])
-
-
-def _revolute_axis(joint) -> Optional[np.ndarray]:
-    name = joint.shortname()
-    for suffix, axis in (("RX", (1.0, 0, 0)), ("RY", (0, 1.0, 0)), ("RZ", (0, 0, 1.0))):
-        if name in ("JointModel" + suffix, "JointModelRUB" + suffix[1]):
-            return np.array(axis, dtype=float)
-    if name in ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned"):
-        a = np.asarray(joint.extract().axis, dtype=float)
-        return a / np.linalg.norm(a)
-    return None
-
-
-def _cross_norm(a, b) -> float:
-    """|a × b| of two 3-vectors, on Python floats (numpy's cross of 3-vectors costs ~20 µs)."""
-    a0, a1, a2 = (float(x) for x in a)
-    b0, b1, b2 = (float(x) for x in b)
-    x, y, z = a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
-    return math.sqrt(x * x + y * y + z * z)
-
-
-def symmetric_about(obj, point: np.ndarray, direction: np.ndarray, eps: float = SYMMETRY_EPS) -> bool:
-    """Whether geometry object ``obj`` (a sphere, cylinder, capsule or cone) is a body of revolution about the
-    line through ``point`` along the unit vector ``direction``, both in the frame of its parent joint: a
-    rotation about that line then leaves the space it occupies unchanged."""
-    return _symmetric(type(obj.geometry).__name__, obj.placement, point, direction, eps)
-
-
-def _symmetric(kind: str, placement, point, direction, eps: float = SYMMETRY_EPS) -> bool:
-    if kind != "Sphere" and kind not in _ROTATIONAL:
-        return False
-    centre = np.asarray(placement.translation, dtype=float)
-    if _cross_norm(centre - point, direction) > eps:
-        return False
-    if kind == "Sphere":
-        return True
-    return _cross_norm(placement.rotation[:, 2], direction) <= eps
 
 
 _RADII: dict = {}  # id(shape) → (shape, _shape_radius(shape)): the shapes are the module sets' (shared)

@@ -23,6 +23,8 @@ from typing import Dict, FrozenSet, Optional, Set, Tuple
 
 import numpy as np
 
+from robodesign.model.revolution import _revolute_axis, _symmetric
+
 _KEPT: Dict[tuple, tuple] = {}   # the set-up key without the base pose → (module set, set-up, root_coaxial)
 _LOCK = threading.Lock()
 
@@ -35,7 +37,6 @@ def _base_free(key: tuple) -> tuple:
 def root_coaxial(robot) -> FrozenSet[Tuple[int, int]]:
     """(geometry, joint) of every geometry on the base that is a body of revolution about the axis of a root joint
     (revolute, on the base), as ``sweep._Tree.coaxial_child_joints`` tests it."""
-    from robodesign.model.sweep import _revolute_axis, _symmetric  # (sweep imports this module)
     model, gm = robot.model, robot.geom_model
     objs = [gm.geometryObjects[g] for g in range(robot.n_collision_geometries)]
     on_base = [(g, o) for g, o in enumerate(objs) if int(o.parentJoint) == 0]

@@ -7,15 +7,12 @@ from __future__ import annotations
 
 import math
 import weakref
-from typing import TYPE_CHECKING, Dict, Tuple
+from typing import Dict, Tuple
 
 import numpy as np
 
 from robodesign.model.robot import vector_norm
 from robodesign.solvers.goal_terms import goal_terms, tcp_terms  # (what the goal gives, kept per goal)
-
-if TYPE_CHECKING:  # pragma: no cover
-    from robodesign.solvers.ik import GoalModel
 
 __all__ = ["ChainBounds", "chain_bounds"]
 
@@ -44,7 +41,7 @@ class ChainBounds:
     _AXES = {name: np.array(v) for name, v in _REVOLUTE_AXES.items()}   # (read, never written)
 
     def __init__(self, robot):
-        self._verdicts: Dict[int, Tuple["GoalModel", str]] = {}   # id(goal model) → (it, unreachable's answer)
+        self._verdicts: Dict[int, Tuple[object, str]] = {}   # id(goal model) → (it, unreachable's answer)
         self.key = robot.base_pose.tobytes()   # (the base pose they hold for: chain_bounds' cache)
         self.o, self.R = robot.reach_bound()
         self.circle = None
@@ -77,9 +74,10 @@ class ChainBounds:
         self.R1 = self.R - vector_norm(t2)       # R'
         self.R2 = self.R1 - vector_norm(t_tcp)   # R''
 
-    def unreachable(self, gm: "GoalModel") -> str:
-        """Why no configuration can put the TCP into the goal ('' when the bounds allow it); remembered per goal
-        model (the bounds and the goal are fixed: the IK stage asks once per goal, solve_ik again)."""
+    def unreachable(self, gm) -> str:
+        """Why no configuration can put the TCP into the goal of ``gm`` (a :class:`robodesign.solvers.ik.GoalModel`;
+        '' when the bounds allow it); remembered per goal model (the bounds and the goal are fixed: the IK stage asks
+        once per goal, solve_ik again)."""
         hit = self._verdicts.get(id(gm))
         if hit is not None and hit[0] is gm:
             return hit[1]
@@ -87,7 +85,7 @@ class ChainBounds:
         self._verdicts[id(gm)] = (gm, why)
         return why
 
-    def _unreachable(self, gm: "GoalModel") -> str:
+    def _unreachable(self, gm) -> str:
         if gm.unconstrained:
             return ""
         rp, pn, _ = goal_terms(gm)
@@ -107,7 +105,7 @@ class ChainBounds:
                 return "out_of_orientation_reach"
         return ""
 
-    def _surely_within(self, gm: "GoalModel", pn: np.ndarray) -> bool:
+    def _surely_within(self, gm, pn: np.ndarray) -> bool:
         """Whether ``gm.position_lower_bound(o) > R + 1e-9`` is certainly False without computing it: the goal's
         nominal position pn lies in each of its position sets (:func:`_nominal_inside`), so the bound (the distance
         from o to a box, or |o − pn| − r) is at most |o − pn|, and that is at most R (< 100 m: the roundings of both
@@ -115,10 +113,10 @@ class ChainBounds:
         return _nominal_inside(gm) and vector_norm(self.o - pn) <= self.R < 100.0
 
 
-_INSIDE: Dict[int, Tuple["GoalModel", bool]] = {}   # id(goal model) → (it, _nominal_inside's answer)
+_INSIDE: Dict[int, Tuple[object, bool]] = {}   # id(goal model) → (it, _nominal_inside's answer)
 
 
-def _nominal_inside(gm: "GoalModel") -> bool:
+def _nominal_inside(gm) -> bool:
     """Whether the goal's nominal position lies in its position sets: every complete x/y/z box (in a frame whose Q
     is a rotation to 1e-12, or the nominal's) holds 0 and the r_sph bound is not negative; kept per goal model."""
     hit = _INSIDE.get(id(gm))
