@@ -11,7 +11,9 @@ evaluation with its own CPU clock. A swing of the machine's speed then hits both
 per-job ratio B ÷ A cancels it. Run with A and B the same checkout, the ratios come out 0.97–1.04. The absolute
 times are higher than ``profile_evaluator``'s: each worker finds the core's caches filled by the other.
 
-Jobs: ``good``, the known-good IMPROV arm on PTP_3 at the nominal base with study seeds 0, 1, …; per family
+Jobs: ``good``, the known-good IMPROV arm on PTP_3 at the nominal base with study seeds 0, 1, …; ``ptp3`` (only when
+named in ``--only``), PTP_3's first ``--ptp3-candidates`` random candidates, each a new arm (about 1 in 40
+feasible: the feasible group is then random feasible arms, not the one known-good arm again); per family
 (``profile_evaluator``'s generated task, seed 0), the first ``--candidates`` random candidates of its search space.
 Both workers must stop every job at the same stage (else the script stops: the checkouts do not give the same
 results). Printed per scenario and group: the jobs' count, the median CPU ms of A and B, the median of the per-job
@@ -32,7 +34,7 @@ HERE = Path(__file__).resolve().parent
 GOOD = ("1", "21", "4", "22", "5", "23", "12")
 
 
-def worker(src: str, only: list, feasible: int, candidates: int) -> None:
+def worker(src: str, only: list, feasible: int, candidates: int, ptp3_candidates: int) -> None:
     """Read job numbers from stdin, evaluate each, print one JSON line per job (stage, feasible, CPU s, stages)."""
     import os
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})   # both workers on one core: a core's own speed cancels
@@ -59,10 +61,12 @@ def worker(src: str, only: list, feasible: int, candidates: int) -> None:
             jobs += [(name, lambda s=s: Evaluator(EvaluatorSpec(ptp3, seed=s)).evaluate(Candidate(GOOD)))
                      for s in range(feasible)]
             continue
-        problem = Problem.build(family_tasks(name, 1, 0)[0], "robodesign_arm", "cyc")
+        # ptp3: PTP_3's random candidates as profile_evaluator draws them (about 1 in 40 feasible, each a new arm)
+        problem = ptp3 if name == "ptp3" else Problem.build(family_tasks(name, 1, 0)[0], "robodesign_arm", "cyc")
+        n = ptp3_candidates if name == "ptp3" else candidates
         ev = Evaluator(EvaluatorSpec(problem, seed=0))
         rng = np.random.default_rng(0)
-        jobs += [(name, lambda c=problem.space.random_candidate(rng), ev=ev: ev.evaluate(c)) for _ in range(candidates)]
+        jobs += [(name, lambda c=problem.space.random_candidate(rng), ev=ev: ev.evaluate(c)) for _ in range(n)]
     print(json.dumps({"jobs": len(jobs)}), flush=True)
     for line in sys.stdin:
         name, run = jobs[int(line)]
@@ -100,17 +104,20 @@ def main() -> None:
     ap.add_argument("--only", default="good,whitman2020_g5o5,bpo2024")
     ap.add_argument("--feasible", type=int, default=20, help="evaluations of the good PTP_3 arm")
     ap.add_argument("--candidates", type=int, default=300, help="random candidates per family task")
+    ap.add_argument("--ptp3-candidates", type=int, default=900,
+                    help="random PTP_3 candidates of the ptp3 jobs (not in the default --only; ~20 feasible of 900)")
     ap.add_argument("--worker", default="", help=argparse.SUPPRESS)
     args = ap.parse_args()
     only = [s for s in args.only.split(",") if s]
     if args.worker:
         try:
-            worker(args.worker, only, args.feasible, args.candidates)
+            worker(args.worker, only, args.feasible, args.candidates, args.ptp3_candidates)
         except (KeyboardInterrupt, BrokenPipeError):   # (Ctrl-C reaches the workers too: the parent reports)
             pass
         return
     cmd = [sys.executable, __file__, "--a", args.a, "--b", args.b, "--only", args.only,
-           "--feasible", str(args.feasible), "--candidates", str(args.candidates), "--worker"]
+           "--feasible", str(args.feasible), "--candidates", str(args.candidates),
+           "--ptp3-candidates", str(args.ptp3_candidates), "--worker"]
     procs = [subprocess.Popen(cmd + [src], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
              for src in (args.a, args.b)]
     pairs: list = []
