@@ -14,7 +14,7 @@ from conftest import IMPROV, TASKS, boxes_around
 from robodesign.formats.assembly import Assembly
 from robodesign.formats.module_io import load_module_set
 from robodesign.formats.task_io import load_task
-from robodesign.model import collision_cull, geometry_kernel
+from robodesign.model import collision_cull, geometry_kernel, pair_clearance
 from robodesign.model.cell import build_robot
 from robodesign.model.collision_cull import CollisionCuller
 from robodesign.solvers.schedule import static_cell
@@ -104,12 +104,14 @@ def test_the_packed_kernel_equals_the_separate_one_and_the_verdicts_coals():
 
 class DictCounting(CollisionCuller):
     """The culler as it counted before: survivors on the separate arrays (and the hull proof of the pair coal found
-    colliding last on a separate pack), then per pair in a dictionary (until PROVE_AFTER asks) for every query whose
-    pairs survive, the pairs reaching PROVE_AFTER proven in that order."""
+    colliding last on a separate pack), then per pair in a dictionary (until PROVE_AFTER asks, for a pair whose proof
+    was put off there until PROVE_NEW) for every query whose pairs survive, the pairs reaching their count decided
+    in that order."""
 
     def __init__(self, robot):
         super().__init__(robot)
-        self.asks = {}   # per pair asked: how often (until PROVE_AFTER)
+        self.asks = {}   # per pair asked: how often (until its count)
+        self.until = {}  # per pair put off: PROVE_NEW
 
     def in_collision(self, q):
         args, grids, _ = self._one = self._one or self._kernel_args()
@@ -120,11 +122,14 @@ class DictCounting(CollisionCuller):
         ks = args[-2][:n].tolist()
         if self.provable:
             for k in ks:
-                c = self.asks.get(k, 0) + 1
-                if c <= collision_cull.PROVE_AFTER:
+                c, end = self.asks.get(k, 0) + 1, self.until.get(k, collision_cull.PROVE_AFTER)
+                if c <= end:
                     self.asks[k] = c
-                    if c == collision_cull.PROVE_AFTER:
-                        self._prove(k)
+                    if c == end:
+                        was = bool(self._deferred[k])
+                        self._due(k)
+                        if self._deferred[k] and not was:
+                            self.until[k] = collision_cull.PROVE_NEW
         if proven >= 0:
             self._last_hit = proven
         hit = proven >= 0 or (bool(n) and self._ask(q, ks))
@@ -145,18 +150,21 @@ def test_the_kernels_count_takes_the_same_pairs_to_their_proof(order, monkeypatc
     traces = []
     for kind in (CollisionCuller, DictCounting):
         tried = []
-        real = CollisionCuller._prove
-        monkeypatch.setattr(CollisionCuller, "_prove", lambda self, k, _r=real: (tried.append(k), _r(self, k))[1])
-        for record in (collision_cull._PROOFS, collision_cull._FIELDS, collision_cull._BOUNDS):
+        real = CollisionCuller._due
+        monkeypatch.setattr(CollisionCuller, "_due", lambda self, k, _r=real: (tried.append(k), _r(self, k))[1])
+        monkeypatch.setattr(collision_cull, "PROVE_NEW", 24)   # (pairs put off at 8 asks reach their proof here)
+        for record in (collision_cull._PROOFS, collision_cull._FIELDS, collision_cull._BOUNDS, pair_clearance._KNOWN):
             record.clear()   # (each culler from the same start: no proofs, no distance known in the grid cells)
         c = kind(robot)
         verdicts = [c.in_collision(q) for q in Q]
-        traces.append((verdicts, tried, c.active.tolist(), c.proven, c.narrow))
-        monkeypatch.undo()
+        traces.append((verdicts, tried, c.active.tolist(), c.proven, c.narrow, c._deferred.tolist()))
         if kind is CollisionCuller:
-            after = collision_cull.PROVE_AFTER
-            asked = {k: after - int(v) for k, v in enumerate(c.until_proof) if v < after}
+            ends = np.where(c._deferred, collision_cull.PROVE_NEW, collision_cull.PROVE_AFTER)
+            asked = {k: int(e - v) for k, (e, v) in enumerate(zip(ends, c.until_proof)) if v < e}
+        monkeypatch.undo()
     assert traces[0] == traces[1] and len(traces[0][1]) >= 3 and traces[0][3] >= 1
+    # pairs put off at their 8th ask and decided again at their 24th
+    assert sum(traces[0][5]) >= 1 and len(traces[0][1]) > len(set(traces[0][1]))
     assert asked == c.asks and len(asked) >= 10
     ref = [bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True)) for q in Q]
     assert traces[0][0] == ref

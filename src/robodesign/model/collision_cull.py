@@ -11,9 +11,10 @@ their distance does not clear:
   type gives one, else its local AABB's centre and half diagonal; plus coal's swept-sphere radius), its centre from
   the joint poses of the state;
 * a self pair is cleared when its spheres lie farther apart than the pair's security margin, and for good once
-  :mod:`.pair_clearance` has proven it farther apart than that at every configuration (tried on a robot with a
-  convex mesh when coal has been asked about the pair :data:`PROVE_AFTER` times; it is then switched off in
-  ``active``, like an inactive pair);
+  :mod:`.pair_clearance` has proven it farther apart than that at every configuration (on a robot with a convex
+  mesh: when coal has been asked about the pair :data:`PROVE_AFTER` times, a verdict kept for it is taken and,
+  without one, the proof is made at :data:`PROVE_NEW` asks, or at :data:`PROVE_AFTER` in the build's next robot; a
+  proven pair is switched off in ``active``, like an inactive pair);
 * a robot–obstacle pair is cleared when the sphere lies farther from the obstacle than the margin: first by the
   distance to the obstacle's box (its local AABB in its frame, which contains it: the exact distance for a box),
   then, for another shape, by :class:`DistanceField`: the exact distance (coal) from the centre of the grid cell
@@ -38,6 +39,7 @@ from robodesign.model import geometry_kernel, pair_clearance
 from robodesign.model.batch_fk import batch_kinematics
 from robodesign.model.inner_spheres import placed_inner_spheres
 from robodesign.model.pair_scratch import PairScratch
+from robodesign.model.shape_spheres import _bounding_sphere, bounding_sphere, tight_sphere  # noqa: F401 (re-exported)
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
 SLACK = 1e-4
@@ -50,60 +52,12 @@ REACH = 0.5
 GRID_CELLS_MAX = 1 << 22
 #: the dense grids' cells kept in all (64 MB; the oldest fields are dropped beyond)
 GRID_CELLS_KEPT = 1 << 23
-#: the asks of a self pair of coal after which the culler tries to prove it never collides (:mod:`.pair_clearance`)
+#: the asks of a self pair of coal after which the culler looks up whether it is known never to collide
+#: (:mod:`.pair_clearance`'s kept verdicts), and proves it when an earlier robot of the build was asked it as often
 PROVE_AFTER = 8
-
-
-def _bounding_sphere(shape) -> Tuple[np.ndarray, float]:
-    """Centre (in the shape's frame) and radius of a sphere containing ``shape`` (its local AABB's)."""
-    shape.computeLocalAABB()
-    box = shape.aabb_local
-    lo, hi = np.array(box.min_, dtype=float), np.array(box.max_, dtype=float)
-    swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
-    return 0.5 * (lo + hi), 0.5 * float(np.linalg.norm(hi - lo)) + swept
-
-
-def _tight_sphere(shape) -> Tuple[np.ndarray, float]:
-    """A sphere containing ``shape`` (centre in its frame, radius), as tight as the shape's type tells: a sphere's
-    own; about the centre of a cylinder, cone or capsule (coal's, on their z axis) the farthest point of its rims or
-    caps; a convex polytope's farthest vertex from its box's centre; for any other shape :func:`_bounding_sphere`'s.
-    Never larger than that one; coal's swept-sphere radius added."""
-    c, r = _bounding_sphere(shape)
-    swept = float(shape.getSweptSphereRadius()) if hasattr(shape, "getSweptSphereRadius") else 0.0
-    kind, origin = type(shape).__name__, np.zeros(3)
-    if kind == "Sphere":
-        centre, own = origin, float(shape.radius)
-    elif kind in ("Cylinder", "Cone"):
-        centre, own = origin, float(np.hypot(shape.radius, shape.halfLength))
-    elif kind == "Capsule":
-        centre, own = origin, float(shape.radius) + float(shape.halfLength)
-    elif kind.startswith("Convex") and shape.num_points:
-        P = np.asarray(shape.points(), dtype=float).reshape(-1, 3)
-        centre, own = c, float(np.sqrt(((P - c) ** 2).sum(axis=1).max()))
-    else:
-        return c, r
-    return (centre, own + swept) if own + swept < r else (c, r)
-
-
-_SPHERES: Dict[int, Tuple[object, np.ndarray, float]] = {}   # id(shape) → (shape, centre, radius)
-_TIGHT: Dict[int, Tuple[object, np.ndarray, float]] = {}     # id(shape) → (shape, centre, radius): _tight_sphere
-
-
-def bounding_sphere(shape) -> Tuple[np.ndarray, float]:
-    """:func:`_bounding_sphere` of a robot shape, kept per shape object (robots share their coal shapes, which are
-    never changed: ``robodesign.model.robot._coal_shapes``)."""
-    hit = _SPHERES.get(id(shape))
-    if hit is None or hit[0] is not shape:
-        hit = _SPHERES[id(shape)] = (shape, *_bounding_sphere(shape))   # (the shape is held: its id is not reused)
-    return hit[1], hit[2]
-
-
-def tight_sphere(shape) -> Tuple[np.ndarray, float]:
-    """:func:`_tight_sphere` of a robot shape, kept per shape object (as :func:`bounding_sphere`)."""
-    hit = _TIGHT.get(id(shape))
-    if hit is None or hit[0] is not shape:
-        hit = _TIGHT[id(shape)] = (shape, *_tight_sphere(shape))
-    return hit[1], hit[2]
+#: the asks of a self pair after which the culler proves it (a proof costs some hundreds of asks: a pair first asked
+#: this often in one robot is asked often enough to pay for it)
+PROVE_NEW = 512
 
 
 class ObstacleBounds:
@@ -359,7 +313,8 @@ class CollisionCuller:
             self.obstacles.append((field, kk, geo, self.radius[geo] + margin[kk] + SLACK))
         self.narrow = 0   # narrow-phase queries asked (statistics)
         self.until_proof = np.full(self.n_pairs * self.provable, PROVE_AFTER, np.int64)   # asks left (to the proof)
-        self._due = np.zeros(self.n_pairs + 1, np.int64)   # the pairs whose count the kernel took to 0 (scratch)
+        self._due_k = np.zeros(self.n_pairs + 1, np.int64)   # the pairs whose count the kernel took to 0 (scratch)
+        self._deferred = np.zeros(self.n_pairs * self.provable, np.bool_)   # pairs whose proof was put off
         self.proven = 0   # self pairs proven never to collide (:mod:`.pair_clearance`), dropped since
         self._known = _known_proofs(robot, shapes) if self.provable else None
         if self._known is not None:   # the proofs of this build's earlier robots: off before the first query
@@ -445,18 +400,34 @@ class CollisionCuller:
             if left[k] > 0:
                 left[k] -= 1
                 if left[k] == 0:
-                    self._prove(k)
+                    self._due(k)
 
-    def _prove(self, k: int) -> None:
+    def _due(self, k: int) -> None:
+        """Pair ``k``'s count reached 0: at :data:`PROVE_AFTER` asks the verdict kept for it, else (when no earlier
+        robot of this build was asked it as often) the proof put off until :data:`PROVE_NEW` asks; then the proof."""
+        self._prove(k, now=bool(self._deferred[k]))
+
+    def _prove(self, k: int, now: bool = True) -> None:
         """Switch pair ``k`` off in ``active`` when it is a self pair proven never closer than its margin +
-        :data:`SLACK` (not asked again when this build's earlier robots found it not proven: :data:`_PROOFS`)."""
+        :data:`SLACK` (not asked again when this build's earlier robots found it not proven: :data:`_PROOFS`). With
+        ``now`` False only a kept verdict is taken: without one, the proof is put off (the count set to reach 0 again
+        at :data:`PROVE_NEW` asks) unless an earlier robot of the build put it off too."""
         a, b = int(self.first[k]), int(self.second[k])
         limit = float(self.margin[k]) + SLACK
-        if b >= len(self.parent) or not self.active[k] or (self._known or {}).get(k) == (a, b, limit, False):
+        known = self._known or {}
+        if b >= len(self.parent) or not self.active[k] or known.get(k) == (a, b, limit, False):
             return
         objs = self.robot.geom_model.geometryObjects
         a_end, b_end = ((self.shapes[g], np.array(objs[g].placement.homogeneous), int(self.parent[g])) for g in (a, b))
-        proven = pair_clearance.never_collides(self.robot.kinematic_model, a_end, b_end, limit, self._chains)
+        later = not now and known.get(k) != (a, b, limit, None)
+        proven = pair_clearance.never_collides(self.robot.kinematic_model, a_end, b_end, limit, self._chains,
+                                               prove=not later)
+        if proven is None:   # no verdict kept: proven at PROVE_NEW asks (or by the build's next robot at PROVE_AFTER)
+            self._deferred[k] = True
+            self.until_proof[k] = PROVE_NEW - PROVE_AFTER
+            if self._known is not None:
+                self._known[k] = (a, b, limit, None)
+            return
         if proven:
             self.active[k] = False
             self.proven += 1
@@ -501,7 +472,7 @@ class CollisionCuller:
         work = (np.zeros((J + 1, 3, 3)), np.zeros((J + 1, 3)), np.zeros((len(self.parent), 3)))
         out, unknown = np.zeros(self.n_pairs + 1, np.int64), np.zeros(len(ok) + 1, np.int64)
         packed, args = geometry_kernel.pack((*tree, *sp, *obs, self.active, *work, out, unknown))
-        return args, grids, (*packed, self.until_proof, self._due)   # (+ the count of the asks before the proofs)
+        return args, grids, (*packed, self.until_proof, self._due_k)   # (+ the count of the asks before the proofs)
 
     def in_collision(self, q: np.ndarray) -> bool:
         """``robot.in_collision(q)`` (the same verdict): coal asked about the pairs the compiled bounds do not clear
@@ -509,8 +480,8 @@ class CollisionCuller:
         cells it asked about unknown are computed afterwards, for the next queries."""
         args, grids, packed = self._one = self._one or self._kernel_args()
         n, nu, proven, due = cast(Any, geometry_kernel.survivors_packed)(q, *packed, self._last_hit)   # (hull proof: last hit)
-        for k in self._due[:due].tolist():   # the asks counted (by the kernel), the pairs due proven in their order
-            self._prove(k)
+        for k in self._due_k[:due].tolist():   # the asks counted (by the kernel), the pairs due decided in their order
+            self._due(k)
         if proven >= 0:   # two inner spheres overlap: coal finds that pair colliding
             self._last_hit = proven
         hit = proven >= 0 or (bool(n) and self._ask(q, args[-2][:n].tolist()))

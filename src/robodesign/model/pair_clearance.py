@@ -237,7 +237,7 @@ def in_a_frame(Pa: np.ndarray, links, Pb: np.ndarray):
 
 
 def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[object, np.ndarray, int], limit: float,
-                   chains: Optional[Dict[Tuple[int, int], object]] = None) -> bool:
+                   chains: Optional[Dict[Tuple[int, int], object]] = None, prove: bool = True) -> Optional[bool]:
     """Whether the self pair of a robot ``model`` whose ends are ``end_a``, ``end_b`` (each: coal shape, 4×4
     placement in its parent joint's frame, parent joint) is proven farther apart than ``limit`` at every
     configuration (module docstring). ``chains``: the caller's memo of :func:`chain` for this model.
@@ -246,7 +246,8 @@ def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[ob
     process by exactly that (the two shapes, the rounded placements, the axes, the limit): a robot's own relative
     poses differ from the rounded ones by at most 10^−DIGITS per entry, which moves no point within
     :data:`REACH_MAX` of a by more than the allowance. A pair with a triangle mesh is not tried (its distance costs
-    more than its collision tests)."""
+    more than its collision tests). With ``prove`` False only a kept verdict (or a pair that is not tried) is answered,
+    None where a proof would be needed."""
     if any(type(e[0]).__name__.startswith("BVH") for e in (end_a, end_b)):
         return False
     memo: Dict[Tuple[int, int], object] = {} if chains is None else chains
@@ -266,6 +267,8 @@ def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[ob
     hit = _KNOWN.get(key)
     if hit is not None and hit[0][0] is shapes[0] and hit[0][1] is shapes[1]:
         return hit[1]
+    if not prove:
+        return None
     eye = np.eye(4)
     far = sum(float(np.linalg.norm(M[:3, 3])) for M, _ in links) + reach(shapes[1], Pb, np.zeros(3), None)
     proven = far <= REACH_MAX and chain_clears(_PairDistance(shapes[0], eye, shapes[1], Pb, links),
