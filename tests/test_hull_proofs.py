@@ -5,9 +5,13 @@ spheres do not, each one coal's verdict (at other margins too), with the culler'
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import IMPROV, PRIMITIVES
 from test_inner_spheres import depth_inside, module_shapes, pair_collides, ptp3_robot, random_primitives
 
+from robodesign.formats.assembly import random_serial_order
+from robodesign.formats.module_io import load_module_set
 from robodesign.model import geometry_kernel
+from robodesign.model.robot import Robot
 from robodesign.model.collision_cull import SLACK, culler_of
 from robodesign.model.inner_spheres import hull, inner_spheres, placed_inner_spheres
 
@@ -99,3 +103,52 @@ def test_culled_verdicts_stay_coals_with_hull_proofs():
         assert c.in_collision(q) == truth
         colliding += truth
     assert colliding > 100
+
+
+def _placed_at_once(shapes, R, t):
+    """The placed blocks as they were made before the per-geometry pieces (issue 25, round 11): every row turned by
+    one einsum over all geometries, the points moved, the planes' d from all normals at once."""
+    G = len(R)
+    spheres = [inner_spheres(s) for s in shapes]
+    hulls = [hull(s) for s in shapes]
+    parts = [c for c, _ in spheres] + [v for v, _ in hulls] + [p[:, :3] for _, p in hulls]
+    counts = np.array([len(a) for a in parts], dtype=np.int64)
+    owner = np.repeat(np.tile(np.arange(G), 3), counts)
+    rows = np.einsum("mij,mj->mi", R[owner], np.concatenate(parts + [np.zeros((0, 3))]))
+    start = np.zeros(3 * G + 3, dtype=np.int64)
+    ends = np.cumsum(counts)
+    for b in range(3):
+        start[b * (G + 1)] = ends[b * G - 1] if b and G else 0
+        start[b * (G + 1) + 1:(b + 1) * (G + 1)] = ends[b * G:(b + 1) * G]
+    n_moved = start[2 * (G + 1)]
+    rows[:n_moved] += t[owner[:n_moved]]
+    normals, t_p = rows[n_moved:], t[owner[n_moved:]]
+    planes_d = np.concatenate([p[:, 3] for _, p in hulls] + [np.zeros(0)]) - (normals * t_p).sum(axis=1)
+    values = np.concatenate([r for _, r in spheres] + [np.zeros(start[2 * (G + 1)] - start[G + 1]), planes_d])
+    return start, rows, values
+
+
+def test_placed_blocks_from_pieces_are_bitwise_the_blocks_made_at_once():
+    """The blocks put together from the kept per-geometry pieces equal, bit for bit, the blocks made at once over all
+    geometries: the shapes and placements of random IMPROV and primitive arms, and random shapes at random
+    placements (seeded), each asked twice (the second time from kept pieces)."""
+    from robodesign.model.inner_spheres import _placed
+    rng = np.random.default_rng(23)
+    cases = []
+    for path, dofs in ((IMPROV, (6, 7)), (PRIMITIVES, (3, 8))):
+        ms = load_module_set(path)
+        for _ in range(10):
+            robot = Robot.from_order(ms, random_serial_order(ms, rng, dof=int(rng.integers(*dofs))))
+            objs = list(robot.geom_model.geometryObjects)[:robot.n_collision_geometries]
+            cases.append(([o.geometry for o in objs], np.array([o.placement.rotation for o in objs]),
+                          np.array([o.placement.translation for o in objs])))
+    pool = module_shapes() + random_primitives(4, 5)
+    for _ in range(20):
+        shapes = [pool[i] for i in rng.integers(len(pool), size=int(rng.integers(1, 30)))]
+        cases.append((shapes, np.array([pin.SE3.Random().rotation for _ in shapes]), rng.normal(size=(len(shapes), 3))))
+    for shapes, R, t in cases:
+        want = _placed_at_once(shapes, R, t)
+        for _ in range(2):
+            got = _placed(shapes, R, t)
+            for a, b in zip(got, want):
+                assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from robodesign.solvers.ik_accept import Acceptance
+from robodesign.solvers.ik_accept import Acceptance, near_any
 
 
 def reference_within(q, lo, hi) -> bool:
@@ -59,3 +59,27 @@ def test_limit_verdicts_equal_the_chained_comparison():
                 seen.add(accept(q.copy()))   # the same configuration again
         assert stats["rejected_limits"] == sum(not reference_within(q, lo, hi) for q in qs)
     assert seen == {"limits", "added", "duplicate"}
+
+
+def test_duplicates_with_the_stacked_solutions_equal_the_plain_norms():
+    """near_any given the solutions stacked (the acceptance's rows) and without them decides as
+    ``any(np.linalg.norm(q - s) <= tol)``: random sets of 1-60 solutions, queries at, just inside and just outside
+    tol of one of them (seeded); the acceptance's own stack holds its solutions row by row."""
+    rng = np.random.default_rng(11)
+    tol = 1e-3
+    for trial in range(300):
+        n = int(rng.integers(1, 9))
+        sols = [rng.uniform(-3, 3, n) for _ in range(int(rng.integers(1, 61)))]
+        rows = np.vstack(sols + [np.full(n, np.nan)] * int(rng.integers(0, 5)))   # room beyond: ignored
+        s = sols[int(rng.integers(len(sols)))]
+        u = rng.normal(size=n)
+        u /= np.linalg.norm(u)
+        for q in (s.copy(), s + u * tol * (1 - 1e-12), s + u * tol * (1 + 1e-12), s + u * tol, rng.uniform(-3, 3, n)):
+            plain = any(np.linalg.norm(q - p) <= tol for p in sols)
+            assert near_any(q, sols, tol, rows) == plain == near_any(q, sols, tol)
+    stats = {"rejected_limits": 0, "rejected_collision": 0, "rejected_duplicate": 0}
+    got: list = []
+    accept = Acceptance(None, None, np.full(3, -4.0), np.full(3, 4.0), None, False, False, 1e-3, stats, got)
+    for q in rng.uniform(-3, 3, (100, 3)):
+        accept(q)
+    assert len(got) == 100 and np.array_equal(accept._rows[:100], np.array(got))

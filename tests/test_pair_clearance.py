@@ -248,3 +248,24 @@ def test_a_builds_next_robots_start_with_its_proven_pairs_off(geometry_paths):
             ref = bool(pin.computeCollisions(robot.model, robot.data, robot.geom_model, robot.geom_data, q, True))
             assert c.in_collision(q) == ref
     assert carried > 10
+
+
+def test_the_framed_key_is_in_a_frames_bytes():
+    """framed (kept per the raw placements' bytes) gives the bytes of in_a_frame's rounded Pb and links, on the self
+    pairs of random IMPROV and primitive arms, asked once (new entries) and again (kept ones); and
+    never_collides(prove=False) answers the kept verdicts as they were proven."""
+    for robot in random_arms(6, 17):
+        for _, a, b, links in self_pairs(robot):
+            if links is None:
+                continue
+            Pa, Pb = np.array(a.placement.homogeneous), np.array(b.placement.homogeneous)
+            f_links, f_Pb = pair_clearance.in_a_frame(Pa, links, Pb)
+            want = (f_Pb.tobytes(), tuple((M.tobytes(), axis.tobytes()) for M, axis in f_links))
+            assert pair_clearance.framed(Pa, links, Pb) == want
+            assert pair_clearance.framed(Pa.copy(), [(M.copy(), x.copy()) for M, x in links], Pb.copy()) == want
+    ms = load_module_set(IMPROV)
+    robot = Robot.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"])
+    proven = [pair_clearance.never_collides(robot.model, ends(a), ends(b), SLACK) for _, a, b, _ in self_pairs(robot)]
+    kept = [pair_clearance.never_collides(robot.model, ends(a), ends(b), SLACK, prove=False)
+            for _, a, b, _ in self_pairs(robot)]
+    assert kept == proven and sum(proven) > 20

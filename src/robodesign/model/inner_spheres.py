@@ -41,6 +41,7 @@ GRID = 16
 _INNER: Dict[int, Tuple[object, np.ndarray, np.ndarray]] = {}   # id(shape) → (shape, centres, radii)
 _HULL: Dict[int, Tuple[object, np.ndarray, np.ndarray]] = {}    # id(shape) → (shape, edges' ends, planes)
 _PLACED: Dict[tuple, Tuple[tuple, Tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}   # placed_inner_spheres' results
+_PIECES: Dict[tuple, Tuple[object, Tuple[np.ndarray, ...]]] = {}   # placed_piece's: (id(shape), R, t bytes) → pieces
 
 
 def _on_axis(radius: float, half: float, axis: int, rounded: bool) -> List[Tuple[np.ndarray, float]]:
@@ -155,25 +156,49 @@ def _placed(shapes, R: np.ndarray, t: np.ndarray) -> Tuple[np.ndarray, np.ndarra
     geometry ``g``'s spheres are rows ``start[g]`` to ``start[g + 1]`` (``rows``: centres, ``values``: radii), its
     hull's edges' ends rows ``start[G + 1 + g]`` to ``start[G + 2 + g]`` (in pairs; ``values``: 0) and its planes rows
     ``start[2G + 2 + g]`` to ``start[2G + 3 + g]`` (``rows``: unit normal n, ``values``: d; a point x of the joint
-    frame lies inside when n·x + d ≤ 0)."""
+    frame lies inside when n·x + d ≤ 0). Each geometry's rows are :func:`placed_piece`'s."""
     G = len(R)
-    spheres = [inner_spheres(s) for s in shapes]
-    hulls = [hull(s) for s in shapes]
-    parts = [c for c, _ in spheres] + [v for v, _ in hulls] + [p[:, :3] for _, p in hulls]   # 3 blocks of G
+    pieces = [placed_piece(s, R[g], t[g]) for g, s in enumerate(shapes)]
+    parts = [p[b] for b in range(3) for p in pieces]   # 3 blocks of G: spheres, edges' ends, normals
     counts = np.array([len(a) for a in parts], dtype=np.int64)
-    owner = np.repeat(np.tile(np.arange(G), 3), counts)
-    rows = np.einsum("mij,mj->mi", R[owner], np.concatenate(parts + [np.zeros((0, 3))]))   # all turned at once
     start = np.zeros(3 * G + 3, dtype=np.int64)
     ends = np.cumsum(counts)
     for b in range(3):   # each block's starts: its first row, then each geometry's end
         start[b * (G + 1)] = ends[b * G - 1] if b and G else 0
         start[b * (G + 1) + 1:(b + 1) * (G + 1)] = ends[b * G:(b + 1) * G]
-    n_moved = start[2 * (G + 1)]   # the spheres' and edges' rows are points: moved by t; the planes' rows normals
-    rows[:n_moved] += t[owner[:n_moved]]
-    normals, t_p = rows[n_moved:], t[owner[n_moved:]]
-    planes_d = np.concatenate([p[:, 3] for _, p in hulls] + [np.zeros(0)]) - (normals * t_p).sum(axis=1)
-    values = np.concatenate([r for _, r in spheres] + [np.zeros(start[2 * (G + 1)] - start[G + 1]), planes_d])
+    rows = np.concatenate(parts + [np.zeros((0, 3))])
+    values = np.concatenate([p[3] for p in pieces] + [np.zeros(start[2 * (G + 1)] - start[G + 1])]
+                            + [p[4] for p in pieces] + [np.zeros(0)])
     return start, np.ascontiguousarray(rows), values
+
+
+def placed_piece(shape, R: np.ndarray, t: np.ndarray) -> Tuple[np.ndarray, ...]:
+    """(sphere centres, edges' ends, plane normals, sphere radii, plane offsets d) of ``shape``'s inner spheres and
+    hull at rotation ``R``, offset ``t`` in its joint's frame (points turned and moved, normals turned, d − n·t),
+    kept per shape object and the bytes of R and t (a module's shapes sit at the same placements in every build).
+    Read-only arrays."""
+    R, t = np.asarray(R, dtype=float).reshape(3, 3), np.asarray(t, dtype=float).reshape(3)
+    key = (id(shape), R.tobytes(), t.tobytes())
+    hit = _PIECES.get(key)
+    if hit is None or hit[0] is not shape:
+        if len(_PIECES) >= 4096:
+            _PIECES.clear()
+        hit = _PIECES[key] = (shape, _piece(shape, R, t))   # (the shape held: its id not reused)
+    return hit[1]
+
+
+def _piece(shape, R: np.ndarray, t: np.ndarray) -> Tuple[np.ndarray, ...]:
+    """:func:`placed_piece`'s arrays, made: all rows turned by one einsum, the points then moved by t."""
+    (c, r), (v, p) = inner_spheres(shape), hull(shape)
+    n_pts = len(c) + len(v)
+    local = np.concatenate([c, v, p[:, :3]])
+    rows = np.einsum("mij,mj->mi", np.repeat(R[None], len(local), axis=0), local)
+    rows[:n_pts] += t
+    normals = rows[n_pts:]
+    out = (rows[:len(c)], rows[len(c):n_pts], normals, r, p[:, 3] - (normals * t).sum(axis=1))
+    rows.setflags(write=False)
+    out[4].setflags(write=False)
+    return out
 
 
 __all__ = ["hull", "inner_spheres", "placed_inner_spheres", "MAX_SPHERES", "GRID"]

@@ -43,6 +43,7 @@ _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "Join
 #: verdicts kept (the oldest is dropped beyond)
 KEPT = 1 << 16
 _KNOWN: Dict[tuple, Tuple[tuple, bool]] = {}   # key → (the shapes, held so their ids are not reused; verdict)
+_FRAMED: Dict[tuple, Tuple[bytes, tuple]] = {}   # :func:`framed`'s: by the raw placements' bytes
 
 
 def chain(model, i: int, j: int) -> Optional[List[Tuple[np.ndarray, np.ndarray]]]:
@@ -236,6 +237,20 @@ def in_a_frame(Pa: np.ndarray, links, Pb: np.ndarray):
     return [(np.round(M, DIGITS), axis) for M, axis in first], np.round(Pb, DIGITS)
 
 
+def framed(Pa: np.ndarray, links, Pb: np.ndarray) -> Tuple[bytes, tuple]:
+    """The bytes of :func:`in_a_frame`'s ``Pb`` and of its links' (placement, axis) pairs: the pair's part of the
+    verdicts' key, kept per the bytes of ``Pa``, ``Pb`` and the links (a function of those only; the pairs of a
+    module chain recur across the robots of a search)."""
+    raw = (Pa.tobytes(), Pb.tobytes(), tuple((M.tobytes(), axis.tobytes()) for M, axis in links))
+    hit = _FRAMED.get(raw)
+    if hit is None:
+        f_links, f_Pb = in_a_frame(Pa, links, Pb)
+        if len(_FRAMED) >= KEPT:
+            _FRAMED.pop(next(iter(_FRAMED)))
+        hit = _FRAMED[raw] = (f_Pb.tobytes(), tuple((M.tobytes(), axis.tobytes()) for M, axis in f_links))
+    return hit
+
+
 def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[object, np.ndarray, int], limit: float,
                    chains: Optional[Dict[Tuple[int, int], object]] = None, prove: bool = True) -> Optional[bool]:
     """Whether the self pair of a robot ``model`` whose ends are ``end_a``, ``end_b`` (each: coal shape, 4×4
@@ -260,15 +275,15 @@ def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[ob
         if links is None:
             return False
         end_a, end_b = end_b, end_a
-    links, Pb = in_a_frame(end_a[1], links, end_b[1])
     shapes = (end_a[0], end_b[0])
-    key = (id(shapes[0]), id(shapes[1]), Pb.tobytes(), float(limit),
-           tuple((M.tobytes(), axis.tobytes()) for M, axis in links))
+    Pb_frame, links_frame = framed(end_a[1], links, end_b[1])
+    key = (id(shapes[0]), id(shapes[1]), Pb_frame, float(limit), links_frame)
     hit = _KNOWN.get(key)
     if hit is not None and hit[0][0] is shapes[0] and hit[0][1] is shapes[1]:
         return hit[1]
     if not prove:
         return None
+    links, Pb = in_a_frame(end_a[1], links, end_b[1])
     eye = np.eye(4)
     far = sum(float(np.linalg.norm(M[:3, 3])) for M, _ in links) + reach(shapes[1], Pb, np.zeros(3), None)
     proven = far <= REACH_MAX and chain_clears(_PairDistance(shapes[0], eye, shapes[1], Pb, links),
@@ -281,5 +296,5 @@ def never_collides(model, end_a: Tuple[object, np.ndarray, int], end_b: Tuple[ob
 
 
 __all__ = ["ALLOWANCE", "BUDGET", "DIGITS", "KEPT", "MAX_CHAIN", "REACH_MAX", "START", "arm", "chain", "chain_arms",
-           "chain_clears", "chain_poses", "in_a_frame", "never_collides", "reach",
+           "chain_clears", "chain_poses", "framed", "in_a_frame", "never_collides", "reach",
            "worth_proving"]

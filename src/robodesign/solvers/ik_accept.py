@@ -20,15 +20,15 @@ import numpy as np
 TWO_PI = 2.0 * math.pi
 
 
-def near_any(q: np.ndarray, sols: List[np.ndarray], tol: float) -> bool:
+def near_any(q: np.ndarray, sols: List[np.ndarray], tol: float, rows: Optional[np.ndarray] = None) -> bool:
     """``any(np.linalg.norm(q - s) <= tol for s in sols)``, decided by the same numbers: the norm as numpy
     computes it (√ of the difference's ``dot`` with itself). With many solutions, one vectorised sum of squares
     first drops those farther than tol·√(1 + 1e-9): both sums are within n·2⁻⁵³ (relative) of the exact one, so
     none of those can be within tol by the exact test (tol > 1e-100: no underflow of tol²); the rest are tested
-    one by one, in order."""
+    one by one, in order. ``rows``: the solutions stacked (row i = sols[i], at least len(sols) rows; else stacked
+    here)."""
     if len(sols) > 8 and tol > 1e-100:
-        d = np.array(sols)
-        d -= q
+        d = (np.array(sols) if rows is None else rows[:len(sols)]) - q
         idx = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= tol * tol * (1.0 + 1e-9)).tolist()
         sols = [sols[i] for i in idx]
     for s in sols:
@@ -50,6 +50,7 @@ class Acceptance:
         self.lo, self.hi = lo.tolist(), hi.tolist()
         self.in_collision = robot.in_collision if check_collision else None
         self.canonical, self.distinct_tol, self.stats, self.sols = canonical, distinct_tol, stats, sols
+        self._rows = np.array(sols, dtype=float).reshape(len(sols), len(lo))   # sols stacked (rows beyond: unused)
         # Robot.nearest_equivalent's reference point
         self.turn_ref = (np.clip(0.0, robot.q_lower, robot.q_upper) if q_seed is None else q_seed).tolist() \
             if canonical else []
@@ -68,8 +69,18 @@ class Acceptance:
             q2 = self.robot.nearest_equivalent(q, self.q_seed)
             if not np.array_equal(q2, q) and self.valid(self.robot.fk(q2)):
                 q = q2
-        if self.sols and near_any(q, self.sols, self.distinct_tol):
+        if self.sols and near_any(q, self.sols, self.distinct_tol, self._rows):
             self.stats["rejected_duplicate"] += 1
             return "duplicate"
+        self._stack(q)
         self.sols.append(q.copy())
         return "added"
+
+    def _stack(self, q: np.ndarray) -> None:
+        """Put ``q`` in ``_rows`` after the solutions so far (their room doubled when full)."""
+        m = len(self.sols)
+        if m == len(self._rows):
+            grown = np.empty((max(2 * m, 16), len(q)))
+            grown[:m] = self._rows
+            self._rows = grown
+        self._rows[m] = q
