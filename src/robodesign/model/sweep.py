@@ -389,6 +389,15 @@ class SweepChecker:
         self.queries += len(out)
         return out
 
+    def distance(self, q: np.ndarray, c: int) -> float:
+        """:meth:`distances` of the one pair with index c (the same number, without the array)."""
+        r, gm, gd, pair = self.robot, self._gm, self._req, self.pairs[c]
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        if self._asked is not None:
+            self._asked.add(pair)
+        self.queries += 1
+        return pin.computeDistance(gm, gd, pair).min_distance
+
     def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
               at: Optional[Callable[[int, float], np.ndarray]] = None,
               poses: Optional[np.ndarray] = None) -> List[CollisionEvent]:
@@ -530,7 +539,7 @@ class SweepChecker:
             if s >= 1.0:
                 return None
             q = qa + s * (qb - qa) if at is None else at(s)
-            dist = self.distances(q, [c])[0]
+            dist = self.distance(q, c)
             free = dist - self.margins[c]
             if free <= tol:
                 return s, float(dist)
