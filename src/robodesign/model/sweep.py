@@ -43,7 +43,7 @@ import pinocchio as pin
 
 from robodesign.model.revolution import _revolute_axis, _symmetric
 from robodesign.model.robot import Robot
-from robodesign.model.sweep_bounds import PosedArms, StaticSteps
+from robodesign.model.sweep_bounds import PosedArms, StaticSteps, vector_norm
 from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
 from robodesign.model.sweep_rebase import keep, rebased
 from robodesign.model.sweep_scratch import KeptScratch
@@ -120,8 +120,8 @@ class _Tree:
     @cached_property
     def _norms(self) -> Tuple[List[float], List[float]]:
         """|translation| of every joint placement and of every geometry placement."""
-        return ([float(np.linalg.norm(p.translation)) for p in self.placements],
-                [float(np.linalg.norm(p.translation)) for p in self.geom_placement])
+        return ([vector_norm(p.translation) for p in self.placements],
+                [vector_norm(p.translation) for p in self.geom_placement])
 
     def own_axis_symmetric(self) -> List[bool]:
         return list(self._own_axis_symmetric)

@@ -13,6 +13,13 @@ import numpy as np
 from robodesign.model.robot import Robot
 
 
+def vector_norm(x: np.ndarray) -> float:
+    """``numpy.linalg.norm`` of the float vector x, the same number without its checks: the square root of x·x
+    (of x laid out as numpy's norm lays it out)."""
+    y = x.ravel(order="K")
+    return math.sqrt(y.dot(y))
+
+
 class StaticSteps:
     """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
     inside a step)."""
@@ -55,7 +62,7 @@ class PosedArms:
         self.box_centre = np.array([(lo + hi) / 2 for lo, hi in boxes]).reshape(G, 3)
         # how far a point of g can be from the box centre once g turns (the half diagonal, or the shape's own
         # bound where tighter: 0 for a sphere centred there, whose occupied space turns into itself)
-        self.box_half_diagonal = np.array([float(np.linalg.norm(hi - lo)) / 2 for lo, hi in boxes])
+        self.box_half_diagonal = np.array([vector_norm(hi - lo) / 2 for lo, hi in boxes])
         self.box_radius = np.array([min(d, _kept_reach(geo, c)) for d, geo, c in
                                     zip(self.box_half_diagonal, tree.geom_geometry, self.box_centre)])
         joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
