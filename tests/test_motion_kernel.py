@@ -92,3 +92,35 @@ def test_arcs_compiled_are_the_numpy_path(kernels, monkeypatch):
             monkeypatch.undo()
         for name in ("h", "a1", "a2", "tau"):
             assert _same_numbers(getattr(got, name), getattr(want, name)), name
+
+
+def _at_plain(m: StepMotion, k: int, s: float) -> np.ndarray:
+    """StepMotion.at as written before the kernel (an independent copy of the formula): first arc up to
+    min(x, tau), then the second arc."""
+    x = s * m.h[k, 0]
+    u, w = np.minimum(x, m.tau[k]), np.maximum(x - m.tau[k], 0.0)
+    return m.q[k] + m.v[k] * u + m.a1[k] * u ** 2 / 2 + (m.v[k] + m.a1[k] * u) * w + m.a2[k] * w ** 2 / 2
+
+
+def test_positions_inside_a_step_compiled_are_the_numpy_path(kernels, monkeypatch):
+    """StepMotion.at by the kernel (what the collision sweep asks): the numpy path's numbers, byte for byte, at
+    random fractions, both ends, the switch and beyond it, on the random motions (non-finite entries included);
+    a step index outside [0, N − 1) keeps numpy's answer (a negative one counts from the end, as numpy's)."""
+    rng = np.random.default_rng(21)
+    asked = 0
+    for m in _motions(rng, 150):
+        assert motion.judge_kernels() is kernels and m._arc_rows is not None
+        monkeypatch.setattr(motion, "judge_kernels", lambda: None)
+        plain = StepMotion(m.t, m.q, m.v, m.h, m.a1, m.a2, m.tau)
+        assert plain._arc_rows is None   # (kept: this one takes the numpy path)
+        monkeypatch.undo()
+        for k in range(len(m.tau)):
+            switch = [float(x) for x in m.tau[k] / m.h[k, 0] if np.isfinite(x)]
+            for s in [0.0, 1.0, *rng.uniform(0, 1, 4).tolist(), *switch, *np.nextafter(switch, 2.0).tolist()]:
+                with np.errstate(all="ignore"):
+                    got, want, formula = m.at(k, s), plain.at(k, s), _at_plain(m, k, s)
+                assert _same_numbers(got, want) and _same_numbers(got, formula), (k, s)
+                asked += 1
+        if len(m.tau):
+            assert _same_numbers(m.at(-1, 0.5), plain.at(-1, 0.5))
+    assert asked > 5000

@@ -93,3 +93,23 @@ def test_a_scratch_space_fits_only_its_geometry(ptp3_solved):
     assert not kept.fits(robot._robot_only_geom())
     robot.geom_model.addGeometryObject(robot.geom_model.geometryObjects[0])
     assert not kept.fits(robot.geom_model)
+
+
+def test_one_pairs_distance_is_the_pairs_distances(ptp3_solved):
+    """SweepChecker.distance (the advancement's one-pair query) is distances(q, [c]) bit for bit, counts one query,
+    and records the pair asked in a kept scratch space as distances does: over a seeded random sequence of
+    configurations and pairs in two checkers (the one-pair query in one, distances in the other), both against a
+    plain pinocchio.GeometryData asked the same queries."""
+    task, ms, sol = ptp3_solved
+    robot = solution_robot(task, sol, ms)
+    Q = np.asarray(sol.trajectory.q)
+    rng = np.random.default_rng(17)
+    ka, kb = KeptScratch(robot.geom_model), KeptScratch(robot.geom_model)
+    a = sweep.SweepChecker(robot, posed_arms=True, scratch=ka)
+    b = sweep.SweepChecker(robot, posed_arms=True, scratch=kb)
+    seq = [(q, [int(c)]) for q, cs in _sequence(robot, Q, rng, len(a.pairs)) for c in cs]
+    got = np.array([a.distance(q, cs[0]) for q, cs in seq]).tobytes()
+    assert got == np.array([b.distances(q, cs)[0] for q, cs in seq]).tobytes()
+    plain = _queries(robot, pin.GeometryData(robot.geom_model), [(q, [a.pairs[c] for c in cs]) for q, cs in seq])
+    assert got == plain and a.queries == b.queries == len(seq) > 20
+    assert ka.asked == kb.asked == {a.pairs[cs[0]] for _, cs in seq}

@@ -1,9 +1,10 @@
 """The interval RNEA of :mod:`robodesign.judge.interval_rnea`, compiled (numba): one loop over the rows instead of
 a few thousand small numpy operations per pass; and the judge's TCP twists
 (:attr:`TrajectoryQuantities.tcp_twists <robodesign.judge.quantities.TrajectoryQuantities.tcp_twists>`: one loop
-over the samples instead of ~25 numpy passes per joint), the arcs of the judged motion and the extremes of its positions and
-velocities per step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes), and the
-whole-step torque bounds of :mod:`robodesign.judge.arc_torques` (its prefilter's last ~40 numpy passes).
+over the samples instead of ~25 numpy passes per joint), the arcs of the judged motion, its positions inside a step
+(what the collision sweep asks, hundreds of times per check) and the extremes of its positions and velocities per
+step (:class:`~robodesign.judge.motion.StepMotion`: one loop instead of ~40 numpy passes), and the whole-step
+torque bounds of :mod:`robodesign.judge.arc_torques` (its prefilter's last ~40 numpy passes).
 
 The kernel makes **the same floating-point operations in the same order** as the numpy path
 (:meth:`IntervalDynamics.link_torques <robodesign.judge.interval_rnea.IntervalDynamics.link_torques>`: the
@@ -295,6 +296,24 @@ def step_arcs(q, v, h):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def step_at(rows, k, s):  # pragma: no cover - compiled
+    """q at fraction s of step k of the two-arc motion whose per-step rows (N − 1, 6, dof) are q, v at the step's
+    start, a1, a2, tau and h (StepMotion's arc rows), as StepMotion.at's numpy path: the same operations in the same
+    order, numpy.minimum's and numpy.maximum's choices (a NaN kept)."""
+    x = s * rows[k, 5, 0]
+    dof = rows.shape[2]
+    out = np.empty(dof)
+    for j in range(dof):
+        T = rows[k, 4, j]
+        u = x if (x != x or x <= T) else T
+        d = x - T
+        w = d if (d != d or d >= 0.0) else 0.0
+        V, A1 = rows[k, 1, j], rows[k, 2, j]
+        out[j] = (((rows[k, 0, j] + V * u) + A1 * (u * u) / 2) + (V + A1 * u) * w) + rows[k, 3, j] * (w * w) / 2
+    return out
+
+
+@njit(cache=True, nogil=True)
 def _first_extreme(c, largest):  # pragma: no cover - compiled
     """numpy.argmin (argmax with ``largest``) of the 1-D array c: the first NaN, else the first smallest (largest)."""
     best, idx = c[0], 0
@@ -506,6 +525,7 @@ def _warm() -> None:
     a, b = np.zeros((2, 1)), np.zeros((1, 1))
     position_extremes(a, a, b, b, b, b, b, b)
     step_arcs(a, a, np.ones(1))
+    step_at(np.zeros((1, 6, 1)), 0, 0.5)
     velocity_extremes(a, b, b, b)
     f = np.zeros(1)
     steps_certified(b, b, b, b, b, b, f, f, 1.0, i, b, b, b, f, f)
@@ -513,8 +533,8 @@ def _warm() -> None:
 
 
 KERNELS = KernelModule("robodesign.judge.interval_kernel", __file__, link_torques,
-                       ("link_torques", "tcp_twists", "step_arcs", "position_extremes", "velocity_extremes",
-                        "steps_certified", "prefilter_boxes"), _warm)
+                       ("link_torques", "tcp_twists", "step_arcs", "step_at", "position_extremes",
+                        "velocity_extremes", "steps_certified", "prefilter_boxes"), _warm)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -48,6 +48,13 @@ def _contiguous(*arrays: np.ndarray) -> Tuple[np.ndarray, ...]:
     return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
 
 
+@dataclass(frozen=True)
+class _ArcRows:
+    """StepMotion's per-step rows for the compiled :meth:`StepMotion.at`, with the kernel module that reads them."""
+    kernel: Any
+    array: np.ndarray
+
+
 def least_acceleration(h, dq_, v0, v1) -> np.ndarray:
     """Smallest peak |q̈| of a motion from (0, v0) to (dq_, v1) in time h (arrays broadcast)."""
     r2 = 2 * dq_ - (v0 + v1) * h  # 2r
@@ -99,7 +106,10 @@ class StepMotion:
         return self.q[:-1] + self.v[:-1] * self.tau + self.a1 * self.tau ** 2 / 2
 
     def at(self, k: int, s: float) -> np.ndarray:
-        """q at fraction ``s`` ∈ [0, 1] of step k."""
+        """q at fraction ``s`` ∈ [0, 1] of step k (compiled where the kernels run: the same numbers)."""
+        rows = self._arc_rows
+        if rows is not None and 0 <= k < len(rows.array):
+            return rows.kernel.step_at(rows.array, k, float(s))
         x = s * self.h[k, 0]
         tau = self.tau[k]
         u = np.minimum(x, tau)
@@ -107,6 +117,17 @@ class StepMotion:
         # first arc up to min(x, tau), then the second arc for the rest
         return (self.q[k] + self.v[k] * u + self.a1[k] * u ** 2 / 2
                 + (self.v[k] + self.a1[k] * u) * w + self.a2[k] * w ** 2 / 2)
+
+    @cached_property
+    def _arc_rows(self) -> Optional["_ArcRows"]:
+        """What :meth:`at`'s kernel reads, per step: q and v at its start, a1, a2, tau and h, as one (N − 1, 6, dof)
+        array; None without the kernels or on other shapes than (N, dof) samples."""
+        kernel = judge_kernels()
+        if kernel is None or self.q.ndim != 2 or self.q.shape != self.v.shape or self.tau.shape != self.a1.shape \
+                or len(self.q) != len(self.tau) + 1:
+            return None
+        rows = [self.q[:-1], self.v[:-1], self.a1, self.a2, self.tau, np.broadcast_to(self.h, self.tau.shape)]
+        return _ArcRows(kernel, np.ascontiguousarray(np.stack(rows, axis=1), dtype=float))
 
     def velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
         """Per step: (largest |velocity|, time of it within the step)."""

@@ -67,3 +67,7 @@ class RobotPairSweep(SweepChecker):
                                    sb[j], coal.Transform3s(Mb.rotation, Mb.translation), self._req, self._res)
         self.queries += len(out)
         return out
+
+    def distance(self, q: np.ndarray, c: int) -> float:
+        """:meth:`distances` of the one pair with index c."""
+        return float(self.distances(q, [c])[0])

@@ -43,7 +43,7 @@ import pinocchio as pin
 
 from robodesign.model.revolution import _revolute_axis, _symmetric
 from robodesign.model.robot import Robot
-from robodesign.model.sweep_bounds import PosedArms, StaticSteps
+from robodesign.model.sweep_bounds import PosedArms, StaticSteps, vector_norm
 from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
 from robodesign.model.sweep_rebase import keep, rebased
 from robodesign.model.sweep_scratch import KeptScratch
@@ -120,8 +120,8 @@ class _Tree:
     @cached_property
     def _norms(self) -> Tuple[List[float], List[float]]:
         """|translation| of every joint placement and of every geometry placement."""
-        return ([float(np.linalg.norm(p.translation)) for p in self.placements],
-                [float(np.linalg.norm(p.translation)) for p in self.geom_placement])
+        return ([vector_norm(p.translation) for p in self.placements],
+                [vector_norm(p.translation) for p in self.geom_placement])
 
     def own_axis_symmetric(self) -> List[bool]:
         return list(self._own_axis_symmetric)
@@ -389,6 +389,15 @@ class SweepChecker:
         self.queries += len(out)
         return out
 
+    def distance(self, q: np.ndarray, c: int) -> float:
+        """:meth:`distances` of the one pair with index c (the same number, without the array)."""
+        r, gm, gd, pair = self.robot, self._gm, self._req, self.pairs[c]
+        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        if self._asked is not None:
+            self._asked.add(pair)
+        self.queries += 1
+        return pin.computeDistance(gm, gd, pair).min_distance
+
     def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
               at: Optional[Callable[[int, float], np.ndarray]] = None,
               poses: Optional[np.ndarray] = None) -> List[CollisionEvent]:
@@ -530,7 +539,7 @@ class SweepChecker:
             if s >= 1.0:
                 return None
             q = qa + s * (qb - qa) if at is None else at(s)
-            dist = self.distances(q, [c])[0]
+            dist = self.distance(q, c)
             free = dist - self.margins[c]
             if free <= tol:
                 return s, float(dist)

@@ -13,6 +13,13 @@ import numpy as np
 from robodesign.model.robot import Robot
 
 
+def vector_norm(x: np.ndarray) -> float:
+    """``numpy.linalg.norm`` of the float vector x, the same number without its checks: the square root of x·x
+    (of x laid out as numpy's norm lays it out)."""
+    y = x.ravel(order="K")
+    return math.sqrt(y.dot(y))
+
+
 class StaticSteps:
     """dQ @ W (n−1, P), the static bound per step and pair, computed on first use (most checks never advance
     inside a step)."""
@@ -55,8 +62,8 @@ class PosedArms:
         self.box_centre = np.array([(lo + hi) / 2 for lo, hi in boxes]).reshape(G, 3)
         # how far a point of g can be from the box centre once g turns (the half diagonal, or the shape's own
         # bound where tighter: 0 for a sphere centred there, whose occupied space turns into itself)
-        self.box_half_diagonal = np.array([float(np.linalg.norm(hi - lo)) / 2 for lo, hi in boxes])
-        self.box_radius = np.array([min(d, _reach(geo, c)) for d, geo, c in
+        self.box_half_diagonal = np.array([vector_norm(hi - lo) / 2 for lo, hi in boxes])
+        self.box_radius = np.array([min(d, _kept_reach(geo, c)) for d, geo, c in
                                     zip(self.box_half_diagonal, tree.geom_geometry, self.box_centre)])
         joint_of_v = {tree.idx_v[j]: j for j in range(1, tree.nj)}
         self.joints = [joint_of_v[v] for v in range(dof)]  # pinocchio joint id per velocity index
@@ -116,8 +123,7 @@ class PosedArms:
         idx = np.where(W > 0, owner, G)
         key = idx.tobytes()
         if key not in self._gathers:
-            uniq, inverse = np.unique(idx, axis=1, return_inverse=True)
-            self._gathers[key] = (np.ascontiguousarray(uniq, dtype=np.int64), inverse.reshape(-1).astype(np.int64))
+            self._gathers[key] = _distinct_columns(idx)
         uniq, inverse = self._gathers[key]
         kernel = _kernel(count=False) if len(X) else None
         if kernel is not None:
@@ -265,6 +271,36 @@ def _reach(geo: Any, c: np.ndarray) -> float:
     else:
         return math.inf
     return out * (1 + 1e-12) + 1e-15
+
+
+_REACHES: dict = {}  # (id(shape), c's bytes) → (shape, _reach(shape, c)): the shapes are the module sets' (shared)
+
+
+def _kept_reach(geo: Any, c: np.ndarray) -> float:
+    """:func:`_reach` of ``geo`` at c, computed once per shape and point (a convex hull's reads all its points)."""
+    key = (id(geo), np.asarray(c, dtype=float).tobytes())
+    hit = _REACHES.get(key)
+    if hit is None or hit[0] is not geo:
+        if len(_REACHES) >= 4096:
+            _REACHES.clear()
+        hit = _REACHES[key] = (geo, _reach(geo, c))
+    return hit[1]
+
+
+def _distinct_columns(idx: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """(the distinct columns of the integer matrix ``idx`` in the order they first appear, int64; per column of
+    ``idx`` the index of its own among them): what :meth:`PosedArms.segments` gathers once each."""
+    cols = np.ascontiguousarray(idx.T, dtype=np.int64)
+    first: dict = {}
+    where: List[int] = []
+    inverse = np.empty(len(cols), np.int64)
+    for p, col in enumerate(map(bytes, cols)):
+        i = first.get(col)
+        if i is None:
+            i = first[col] = len(where)
+            where.append(p)
+        inverse[p] = i
+    return np.ascontiguousarray(cols[where].T), inverse
 
 
 BOUND_SLACK = 1.0 + 1e-9  # relative slack of PosedArms.extend's bounds (the forward kinematics' rounding)
