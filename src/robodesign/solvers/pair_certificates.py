@@ -111,10 +111,9 @@ class PairCertificates:
         """The pairs of row ``j`` of :meth:`pending`'s ``P`` the collision test must be asked about at ``R[j]``:
         the certified pairs' distances are computed first (a new certificate, which also clears them in the later
         rows of ``P`` it proves free), and those farther than their margin + :data:`SLACK` are dropped."""
-        ks = P[j].nonzero()[0]
-        own = ks[self.certified[ks]]
+        own = (P[j] & self.certified).nonzero()[0]
         if not len(own):
-            return ks.tolist()
+            return P[j].nonzero()[0].tolist()
         q = R[j]
         free = self._distances(q, own)
         if self.kernel is not None:
