@@ -65,6 +65,19 @@ def test_states_equal_ompl_interpolation_bit_for_bit():
             assert np.array_equal(row, [out[i] for i in range(n)])
 
 
+def test_the_remembered_fractions_are_the_orders_divided():
+    """The validator's fractions, remembered per segment count across planning calls, are bisection_order(nd) / nd
+    bit for bit (what motion_states interpolates at), read-only, and give motion_states' states."""
+    from robodesign.solvers.ompl_motion import _fractions, _interpolated
+    rng = np.random.default_rng(8)
+    for nd in list(range(1, 700)) + [1500, 4000]:
+        want = np.array(bisection_order(nd), dtype=float) / float(nd)
+        got = _fractions(nd)
+        assert got.tobytes() == want.tobytes() and not got.flags.writeable and _fractions(nd) is got
+        a, b = rng.uniform(-4, 4, 7), rng.uniform(-4, 4, 7)
+        assert _interpolated(a, b, got).tobytes() == motion_states(a, b, nd, bisection_order(nd)).tobytes()
+
+
 @pytest.fixture(scope="module")
 def queries():
     task = load_task(TASKS / "simple" / "PTP_3.json")

@@ -15,8 +15,9 @@ OMPL's validator (:data:`PLANNERS_TWO_STATE`).
 """
 from __future__ import annotations
 
+import functools
 from collections import deque
-from typing import Callable, Dict, List
+from typing import Callable, List
 
 import numpy as np
 
@@ -42,28 +43,37 @@ def bisection_order(nd: int) -> List[int]:
 
 def motion_states(a: np.ndarray, b: np.ndarray, nd: int, order: List[int]) -> np.ndarray:
     """``[b, a + (b − a)·(j/nd) for j in order]``: the states OMPL's ``checkMotion(a, b)`` asks about, in order."""
-    T = np.array(order, dtype=float) / float(nd)
+    return _interpolated(a, b, np.array(order, dtype=float) / float(nd))
+
+
+def _interpolated(a: np.ndarray, b: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """``[b, a + (b − a)·t for t in T]``."""
     return np.vstack([b[None, :], a[None, :] + (b - a)[None, :] * T[:, None]])
+
+
+@functools.lru_cache(maxsize=1024)
+def _fractions(nd: int) -> np.ndarray:
+    """:func:`bisection_order` of ``nd`` divided by ``nd`` (what :func:`motion_states` interpolates at), remembered
+    across planning calls (read-only)."""
+    T = np.array(bisection_order(nd), dtype=float) / float(nd)
+    T.flags.writeable = False
+    return T
 
 
 def motion_validator(ob, space, si, n: int, first_invalid: Callable[[np.ndarray], int]):
     """An ``ob.MotionValidator`` for ``si`` whose ``checkMotion(s1, s2)`` is OMPL's discrete one with the states
     decided by ``first_invalid(Q)`` (the index of the first invalid row of ``Q`` in row order, or −1). It holds
     ``space`` (for its segment count), not ``si``: no reference cycle through OMPL's objects."""
-    orders: Dict[int, List[int]] = {}
     idx = range(n)
 
     class BatchedMotionValidator(ob.MotionValidator):
         def checkMotion(self, s1, s2, *last_valid) -> bool:
             if last_valid:   # (not installed for the planners that ask for it)
                 raise NotImplementedError("checkMotion with the last valid state")
-            nd = int(space.validSegmentCount(s1, s2))
-            order = orders.get(nd)
-            if order is None:
-                order = orders[nd] = bisection_order(nd)
+            T = _fractions(int(space.validSegmentCount(s1, s2)))
             a = np.array([s1[i] for i in idx], dtype=float)
             b = np.array([s2[i] for i in idx], dtype=float)
-            return first_invalid(motion_states(a, b, nd, order)) < 0
+            return first_invalid(_interpolated(a, b, T)) < 0
 
     return BatchedMotionValidator(si)
 

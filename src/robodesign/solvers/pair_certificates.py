@@ -20,8 +20,9 @@ microsecond) gets none: the genetic search on the whitman2020 tasks planned 1.0â
 """
 from __future__ import annotations
 
+import sys
 import weakref
-from typing import List, Optional
+from typing import Any, List, Optional
 
 import numpy as np
 import pinocchio as pin
@@ -78,6 +79,7 @@ class PairCertificates:
         self.anchors = np.zeros((ANCHORS, robot.dof))
         self.free = np.full((ANCHORS, len(self.certified)), np.nan)
         self.count = 0         # certificates made
+        self.kernel = _kernel()   # the compiled loops (solvers.certificate_kernel), or None: numpy
 
     def pending(self, R: np.ndarray, S: np.ndarray) -> np.ndarray:
         """(N, pairs) booleans: ``S`` (the pairs the culler's bounds do not clear at the rows of ``R``) without the
@@ -86,7 +88,9 @@ class PairCertificates:
         P = S.copy()
         m = min(self.count, ANCHORS)
         cols = np.flatnonzero(S.any(axis=0) & self.certified)
-        if m and len(cols):
+        if m and len(cols) and self.kernel is not None:
+            self.kernel.clear_pending(P, R, self.anchors, self.free, m, self.W, cols, SLACK)
+        elif m and len(cols):
             rows = np.flatnonzero(S[:, cols].any(axis=1))
             bound = np.abs(R[rows, None, :] - self.anchors[None, :m]) @ self.W[:, cols]   # (rows, m, pairs)
             P[np.ix_(rows, cols)] &= ~(self.free[:m, cols] - bound > SLACK).any(axis=1)
@@ -107,29 +111,44 @@ class PairCertificates:
         """The pairs of row ``j`` of :meth:`pending`'s ``P`` the collision test must be asked about at ``R[j]``:
         the certified pairs' distances are computed first (a new certificate, which also clears them in the later
         rows of ``P`` it proves free), and those farther than their margin + :data:`SLACK` are dropped."""
-        ks = P[j].nonzero()[0]
-        own = ks[self.certified[ks]]
+        own = (P[j] & self.certified).nonzero()[0]
         if not len(own):
-            return ks.tolist()
+            return P[j].nonzero()[0].tolist()
         q = R[j]
-        free = self._certify(q, own)
+        free = self._distances(q, own)
+        if self.kernel is not None:
+            self.kernel.keep_and_clear(P, R, j, own, free, self.W, SLACK, self.anchors, self.free,
+                                       self.count % ANCHORS)
+            self.count += 1
+            return P[j].nonzero()[0].tolist()
+        self._keep(q, own, free)
         if j + 1 < len(R):
             P[j + 1:, own] &= ~(free - np.abs(R[j + 1:] - q) @ self.W[:, own] > SLACK)
         P[j, own[free > SLACK]] = False
         return P[j].nonzero()[0].tolist()
 
-    def _certify(self, q: np.ndarray, own: np.ndarray) -> np.ndarray:
-        """The clearances beyond the margin of pairs ``own`` at ``q`` (coal's distances), kept as a new
-        certificate."""
+    def _distances(self, q: np.ndarray, own: np.ndarray) -> np.ndarray:
+        """The clearances beyond the margin of pairs ``own`` at ``q`` (coal's distances)."""
         r = self.robot
         gm, gd = r.geom_model, r.geom_data
         pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
         distance = pin.computeDistance
         d = np.array([distance(gm, gd, k).min_distance for k in own.tolist()], dtype=float)
-        free = d - self.margin[own]
+        return d - self.margin[own]
+
+    def _keep(self, q: np.ndarray, own: np.ndarray, free: np.ndarray) -> None:
+        """The clearances ``free`` of pairs ``own`` at ``q`` kept as a new certificate (the oldest overwritten)."""
         row = self.count % ANCHORS
         self.anchors[row] = q
         self.free[row] = np.nan
         self.free[row, own] = free
         self.count += 1
-        return free
+
+
+def _kernel() -> Any:
+    """:mod:`robodesign.solvers.certificate_kernel` when its compiled loops run in this process, else None (also
+    in a process that has not imported numba: importing it takes 0.3â€“1 s). Both paths give the same verdicts."""
+    if "numba" not in sys.modules:
+        return None
+    from robodesign.solvers import certificate_kernel
+    return certificate_kernel if certificate_kernel.ready() else None
