@@ -103,24 +103,29 @@ def _at_plain(m: StepMotion, k: int, s: float) -> np.ndarray:
 
 
 def test_positions_inside_a_step_compiled_are_the_numpy_path(kernels, monkeypatch):
-    """StepMotion.at by the kernel (what the collision sweep asks): the numpy path's numbers, byte for byte, at
-    random fractions, both ends, the switch and beyond it, on the random motions (non-finite entries included);
-    a step index outside [0, N − 1) keeps numpy's answer (a negative one counts from the end, as numpy's)."""
+    """StepMotion.at by the kernel (what the collision sweep asks; from a motion's _LAY_OUT_AFTER-th call on): the
+    numpy path's numbers, byte for byte, at random fractions, both ends, the switch and just beyond it, on the random
+    motions (non-finite entries included), and the formula's as written before the kernel; a step index outside
+    [0, N − 1) keeps numpy's answer (a negative one counts from the end, as numpy's)."""
     rng = np.random.default_rng(21)
-    asked = 0
+    compiled = 0
     for m in _motions(rng, 150):
-        assert motion.judge_kernels() is kernels and m._arc_rows is not None
-        monkeypatch.setattr(motion, "judge_kernels", lambda: None)
-        plain = StepMotion(m.t, m.q, m.v, m.h, m.a1, m.a2, m.tau)
-        assert plain._arc_rows is None   # (kept: this one takes the numpy path)
-        monkeypatch.undo()
+        calls = []
         for k in range(len(m.tau)):
             switch = [float(x) for x in m.tau[k] / m.h[k, 0] if np.isfinite(x)]
-            for s in [0.0, 1.0, *rng.uniform(0, 1, 4).tolist(), *switch, *np.nextafter(switch, 2.0).tolist()]:
-                with np.errstate(all="ignore"):
-                    got, want, formula = m.at(k, s), plain.at(k, s), _at_plain(m, k, s)
-                assert _same_numbers(got, want) and _same_numbers(got, formula), (k, s)
-                asked += 1
-        if len(m.tau):
-            assert _same_numbers(m.at(-1, 0.5), plain.at(-1, 0.5))
-    assert asked > 5000
+            calls += [(k, s) for s in [0.0, 1.0, *rng.uniform(0, 1, 4).tolist(), *switch,
+                                       *np.nextafter(switch, 2.0).tolist()]]
+        calls += [(-1, 0.5)] if len(m.tau) else []
+        with monkeypatch.context() as patch, np.errstate(all="ignore"):
+            patch.setattr(motion, "judge_kernels", lambda: None)
+            plain = StepMotion(m.t, m.q, m.v, m.h, m.a1, m.a2, m.tau)
+            want = [plain.at(k, s) for k, s in calls]
+            assert plain._arc_rows.array is None
+        with np.errstate(all="ignore"):
+            got = [m.at(k, s) for k, s in calls]
+            formula = [_at_plain(m, k, s) for k, s in calls]
+        for g, w, f, call in zip(got, want, formula, calls):
+            assert _same_numbers(g, w) and _same_numbers(g, f), call
+        assert (m._arc_rows.kernel is kernels) == (len(calls) >= motion._LAY_OUT_AFTER)
+        compiled += max(0, len(calls) - motion._LAY_OUT_AFTER + 1)
+    assert compiled > 5000

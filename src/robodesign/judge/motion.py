@@ -48,11 +48,31 @@ def _contiguous(*arrays: np.ndarray) -> Tuple[np.ndarray, ...]:
     return tuple(np.ascontiguousarray(a, dtype=float) for a in arrays)
 
 
-@dataclass(frozen=True)
+_LAY_OUT_AFTER = 8  # StepMotion.at calls on the numpy path before the motion's rows are laid out for the kernel
+
+
 class _ArcRows:
-    """StepMotion's per-step rows for the compiled :meth:`StepMotion.at`, with the kernel module that reads them."""
-    kernel: Any
-    array: np.ndarray
+    """What the compiled :meth:`StepMotion.at` reads: the motion's rows per step (q and v at the step's start, a1,
+    a2, tau and h: one (N − 1, 6, dof) array) and the kernel module, laid out at the motion's
+    :data:`_LAY_OUT_AFTER`-th call (the layout costs a few numpy-path calls; most motions are asked once or twice)."""
+
+    def __init__(self) -> None:
+        self.asked = 0
+        self.kernel: Any = None
+        self.array: Optional[np.ndarray] = None
+
+    def laid_out(self, m: "StepMotion") -> Optional[np.ndarray]:
+        """The rows of ``m`` if this call takes the kernel (laid out now if this is the call to), else None."""
+        if self.asked < _LAY_OUT_AFTER:
+            self.asked += 1
+            if self.asked < _LAY_OUT_AFTER:
+                return None
+            kernel = judge_kernels()
+            if kernel is not None and m.q.ndim == 2 and m.q.shape == m.v.shape and m.tau.shape == m.a1.shape \
+                    and len(m.q) == len(m.tau) + 1:
+                rows = [m.q[:-1], m.v[:-1], m.a1, m.a2, m.tau, np.broadcast_to(m.h, m.tau.shape)]
+                self.kernel, self.array = kernel, np.ascontiguousarray(np.stack(rows, axis=1), dtype=float)
+        return self.array
 
 
 def least_acceleration(h, dq_, v0, v1) -> np.ndarray:
@@ -108,8 +128,9 @@ class StepMotion:
     def at(self, k: int, s: float) -> np.ndarray:
         """q at fraction ``s`` ∈ [0, 1] of step k (compiled where the kernels run: the same numbers)."""
         rows = self._arc_rows
-        if rows is not None and 0 <= k < len(rows.array):
-            return rows.kernel.step_at(rows.array, k, float(s))
+        array = rows.laid_out(self)
+        if array is not None and 0 <= k < len(array):
+            return rows.kernel.step_at(array, k, float(s))
         x = s * self.h[k, 0]
         tau = self.tau[k]
         u = np.minimum(x, tau)
@@ -119,15 +140,9 @@ class StepMotion:
                 + (self.v[k] + self.a1[k] * u) * w + self.a2[k] * w ** 2 / 2)
 
     @cached_property
-    def _arc_rows(self) -> Optional["_ArcRows"]:
-        """What :meth:`at`'s kernel reads, per step: q and v at its start, a1, a2, tau and h, as one (N − 1, 6, dof)
-        array; None without the kernels or on other shapes than (N, dof) samples."""
-        kernel = judge_kernels()
-        if kernel is None or self.q.ndim != 2 or self.q.shape != self.v.shape or self.tau.shape != self.a1.shape \
-                or len(self.q) != len(self.tau) + 1:
-            return None
-        rows = [self.q[:-1], self.v[:-1], self.a1, self.a2, self.tau, np.broadcast_to(self.h, self.tau.shape)]
-        return _ArcRows(kernel, np.ascontiguousarray(np.stack(rows, axis=1), dtype=float))
+    def _arc_rows(self) -> "_ArcRows":
+        """The compiled :meth:`at`'s rows of this motion (laid out at its :data:`_LAY_OUT_AFTER`-th call)."""
+        return _ArcRows()
 
     def velocity_extremes(self) -> Tuple[np.ndarray, np.ndarray]:
         """Per step: (largest |velocity|, time of it within the step)."""
