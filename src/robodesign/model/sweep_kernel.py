@@ -390,6 +390,7 @@ def _warm() -> None:
                     np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64))
     sphere_gaps(TG, np.zeros((1, 3)), i, i, f, np.zeros((2, 1)))
     open_steps(np.zeros((2, 1)), np.zeros((1, 1)), f, f, 1e-6, 1.0, 500.0, np.zeros((1, 1), np.int64))
+    next_due(np.zeros(1, np.int64), 1, np.zeros((1, 1), np.int64), np.zeros(1, np.int64))   # (the queue's first batch)
     settle(np.zeros(1, np.int64), 2, np.zeros((1, 1), np.int64), np.zeros(1, np.int64), 1, f, 0,
            np.zeros((2, 1), np.int64), True, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f,
            np.zeros((1, 1)), 1e-6, 1.0, False)
