@@ -133,3 +133,31 @@ def test_verdicts_equal_in_collision_with_a_safety_margin(cell, geometry_paths):
         assert (fresh & ~plain).any()     # the margin does make some states collide
     finally:
         robot.set_obstacles(obstacles, safety_margin=margin)
+
+
+def test_field_cells_are_coals_distances_at_their_centres(cell):
+    """fill's cells (centres made in one numpy pass, coal asked with one kept pose) hold, bit for bit, the distance
+    coal gives at each cell's centre made one by one as before ((grid_lo + index + 0.5) · cell, a new transform per
+    point), on a fresh field of the PTP_3 machine: random batches with repeats and known cells (seeded)."""
+    import coal
+    from robodesign.model.collision_cull import DistanceField
+    robot, _ = cell
+    o = robot.geom_model.geometryObjects[robot.n_collision_geometries]
+    field = DistanceField(o.geometry, o.placement.homogeneous)
+    assert len(field.values) > 1000
+    dz, dy = int(field.grid_dim[2]), int(field.grid_dim[1])
+    req, res, dot = coal.DistanceRequest(), coal.DistanceResult(), coal.Sphere(0.0)
+
+    def one_by_one(f):
+        c = (field.grid_lo + np.array([f // (dy * dz), f // dz % dy, f % dz]) + 0.5) * field.cell
+        res.clear()
+        return float(coal.distance(dot, coal.Transform3s(np.eye(3), c), field.shape, field.tf, req, res))
+
+    rng = np.random.default_rng(8)
+    for _ in range(6):
+        flat = rng.integers(len(field.values), size=int(rng.integers(1, 80)))
+        flat = np.concatenate([flat, flat[:5]])
+        got = field.fill(flat)
+        want = np.array([one_by_one(f) for f in flat.tolist()])
+        assert got.tobytes() == want.tobytes()
+    assert np.isnan(field.values).sum() < len(field.values)
