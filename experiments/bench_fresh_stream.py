@@ -43,19 +43,25 @@ def stream(ptp3, n: int, prof: str) -> None:
         pr = cProfile.Profile()
         pr.enable()
     t0 = time.process_time()
-    for c in cands:
-        t = time.process_time()
-        e = ev.evaluate(c)
-        dt = time.process_time() - t
-        rows.append(_row(e))
-        if e.feasible:
-            feasible.append(dt)
-            for s in e.stages:
-                stages.setdefault(s["name"], []).append(s["seconds"])
+    try:
+        for c in cands:
+            t = time.process_time()
+            e = ev.evaluate(c)
+            dt = time.process_time() - t
+            rows.append(_row(e))
+            if e.feasible:
+                feasible.append(dt)
+                for s in e.stages:
+                    stages.setdefault(s["name"], []).append(s["seconds"])
+    except KeyboardInterrupt:   # Ctrl-C: the candidates evaluated so far are reported
+        print(f"# stopped after {len(rows)} of {n} candidates")
     total = time.process_time() - t0
     if prof:
         pr.disable()
         pr.dump_stats(prof)
+    if not feasible:
+        print(f"stream cpu {total:.2f} s, {len(rows)} candidates, none feasible, signature {_signature(rows)}")
+        return
     print(f"stream cpu {total:.2f} s, feasible {len(feasible)}, median feasible {np.median(feasible) * 1e3:.1f} ms "
           f"(mean {np.mean(feasible) * 1e3:.1f}), signature {_signature(rows)}")
     print("  stage medians (ms): " + "  ".join(f"{k} {np.median(v) * 1e3:.1f}" for k, v in stages.items()))
@@ -68,7 +74,11 @@ def genetic(ptp3_base, budget: int) -> None:
     study = Study(create_optimizer("genetic", ptp3_base, seed=0), SerialExecutor(Evaluator(EvaluatorSpec(ptp3_base, seed=0))),
                   Budget(evaluations=budget), on_evaluation=lambda i, e, best: rows.append(_row(e)))
     t = time.process_time()
-    res = study.run()
+    try:
+        res = study.run()
+    except KeyboardInterrupt:   # Ctrl-C: nothing to report but how far it got
+        print(f"# stopped after {len(rows)} of {budget} evaluations")
+        return
     cpu = time.process_time() - t
     best = res.best.cost if res.best is not None and res.best.feasible else None
     print(f"genetic {budget}: cpu {cpu:.2f} s, {len(rows) / cpu:.1f} evaluations per CPU s, feasible "
