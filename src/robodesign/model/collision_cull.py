@@ -395,10 +395,10 @@ class CollisionCuller:
         return False
 
     def _count(self, ks: List[int]) -> None:
-        """Count down the asks left of the pairs ``ks`` (``until_proof``); a self pair asked for the
-        :data:`PROVE_AFTER`-th time is given to :func:`~robodesign.model.pair_clearance.never_collides` and, proven,
-        switched off in ``active`` (the bounds clear it from then on: coal would not find it colliding at any
-        configuration). :func:`~robodesign.model.geometry_kernel.survivors_packed` counts in_collision's the same."""
+        """Count down the asks left of the pairs ``ks`` (``until_proof``); a pair whose count reaches 0 is decided by
+        :meth:`_due` (a kept verdict of :func:`~robodesign.model.pair_clearance.never_collides`, or its proof; a pair
+        proven is switched off in ``active``: the bounds clear it from then on, coal would not find it colliding at
+        any configuration). :func:`~robodesign.model.geometry_kernel.survivors_packed` counts in_collision's the same."""
         left = self.until_proof
         for k in ks:
             if left[k] > 0:
