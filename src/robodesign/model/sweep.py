@@ -42,8 +42,8 @@ import numpy as np
 import pinocchio as pin
 
 from robodesign.model.revolution import _revolute_axis, _symmetric
-from robodesign.model.robot import Robot
-from robodesign.model.sweep_bounds import PosedArms, StaticSteps, vector_norm
+from robodesign.model.robot import Robot, vector_norm
+from robodesign.model.sweep_bounds import PosedArms, StaticSteps
 from robodesign.model.sweep_clearance import DueQueue, open_steps, robot_spheres
 from robodesign.model.sweep_rebase import keep, rebased
 from robodesign.model.sweep_scratch import KeptScratch

@@ -10,14 +10,7 @@ from typing import Any, List, Optional, Tuple
 
 import numpy as np
 
-from robodesign.model.robot import Robot
-
-
-def vector_norm(x: np.ndarray) -> float:
-    """``numpy.linalg.norm`` of the float vector x, the same number without its checks: the square root of x·x
-    (of x laid out as numpy's norm lays it out)."""
-    y = x.ravel(order="K")
-    return math.sqrt(y.dot(y))
+from robodesign.model.robot import Robot, vector_norm
 
 
 class StaticSteps:
