@@ -37,6 +37,7 @@ import pinocchio as pin
 
 from robodesign.model import geometry_kernel, pair_clearance
 from robodesign.model.batch_fk import batch_kinematics
+from robodesign.model.culler_keep import geometry_state, taken_up
 from robodesign.model.inner_spheres import placed_inner_spheres
 from robodesign.model.pair_scratch import PairScratch
 from robodesign.model.shape_spheres import _bounding_sphere, bounding_sphere, tight_sphere  # noqa: F401 (re-exported)
@@ -321,14 +322,33 @@ class CollisionCuller:
         self._deferred = np.zeros(self.n_pairs * self.provable, np.bool_)   # pairs whose proof was put off
         self.proven = 0   # self pairs proven never to collide (:mod:`.pair_clearance`), dropped since
         self._known = _known_proofs(robot, shapes) if self.provable else None
-        if self._known is not None:   # the proofs of this build's earlier robots: off before the first query
-            for k, ends in self._known.items():
-                if (int(first[k]), int(second[k]), float(margin[k]) + SLACK, True) == ends and self.active[k]:
-                    self.active[k] = False
-                    self.proven += 1
+        self._switch_off_known()
         self.scratch = PairScratch(gm, margin)   # coal's scratch space of the pairs asked
         self._one: Optional[tuple] = None    # the compiled single-configuration bound's arrays (on first use)
         self._last_hit = -1                  # the pair collides found colliding last
+        self.geom, self.state = gm, geometry_state(robot, margin, active)   # what it was built for (culler_of)
+
+    def _switch_off_known(self) -> None:
+        """Switch off the pairs this build's earlier robots proved never to collide (before the first query)."""
+        for k, ends in (self._known or {}).items():
+            if (int(self.first[k]), int(self.second[k]), float(self.margin[k]) + SLACK, True) == ends and self.active[k]:
+                self.active[k] = False
+                self.proven += 1
+
+    def restart(self) -> None:
+        """Start again as a new culler of the same geometry state would (:func:`culler_of` takes a robot's culler up
+        again): the scratch space's GJK guesses set back to a new one's (as ``Robot.set_base_pose`` does to the
+        robot's own), no pair found colliding last, the counts to the proofs as at the start, the build's record
+        looked up again. It keeps what a new one would make the same (the bounds' arrays, the kernel's arguments, the
+        pairs in the scratch space) and the pairs proven never to collide (off in ``active``: coal finds none of
+        them colliding at any configuration, so no verdict changes)."""
+        from robodesign.model.robot_geometry import _fresh_guesses  # (robot_geometry imports this module)
+        _fresh_guesses(self.scratch.data)
+        self._last_hit, self.narrow = -1, 0
+        self.until_proof.fill(PROVE_AFTER)
+        self._deferred.fill(False)
+        self._known = _known_proofs(self.robot, self.shapes) if self.provable else None
+        self._switch_off_known()
 
     def centres(self, Q: np.ndarray) -> np.ndarray:
         """World centres (N × geometries × 3) of the bounding spheres at every row of ``Q``."""
@@ -548,13 +568,14 @@ def _known_proofs(robot, shapes: List[object]) -> Optional[Dict[int, Tuple[int, 
 def culler_of(robot) -> CollisionCuller:
     """The robot's :class:`CollisionCuller`, kept while its geometry stays the same. A
     :class:`~robodesign.model.robot.Robot` keeps it itself (``_culler``, forgotten at every change of its geometry:
-    base pose, obstacles, safety margin, scratch space). Another robot object: the same geometry model and data
+    base pose, obstacles, safety margin, scratch space; taken up again, restarted, when the geometry comes back to the
+    state it was made for: :func:`~.culler_keep.taken_up`). Another robot object: the same geometry model and data
     objects (held by the entry, so they are the same objects, not a new one at a reused address), base pose, safety
     margin and obstacle placements (what ``set_base_pose``, ``set_obstacles`` and ``move_obstacle`` change)."""
     if hasattr(robot, "_culler"):
         own: Optional[CollisionCuller] = robot._culler
         if own is None:
-            own = robot._culler = CollisionCuller(robot)
+            own = robot._culler = taken_up(robot, pair_settings) or CollisionCuller(robot)
         return own
     gm, gd = robot.geom_model, robot.geom_data
     objs = gm.geometryObjects

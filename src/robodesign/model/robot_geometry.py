@@ -135,7 +135,10 @@ class RobotGeometry:
         self._geometry_changed()
 
     def _geometry_changed(self) -> None:
-        """Forget the collision culler (built for the geometry before the change)."""
+        """Forget the collision culler (built for the geometry before the change; kept aside as ``_kept_culler``,
+        which :func:`~robodesign.model.collision_cull.culler_of` takes up again if the geometry comes back to the
+        state it was made for)."""
+        self._kept_culler = getattr(self, "_culler", None) or getattr(self, "_kept_culler", None)
         self._culler: Optional[Any] = None   # model.collision_cull.CollisionCuller of the current geometry
         self._plain_queries = 0              # in_collision queries asked of every pair (< 0: while waiting)
 
