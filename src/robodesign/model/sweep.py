@@ -242,12 +242,37 @@ def _setup_key(robot: Robot, flags: tuple) -> Optional[tuple]:
             robot.dof, robot.n_collision_geometries, len(robot.geom_model.collisionPairs), flags)
 
 
+_ARMS: dict = {}  # _setup_key(robot, (symmetry,)) → (module set, _every_pairs_arms's)
+
+
+def _every_pairs_arms(robot: Robot, symmetry: bool) -> tuple:
+    """(tree, R, cps, is_env, W, owner) of every collision pair of ``robot``: its :class:`_Tree`, the lever arms,
+    the pairs (geometry indices), whether each is a robot–obstacle pair, and :func:`_pair_arms` of them all (each
+    pair's column depends on that pair alone), kept for robots built alike (:func:`_setup_key`; the 64 latest): a
+    new arm's planner (:func:`pair_arms`) and judge (its obstacles, posed arms) take columns of the same."""
+    key = _setup_key(robot, (symmetry,))
+    hit = _ARMS.get(key) if key is not None else None
+    if hit is None or hit[0] is not robot.module_set:
+        tree = _Tree(robot)
+        R = tree.lever_arms(symmetry, robot.dof)
+        cps = [(int(cp.first), int(cp.second)) for cp in robot.geom_model.collisionPairs]
+        is_env = np.array([b >= robot.n_collision_geometries for _, b in cps], dtype=bool)
+        hit = (getattr(robot, "module_set", None), (tree, R, cps, is_env,
+                                                   *_pair_arms(tree, R, cps, is_env, symmetry, robot.dof)))
+        if key is not None:
+            with _SETUPS_LOCK:
+                _ARMS[key] = hit
+                while len(_ARMS) > 64:
+                    _ARMS.pop(next(iter(_ARMS)))
+    return hit[1]
+
+
 def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[Collection[int]], symmetry: bool,
            posed_arms: bool) -> dict:
     """The checker's pairs, their bounds and names (SweepChecker.__init__), as attributes."""
     gm = robot.geom_model
     n_self = robot.n_self_collision_pairs
-    cps = [(int(cp.first), int(cp.second)) for cp in gm.collisionPairs]
+    tree, R, cps, every_env, every_W, every_owner = _every_pairs_arms(robot, symmetry)
     pairs: List[int] = []
     if check_self:
         pairs += list(range(n_self))
@@ -257,13 +282,10 @@ def _setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Optional[
             keep = {robot.obstacle_geometry_ids[i] for i in obstacles}
             env = [k for k in env if cps[k][1] in keep]
         pairs += list(env)
-    tree = _Tree(robot)
-    R = tree.lever_arms(symmetry, robot.dof)
     n_robot = robot.n_collision_geometries
     margins = np.zeros(len(pairs))
-    is_env = np.array([cps[k][1] >= n_robot for k in pairs], dtype=bool)
+    is_env, W, owner = every_env[pairs], every_W[:, pairs], every_owner[:, pairs]
     margins[is_env] = getattr(robot, "safety_margin", 0.0)
-    W, owner = _pair_arms(tree, R, [cps[k] for k in pairs], is_env, symmetry, robot.dof)
     posed = PosedArms(robot, tree, R) if posed_arms else None
     # per pair for the posed bounds' displacement (PosedArms.extend): the geometry that moves (the smaller box)
     # in the frame of the other (-1: an obstacle's, the world)
