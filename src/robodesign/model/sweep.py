@@ -243,13 +243,17 @@ def _setup_key(robot: Robot, flags: tuple) -> Optional[tuple]:
 
 
 _ARMS: dict = {}  # _setup_key(robot, (symmetry,)) → (module set, _every_pairs_arms's)
+#: the robots' every-pair arms kept: a new arm's set-ups follow each other within one evaluation (planner, judge),
+#: and few kept keep few objects alive (the set-ups themselves are kept in _SETUPS)
+_ARMS_KEPT = 8
 
 
 def _every_pairs_arms(robot: Robot, symmetry: bool) -> tuple:
     """(tree, R, cps, is_env, W, owner) of every collision pair of ``robot``: its :class:`_Tree`, the lever arms,
     the pairs (geometry indices), whether each is a robot–obstacle pair, and :func:`_pair_arms` of them all (each
-    pair's column depends on that pair alone), kept for robots built alike (:func:`_setup_key`; the 64 latest): a
-    new arm's planner (:func:`pair_arms`) and judge (its obstacles, posed arms) take columns of the same."""
+    pair's column depends on that pair alone), kept for robots built alike (:func:`_setup_key`; the
+    :data:`_ARMS_KEPT` latest): a new arm's planner (:func:`pair_arms`) and judge (its obstacles, posed arms) take
+    columns of the same."""
     key = _setup_key(robot, (symmetry,))
     hit = _ARMS.get(key) if key is not None else None
     if hit is None or hit[0] is not robot.module_set:
@@ -262,7 +266,7 @@ def _every_pairs_arms(robot: Robot, symmetry: bool) -> tuple:
         if key is not None:
             with _SETUPS_LOCK:
                 _ARMS[key] = hit
-                while len(_ARMS) > 64:
+                while len(_ARMS) > _ARMS_KEPT:
                     _ARMS.pop(next(iter(_ARMS)))
     return hit[1]
 
