@@ -68,7 +68,9 @@ def own_pairs(P, j, certified, skip):  # pragma: no cover - compiled
 def keep_and_clear(P, R, j, own, free, W, slack, anchors, frees, row, misses, skip, limit, rest):  # pragma: no cover
     """A new certificate at ``R[j]`` (clearances ``free`` of the pairs ``own``) kept in row ``row`` of ``anchors``
     and ``frees``, and ``P[r, own[c]] = False`` at ``r = j`` and every later row where it proves the pair free. A
-    pair whose clearance proves nothing (at most ``slack``) ``limit`` times in a row gets ``skip`` = ``rest``."""
+    pair whose clearance proves nothing (at most ``slack``) ``limit`` times in a row gets ``skip`` = ``rest``. Returns
+    how many pairs it so set resting."""
+    tired = 0
     anchors[row, :] = R[j]
     frees[row, :] = np.nan
     q = anchors[row]
@@ -83,9 +85,11 @@ def keep_and_clear(P, R, j, own, free, W, slack, anchors, frees, row, misses, sk
             if misses[k] >= limit:
                 misses[k] = 0
                 skip[k] = rest
+                tired += 1
         for r in range(j + 1, R.shape[0]):
             if P[r, k] and _proves(free[c], R, r, q, W, k, slack):
                 P[r, k] = False
+    return tired
 
 
 def _warm() -> None:

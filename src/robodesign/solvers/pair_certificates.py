@@ -90,6 +90,7 @@ class PairCertificates:
         self.count = 0         # certificates made
         self.misses = np.zeros(len(certified), dtype=np.int64)   # per pair: its clearances proving nothing in a row
         self.skip = np.zeros(len(certified), dtype=np.int64)     # per pair: its next asks without a distance
+        self.resting = False   # whether a pair may have asks left without a distance (else no skip is looked at)
         self.kernel = _kernel()   # the compiled loops (solvers.certificate_kernel), or None: numpy
 
     def pending(self, R: np.ndarray, S: np.ndarray) -> np.ndarray:
@@ -123,18 +124,16 @@ class PairCertificates:
         the certified pairs' distances are computed first (a new certificate, which also clears them in the later
         rows of ``P`` it proves free), and those farther than their margin + :data:`SLACK` are dropped. A pair
         resting (:data:`REST`) gets no distance: it is left to the collision test."""
-        if self.kernel is not None:
-            own = self.kernel.own_pairs(P, j, self.certified, self.skip)
-            if len(own):
-                self.kernel.keep_and_clear(P, R, j, own, self._distances(R[j], own), self.W, SLACK, self.anchors,
-                                           self.free, self.count % ANCHORS, self.misses, self.skip, MISSES, REST)
-                self.count += 1
-            return P[j].nonzero()[0].tolist()
-        own = (P[j] & self.certified).nonzero()[0]
-        rest = self.skip[own] > 0
-        self.skip[own[rest]] -= 1
-        own = own[~rest]
-        if len(own):
+        if self.resting:
+            own = self._rested(P, j)
+        else:
+            own = (P[j] & self.certified).nonzero()[0]
+        if len(own) and self.kernel is not None:
+            tired = self.kernel.keep_and_clear(P, R, j, own, self._distances(R[j], own), self.W, SLACK, self.anchors,
+                                               self.free, self.count % ANCHORS, self.misses, self.skip, MISSES, REST)
+            self.count += 1
+            self.resting = self.resting or tired > 0
+        elif len(own):
             q = R[j]
             free = self._distances(q, own)
             self._keep(q, own, free)
@@ -142,6 +141,19 @@ class PairCertificates:
                 P[j + 1:, own] &= ~(free - np.abs(R[j + 1:] - q) @ self.W[:, own] > SLACK)
             P[j, own[free > SLACK]] = False
         return P[j].nonzero()[0].tolist()
+
+    def _rested(self, P: np.ndarray, j: int) -> np.ndarray:
+        """The certified pairs pending at row ``j`` of ``P`` less the resting ones, whose asks left go down by one
+        (:attr:`resting` cleared once none has any left)."""
+        if self.kernel is not None:
+            own = self.kernel.own_pairs(P, j, self.certified, self.skip)
+        else:
+            own = (P[j] & self.certified).nonzero()[0]
+            rest = self.skip[own] > 0
+            self.skip[own[rest]] -= 1
+            own = own[~rest]
+        self.resting = bool(self.skip.any())
+        return own
 
     def _distances(self, q: np.ndarray, own: np.ndarray) -> np.ndarray:
         """The clearances beyond the margin of pairs ``own`` at ``q`` (coal's distances)."""
@@ -166,6 +178,7 @@ class PairCertificates:
         tired = own[self.misses[own] >= MISSES]
         self.misses[tired] = 0
         self.skip[tired] = REST
+        self.resting = self.resting or len(tired) > 0
 
 
 def _kernel() -> Any:
