@@ -196,3 +196,59 @@ def test_pending_bounds_only_the_rows_it_changes():
         assert np.array_equal(S, S0)   # (S itself not changed)
         cleared, kept = cleared + int((S & ~got).sum()), kept + int(got.sum())
     assert cleared > 1000 and kept > 1000   # (certificates clearing some pairs and leaving others)
+
+
+@pytest.mark.parametrize("kernel", [True, False])
+def test_a_pair_proving_nothing_rests_then_is_asked_again(kernel):
+    """A pair whose clearance is at most SLACK MISSES times in a row gets no distance at its next REST asks (it is
+    left to the collision test), then gets one again; a clearance beyond SLACK in between starts the count anew. The
+    other pairs' distances are asked as before (both paths: the compiled loops and numpy)."""
+    from robodesign.solvers import certificate_kernel, pair_certificates
+    if kernel and not certificate_kernel.warm_up():
+        pytest.skip("numba unavailable")
+    certs = PairCertificates(SimpleNamespace(dof=1), np.ones(2, dtype=bool), np.ones((1, 2)), np.zeros(2))
+    certs.kernel = certificate_kernel if kernel else None
+    M, REST = pair_certificates.MISSES, pair_certificates.REST
+    n = 3 * (M + REST)
+    R = np.arange(n, dtype=float)[:, None]           # far apart: no certificate proves anything at another row
+    tight = np.full(n, SLACK / 2)
+    tight[1] = 1.0                                   # pair 0's second clearance proves: the count starts again
+    asked = []
+
+    def clearances(q, own):
+        asked.append((int(q[0]), own.tolist()))
+        return np.where(own == 0, tight[int(q[0])], 1.0)
+    certs._distances = clearances
+    P = np.ones((n, 2), dtype=bool)
+    left = [certs.ask(P, R, j) for j in range(n)]
+    zero = [j for j, own in asked if 0 in own]
+    first = 2 + M                                    # rows 0, 1 (reset), 2 … M + 1: M misses; then REST rows resting
+    want = [j for j in range(n) if j < first or (j - first) % (REST + M) >= REST]   # M asked, REST resting, ...
+    assert zero == want
+    assert [j for j, own in asked if 1 in own] == list(range(n))   # pair 1 always proves: always asked
+    assert all(lst == ([] if j == 1 else [0]) for j, lst in enumerate(left))   # pair 0 left to the collision test
+
+
+def test_resting_pairs_keep_coals_verdicts(robots, monkeypatch):
+    """With pairs resting after a single miss (MISSES 1) for long (REST 10,000), first_invalid on random segments
+    still gives every state coal's verdict (the resting pairs go to the collision test), and some pairs rested."""
+    from robodesign.solvers import pair_certificates
+    monkeypatch.setattr(pair_certificates, "MISSES", 1)
+    monkeypatch.setattr(pair_certificates, "REST", 10_000)
+    rng = np.random.default_rng(17)
+    rested = 0
+    for robot in robots[:6]:
+        valid = planning._Memoized(planning._config_validator(robot), robot)
+        for _ in range(8):
+            a = robot.random_configuration(rng)
+            b = a + rng.normal(0.0, 0.6, robot.dof)
+            n = int(np.ceil(np.max(np.abs(b - a)) / 0.01))
+            Q = (a + (b - a) * (np.arange(1, n + 1) / n)[:, None])[rng.permutation(n)]
+            ref = [bool(np.all(q >= robot.q_lower - 1e-9) and np.all(q <= robot.q_upper + 1e-9))
+                   and not coal_verdict(robot, q) for q in Q]
+            first = valid.first_invalid(Q)
+            assert first == (ref.index(False) if False in ref else -1)
+            for q, v in zip(Q[:first if first >= 0 else n], ref):
+                assert valid.memo[q.tobytes()] == v
+        rested += int(np.count_nonzero(valid.certificates.skip))
+    assert rested > 0
