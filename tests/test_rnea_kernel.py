@@ -97,13 +97,30 @@ def test_an_uncovered_joint_keeps_pinocchio():
     model.addJoint(2, pin.JointModelRevoluteUnaligned(0.0, 0.0, -1.0), pin.SE3.Random(), "rev")
     model.armature = np.zeros(model.nv)
     assert rnea_kernel.pack(model) is None
-    Q, V, A = _samples(rng, 20, model.nv)
+    Q, V, A = _samples(rng, rnea_batch.KERNEL_ROWS + 20, model.nv)
     assert rnea_batch.rnea_rows(model, Q, V, A).tobytes() == _pinocchio(model, Q, V, A).tobytes()
 
 
-def test_rnea_rows_runs_the_kernel_on_a_covered_arm():
+def _fail(*args, **kwargs):
+    raise AssertionError("the other path ran")
+
+
+def test_rnea_rows_runs_the_kernel_from_kernel_rows_samples_on(monkeypatch):
+    """On a covered arm: the kernel from KERNEL_ROWS samples on (no pool asked), pinocchio's pool below (the
+    kernel not called); both pinocchio's torques bit for bit."""
     ms, rng = load_module_set(IMPROV), np.random.default_rng(8)
     model = Robot.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"]).model
-    Q, V, A = _samples(rng, 50, model.nv)
-    assert rnea_batch._packed(model, False) is not None
-    assert rnea_batch.rnea_rows(model, Q, V, A).tobytes() == _pinocchio(model, Q, V, A).tobytes()
+    many = _samples(rng, rnea_batch.KERNEL_ROWS, model.nv)
+    few = tuple(x[:rnea_batch.KERNEL_ROWS - 1] for x in many)
+    for link_side in (False, True):
+        bare = pin.Model(model)
+        if link_side:
+            bare.armature = np.zeros(model.nv)
+        with monkeypatch.context() as m:
+            m.setattr(rnea_batch, "_pool", _fail)
+            assert rnea_batch.rnea_rows(model, *many, link_side=link_side).tobytes() == \
+                _pinocchio(bare, *many).tobytes()
+        with monkeypatch.context() as m:
+            m.setattr(rnea_kernel, "rnea", _fail)
+            assert rnea_batch.rnea_rows(model, *few, link_side=link_side).tobytes() == \
+                _pinocchio(bare, *few).tobytes()

@@ -14,8 +14,10 @@ made from that copy at its first ask, ~50 µs each: the judge's robot only ever 
 
 A model of revolute and prismatic joints about their frames' axes runs the compiled RNEA of
 :mod:`robodesign.model.rnea_kernel` instead, once its kernel is compiled: pinocchio's operations in pinocchio's
-order, the same torques bit for bit (tests/test_rnea_kernel.py), some 2× faster per sample. Its arrays are
-packed once per kept copy, like the pools.
+order, the same torques bit for bit (tests/test_rnea_kernel.py), ~1.5× faster per sample. Its arrays are
+packed once per kept copy, like the pools, at the first call of at least KERNEL_ROWS samples: packing (~60 µs) costs
+more than a pool (~30 µs), and pays from some 80 samples on (the time scaling's ~1,650 per new arm, not the
+planner's static torque tests of a few).
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ import pinocchio as pin
 
 from robodesign.model import rnea_kernel
 
+KERNEL_ROWS = 64  # the fewest samples a call runs the compiled RNEA on (fewer: pinocchio's pool)
 _UNPACKED = ()   # a kept copy's kernel arrays not packed yet
 # id(model) → [its copy, its pool or None, the link-side pool or None, its kernel arrays, the link side's]
 # (kernel arrays: _UNPACKED, or None when the kernel does not cover the model)
@@ -68,12 +71,12 @@ def _pool(model, link_side: bool):
 
 def rnea_rows(model, Q: np.ndarray, V: np.ndarray, A: np.ndarray, link_side: bool = False) -> np.ndarray:
     """(N, nv) ``pinocchio.rnea(model, data, Q[k], V[k], A[k])`` for every row k; ``link_side``: on the model
-    without armature (the link-side torques of ``Robot.link_torques``): the compiled RNEA when it covers the model
-    and is compiled, else pinocchio's."""
+    without armature (the link-side torques of ``Robot.link_torques``): the compiled RNEA when it covers the model,
+    is compiled and there are at least KERNEL_ROWS samples, else pinocchio's (the same numbers)."""
     Q, V, A = (np.ascontiguousarray(x, dtype=float) for x in (Q, V, A))
     if len(Q) == 0:
         return np.empty((0, model.nv))
-    packed = _packed(model, link_side) if Q.ndim == 2 and rnea_kernel.ready() else None
+    packed = _packed(model, link_side) if Q.ndim == 2 and len(Q) >= KERNEL_ROWS and rnea_kernel.ready() else None
     if packed is not None:
         return rnea_kernel.rnea(*packed + (Q, V, A))
     if not hasattr(pin, "rneaInParallel"):   # pragma: no cover - pinocchio < 3

@@ -39,24 +39,23 @@ def pack(model, armature: bool = True) -> Optional[Packed]:
     n = model.njoints - 1
     if n < 1 or model.nq != model.nv:
         return None
-    ints = np.empty((5, n), np.int64)
-    for k in range(n):
-        jm = model.joints[k + 1]
+    ints, PR, Pt = np.empty((5, n), np.int64), np.empty((n, 3, 3)), np.empty((n, 3))
+    mass, lever, sym = np.empty(n), np.empty((n, 3)), np.empty((n, 6))
+    joints, parents, placements, inertias = model.joints, model.parents, model.jointPlacements, model.inertias
+    for k in range(n):   # (one pass, each of pinocchio's accessors asked once: ~1 µs each)
+        jm = joints[k + 1]
         kind = _KINDS.get(jm.shortname())
-        if kind is None or jm.nq != 1 or jm.nv != 1:
+        if kind is None or jm.nq != 1:
             return None
-        ints[:, k] = (int(model.parents[k + 1]) - 1, kind[0], kind[1], jm.idx_q, jm.idx_v)
-    PR = np.array([np.asarray(model.jointPlacements[k + 1].rotation) for k in range(n)], dtype=float)
-    Pt = np.array([np.asarray(model.jointPlacements[k + 1].translation) for k in range(n)], dtype=float)
-    inertias = [model.inertias[k + 1] for k in range(n)]
-    mass = np.array([Y.mass for Y in inertias], dtype=float)
-    lever = np.array([np.asarray(Y.lever) for Y in inertias], dtype=float)
-    D = [np.asarray(Y.inertia) for Y in inertias]
-    sym = np.array([(d[0, 0], d[0, 1], d[1, 1], d[0, 2], d[1, 2], d[2, 2]) for d in D], dtype=float)
+        ints[:, k] = (parents[k + 1] - 1, kind[0], kind[1], jm.idx_q, jm.idx_v)
+        H = placements[k + 1].homogeneous
+        PR[k], Pt[k] = H[:3, :3], H[:3, 3]
+        Y = inertias[k + 1]
+        mass[k], lever[k], d = Y.mass, Y.lever, Y.inertia
+        sym[k] = d[0, 0], d[0, 1], d[1, 1], d[0, 2], d[1, 2], d[2, 2]
     arm = np.array(model.armature, dtype=float) if armature else np.zeros(model.nv)
-    grav = np.concatenate([np.asarray(model.gravity.linear), np.asarray(model.gravity.angular)]).astype(float)
-    return (ints[0].copy(), ints[1].copy(), ints[2].copy(), ints[3].copy(), ints[4].copy(), PR, Pt, mass, lever,
-            sym, arm, grav)
+    return (ints[0], ints[1], ints[2], ints[3], ints[4], PR, Pt, mass, lever, sym, arm,
+            np.array(model.gravity.vector, dtype=float))
 
 
 @njit(cache=True, nogil=True, inline="always")
