@@ -10,12 +10,12 @@ from robodesign.design.evaluator import Evaluator, EvaluatorSpec
 from robodesign.design.problem import Problem
 from robodesign.design.search_space import Candidate
 from robodesign.judge import interval_kernel
-from robodesign.model import geometry_kernel, sweep_kernel
+from robodesign.model import geometry_kernel, rnea_kernel, sweep_kernel
 from robodesign.solvers import certificate_kernel, topp_kernel
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "cobra"
 GOOD = ("1", "21", "4", "22", "5", "23", "12")   # IMPROV, feasible on PTP_3 at the nominal base
-MODULES = (geometry_kernel, topp_kernel, interval_kernel, sweep_kernel, certificate_kernel)
+MODULES = (geometry_kernel, topp_kernel, interval_kernel, sweep_kernel, certificate_kernel, rnea_kernel)
 
 
 def _signatures(module) -> dict:
