@@ -124,3 +124,31 @@ def test_rnea_rows_runs_the_kernel_from_kernel_rows_samples_on(monkeypatch):
             m.setattr(rnea_kernel, "rnea", _fail)
             assert rnea_batch.rnea_rows(model, *few, link_side=link_side).tobytes() == \
                 _pinocchio(bare, *few).tobytes()
+
+
+def test_a_kernel_that_differs_from_this_pinocchio_keeps_pinocchio(monkeypatch):
+    """Where the kernel's torques differ from this pinocchio's in one last bit (another build: fused multiply-adds),
+    the packed model is not used: rnea_rows gives pinocchio's torques, and the kernel is not asked again."""
+    ms, rng = load_module_set(IMPROV), np.random.default_rng(9)
+    robot = Robot.from_order(ms, ["1", "21", "4", "22", "5", "23", "12"])
+    robot.set_base_pose(homogeneous(rpy_to_matrix(0.1, -0.2, 0.3), [0.3, 0.1, 0.2]))   # a model of its own
+    model = robot.model
+    Q, V, A = _samples(rng, rnea_batch.KERNEL_ROWS + 5, model.nv)
+    exact = rnea_kernel.rnea
+    asked = []
+
+    def off_by_one_bit(*args):
+        asked.append(len(args[-1]))
+        tau = exact(*args)
+        tau[0, 0] = np.nextafter(tau[0, 0], np.inf)
+        return tau
+
+    monkeypatch.setattr(rnea_kernel, "rnea", off_by_one_bit)
+    for link_side in (False, True):
+        bare = pin.Model(model)
+        if link_side:
+            bare.armature = np.zeros(model.nv)
+        assert rnea_batch.rnea_rows(model, Q, V, A, link_side=link_side).tobytes() == \
+            _pinocchio(bare, Q, V, A).tobytes()
+    assert asked == [3, 3]   # the self-check's samples only, once per side
+    assert rnea_batch._packed(model, False) is None and rnea_batch._packed(model, True) is None
