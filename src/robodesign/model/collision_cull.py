@@ -39,7 +39,7 @@ from robodesign.model import geometry_kernel, pair_clearance
 from robodesign.model.batch_fk import batch_kinematics
 from robodesign.model.culler_keep import geometry_state, taken_up
 from robodesign.model.inner_spheres import placed_inner_spheres
-from robodesign.model.pair_scratch import PairScratch
+from robodesign.model.pair_scratch import PairScratch, fresh_guesses
 from robodesign.model.shape_spheres import _bounding_sphere, bounding_sphere, tight_sphere  # noqa: F401 (re-exported)
 
 #: metres kept on top of every margin by the bounds (coal's GJK/EPA tolerances are ~1e-6 m)
@@ -342,8 +342,7 @@ class CollisionCuller:
         looked up again. It keeps what a new one would make the same (the bounds' arrays, the kernel's arguments, the
         pairs in the scratch space) and the pairs proven never to collide (off in ``active``: coal finds none of
         them colliding at any configuration, so no verdict changes)."""
-        from robodesign.model.robot_geometry import _fresh_guesses  # (robot_geometry imports this module)
-        _fresh_guesses(self.scratch.data)
+        fresh_guesses(self.scratch.data)
         self._last_hit, self.narrow = -1, 0
         self.until_proof.fill(PROVE_AFTER)
         self._deferred.fill(False)

@@ -9,9 +9,13 @@ space makes them (pinocchio's request with contacts on and the pair's security m
 ``pin.computeCollision`` makes on the robot's geometry: the same objects (copied from it: shape, parent joint,
 placement), in the same order within the pair, the same placements (``pin.updateGeometryPlacements``) and a request
 with the same fields.
+
+:func:`fresh_guesses` sets a scratch space's GJK guesses back to a new one's (the robot's own, the culler's when
+taken up again, the sweep's).
 """
 from __future__ import annotations
 
+import sys
 from typing import Any, Dict, List
 
 import numpy as np
@@ -71,3 +75,16 @@ class PairScratch:
 
 
 __all__ = ["PairScratch"]
+
+
+GUESS, SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
+NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
+
+
+def fresh_guesses(gd: "pin.GeometryData") -> None:
+    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
+    enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
+    for r in gd.collisionRequests:   # (pinocchio sets distance_upper_bound at every query)
+        r.cached_gjk_guess, r.cached_support_func_guess, r.distance_upper_bound = GUESS, SUPPORT_GUESS, NO_BOUND
+    for r in gd.distanceRequests:
+        r.cached_gjk_guess, r.cached_support_func_guess = GUESS, SUPPORT_GUESS

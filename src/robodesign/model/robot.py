@@ -32,6 +32,7 @@ from robodesign.formats.module_spec import ModuleSet
 from robodesign.model import robot_build as _rb
 from robodesign.model.batch_fk import batch_kinematics as _batch_kinematics
 from robodesign.model.batch_fk import fk_batch
+from robodesign.model.pair_scratch import fresh_guesses
 from robodesign.model.rnea_batch import rnea_rows
 from robodesign.model.robot_build import (
     add_bodies,
@@ -41,7 +42,7 @@ from robodesign.model.robot_build import (
     vector_norm,  # noqa: F401 - where solve and solvers.ik import it from
     walk,
 )
-from robodesign.model.robot_geometry import Obstacle, RobotGeometry, _fresh_guesses
+from robodesign.model.robot_geometry import Obstacle, RobotGeometry
 
 COULOMB_SMOOTHING = 100.0
 # the build's memo helpers, where they were before robot_build had them
@@ -281,7 +282,7 @@ class Robot(RobotGeometry):
         self.data = pin.Data(model)   # (createData's Data, made in place: createData returns a copy)
         self._sync_link_model()
         if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
-            _fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
+            fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
         self._base_probe = None
         self._reach = None
         self._batch_chain = None

@@ -8,7 +8,6 @@ design that fails before its first collision query needs none of it.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple
 
@@ -383,8 +382,6 @@ class RobotGeometry:
 
 
 _CULL_RETRY = 1000   # queries before asking again whether the compiled kernel is ready
-_GUESS, _SUPPORT_GUESS = np.array([1.0, 0.0, 0.0]), np.zeros(2, dtype=np.int32)  # a new coal request's
-_NO_BOUND = sys.float_info.max  # a new collision request's distance_upper_bound
 
 
 _SPHERES: Dict[tuple, Tuple[np.ndarray, np.ndarray]] = {}   # the walk's key of the root objects → (C, r)
@@ -421,15 +418,6 @@ def _pair_column(k: int, n: int) -> List["pin.CollisionPair"]:
     if col is None or len(col) < n:   # (a new list, made whole before it is kept: threads see one or the other)
         col = _PAIR_COLUMNS[k] = [pin.CollisionPair(a, k) for a in range(n)]
     return col[:n]
-
-
-def _fresh_guesses(gd: "pin.GeometryData") -> None:
-    """coal starts each pair's GJK from where its last query ended (the requests' cached guesses, which pinocchio
-    enables): set them back to a new scratch space's, so that answers do not depend on earlier queries."""
-    for r in gd.collisionRequests:   # (pinocchio sets distance_upper_bound at every query)
-        r.cached_gjk_guess, r.cached_support_func_guess, r.distance_upper_bound = _GUESS, _SUPPORT_GUESS, _NO_BOUND
-    for r in gd.distanceRequests:
-        r.cached_gjk_guess, r.cached_support_func_guess = _GUESS, _SUPPORT_GUESS
 
 
 def _probe(robot: RobotGeometry, ab: List[Tuple[int, int]], near: List[Tuple[int, int]]) -> tuple:

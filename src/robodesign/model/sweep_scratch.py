@@ -16,7 +16,7 @@ from typing import Any, Set
 
 import pinocchio as pin
 
-from robodesign.model.robot_geometry import _GUESS, _SUPPORT_GUESS
+from robodesign.model.pair_scratch import GUESS, SUPPORT_GUESS
 
 
 class KeptScratch:
@@ -37,6 +37,6 @@ class KeptScratch:
         requests = self.data.distanceRequests
         for k in self.asked:
             r = requests[k]
-            r.cached_gjk_guess, r.cached_support_func_guess = _GUESS, _SUPPORT_GUESS
+            r.cached_gjk_guess, r.cached_support_func_guess = GUESS, SUPPORT_GUESS
         self.asked.clear()
         return self.data
