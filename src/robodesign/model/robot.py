@@ -283,9 +283,7 @@ class Robot(RobotGeometry):
         self._sync_link_model()
         if self._geom_data is not None:  # the scratch space stays (it holds no placement between queries), but as
             fresh_guesses(self._geom_data)  # a new one: each pair's GJK starts from where a new one starts
-        self._base_probe = None
-        self._reach = None
-        self._batch_chain = None
+        self._base_probe = self._reach = self._batch_chain = None
         self._geometry_changed()
 
     def set_gravity(self, g: Sequence[float]) -> None:
