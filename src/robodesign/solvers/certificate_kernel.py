@@ -4,8 +4,7 @@ those calls' overhead, a state's rows and pairs being few).
 
 A certificate (clearance ``f`` of pair k beyond its margin at configuration a) proves pair k free at q when
 ``f − Σᵢ |qᵢ − aᵢ| · W[i, k] > slack``. :func:`clear_pending` applies the kept certificates to a block of states,
-:func:`own_pairs` picks a state's pairs to compute distances of (not the resting ones), :func:`keep_and_clear` keeps
-a new certificate, applies it to the block's later states and counts the pairs' misses. Only the entries still pending
+:func:`keep_and_clear` keeps a new one and applies it to the block's later states. Only the entries still pending
 are bounded (a cleared one stays cleared), and a pair is cleared at a state by the first certificate that proves it.
 The sums run over the joints in order; numpy's matrix product (BLAS) may round the last bit differently, which
 moves a pair between "proven free" and "asked" only where its bound is within that bit of ``slack`` (1e-4 m beyond
@@ -49,28 +48,9 @@ def clear_pending(P, R, anchors, frees, m, W, cols, slack):  # pragma: no cover 
 
 
 @njit(cache=True, nogil=True)
-def own_pairs(P, j, certified, skip):  # pragma: no cover - compiled
-    """The certified pairs pending at row ``j`` of ``P`` whose distance is to be computed: those whose ``skip`` count
-    is 0 (the others' counts go down by one; they are left to the collision test)."""
-    out = np.empty(P.shape[1], np.int64)
-    n = 0
-    for k in range(P.shape[1]):
-        if P[j, k] and certified[k]:
-            if skip[k] > 0:
-                skip[k] -= 1
-            else:
-                out[n] = k
-                n += 1
-    return out[:n]
-
-
-@njit(cache=True, nogil=True)
-def keep_and_clear(P, R, j, own, free, W, slack, anchors, frees, row, misses, skip, limit, rest):  # pragma: no cover
+def keep_and_clear(P, R, j, own, free, W, slack, anchors, frees, row):  # pragma: no cover - compiled
     """A new certificate at ``R[j]`` (clearances ``free`` of the pairs ``own``) kept in row ``row`` of ``anchors``
-    and ``frees``, and ``P[r, own[c]] = False`` at ``r = j`` and every later row where it proves the pair free. A
-    pair whose clearance proves nothing (at most ``slack``) ``limit`` times in a row gets ``skip`` = ``rest``. Returns
-    how many pairs it so set resting."""
-    tired = 0
+    and ``frees``, and ``P[r, own[c]] = False`` at ``r = j`` and every later row where it proves the pair free."""
     anchors[row, :] = R[j]
     frees[row, :] = np.nan
     q = anchors[row]
@@ -79,29 +59,20 @@ def keep_and_clear(P, R, j, own, free, W, slack, anchors, frees, row, misses, sk
         frees[row, k] = free[c]
         if free[c] > slack:
             P[j, k] = False
-            misses[k] = 0
-        else:
-            misses[k] += 1
-            if misses[k] >= limit:
-                misses[k] = 0
-                skip[k] = rest
-                tired += 1
         for r in range(j + 1, R.shape[0]):
             if P[r, k] and _proves(free[c], R, r, q, W, k, slack):
                 P[r, k] = False
-    return tired
 
 
 def _warm() -> None:
     """Every kernel called once on tiny arguments (compiles or loads them)."""
     P, R, i = np.ones((2, 1), np.bool_), np.zeros((2, 1)), np.zeros(1, np.int64)
     clear_pending(P, R, np.zeros((1, 1)), np.zeros((1, 1)), 1, np.ones((1, 1)), i, 1e-4)
-    own = own_pairs(P, 0, np.ones(1, np.bool_), i)
-    keep_and_clear(P, R, 0, own, np.zeros(1), np.ones((1, 1)), 1e-4, np.zeros((1, 1)), np.zeros((1, 1)), 0, i, i, 4, 64)
+    keep_and_clear(P, R, 0, i, np.zeros(1), np.ones((1, 1)), 1e-4, np.zeros((1, 1)), np.zeros((1, 1)), 0)
 
 
 KERNELS = KernelModule("robodesign.solvers.certificate_kernel", __file__, clear_pending,
-                       ("clear_pending", "own_pairs", "keep_and_clear"), _warm, every=5.0)
+                       ("clear_pending", "keep_and_clear"), _warm, every=5.0)
 available, compiled, warm_up, ready = KERNELS.available, KERNELS.compiled, KERNELS.warm_up, KERNELS.ready
 compile_into_cache = KERNELS.compile_into_cache
 

@@ -10,10 +10,7 @@ more than ``|q − a| · W[:, k]`` relative to the other (the static lever-arm b
 :func:`robodesign.model.sweep.pair_arms`), so at q their distance is more than ``margin_k + SLACK``, and coal's
 collision test (contact within the pair's security margin) finds them free there. Such pairs are not asked; the
 others are asked their distance at q first (a new certificate), and only those closer than ``margin + SLACK`` are
-left for the collision test. The verdicts are the collision tests' (tests/test_pair_certificates.py). A pair whose
-distance proved nothing :data:`MISSES` times in a row rests: its next :data:`REST` asks go to the collision test
-without a distance (on PTP_3's 22 feasible fresh arms 44 % of the planner's distances went to one pair of one arm,
-two modules' faces 20–55 µm apart at every state of an 8,000-state OMPL query).
+left for the collision test. The verdicts are the collision tests' (tests/test_pair_certificates.py).
 
 Certified: the pairs of a robot with a convex mesh (coal's ``Convex``: the IMPROV modules) without a triangle mesh
 (``BVHModel…``, whose distance costs more than its collision test) among their two geometries
@@ -37,12 +34,6 @@ from robodesign.model.sweep import pair_arms
 SLACK = 1e-4
 #: certificates kept (the latest; an older one is overwritten)
 ANCHORS = 32
-#: a pair whose distance proves nothing (clearance at most :data:`SLACK`) this many times in a row ...
-MISSES = 4
-#: ... is left to the collision test without its distance at its next this many asks (a pair that stays within
-#: SLACK of its margin, such as two modules' faces touching at a joint, or a colliding one: the distance was spent
-#: for nothing, and the verdict is the collision test's either way)
-REST = 64
 
 
 def certified_pairs(gm, n_robot: int) -> np.ndarray:
@@ -88,9 +79,6 @@ class PairCertificates:
         self.anchors = np.zeros((ANCHORS, robot.dof))
         self.free = np.full((ANCHORS, len(self.certified)), np.nan)
         self.count = 0         # certificates made
-        self.misses = np.zeros(len(certified), dtype=np.int64)   # per pair: its clearances proving nothing in a row
-        self.skip = np.zeros(len(certified), dtype=np.int64)     # per pair: its next asks without a distance
-        self.resting = False   # whether a pair may have asks left without a distance (else no skip is looked at)
         self.kernel = _kernel()   # the compiled loops (solvers.certificate_kernel), or None: numpy
 
     def pending(self, R: np.ndarray, S: np.ndarray) -> np.ndarray:
@@ -122,38 +110,22 @@ class PairCertificates:
     def ask(self, P: np.ndarray, R: np.ndarray, j: int) -> List[int]:
         """The pairs of row ``j`` of :meth:`pending`'s ``P`` the collision test must be asked about at ``R[j]``:
         the certified pairs' distances are computed first (a new certificate, which also clears them in the later
-        rows of ``P`` it proves free), and those farther than their margin + :data:`SLACK` are dropped. A pair
-        resting (:data:`REST`) gets no distance: it is left to the collision test."""
-        if self.resting:
-            own = self._rested(P, j)
-        else:
-            own = (P[j] & self.certified).nonzero()[0]
-        if len(own) and self.kernel is not None:
-            tired = self.kernel.keep_and_clear(P, R, j, own, self._distances(R[j], own), self.W, SLACK, self.anchors,
-                                               self.free, self.count % ANCHORS, self.misses, self.skip, MISSES, REST)
-            self.count += 1
-            self.resting = self.resting or tired > 0
-        elif len(own):
-            q = R[j]
-            free = self._distances(q, own)
-            self._keep(q, own, free)
-            if j + 1 < len(R):
-                P[j + 1:, own] &= ~(free - np.abs(R[j + 1:] - q) @ self.W[:, own] > SLACK)
-            P[j, own[free > SLACK]] = False
-        return P[j].nonzero()[0].tolist()
-
-    def _rested(self, P: np.ndarray, j: int) -> np.ndarray:
-        """The certified pairs pending at row ``j`` of ``P`` less the resting ones, whose asks left go down by one
-        (:attr:`resting` cleared once none has any left)."""
+        rows of ``P`` it proves free), and those farther than their margin + :data:`SLACK` are dropped."""
+        own = (P[j] & self.certified).nonzero()[0]
+        if not len(own):
+            return P[j].nonzero()[0].tolist()
+        q = R[j]
+        free = self._distances(q, own)
         if self.kernel is not None:
-            own = self.kernel.own_pairs(P, j, self.certified, self.skip)
-        else:
-            own = (P[j] & self.certified).nonzero()[0]
-            rest = self.skip[own] > 0
-            self.skip[own[rest]] -= 1
-            own = own[~rest]
-        self.resting = bool(self.skip.any())
-        return own
+            self.kernel.keep_and_clear(P, R, j, own, free, self.W, SLACK, self.anchors, self.free,
+                                       self.count % ANCHORS)
+            self.count += 1
+            return P[j].nonzero()[0].tolist()
+        self._keep(q, own, free)
+        if j + 1 < len(R):
+            P[j + 1:, own] &= ~(free - np.abs(R[j + 1:] - q) @ self.W[:, own] > SLACK)
+        P[j, own[free > SLACK]] = False
+        return P[j].nonzero()[0].tolist()
 
     def _distances(self, q: np.ndarray, own: np.ndarray) -> np.ndarray:
         """The clearances beyond the margin of pairs ``own`` at ``q`` (coal's distances)."""
@@ -165,20 +137,12 @@ class PairCertificates:
         return d - self.margin[own]
 
     def _keep(self, q: np.ndarray, own: np.ndarray, free: np.ndarray) -> None:
-        """The clearances ``free`` of pairs ``own`` at ``q`` kept as a new certificate (the oldest overwritten), and
-        the pairs' misses counted (:data:`MISSES`, :data:`REST`)."""
+        """The clearances ``free`` of pairs ``own`` at ``q`` kept as a new certificate (the oldest overwritten)."""
         row = self.count % ANCHORS
         self.anchors[row] = q
         self.free[row] = np.nan
         self.free[row, own] = free
         self.count += 1
-        hit = free > SLACK
-        self.misses[own[hit]] = 0
-        self.misses[own[~hit]] += 1
-        tired = own[self.misses[own] >= MISSES]
-        self.misses[tired] = 0
-        self.skip[tired] = REST
-        self.resting = self.resting or len(tired) > 0
 
 
 def _kernel() -> Any:
