@@ -65,12 +65,17 @@ def _same_as_pinocchio(model, packed: rnea_kernel.Packed, link_side: bool) -> bo
     rng = np.random.default_rng(0)
     Q, V, A = (rng.uniform(-s, s, (3, model.nv)) for s in (4.0, 10.0, 300.0))
     V[0] = 0.0
-    if link_side:
-        model = pin.Model(model)
-        model.armature = np.zeros(model.nv)
+    model = _without_armature(model) if link_side else model
     data = model.createData()
     ref = np.array([pin.rnea(model, data, Q[k], V[k], A[k]) for k in range(3)])
     return bool(ref.tobytes() == rnea_kernel.rnea(*packed + (Q, V, A)).tobytes())
+
+
+def _without_armature(model):
+    """A copy of ``model`` without motor inertia (armature): Robot.link_torques' model."""
+    bare = pin.Model(model)
+    bare.armature = np.zeros(model.nv)
+    return bare
 
 
 def _pool(model, link_side: bool):
@@ -79,11 +84,7 @@ def _pool(model, link_side: bool):
     hit = _kept(model)
     i = 2 if link_side else 1
     if hit[i] is None:
-        kept = hit[0]
-        if link_side:     # Robot.link_torques' model: the same without motor inertia (armature)
-            kept = pin.Model(kept)
-            kept.armature = np.zeros(model.nv)
-        hit[i] = pin.ModelPool(kept, 1)
+        hit[i] = pin.ModelPool(_without_armature(hit[0]) if link_side else hit[0], 1)
     return hit[i]
 
 
@@ -98,9 +99,7 @@ def rnea_rows(model, Q: np.ndarray, V: np.ndarray, A: np.ndarray, link_side: boo
     if packed is not None:
         return rnea_kernel.rnea(*packed + (Q, V, A))
     if not hasattr(pin, "rneaInParallel"):   # pragma: no cover - pinocchio < 3
-        if link_side:
-            model = pin.Model(model)
-            model.armature = np.zeros(model.nv)
+        model = _without_armature(model) if link_side else model
         data = model.createData()
         return np.array([pin.rnea(model, data, Q[k], V[k], A[k]) for k in range(len(Q))])
     pool = _pool(model, link_side)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
+from typing import Any, Callable, Collection, Iterable, List, Optional, Sequence, Set, Tuple
 
 import numpy as np
 import pinocchio as pin
@@ -254,20 +254,28 @@ def _every_pairs_arms(robot: Robot, symmetry: bool) -> tuple:
     pair's column depends on that pair alone), kept for robots built alike (:func:`_setup_key`; the
     :data:`_ARMS_KEPT` latest): a new arm's planner (:func:`pair_arms`) and judge (its obstacles, posed arms) take
     columns of the same."""
-    key = _setup_key(robot, (symmetry,))
-    hit = _ARMS.get(key) if key is not None else None
-    if hit is None or hit[0] is not robot.module_set:
+    def make() -> tuple:
         tree = _Tree(robot)
         R = tree.lever_arms(symmetry, robot.dof)
         cps = [(int(cp.first), int(cp.second)) for cp in robot.geom_model.collisionPairs]
         is_env = np.array([b >= robot.n_collision_geometries for _, b in cps], dtype=bool)
-        hit = (getattr(robot, "module_set", None), (tree, R, cps, is_env,
-                                                   *_pair_arms(tree, R, cps, is_env, symmetry, robot.dof)))
+        return (tree, R, cps, is_env, *_pair_arms(tree, R, cps, is_env, symmetry, robot.dof))
+
+    return _remembered(_ARMS, _ARMS_KEPT, _setup_key(robot, (symmetry,)), robot, make)
+
+
+def _remembered(store: dict, limit: int, key: Optional[tuple], robot: Robot, make: Callable[[], Any]) -> Any:
+    """``store[key]``'s value for robots built alike (:func:`_setup_key`; held with the robot's module set, so an
+    entry of another module set at a reused id is made again), else ``make()``, kept there (the ``limit`` latest
+    entries; none when ``key`` is None)."""
+    hit = store.get(key) if key is not None else None
+    if hit is None or hit[0] is not robot.module_set:
+        hit = (getattr(robot, "module_set", None), make())
         if key is not None:
             with _SETUPS_LOCK:
-                _ARMS[key] = hit
-                while len(_ARMS) > _ARMS_KEPT:
-                    _ARMS.pop(next(iter(_ARMS)))
+                store[key] = hit
+                while len(store) > limit:
+                    store.pop(next(iter(store)))
     return hit[1]
 
 
@@ -316,17 +324,13 @@ def _cached_setup(robot: Robot, check_self: bool, check_env: bool, obstacles: Op
     """:func:`_setup`, shared by robots built alike (:func:`_setup_key`; the 64 latest kept)."""
     key = _setup_key(robot, (check_self, check_env, None if obstacles is None else tuple(obstacles), symmetry,
                              posed_arms))
-    hit = _SETUPS.get(key) if key is not None else None
-    if hit is None or hit[0] is not robot.module_set:
+
+    def make() -> dict:
         setup = rebased(robot, key) if key is not None else None   # (a robot built alike at another base pose's)
-        hit = (getattr(robot, "module_set", None), setup if setup is not None else
-               keep(robot, key, _setup(robot, check_self, check_env, obstacles, symmetry, posed_arms)))
-        if key is not None:
-            with _SETUPS_LOCK:
-                _SETUPS[key] = hit
-                while len(_SETUPS) > 64:
-                    _SETUPS.pop(next(iter(_SETUPS)))
-    return hit[1]
+        return setup if setup is not None else \
+            keep(robot, key, _setup(robot, check_self, check_env, obstacles, symmetry, posed_arms))
+
+    return _remembered(_SETUPS, 64, key, robot, make)
 
 
 def pair_arms(robot: Robot) -> np.ndarray:
