@@ -170,24 +170,37 @@ class _PairDistance:
         self._coal, self.links = coal, links
         self.a, self.b, self.Pb = shape_a, shape_b, Pb
         self.Ta = coal.Transform3s(Pa[:3, :3].copy(), Pa[:3, 3].copy())
+        self.Tb = coal.Transform3s()   # b's pose, set per row
         self.req, self.res = coal.DistanceRequest(), coal.DistanceResult()
         self.asked = 0
 
-    def __call__(self, angles: np.ndarray) -> np.ndarray:
+    def __call__(self, angles: np.ndarray, stop: float = -np.inf) -> np.ndarray:
+        """The distances at the rows of ``angles`` in order, up to the first one not above ``stop`` (the rows
+        after it are not asked); b's pose set row by row in one ``Transform3s`` (the same numbers as a new one
+        made of each row's rotation and translation)."""
         T = chain_poses(self.links, angles) @ self.Pb
-        coal, a, Ta, b, req, res = self._coal, self.a, self.Ta, self.b, self.req, self.res
-        out = np.empty(len(T))
-        for n, P in enumerate(T):
-            res.clear()
-            out[n] = coal.distance(a, Ta, b, coal.Transform3s(P[:3, :3].copy(), P[:3, 3].copy()), req, res)
-        self.asked += len(T)
-        return out
+        R, t = np.ascontiguousarray(T[:, :3, :3]), np.ascontiguousarray(T[:, :3, 3])
+        a, Ta, b, Tb, req, res = self.a, self.Ta, self.b, self.Tb, self.req, self.res
+        distance, clear, turn, move = self._coal.distance, res.clear, Tb.setRotation, Tb.setTranslation
+        out = []
+        for Rn, tn in zip(R, t):
+            turn(Rn)
+            move(tn)
+            clear()
+            d = distance(a, Ta, b, Tb, req, res)
+            out.append(d)
+            if d <= stop:
+                break
+        self.asked += len(out)
+        return np.array(out, dtype=float)
 
 
 def chain_clears(distance, arms: np.ndarray, limit: float, budget: int = BUDGET) -> bool:
-    """Whether ``distance`` (rows of chain angles → coal's distances) is above ``limit`` over the whole box
-    [−π, π]^k of the chain angles, by the cells of the module docstring with ``arms`` (per chain angle) as the
-    Lipschitz bounds: all cells of a round asked at once, the failing ones split for the next round."""
+    """Whether ``distance`` (rows of chain angles, a stop → coal's distances in row order, up to the first one not
+    above the stop) is above ``limit`` over the whole box [−π, π]^k of the chain angles, by the cells of the module
+    docstring with ``arms`` (per chain angle) as the Lipschitz bounds: all cells of a round asked at once (up to
+    the first centre not above ``limit``: the pair is then not proven, whatever the rest), the failing ones split
+    for the next round."""
     k = len(arms)
     h = np.pi / START
     axes = [-np.pi + h * (2 * np.arange(START) + 1)] * k
@@ -197,9 +210,9 @@ def chain_clears(distance, arms: np.ndarray, limit: float, budget: int = BUDGET)
     while len(C):
         if asked + len(C) > budget:
             return False
-        d = distance(C)
+        d = distance(C, limit)
         asked += len(C)
-        if (d <= limit).any():
+        if len(d) < len(C) or (d <= limit).any():
             return False
         terms = HW * arms
         open_ = d - terms.sum(axis=1) <= limit
