@@ -151,14 +151,19 @@ def chain_poses(links, angles: np.ndarray) -> np.ndarray:
     """(n × 4 × 4) the poses of the last chain joint's frame in joint i's frame at the rows of chain ``angles``
     (n × k; a rotation of θ about the unit axis u is Rodrigues' I + sin θ K + (1 − cos θ) K², K = [u]×)."""
     n = len(angles)
-    T = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+    T = np.empty((n, 4, 4))
+    T[:] = _EYE4
     for (M, axis), a in zip(links, angles.T):
         x, y, z = axis
         K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-        X = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+        X = np.empty((n, 4, 4))
+        X[:] = _EYE4
         X[:, :3, :3] += np.sin(a)[:, None, None] * K + (1.0 - np.cos(a))[:, None, None] * (K @ K)
         T = T @ M @ X
     return T
+
+
+_EYE4 = np.eye(4)
 
 
 class _PairDistance:
