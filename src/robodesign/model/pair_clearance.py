@@ -168,14 +168,16 @@ _EYE4 = np.eye(4)
 
 class _PairDistance:
     """coal's distances of shape a (fixed, at ``Pa`` in joint i's frame) and shape b (at ``Pb`` in joint j's frame)
-    at rows of chain angles; ``asked``: the distances computed."""
+    at rows of chain angles, by coal's distance functor of the two shapes (``coal.ComputeDistance``: the function
+    ``coal.distance`` looks up at every call, looked up once; the same numbers); ``asked``: the distances computed."""
 
     def __init__(self, shape_a, Pa: np.ndarray, shape_b, Pb: np.ndarray, links):
         import coal
-        self._coal, self.links = coal, links
+        self.links = links
         self.a, self.b, self.Pb = shape_a, shape_b, Pb
         self.Ta = coal.Transform3s(Pa[:3, :3].copy(), Pa[:3, 3].copy())
         self.Tb = coal.Transform3s()   # b's pose, set per row
+        self._distance = coal.ComputeDistance(shape_a, shape_b)
         self.req, self.res = coal.DistanceRequest(), coal.DistanceResult()
         self.asked = 0
 
@@ -185,14 +187,14 @@ class _PairDistance:
         made of each row's rotation and translation)."""
         T = chain_poses(self.links, angles) @ self.Pb
         R, t = np.ascontiguousarray(T[:, :3, :3]), np.ascontiguousarray(T[:, :3, 3])
-        a, Ta, b, Tb, req, res = self.a, self.Ta, self.b, self.Tb, self.req, self.res
-        distance, clear, turn, move = self._coal.distance, res.clear, Tb.setRotation, Tb.setTranslation
+        Ta, Tb, req, res = self.Ta, self.Tb, self.req, self.res
+        distance, clear, turn, move = self._distance, res.clear, Tb.setRotation, Tb.setTranslation
         out = []
         for Rn, tn in zip(R, t):
             turn(Rn)
             move(tn)
             clear()
-            d = distance(a, Ta, b, Tb, req, res)
+            d = distance(Ta, Tb, req, res)
             out.append(d)
             if d <= stop:
                 break
