@@ -126,3 +126,34 @@ def test_a_feasible_evaluation_compiles_nothing_the_warm_up_did_not():
     assert sum(ev.stage in ("done", "timing", "check") or ev.feasible for ev in evs) >= 2   # planning ran
     assert {k: set(getattr(certificate_kernel, k).signatures) for k in kernels} == warmed
     assert all(warmed.values())
+
+
+def test_a_clearance_within_the_slack_proves_nothing_since_the_lever_arms_are_never_negative(robots):  # noqa: F811
+    """The kernels sum no bound for a clearance of at most SLACK, as ``f − bound ≤ f`` when W ≥ 0: W (sweep.pair_arms)
+    of the random IMPROV arms and the built-in arm has no negative entry; and with such clearances only (touching
+    faces at every anchor, a few far ones) ``pending`` and ``ask`` keep what the formula over every row and anchor
+    keeps, on real W and states near the anchors."""
+    from robodesign.model.sweep import pair_arms
+    rng = np.random.default_rng(59)
+    for robot in robots:
+        W = pair_arms(robot)
+        assert W.shape == (robot.dof, len(robot.geom_model.collisionPairs)) and (W >= 0).all()
+        certs = PairCertificates(robot, np.ones(W.shape[1], bool), np.ascontiguousarray(W), np.zeros(W.shape[1]))
+        certs.kernel = certificate_kernel
+        certs.count = ANCHORS
+        certs.anchors[:] = np.array([robot.random_configuration(rng) for _ in range(ANCHORS)])
+        certs.free[:] = np.where(rng.random(certs.free.shape) < 0.9, rng.uniform(-SLACK, SLACK, certs.free.shape),
+                                 rng.uniform(0.0, 0.2, certs.free.shape))
+        R = certs.anchors[rng.integers(0, ANCHORS, 200)] + rng.normal(0.0, 0.01, (200, robot.dof))
+        S = rng.random((200, W.shape[1])) < 0.5
+        bound = np.abs(R[:, None, :] - certs.anchors[None, :]) @ W
+        want = S & ~(certs.free - bound > SLACK).any(axis=1)
+        assert np.array_equal(certs.pending(R, S), want) and (S & ~want).any() and want.any()
+        P, j = want.copy(), 7
+        own = np.flatnonzero(P[j])
+        free = np.where(rng.random(len(own)) < 0.7, rng.uniform(-SLACK, SLACK, len(own)), 0.05)
+        certs._distances = lambda q, own, free=free: free
+        left = certs.ask(P, R, j)
+        later = free - np.abs(R[j + 1:] - R[j]) @ W[:, own] > SLACK
+        assert left == own[free <= SLACK].tolist()
+        assert np.array_equal(P[j + 1:, own], want[j + 1:, own] & ~later)
