@@ -137,11 +137,15 @@ def _next_to(steps: np.ndarray, n: int) -> np.ndarray:
 def _uncertified(kernel, groups: List[Tuple[np.ndarray, np.ndarray]], margins: np.ndarray, args: tuple) -> np.ndarray:
     """:func:`open_steps`'s (P, n − 1) answer from the clearance bounds ``groups`` ((pairs, (n, len(pairs)) bounds))
     less the pairs' ``margins``; ``args``: the schedule's step bounds, the fastest joint's and the rest of the
-    kernel's arguments."""
+    kernel's arguments. One group (the judge's: its self pairs, or its pairs with one obstacle) is taken in place, as
+    before: it is asked again only after its field's kernel wrote it anew."""
     n, P = len(groups[0][1]), len(margins)
-    F = np.empty((n, P))
-    for c, lb in groups:
-        F[:, c] = lb
+    if len(groups) == 1:
+        F = groups[0][1]
+    else:
+        F = np.empty((n, P))
+        for c, lb in groups:
+            F[:, c] = lb
     F -= margins
     out = np.empty((P, n - 1), np.int64)
     kernel.open_steps(F, *args, out)
