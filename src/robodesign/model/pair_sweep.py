@@ -11,7 +11,7 @@ distance query differs (two robots, two models).
 """
 from __future__ import annotations
 
-from typing import List, Sequence, Tuple
+from typing import Callable, List, Sequence, Tuple
 
 import coal
 import numpy as np
@@ -68,6 +68,6 @@ class RobotPairSweep(SweepChecker):
         self.queries += len(out)
         return out
 
-    def distance(self, q: np.ndarray, c: int) -> float:
-        """:meth:`distances` of the one pair with index c."""
-        return float(self.distances(q, [c])[0])
+    def _pair_query(self, c: int) -> Callable[[np.ndarray], float]:
+        """:meth:`distances` of the one pair with index c, as a function of the configuration."""
+        return lambda q: float(self.distances(q, [c])[0])

@@ -421,12 +421,21 @@ class SweepChecker:
 
     def distance(self, q: np.ndarray, c: int) -> float:
         """:meth:`distances` of the one pair with index c (the same number, without the array)."""
-        r, gm, gd, pair = self.robot, self._gm, self._req, self.pairs[c]
-        pin.updateGeometryPlacements(r.model, r.data, gm, gd, q)
+        return self._pair_query(c)(q)
+
+    def _pair_query(self, c: int) -> Callable[[np.ndarray], float]:
+        """The distance at a configuration of the pair with index c (:meth:`distances`'s number, counted in
+        :attr:`queries`), with what the query reads looked up once (:meth:`_advance`'s sub-steps)."""
+        model, data, gm, gd, pair = self.robot.model, self.robot.data, self._gm, self._req, self.pairs[c]
+        place, distance = pin.updateGeometryPlacements, pin.computeDistance
         if self._asked is not None:
             self._asked.add(pair)
-        self.queries += 1
-        return pin.computeDistance(gm, gd, pair).min_distance
+
+        def query(q: np.ndarray) -> float:
+            place(model, data, gm, gd, q)
+            self.queries += 1
+            return distance(gm, gd, pair).min_distance
+        return query
 
     def check(self, Q: np.ndarray, first_only: bool = True, path: Optional[np.ndarray] = None,
               at: Optional[Callable[[int, float], np.ndarray]] = None,
@@ -563,17 +572,16 @@ class SweepChecker:
         """Conservative advancement of pair c along qa→qb (displacement bound ``bound``; ``at(s)``: the
         configuration at fraction s, default the linear interpolation)."""
         s = 0.0
-        tol = self.tolerance
+        tol, margin, query = self.tolerance, self.margins[c], self._pair_query(c)
         for _ in range(self.max_substeps):
             s += free / bound
             if s >= 1.0:
                 return None
-            q = qa + s * (qb - qa) if at is None else at(s)
-            dist = self.distance(q, c)
-            free = dist - self.margins[c]
+            dist = query(qa + s * (qb - qa) if at is None else at(s))
+            free = dist - margin
             if free <= tol:
                 return s, float(dist)
-        return s, float(free + self.margins[c])  # could not certify: report as contact
+        return s, float(free + margin)  # could not certify: report as contact
 
     def in_contact(self, q: np.ndarray, names: Iterable[Tuple[str, str]]) -> Set[Tuple[str, str]]:
         """Which of the pairs named ``names`` are in contact (within their margin) at configuration q."""

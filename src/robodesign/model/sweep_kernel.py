@@ -233,14 +233,16 @@ def certify(due, d, k, margins, is_env, rows, TG, mov, ref, cen, rad, sched, ext
 
 
 @njit(cache=True, nogil=True)
-def obstacle_bounds(TG, geo, cen, rad, oR, ot, lo, hi, grid_lo, grid_dim, h, grid, out, unknown):  # pragma: no cover
+def obstacle_bounds(TG, geo, cen, rad, oR, ot, lo, hi, grid_lo, grid_dim, h, grid, out, unknown,
+                    where):  # pragma: no cover - compiled
     """Lower bounds out[k, i] of the distance from robot geometry geo[i] (a sphere around it: centre cen[i] in the
     geometry's frame, radius rad[i]) at sample k (TG: the geometries' poses) to one obstacle: the sphere centre's
     distance to the obstacle's box (oR, ot: world → obstacle frame; lo, hi: the box there) or, where larger, its
     grid cell's exact distance (grid: the obstacle's distance field, cells of edge h from grid_lo, NaN unknown)
     minus the centre's distance to the cell's centre (distance is 1-Lipschitz), less rad[i] (model.collision_cull's
     bounds, as geometry_kernel.survivors reads them); −inf for a centre that is no finite point. The unknown cells met
-    are written to ``unknown`` (flat indices into grid, with repeats); returns how many."""
+    are written to ``unknown`` (flat indices into grid, with repeats) and where each was met to ``where`` (the flat
+    index k·len(geo) + i of ``out``); returns how many."""
     nu = 0
     for i in range(len(geo)):
         g = geo[i]
@@ -276,6 +278,7 @@ def obstacle_bounds(TG, geo, cen, rad, oR, ot, lo, hi, grid_lo, grid_dim, h, gri
                     v = grid[flat]
                     if np.isnan(v):
                         unknown[nu] = flat
+                        where[nu] = k * len(geo) + i
                         nu += 1
                     elif v - np.sqrt(dc) > b:
                         b = v - np.sqrt(dc)
@@ -387,7 +390,7 @@ def _warm() -> None:
     certify(i, f, 0, f, np.zeros(1, np.bool_), np.zeros((1, 2)), TG, i, i, np.zeros((1, 3)), f, np.zeros((1, 1)),
             1e-6, 1.0, False)
     obstacle_bounds(TG, i, np.zeros((1, 3)), f, np.eye(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3, np.int64),
-                    np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64))
+                    np.ones(3, np.int64), 1.0, np.zeros(1), np.zeros((2, 1)), np.zeros(2, np.int64), np.zeros(2, np.int64))
     sphere_gaps(TG, np.zeros((1, 3)), i, i, f, np.zeros((2, 1)))
     open_steps(np.zeros((2, 1)), np.zeros((1, 1)), f, f, 1e-6, 1.0, 500.0, np.zeros((1, 1), np.int64))
     next_due(np.zeros(1, np.int64), 1, np.zeros((1, 1), np.int64), np.zeros(1, np.int64))   # (the queue's first batch)
