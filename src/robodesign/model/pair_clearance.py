@@ -44,6 +44,7 @@ _AXES = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0), "Join
 KEPT = 1 << 16
 _KNOWN: Dict[tuple, Tuple[tuple, bool]] = {}   # key → (the shapes, held so their ids are not reused; verdict)
 _FRAMED: Dict[tuple, Tuple[bytes, tuple]] = {}   # :func:`framed`'s: by the raw placements' bytes
+_EYE4 = np.eye(4)   # (:func:`chain_poses`' identity stacks are filled from it)
 
 
 def chain(model, i: int, j: int) -> Optional[List[Tuple[np.ndarray, np.ndarray]]]:
@@ -161,9 +162,6 @@ def chain_poses(links, angles: np.ndarray) -> np.ndarray:
         X[:, :3, :3] += np.sin(a)[:, None, None] * K + (1.0 - np.cos(a))[:, None, None] * (K @ K)
         T = T @ M @ X
     return T
-
-
-_EYE4 = np.eye(4)
 
 
 class _PairDistance:
