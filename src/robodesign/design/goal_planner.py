@@ -152,7 +152,7 @@ class GoalPlanner:
             if g.solver_kind == "pose":
                 n_sol = 1 if i == probe else self.settings.ik_solutions
                 r = solve_ik(self.robot, g.target_poses[0], self.rng, max_restarts=self.settings.ik_restarts,
-                             n_solutions=n_sol)
+                             n_solutions=n_sol, saturate=self.settings.ik_saturate)
                 sols, reason = r.solutions, str(r.stats.get("reason"))
                 if not sols:
                     self.res.goals_reached = reached

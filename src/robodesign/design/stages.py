@@ -32,6 +32,11 @@ class SolveSettings:
     # shortest time-optimal bounds, so more choice gives shorter, less random cycle times
     # (docs/benchmarks.md, "Choosing among IK solutions")
     ik_solutions: int = 48
+    # stop collecting a goal's IK solutions once this many converged restarts since its last new solution were
+    # duplicates of those found (0: run every restart). 8 halves a feasible six-joint arm's IK stage; it loses
+    # the rarely found solutions, and with them a little of the sequencing's choice (docs/benchmarks.md, "IK
+    # restarts that stop when a goal's solutions stop growing")
+    ik_saturate: int = 0
     resolution: float = 0.01  # rad: dense collision-check step of planned paths
     # when no path reaches a goal's chosen IK solution, one more query (half of plan_time) to it or any of this
     # many of the goal's other IK solutions (nearest first)

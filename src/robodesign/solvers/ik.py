@@ -720,7 +720,7 @@ _trace: Optional[list] = None   # development hook: a list receives (converged, 
 def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
              max_iter: int = 40, check_collision: bool = True, n_solutions: int = 1,
              time_limit: Optional[float] = None, distinct_tol: float = DISTINCT_TOL,
-             reach_bounds: bool = True, canonical: bool = True) -> IKResult:
+             reach_bounds: bool = True, canonical: bool = True, saturate: int = 0) -> IKResult:
     """Joint configurations whose TCP pose lies inside the tolerated ``goal``.
 
     ``rng``: a ``np.random.Generator`` or a seed (the result is deterministic for a given seed unless
@@ -734,9 +734,13 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     (Euclidean joint distance). With ``canonical`` (default) each solution's revolute joints are turned by
     whole turns to the sheet nearest ``q_seed`` (else nearest 0; :meth:`Robot.nearest_equivalent`), so the
     solutions of one goal and of consecutive goals lie in one piece of free space.
+    With ``saturate`` > 0 the collecting stops (reason "saturated") once that many converged attempts since the
+    last new solution were duplicates of the solutions found (collision and limit rejections do not count):
+    the goal's solutions have stopped growing. The solutions are then the first ones the full search finds.
     ``time_limit`` (s) stops the search after the current attempt.
     ``stats``: attempts, iterations, converged, rejected_limits, rejected_collision, rejected_duplicate,
-    time, reason ("found" | "max_restarts" | "time_limit" | "out_of_reach" | "out_of_orientation_reach").
+    time, reason ("found" | "saturated" | "max_restarts" | "time_limit" | "out_of_reach" |
+    "out_of_orientation_reach").
     """
     t0 = time.perf_counter()
     if not isinstance(goal, ToleratedPose):
@@ -848,6 +852,7 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         return q2
 
     accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
+    repeats = 0   # duplicates found since the last new solution (saturate)
 
     # every attempt's start at once: the same numbers as one uniform draw (random_configuration) per attempt
     starts = r_lo + (r_hi - r_lo) * rng.random((max_restarts, n))
@@ -885,6 +890,12 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
                 verdict = accept(q2)
                 if verdict != "collision":
                     break
-        if verdict == "added" and len(sols) >= n_solutions:
-            return finish("found")
+        if verdict == "added":
+            if len(sols) >= n_solutions:
+                return finish("found")
+            repeats = 0
+        elif verdict == "duplicate":
+            repeats += 1
+            if repeats == saturate:
+                return finish("saturated")
     return finish("max_restarts")
