@@ -33,15 +33,30 @@ from robodesign.design.problem import Problem  # noqa: E402
 from robodesign.design.solve import warm_up  # noqa: E402
 
 
-def evaluate(problem, restarts: int, jobs) -> list:
-    """(CPU seconds, evaluation) of each (candidate, study seed) in ``jobs`` at ``restarts`` IK restarts per goal."""
+def evaluate(problem, restarts: int, jobs, **overrides) -> list:
+    """(CPU seconds, evaluation) of each (candidate, study seed) in ``jobs`` at ``restarts`` IK restarts per goal
+    (and the other solve settings ``overrides``)."""
     out = []
     for cand, seed in jobs:
-        ev = Evaluator(EvaluatorSpec(problem, settings=evaluation_settings(ik_restarts=restarts), seed=seed))
+        settings = evaluation_settings(ik_restarts=restarts, **overrides)
+        ev = Evaluator(EvaluatorSpec(problem, settings=settings, seed=seed))
         t = time.process_time()
         e = ev.evaluate(cand)
         out.append((time.process_time() - t, e))
     return out
+
+
+def ptp3_problem() -> Problem:
+    return Problem.build(SHARED / "tasks" / "simple" / "PTP_3.json", SHARED / "modules" / "IMPROV", "cyc")
+
+
+def feasible_arms(ptp3: Problem, n: int) -> list:
+    """The candidates among PTP_3's first ``n`` random ones (generator seed 0) feasible with the evaluator's
+    settings (study seed 0)."""
+    rng = np.random.default_rng(0)
+    drawn = [ptp3.space.random_candidate(rng) for _ in range(n)]
+    ev = Evaluator(EvaluatorSpec(ptp3, seed=0))
+    return [c for c in drawn if ev.evaluate(c).feasible]
 
 
 def main() -> None:
@@ -52,11 +67,8 @@ def main() -> None:
     args = ap.parse_args()
     settings = [int(x) for x in args.restarts.split(",")]
     warm_up()
-    ptp3 = Problem.build(SHARED / "tasks" / "simple" / "PTP_3.json", SHARED / "modules" / "IMPROV", "cyc")
-    rng = np.random.default_rng(0)
-    drawn = [ptp3.space.random_candidate(rng) for _ in range(args.n)]
-    ev = Evaluator(EvaluatorSpec(ptp3, seed=0))
-    fresh = [c for c in drawn if ev.evaluate(c).feasible]
+    ptp3 = ptp3_problem()
+    fresh = feasible_arms(ptp3, args.n)
     sets = {"known-good arm": [(Candidate(GOOD), s) for s in range(1, 21)],
             f"feasible of {args.n} random": [(c, 1) for c in fresh]}
     for name, jobs in sets.items():
