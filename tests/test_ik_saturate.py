@@ -52,7 +52,7 @@ def test_saturated_search_is_the_full_search_cut_at_the_kth_repeat(verdicts, k):
     robot = Robot.from_order(load_module_set(IMPROV), GOOD)
     task = load_task(TASKS / "simple" / "PTP_3.json")
     stopped = saved = 0
-    for gi, goal in enumerate(g.pose for g in task.goals):
+    for goal in (g.pose for g in task.goals):
         for seed in range(3):
             verdicts.clear()
             full = solve_ik(robot, goal, rng=seed, max_restarts=150, n_solutions=48)
@@ -121,3 +121,20 @@ def test_the_evaluator_passes_it_on(monkeypatch):
         reasons = {c[2] for c in calls}
         assert reasons == ({"max_restarts"} if k == 0 else {"saturated"})
         assert all(c[3] == 150 for c in calls) == (k == 0)
+
+
+def test_a_negative_setting_is_an_error_naming_the_field(tmp_path):
+    from robodesign.core.errors import InputError
+    from robodesign.design.stages import check_settings
+    from robodesign.experiment.config import load_experiment
+    with pytest.raises(InputError, match="saturate must be 0"):
+        solve_ik(Robot.from_order(load_module_set(IMPROV), GOOD),
+                 load_task(TASKS / "simple" / "PTP_3.json").goals[0].pose, rng=0, saturate=-1)
+    with pytest.raises(InputError, match="--ik-saturate: must be a whole number"):
+        check_settings(SolveSettings(ik_saturate=-2))
+    cfg = tmp_path / "exp.yaml"
+    cfg.write_text(f"tasks: [{{task: {TASKS / 'simple' / 'PTP_3.json'}}}]\nmodules: {IMPROV}\n"
+                   "optimizers: [random]\nsolve: {ik_saturate: -1}\n")
+    with pytest.raises(InputError) as e:
+        load_experiment(cfg)
+    assert "exp.yaml" in str(e.value) and "solve.ik_saturate" in str(e.value)

@@ -73,6 +73,10 @@ def check_settings(settings: SolveSettings, file: Optional[str] = None, path: Se
              + f"; available: {', '.join(TIMING_METHODS)}")
     if not (isinstance(settings.plan_time, (int, float)) and settings.plan_time > 0 and math.isfinite(settings.plan_time)):
         fail("plan_time", f"must be a positive number of seconds, got {settings.plan_time!r}")
+    if not (isinstance(settings.ik_saturate, int) and not isinstance(settings.ik_saturate, bool)
+            and settings.ik_saturate >= 0):
+        fail("ik_saturate", f"must be a whole number of repeated IK solutions, 0 (off) or more, got "
+                            f"{settings.ik_saturate!r}")
     if settings.stop_after is not None and settings.stop_after not in STAGES:
         fail("stop_after", f"unknown stage {settings.stop_after!r}; stages: {', '.join(STAGES)}")
 

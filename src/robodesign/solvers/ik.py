@@ -749,6 +749,8 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
         raise InputError("n_solutions must be at least 1")
     if max_restarts < 1 or max_iter < 1:
         raise InputError("max_restarts and max_iter must be at least 1")
+    if saturate < 0:
+        raise InputError(f"saturate must be 0 (off) or more, got {saturate}")
     rng = _as_rng(rng)
     model, data, fid = robot.kinematic_model, robot.data, robot.tcp_frame
     n = robot.dof
