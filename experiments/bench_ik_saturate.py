@@ -15,8 +15,9 @@ to ``DIR/<part>.txt``:
   the median cost and the mean over the arms of each arm's best cost over the seeds;
 * ``kept``: per goal search of those evaluations (3 seeds), the share of the full search's solutions and of its
   attempts each k keeps (the saturated search is the full one cut short, so both come from one run each);
-* ``ga``: the genetic search on PTP_3 (600 evaluations, study seeds 0-5, the settings' order alternating): the
-  best cycle time, feasible evaluations and CPU seconds of each run;
+* ``ga``: the genetic search on PTP_3 (600 evaluations, study seeds 0 to ``--ga-seeds`` - 1, default 6, the
+  settings' order alternating): the best cycle time, feasible evaluations and CPU seconds of each run, and per
+  setting the mean best, the runs worse and better than the first setting's and the summed CPU;
 * ``families``: 10 generated tasks each of the published Whitman2020 5/5 (free base) and BPO24 families (seed 7;
   the robodesign_arm set; written to results/tasks/ once): the designs that passed IK in a 500-evaluation genetic search (at most 12 per task),
   evaluated with study seeds 1-4 at every setting: feasible count, failing stages, paired cost ratio, CPU.
@@ -123,17 +124,26 @@ def part_kept(ptp3, fresh, ks, say) -> None:
             f"{np.mean(n < a[:, 2 * full]):.3f}, attempts {at.mean():.1f} ({at.sum() / a[:, 2 * full + 1].sum():.3f})")
 
 
-def part_ga(ptp3, ks, say) -> None:
-    for seed in range(6):
+def part_ga(ptp3, ks, say, seeds: int) -> None:
+    bests: dict = {k: [] for k in ks}
+    cpus: dict = {k: [] for k in ks}
+    for seed in range(seeds):
         out = []
         for k in ks if seed % 2 == 0 else ks[::-1]:
             feasible = [0]
             t = time.process_time()
             r = optimize(ptp3, "genetic", "600evals", seed=seed, settings=evaluation_settings(ik_saturate=k),
                          on_evaluation=lambda i, e, best: feasible.__setitem__(0, feasible[0] + bool(e.feasible)))
+            cpu = time.process_time() - t
             cost = r.best.cost if r.best is not None and r.best.feasible else float("nan")
-            out.append((k, f"ik_saturate {k}: best {cost:.3f} s, {feasible[0]} feasible, CPU {time.process_time() - t:.1f} s"))
+            bests[k].append(cost)
+            cpus[k].append(cpu)
+            out.append((k, f"ik_saturate {k}: best {cost:.3f} s, {feasible[0]} feasible, CPU {cpu:.1f} s"))
         say(f"seed {seed}: " + " | ".join(text for _, text in sorted(out)))
+    for k in ks:
+        d = np.array(bests[k]) - np.array(bests[ks[0]])
+        say(f"ik_saturate {k}: best mean {np.mean(bests[k]):.4f} s (against {ks[0]}: worse in {int((d > 0).sum())}, "
+            f"better in {int((d < 0).sum())} of {seeds}), CPU sum {sum(cpus[k]):.1f} s")
 
 
 def part_families(ks, say) -> None:
@@ -167,6 +177,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="evals,share,kept,ga,families")
     ap.add_argument("--saturate", default="0,8,12", help="ik_saturate settings, the first the reference (0: off)")
+    ap.add_argument("--ga-seeds", type=int, default=6, help="study seeds of the ga part (0, 1, ...)")
     ap.add_argument("--out", type=Path, default=Path("docs/results/issue25_round14/saturate"))
     args = ap.parse_args()
     ks = [int(x) for x in args.saturate.split(",")]
@@ -188,7 +199,7 @@ def main() -> None:
         elif part == "kept":
             part_kept(ptp3, fresh, sorted(set(ks) | {0, 8, 12, 16, 24}), say)
         elif part == "ga":
-            part_ga(ptp3, ks, say)
+            part_ga(ptp3, ks, say, args.ga_seeds)
         elif part == "families":
             part_families(ks, say)
         else:
