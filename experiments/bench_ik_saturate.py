@@ -208,4 +208,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:   # every line printed so far is already in its part's file
+        print("interrupted: the lines printed so far are in the parts' files", file=sys.stderr)
+        sys.exit(130)
