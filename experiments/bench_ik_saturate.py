@@ -146,14 +146,19 @@ def part_ga(ptp3, ks, say, seeds: int) -> None:
             f"better in {int((d < 0).sum())} of {seeds}), CPU sum {sum(cpus[k]):.1f} s")
 
 
+def family_tasks(fam: str) -> list:
+    """The 10 task files of family ``fam`` (:data:`FAMILIES`; generated into results/tasks/ on first use)."""
+    folder = HERE.parent / "results" / "tasks" / f"bench_ik_saturate_{fam}_s7_n10"
+    if not folder.is_dir():
+        subprocess.run([str(Path(sys.executable).parent / "robodesign"), "generate", *FAMILIES[fam], "--variant",
+                        "published", "--count", "10", "--seed", "7", "--out", str(folder), "-q"], check=True)
+    return sorted(folder.glob("*.json"))
+
+
 def part_families(ks, say) -> None:
-    for fam, args in FAMILIES.items():
-        folder = HERE.parent / "results" / "tasks" / f"bench_ik_saturate_{fam}_s7_n10"
-        if not folder.is_dir():
-            subprocess.run([str(Path(sys.executable).parent / "robodesign"), "generate", *args, "--variant", "published",
-                            "--count", "10", "--seed", "7", "--out", str(folder), "-q"], check=True)
+    for fam in FAMILIES:
         res: dict = {k: [] for k in ks}
-        for f in sorted(folder.glob("*.json")):
+        for f in family_tasks(fam):
             problem = Problem.build(f, "robodesign_arm", "cyc")
             got: list = []
             optimize(problem, "genetic", "500evals", seed=0, on_evaluation=lambda i, e, best: got.append(e.candidate)
