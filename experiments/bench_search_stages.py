@@ -32,8 +32,7 @@ RANDOM = 300   # random candidates per task, for the IK failures of the search s
 
 
 def family_table(fam: str, tasks: int, budget: str) -> str:
-    each: dict = defaultdict(list)
-
+    each: dict = defaultdict(list)   # ending stage -> each evaluation's summed stage seconds
     reached: list = []   # goals reached by the candidates that failed at IK
     random_ik: list = []  # (goals reached, seconds) of the IK failures among random candidates
 
