@@ -742,41 +742,75 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     time, reason ("found" | "saturated" | "max_restarts" | "time_limit" | "out_of_reach" |
     "out_of_orientation_reach").
     """
-    t0 = time.perf_counter()
-    if not isinstance(goal, ToleratedPose):
-        raise InputError(f"goal must be a ToleratedPose, got {type(goal).__name__}")
     if n_solutions < 1:
         raise InputError("n_solutions must be at least 1")
-    if max_restarts < 1 or max_iter < 1:
-        raise InputError("max_restarts and max_iter must be at least 1")
-    if saturate < 0:
-        raise InputError(f"saturate must be 0 (off) or more, got {saturate}")
+    return IKSearch(robot, goal, rng, q_seed=q_seed, max_restarts=max_restarts, max_iter=max_iter,
+                    check_collision=check_collision, time_limit=time_limit, distinct_tol=distinct_tol,
+                    reach_bounds=reach_bounds, canonical=canonical, saturate=saturate).run(n_solutions)
+
+
+class IKSearch:
+    """:func:`solve_ik` as a search that can stop and go on: ``run(n)`` collects solutions until there are ``n``
+    (reason "found") or the search ends, and a later ``run(m)`` goes on from where it stopped. The attempts,
+    random draws and solutions are those of one ``solve_ik(..., n_solutions=m)`` call, so a caller can first
+    ask every goal for one solution (is each reachable?) and collect the rest afterwards, at no extra cost
+    (:meth:`robodesign.design.goal_planner.GoalPlanner.solve_ik`). ``solutions``: the distinct solutions so
+    far (first = first found); ``finished``: the search has ended (``stats["reason"]`` says why)."""
+
+    def __init__(self, robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
+                 max_iter: int = 40, check_collision: bool = True, time_limit: Optional[float] = None,
+                 distinct_tol: float = DISTINCT_TOL, reach_bounds: bool = True, canonical: bool = True,
+                 saturate: int = 0) -> None:
+        if not isinstance(goal, ToleratedPose):
+            raise InputError(f"goal must be a ToleratedPose, got {type(goal).__name__}")
+        if max_restarts < 1 or max_iter < 1:
+            raise InputError("max_restarts and max_iter must be at least 1")
+        if saturate < 0:
+            raise InputError(f"saturate must be 0 (off) or more, got {saturate}")
+        if q_seed is not None:
+            q_seed = np.asarray(q_seed, dtype=float)
+            if q_seed.shape != (robot.dof,):
+                raise InputError(f"q_seed must have {robot.dof} values, got shape {q_seed.shape}")
+        self.solutions: List[np.ndarray] = []
+        self.stats: Dict[str, Any] = {"attempts": 0, "iterations": 0, "converged": 0, "rejected_limits": 0,
+                                      "rejected_collision": 0, "rejected_duplicate": 0, "repairs": 0,
+                                      "time": 0.0, "reason": "max_restarts"}
+        self.finished = False
+        self._steps = _search(robot, goal, rng, q_seed, max_restarts, max_iter, check_collision, time_limit,
+                              distinct_tol, reach_bounds, canonical, saturate, self.solutions, self.stats)
+
+    def run(self, n_solutions: int) -> IKResult:
+        """Go on until there are ``n_solutions`` solutions or the search ends; the result so far (copies)."""
+        t0 = time.perf_counter()
+        while not self.finished and len(self.solutions) < n_solutions:
+            try:
+                next(self._steps)
+            except StopIteration:
+                self.finished = True
+        if not self.finished:
+            self.stats["reason"] = "found"
+        self.stats["time"] += time.perf_counter() - t0
+        return IKResult(list(self.solutions), dict(self.stats))
+
+
+def _search(robot, goal: ToleratedPose, rng, q_seed: Optional[np.ndarray], max_restarts: int, max_iter: int,
+            check_collision: bool, time_limit: Optional[float], distinct_tol: float, reach_bounds: bool,
+            canonical: bool, saturate: int, sols: List[np.ndarray], stats: Dict[str, Any]):
+    """The body of :class:`IKSearch`: appends each new solution to ``sols`` and yields; sets
+    ``stats["reason"]`` and returns when the search ends."""
+    t0 = time.perf_counter()
     rng = _as_rng(rng)
     model, data, fid = robot.kinematic_model, robot.data, robot.tcp_frame
     n = robot.dof
     lo = np.asarray(robot.q_lower, dtype=float)
     hi = np.asarray(robot.q_upper, dtype=float)
     gm = goal_model(goal)
-    stats: Dict[str, Any] = {"attempts": 0, "iterations": 0, "converged": 0, "rejected_limits": 0,
-                             "rejected_collision": 0, "rejected_duplicate": 0, "repairs": 0, "time": 0.0,
-                             "reason": "max_restarts"}
-    sols: List[np.ndarray] = []
     total_iter = 0
-
-    def finish(reason: str) -> IKResult:
-        stats["iterations"] = total_iter
-        stats["reason"] = reason
-        stats["time"] = time.perf_counter() - t0
-        return IKResult(sols, stats)
-
-    if q_seed is not None:
-        q_seed = np.asarray(q_seed, dtype=float)
-        if q_seed.shape != (n,):
-            raise InputError(f"q_seed must have {n} values, got shape {q_seed.shape}")
 
     why = chain_bounds(robot).unreachable(gm) if reach_bounds else ""
     if why:
-        return finish(why)
+        stats["reason"] = why
+        return
 
     valid = goal.valid
     trace = _trace
@@ -863,7 +897,8 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     attempt = 0
     while attempt < max_restarts:
         if deadline is not None and attempt > 0 and time.perf_counter() > deadline:
-            return finish("time_limit")
+            stats["iterations"], stats["reason"] = total_iter, "time_limit"
+            return
         if gm.unconstrained:
             found = starts[attempt].copy()
             attempt += 1
@@ -893,11 +928,12 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
                 if verdict != "collision":
                     break
         if verdict == "added":
-            if len(sols) >= n_solutions:
-                return finish("found")
+            stats["iterations"] = total_iter
             repeats = 0
+            yield
         elif verdict == "duplicate":
             repeats += 1
             if repeats == saturate:
-                return finish("saturated")
-    return finish("max_restarts")
+                stats["iterations"], stats["reason"] = total_iter, "saturated"
+                return
+    stats["iterations"], stats["reason"] = total_iter, "max_restarts"
