@@ -138,47 +138,6 @@ def test_bounds_change_nothing_when_they_pass():
     assert passed >= 3
 
 
-@pytest.mark.slow
-def test_ik_stage_unchanged_when_a_later_goal_is_provably_out_of_reach(monkeypatch, tmp_path):
-    """The ik stage probes the last goal before a provably unreachable one for one solution instead of
-    collecting 48: same stage, goals reached and message as without the pre-check (candidates of a
-    generated Whitman 5-goal task, free base, built-in set, found by a seeded search)."""
-    import robodesign.solvers.ik as ikm
-    from robodesign.design.problem import Problem
-    from robodesign.design.search_space import Candidate
-    from robodesign.design.solve import SolveSettings, solve
-    from robodesign.generate.registry import generate
-    f = generate("whitman2020", tmp_path, 1, 0, {"goals": 5, "obstacles": 5, "base": "xyz_any_rot",
-                                                      "variant": "easy"})[0]
-    p = Problem.build(f, "robodesign_arm", "cyc")
-    cands = [(4, ("1", "4", "21", "5", "22", "6", "21", "22", "11", "22", "11", "21", "14"),
-              (-0.680352611790038, 0.992871751079341, -0.08056804021363084, 1.200339195298846)),
-             (7, ("1", "5", "21", "22", "11", "22", "6", "21", "21", "22", "4", "14"),
-              (-0.3696345057131367, -0.4837182962908233, 0.956602274628434, 2.770922385972015))]
-    real = ikm.solve_ik
-    asked = []
-
-    def spy(*a, **k):
-        asked.append(k.get("n_solutions"))
-        return real(*a, **k)
-
-    def run(c, seed):
-        r = solve(p.task, p.module_set, list(c.order), p.base_pose(c),
-                  settings=SolveSettings(stop_after="ik", ik_restarts=150, seed=seed))
-        return r.stage, r.goals_reached, r.message
-
-    monkeypatch.setattr(ikm, "solve_ik", spy)
-    fast = [run(Candidate(o, b), s) for s, o, b in cands]
-    assert 1 in asked                                   # the probe ran
-    monkeypatch.setattr(ikm, "provably_unreachable", lambda robot, goal: "")   # no pre-check (solve_ik keeps its bounds)
-    asked.clear()
-    slow = [run(Candidate(o, b), s) for s, o, b in cands]
-    assert 1 not in asked
-    assert fast == slow
-    st, n, m = fast[0]   # the probed candidate (the other one stops at `reach` on today's easy variant)
-    assert st == "ik" and n >= 1 and "out_of_reach" in m, fast
-
-
 def test_the_verdict_is_remembered_per_goal_model(robots):
     """ChainBounds.unreachable remembers its answer per goal model (the IK stage asks per goal, solve_ik again):
     the remembered answer is the computed one, for reachable and unreachable goals alike."""

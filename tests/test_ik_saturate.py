@@ -101,22 +101,28 @@ def test_off_by_default_and_on_from_a_config(tmp_path):
 
 
 def test_the_evaluator_passes_it_on(monkeypatch):
-    """An evaluation with ``ik_saturate`` = 8 stops its goals' collecting there (the IK calls it makes, recorded)."""
+    """An evaluation with ``ik_saturate`` = 8 stops its goals' collecting there (the IK searches it makes and
+    their last runs, recorded)."""
     from robodesign.design.evaluator import Candidate, Evaluator, EvaluatorSpec
     from robodesign.design.problem import Problem
-    calls = []
-    plain = ik.solve_ik
+    runs: dict = {}
 
-    def recorded(*a, **kw):
-        r = plain(*a, **kw)
-        calls.append((kw.get("saturate"), kw.get("n_solutions", 1), r.stats["reason"], r.stats["attempts"]))
-        return r
-    monkeypatch.setattr(ik, "solve_ik", recorded)
+    class Recorded(ik.IKSearch):
+        def run(self, n):
+            r = super().run(n)
+            runs[id(self)] = (self._saturate, n, r.stats["reason"], r.stats["attempts"])
+            return r
+
+        def __init__(self, *a, saturate=0, **kw):
+            super().__init__(*a, saturate=saturate, **kw)
+            self._saturate = saturate
+    monkeypatch.setattr(ik, "IKSearch", Recorded)
     problem = Problem.build(TASKS / "simple" / "PTP_3.json", IMPROV, "cyc")
     for k in (0, 8):
-        calls.clear()
+        runs.clear()
         e = Evaluator(EvaluatorSpec(problem, settings=evaluation_settings(ik_saturate=k), seed=1)).evaluate(
             Candidate(tuple(GOOD)))
+        calls = list(runs.values())
         assert e.feasible and len(calls) == 3 and all(c[0] == k and c[1] == 48 for c in calls)
         reasons = {c[2] for c in calls}
         assert reasons == ({"max_restarts"} if k == 0 else {"saturated"})

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import IMPROV, TASKS
 
 from robodesign.core.errors import InputError
 from robodesign.formats.module_io import load_module_set
@@ -12,8 +13,6 @@ from robodesign.formats.task_io import load_task
 from robodesign.formats.tolerance import ToleratedPose
 from robodesign.model.robot import Robot
 from robodesign.solvers.ik import IKSearch, solve_ik
-
-from conftest import IMPROV, TASKS
 
 GOOD = ["1", "21", "4", "22", "5", "23", "12"]   # experiments/profile_evaluator.GOOD
 

@@ -28,7 +28,7 @@ BIG_FUNCTIONS = {
     "design/goal_planner.py:choose_and_plan": (84, "IK choice by dynamic programming, then the planned moves, in "
                                                    "one pass; not split yet (design/ was being worked on elsewhere)"),
     "solvers/ik.py:_make_term": (156, "one closure per tolerance projection (to move to ToleratedPose, issue 23 §2)"),
-    "solvers/ik.py:solve_ik": (188, "the restart loop with its screening, sampling and acceptance (+7: whole turns)"),
+    "solvers/ik.py:_search": (146, "the restart loop with its screening, sampling and acceptance (IKSearch's body)"),
     "solvers/ik_kernel.py:goal_rows_ws": (98, "a numba kernel: the residual rows and Jacobian of every goal term "
                                               "kind, written out without calls for speed"),
     "solvers/planning.py:plan_path": (100, "input checks, the straight line, OMPL, shortcutting and the final "

@@ -11,10 +11,12 @@ import numpy as np
 
 from robodesign.core.trajectory import Trajectory
 from robodesign.design.blocked import tool_block
+from robodesign.design.follow_ik import FOLLOW_TRIES, follow_chain, timed_follow
 from robodesign.design.stages import SolveResult, SolveSettings
 from robodesign.formats.costs import CostFunction, cost_term
 from robodesign.formats.task_spec import Goal, Task
 from robodesign.formats.tolerance import ToleratedPose
+from robodesign.solvers.lazy_rng import LazyGenerator
 from robodesign.solvers.schedule import ScheduleError, check_hold, find_wait
 from robodesign.solvers.timing import time_parameterize
 
@@ -77,6 +79,10 @@ def position_slack(pose: ToleratedPose) -> float:
     return s if math.isfinite(s) else 1e9
 
 
+#: the key that tells the goals' IK streams (GoalPlanner.goal_rng) from other streams of the same seed
+_IK_STREAM = 0x1C0
+
+
 _FULL_POSE: "weakref.WeakKeyDictionary[Task, Tuple[Tuple[str, ...], Optional[Goal]]]" = weakref.WeakKeyDictionary()
 
 
@@ -114,11 +120,13 @@ class GoalPlanner:
         self.order = [task.goal(gid) for gid in task.goal_order]
         self.ik: Dict[str, List[np.ndarray]] = {}  # at/reach goal → candidate configurations
         self.follow_ik: Dict[str, List[np.ndarray]] = {}
+        self._searches: Dict[str, Any] = {}   # pose goal → its IK search (solvers.ik.IKSearch), to collect from
+        self._held: Dict[str, Tuple[List[np.ndarray], List[np.ndarray]]] = {}   # see _holdable
         self._timed_memo: Dict[tuple, Trajectory] = {}   # the moves timed for this robot (see _timed)
 
     # -- IK ------------------------------------------------------------------------------------
     def solve_ik(self) -> None:
-        from robodesign.solvers.ik import fixes_full_pose, provably_unreachable, solve_ik
+        from robodesign.solvers.ik import IKSearch, fixes_full_pose
         # a goal at whose pose this design's end effector lies inside an obstacle deeper than the goal's
         # tolerance can move it (design/blocked.py) has no collision-free IK solution: no restarts
         block = self._tool_block()
@@ -135,46 +143,73 @@ class GoalPlanner:
             raise _Fail(f"no IK solution for goal {full.id}: it fixes position and orientation, but the arm's tool "
                         f"moves in only {self.robot.generic_rank()} independent directions at any configuration "
                         "(its Jacobian's rank; parallel or coaxial joint axes)")
-        # a goal that provably no configuration reaches (solvers.ik.ChainBounds) fails the stage whatever
-        # comes before it. The last IK goal before it then only needs to show whether it is reachable: its
-        # first solution decides that exactly as when ik_solutions are wanted (the attempts up to the first
-        # accepted one are the same), and nothing after it draws from the random generator any more (the
-        # earlier goals keep collecting: collecting draws perturbations that later goals' starts depend on)
-        doomed = next((i for i, g in enumerate(self.order)
-                       if any(provably_unreachable(self.robot, p) for p in goal_poses(g))), None)
-        probe = None
-        if doomed is not None:
-            before = [i for i in range(doomed) if self.order[i].solver_kind in ("pose", "poses")]
-            if before and self.order[before[-1]].solver_kind == "pose":
-                probe = before[-1]
+        # first one solution per goal, in goal order: a goal without any fails the stage after the earlier
+        # goals' first solutions only (each goal draws from a random stream of its own, so the order of the work
+        # does not change what any goal finds); then each goal's other solutions (collect_ik)
         reached = 0
+        self._searches = {}
         for i, g in enumerate(self.order):
             if g.solver_kind == "pose":
-                n_sol = 1 if i == probe else self.settings.ik_solutions
-                r = solve_ik(self.robot, g.target_poses[0], self.rng, max_restarts=self.settings.ik_restarts,
-                             n_solutions=n_sol, saturate=self.settings.ik_saturate)
-                sols, reason = r.solutions, str(r.stats.get("reason"))
-                if not sols:
+                search = IKSearch(self.robot, g.target_poses[0], self.goal_rng(i),
+                                  max_restarts=self.settings.ik_restarts, saturate=self.settings.ik_saturate)
+                r = search.run(1)
+                if not r.solutions:
                     self.res.goals_reached = reached
-                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({reason})")
-                self.ik[g.id] = sols
+                    raise _Fail(f"no collision-free IK solution for goal {g.id} ({r.stats.get('reason')})")
+                self._searches[g.id] = search
                 reached += 1
             elif g.solver_kind == "poses":
-                sols = []
-                seed = None
-                for i, pose in enumerate(g.target_poses):
-                    r = solve_ik(self.robot, pose, self.rng, q_seed=seed, max_restarts=self.settings.ik_restarts)
-                    q = r.q
-                    if q is None:  # r failed
-                        self.res.goals_reached = reached
-                        raise _Fail(f"no IK solution for pose {i} of follow goal {g.id}")
-                    seed = q
-                    sols.append(q)
-                self.follow_ik[g.id] = sols
+                try:
+                    self.follow_ik[g.id] = self.follow_chain(i, g)
+                except _Fail:
+                    self.res.goals_reached = reached
+                    raise
                 reached += 1
             else:
                 reached += 1
         self.res.goals_reached = reached
+        self.collect_ik()
+
+    def follow_chain(self, i: int, g: Goal) -> List[np.ndarray]:
+        """One configuration per pose of follow goal ``g`` (goal ``i``, its own random stream):
+        :func:`robodesign.design.follow_ik.follow_chain`."""
+        t_rel = cast(_FollowGoal, g).t
+        sols, k = follow_chain(self.robot, list(g.target_poses), t_rel, self.task.dt, self.goal_rng(i),
+                               self.settings.ik_restarts)
+        if sols is not None:
+            return sols
+        if t_rel is None or k == 0:
+            raise _Fail(f"no IK solution for pose {k} of follow goal {g.id}")
+        raise _Fail(f"no IK solution for pose {k} of follow goal {g.id} that the joints reach from pose {k - 1} in "
+                    f"its {float(t_rel[k] - t_rel[k - 1]):.3g} s (speed and acceleration limits; {FOLLOW_TRIES} "
+                    "configurations of the first pose tried)")
+
+    def goal_rng(self, i: int) -> LazyGenerator:
+        """The random stream of the IK of goal ``i`` (in goal order): its own, from the settings' seed."""
+        return LazyGenerator([self.settings.seed, _IK_STREAM, i])
+
+    def collect_ik(self) -> None:
+        """Every pose goal's solutions (``settings.ik_solutions``), goal by goal in goal order. Collecting stops
+        after the first goal none of whose solutions the arm can hold against gravity (static_torque): that
+        stage fails there whatever the later goals hold (:meth:`filter_static_torque`); a solve that stops after
+        the ik stage (``settings.stop_after``) collects every goal."""
+        self._held = {}
+        torque_next = self.settings.stop_after != "ik"
+        for gid, search in self._searches.items():
+            self.ik[gid] = search.run(self.settings.ik_solutions).solutions
+            if torque_next and not self._holdable(gid)[0]:
+                break
+
+    def _holdable(self, gid: str) -> Tuple[List[np.ndarray], List[np.ndarray]]:
+        """(the solutions of pose goal ``gid`` the arm holds at rest within its torque limits, |τ| of each
+        solution), computed once."""
+        hit = self._held.get(gid)
+        if hit is None:
+            r = self.robot
+            limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
+            taus = [np.abs(r.gravity_torque(q)) for q in self.ik[gid]]
+            hit = self._held[gid] = ([q for q, tau in zip(self.ik[gid], taus) if np.all(tau <= limit)], taus)
+        return hit
 
     def _tool_block(self):
         """:func:`robodesign.design.blocked.tool_block` of this design's end effector (its only one; the
@@ -186,9 +221,8 @@ class GoalPlanner:
     def filter_static_torque(self) -> None:
         r = self.robot
         limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
-        for gid, sols in self.ik.items():
-            taus = [np.abs(r.gravity_torque(q)) for q in sols]
-            ok = [q for q, tau in zip(sols, taus) if np.all(tau <= limit)]
+        for gid in list(self.ik):
+            ok, taus = self._holdable(gid)
             if not ok:
                 tau = taus[0]
                 j = int(np.argmax(tau / limit))
@@ -451,7 +485,7 @@ class GoalPlanner:
                     seg = self._timed(robot, path, dt=dt, method=self.settings.timing, blend_radius=0.0,
                                       stop_at=tuple(range(len(path))))
                 else:
-                    seg = _timed_follow(path, t_rel, dt)
+                    seg = timed_follow(path, t_rel, dt)
                 traj = self._append_after_wait(traj, seg, g, colliders)
                 g2t[g.id] = float(traj.t[-1])
         return traj, g2t
@@ -534,18 +568,3 @@ def _translate(T: np.ndarray, d: np.ndarray) -> np.ndarray:
     T2 = T.copy()
     T2[:3, 3] += d
     return T2
-
-
-def _timed_follow(path: np.ndarray, t_rel: np.ndarray, dt: float):
-    """Quintic rest-to-rest moves between consecutive follow poses with exactly the given timing."""
-    out = Trajectory.at_rest(path[0])
-    for a, b, T in zip(path, path[1:], np.diff(t_rel)):
-        n = max(1, int(round(T / dt)))
-        s = np.linspace(0, 1, n + 1)[:, None]
-        d = b - a
-        q = a + d * (10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5)
-        dq = d * (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / T
-        ddq = d * (60 * s - 180 * s ** 2 + 120 * s ** 3) / T ** 2
-        ddq[-1] = 0.0
-        out = out.concatenate(Trajectory(np.arange(n + 1) * dt, q, dq, ddq))
-    return out

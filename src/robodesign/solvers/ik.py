@@ -720,7 +720,8 @@ _trace: Optional[list] = None   # development hook: a list receives (converged, 
 def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
              max_iter: int = 40, check_collision: bool = True, n_solutions: int = 1,
              time_limit: Optional[float] = None, distinct_tol: float = DISTINCT_TOL,
-             reach_bounds: bool = True, canonical: bool = True, saturate: int = 0) -> IKResult:
+             reach_bounds: bool = True, canonical: bool = True, saturate: int = 0,
+             max_step: Optional[np.ndarray] = None) -> IKResult:
     """Joint configurations whose TCP pose lies inside the tolerated ``goal``.
 
     ``rng``: a ``np.random.Generator`` or a seed (the result is deterministic for a given seed unless
@@ -737,16 +738,20 @@ def solve_ik(robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: in
     With ``saturate`` > 0 the collecting stops (reason "saturated") once that many converged attempts since the
     last new solution were duplicates of the solutions found (collision and limit rejections do not count):
     the goal's solutions have stopped growing. The solutions are then the first ones the full search finds.
+    With ``max_step`` (rad or m per joint, or one number for all) a solution must lie within that of ``q_seed`` in
+    every joint (a path's next pose, reached in a given time: :meth:`GoalPlanner.follow_chain
+    <robodesign.design.goal_planner.GoalPlanner.follow_chain>`); farther ones count as rejected_far.
     ``time_limit`` (s) stops the search after the current attempt.
     ``stats``: attempts, iterations, converged, rejected_limits, rejected_collision, rejected_duplicate,
-    time, reason ("found" | "saturated" | "max_restarts" | "time_limit" | "out_of_reach" |
+    (rejected_far,) time, reason ("found" | "saturated" | "max_restarts" | "time_limit" | "out_of_reach" |
     "out_of_orientation_reach").
     """
     if n_solutions < 1:
         raise InputError("n_solutions must be at least 1")
     return IKSearch(robot, goal, rng, q_seed=q_seed, max_restarts=max_restarts, max_iter=max_iter,
                     check_collision=check_collision, time_limit=time_limit, distinct_tol=distinct_tol,
-                    reach_bounds=reach_bounds, canonical=canonical, saturate=saturate).run(n_solutions)
+                    reach_bounds=reach_bounds, canonical=canonical, saturate=saturate,
+                    max_step=max_step).run(n_solutions)
 
 
 class IKSearch:
@@ -760,7 +765,7 @@ class IKSearch:
     def __init__(self, robot, goal: ToleratedPose, rng=None, q_seed=None, max_restarts: int = 300,
                  max_iter: int = 40, check_collision: bool = True, time_limit: Optional[float] = None,
                  distinct_tol: float = DISTINCT_TOL, reach_bounds: bool = True, canonical: bool = True,
-                 saturate: int = 0) -> None:
+                 saturate: int = 0, max_step: Optional[np.ndarray] = None) -> None:
         if not isinstance(goal, ToleratedPose):
             raise InputError(f"goal must be a ToleratedPose, got {type(goal).__name__}")
         if max_restarts < 1 or max_iter < 1:
@@ -771,13 +776,18 @@ class IKSearch:
             q_seed = np.asarray(q_seed, dtype=float)
             if q_seed.shape != (robot.dof,):
                 raise InputError(f"q_seed must have {robot.dof} values, got shape {q_seed.shape}")
+        if max_step is not None:
+            max_step = np.broadcast_to(np.asarray(max_step, dtype=float), (robot.dof,))
+            if q_seed is None:
+                raise InputError("max_step needs q_seed (the configuration a solution must lie near)")
         self.solutions: List[np.ndarray] = []
         self.stats: Dict[str, Any] = {"attempts": 0, "iterations": 0, "converged": 0, "rejected_limits": 0,
                                       "rejected_collision": 0, "rejected_duplicate": 0, "repairs": 0,
                                       "time": 0.0, "reason": "max_restarts"}
         self.finished = False
         self._steps = _search(robot, goal, rng, q_seed, max_restarts, max_iter, check_collision, time_limit,
-                              distinct_tol, reach_bounds, canonical, saturate, self.solutions, self.stats)
+                              distinct_tol, reach_bounds, canonical, saturate, self.solutions, self.stats,
+                              max_step)
 
     def run(self, n_solutions: int) -> IKResult:
         """Go on until there are ``n_solutions`` solutions or the search ends; the result so far (copies)."""
@@ -795,7 +805,8 @@ class IKSearch:
 
 def _search(robot, goal: ToleratedPose, rng, q_seed: Optional[np.ndarray], max_restarts: int, max_iter: int,
             check_collision: bool, time_limit: Optional[float], distinct_tol: float, reach_bounds: bool,
-            canonical: bool, saturate: int, sols: List[np.ndarray], stats: Dict[str, Any]):
+            canonical: bool, saturate: int, sols: List[np.ndarray], stats: Dict[str, Any],
+            max_step: Optional[np.ndarray] = None):
     """The body of :class:`IKSearch`: appends each new solution to ``sols`` and yields; sets
     ``stats["reason"]`` and returns when the search ends."""
     t0 = time.perf_counter()
@@ -887,7 +898,8 @@ def _search(robot, goal: ToleratedPose, rng, q_seed: Optional[np.ndarray], max_r
         total_iter += its
         return q2
 
-    accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols)
+    accept = Acceptance(robot, valid, lo, hi, q_seed, check_collision, canonical, distinct_tol, stats, sols,
+                        max_step)
     repeats = 0   # duplicates found since the last new solution (saturate)
 
     # every attempt's start at once: the same numbers as one uniform draw (random_configuration) per attempt

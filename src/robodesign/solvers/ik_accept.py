@@ -39,14 +39,17 @@ def near_any(q: np.ndarray, sols: List[np.ndarray], tol: float, rows: Optional[n
 
 
 class Acceptance:
-    """``accept(q) -> verdict`` ("limits", "collision", "duplicate" or "added") of one :func:`solve_ik` call:
-    counts the rejections in ``stats`` and appends an accepted configuration (its whole-turn equivalent nearest
-    ``q_seed``, else nearest 0, when ``canonical`` and that one is valid too) to ``sols``."""
+    """``accept(q) -> verdict`` ("limits", "collision", "far", "duplicate" or "added") of one :func:`solve_ik`
+    call: counts the rejections in ``stats`` and appends an accepted configuration (its whole-turn equivalent
+    nearest ``q_seed``, else nearest 0, when ``canonical`` and that one is valid too) to ``sols``. With
+    ``max_step`` (per joint; needs ``q_seed``) a configuration farther than that from ``q_seed`` in some joint is
+    rejected as "far"."""
 
     def __init__(self, robot, valid, lo: np.ndarray, hi: np.ndarray, q_seed: Optional[np.ndarray],
                  check_collision: bool, canonical: bool, distinct_tol: float, stats: Dict[str, Any],
-                 sols: List[np.ndarray]) -> None:
+                 sols: List[np.ndarray], max_step: Optional[np.ndarray] = None) -> None:
         self.robot, self.valid, self.q_seed = robot, valid, q_seed
+        self.max_step = max_step
         self.lo, self.hi = lo.tolist(), hi.tolist()
         self.in_collision = robot.in_collision if check_collision else None
         self.canonical, self.distinct_tol, self.stats, self.sols = canonical, distinct_tol, stats, sols
@@ -69,6 +72,9 @@ class Acceptance:
             q2 = self.robot.nearest_equivalent(q, self.q_seed)
             if not np.array_equal(q2, q) and self.valid(self.robot.fk(q2)):
                 q = q2
+        if self.max_step is not None and not np.all(np.abs(q - self.q_seed) <= self.max_step):
+            self.stats["rejected_far"] = self.stats.get("rejected_far", 0) + 1
+            return "far"
         if self.sols and near_any(q, self.sols, self.distinct_tol, self._rows):
             self.stats["rejected_duplicate"] += 1
             return "duplicate"
