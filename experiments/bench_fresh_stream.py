@@ -6,10 +6,11 @@
 The stream: the first ``--n`` random candidates of simple/PTP_3 with IMPROV (the draws of ``bench_paired.py``'s
 ``ptp3`` scenario; 23 of the first 900 are feasible), evaluated one after the other by one evaluator. Prints the
 stream's CPU seconds, the feasible candidates' median CPU time and stage medians, and a signature of every result
-(stage, verdict and cost of each candidate: it must not change with a change meant to be exact; 7c060069b7 for 900).
+(stage, verdict and cost of each candidate: it must not change with a change meant to be exact; 1e23828eaa for 900
+under evaluation rules 2, 7c060069b7 under rules 1).
 ``--prof FILE`` dumps a cProfile of the stream. ``--ga N``: instead, the genetic search on PTP_3 with IMPROV and the
-base pose searched, N evaluations (evaluations per CPU second, the best cost, the results' signature: 2fba5125a3
-for 300).
+base pose searched, N evaluations (evaluations per CPU second, the best cost, the results' signature: 34fcbf1b19
+for 300 under evaluation rules 2, 2fba5125a3 under rules 1).
 """
 from __future__ import annotations
 

@@ -4,8 +4,8 @@
 
 Runs the genetic search of experiments/bench_front_ga.py (200 evaluations, seed 0) on one generated task (a
 substring of its name: bpo2024's ``oven_hard_s0_0001``, whitman2020's ``..._0001``), records every
-``solve_ik`` call (robot: assembly, base pose, obstacles, margin; goal, the random generator's state, options),
-then replays them ``--rounds`` times on fresh robots, robot by robot in the search's order (the robot's base
+IK search (``solvers.ik.IKSearch``, which ``solve_ik`` makes too; robot: assembly, base pose, obstacles, margin; goal,
+the random generator's state, options, and the runs asked of it), then replays them ``--rounds`` times on fresh robots, robot by robot in the search's order (the robot's base
 contacts asked first, as the base stage asks them). Per round it prints the wall and process CPU time of the
 robots whose IK stage failed (sum, median per robot); at the end a hash of every call's solutions (their
 bytes), statistics (time excluded) and the generator's state after it: equal hashes mean the same IK
@@ -52,21 +52,29 @@ def main() -> None:
     ev = Evaluator(EvaluatorSpec(problem, evaluation_settings(), seed=0))
     opt = create_optimizer("genetic", problem, seed=0, options={})
     calls: dict = {}
-    solve_ik = ik.solve_ik
+    plain = ik.IKSearch
 
-    def spy(robot, goal, rng=None, **kw):
-        key = (id(robot), robot.base_pose.tobytes())
-        if key not in calls:
-            calls[key] = (robot.module_set, robot.assembly, robot.base_pose.copy(), list(robot.obstacles),
-                          robot.safety_margin, [])
-        calls[key][5].append((goal, copy.deepcopy(rng.bit_generator.state), kw))
-        return solve_ik(robot, goal, rng, **kw)
+    class Spy(plain):   # every IK search (solve_ik makes one per call) and the runs asked of it
+        def __init__(self, robot, goal, rng=None, **kw):
+            key = (id(robot), robot.base_pose.tobytes())
+            if key not in calls:
+                calls[key] = (robot.module_set, robot.assembly, robot.base_pose.copy(), list(robot.obstacles),
+                              robot.safety_margin, [])
+            gen = rng if isinstance(rng, np.random.Generator) else getattr(rng, "generator", None)
+            state = copy.deepcopy(gen.bit_generator.state) if gen is not None else rng
+            self.runs: list = []
+            calls[key][5].append((goal, state, kw, self.runs))
+            super().__init__(robot, goal, rng, **kw)
 
-    ik.solve_ik = spy   # (goal_planner imports it at each call)
+        def run(self, n):
+            self.runs.append(n)
+            return super().run(n)
+
+    ik.IKSearch = Spy   # (goal_planner and solve_ik look it up at each call)
     Study(opt, SerialExecutor(ev), Budget.parse("200evals"), batch_size=16).run()
-    ik.solve_ik = solve_ik
+    ik.IKSearch = plain
     cases = list(calls.values())
-    print(f"# {task.name}: {len(cases)} robots, {sum(len(c[5]) for c in cases)} solve_ik calls", flush=True)
+    print(f"# {task.name}: {len(cases)} robots, {sum(len(c[5]) for c in cases)} IK searches", flush=True)
 
     def replay():
         results, times = [], []
@@ -76,12 +84,16 @@ def main() -> None:
             robot.base_collisions()
             t, c = time.perf_counter(), time.process_time()
             out = []
-            for goal, state, kw in todo:
+            for goal, state, kw, runs in todo:
                 rng = np.random.default_rng()
                 rng.bit_generator.state = state
-                r = solve_ik(robot, goal, rng, **kw)
-                out.append(([s.tobytes() for s in r.solutions], {k: v for k, v in r.stats.items() if k != "time"},
-                            rng.bit_generator.state))
+                search = plain(robot, goal, rng, **kw)
+                r = None
+                for n in runs:
+                    r = search.run(n)
+                sols = [] if r is None else [s.tobytes() for s in r.solutions]
+                stats = {} if r is None else {k: v for k, v in r.stats.items() if k != "time"}
+                out.append((sols, stats, rng.bit_generator.state))
             times.append((time.perf_counter() - t, time.process_time() - c))
             results.append(out)
         return results, times

@@ -231,6 +231,30 @@ def test_results_store_refuses_to_resume_a_changed_problem(tmp_path):
     db.close()
 
 
+def test_results_store_refuses_a_run_made_under_other_evaluation_rules(tmp_path):
+    """A run records the evaluation rules it was made under; a run made under others (an older robodesign's: no
+    record means rules 1) is not resumed, since its remaining candidates would be evaluated differently."""
+    from robodesign.design.evaluator import EVALUATION_RULES, Evaluation
+    from robodesign.experiment.storage import ExperimentDB
+    p = Problem.build("robodesign/pick_and_place", "robodesign_arm", "cyc")
+    db = ExperimentDB(tmp_path / "evaluations.sqlite")
+    c = p.space.random_candidate(__import__("numpy").random.default_rng(0))
+    ev = Evaluation(candidate=c, feasible=False, cost=None, score=2e9, stage="ik", stage_index=3, goals_reached=0,
+                    seconds=0.1, seed=1)
+    for run in ("now", "old", "other"):
+        db.ensure_run(run, "pick", "random", "random", 0, 0, "2evals", 1)
+        db.storage(run, p).append(0, ev)
+    assert EVALUATION_RULES >= 2 and db.info("rules:now") == str(EVALUATION_RULES)
+    assert [e.candidate for e in db.storage("now", p).load()] == [c]          # same rules: resumes
+    db.con.execute("DELETE FROM info WHERE key='rules:old'")                    # as an older robodesign stored it
+    db.set_info("rules:other", str(EVALUATION_RULES + 1))
+    for run, rules in (("old", 1), ("other", EVALUATION_RULES + 1)):
+        with pytest.raises(InputError, match=f"cannot resume run '{run}': its evaluations were made under evaluation "
+                                             f"rules {rules}, this robodesign evaluates under rules {EVALUATION_RULES}"):
+            db.storage(run, p).load()
+    db.close()
+
+
 # -- the default DoF: seven joints where a pose is fixed among obstacles ----------------------------------------
 PTP_3 = ROOT.parent / "shared" / "cobra" / "tasks" / "simple" / "PTP_3.json"
 

@@ -29,6 +29,12 @@ from robodesign.design.solve import STAGES, SolveSettings, solve
 from robodesign.formats.module_spec import ModuleSet
 from robodesign.formats.task_spec import Task
 
+#: the rules that make an evaluation of (candidate, problem, settings, seed), numbered: a change of robodesign that
+#: gives other evaluations for the same inputs takes the next number, and a stored run made under other rules is
+#: not resumed (experiment/storage.py). 1: up to 2026-11-28; 2: each goal's IK draws from a random stream of its
+#: own and every goal's first solution comes before any goal's others (design/goal_planner.py)
+EVALUATION_RULES = 2
+
 INFEASIBLE = 1e9
 STAGE_PENALTY = 1e6
 #: the shortfall at which the graded penalty is 1/2, per stage and unit: 0.1 m beyond the reach bound,

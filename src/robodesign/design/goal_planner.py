@@ -199,6 +199,7 @@ class GoalPlanner:
             self.ik[gid] = search.run(self.settings.ik_solutions).solutions
             if torque_next and not self._holdable(gid)[0]:
                 break
+        self._searches = {}   # (their suspended loops hold the robot's kernels and buffers: let them go)
 
     def _holdable(self, gid: str) -> Tuple[List[np.ndarray], List[np.ndarray]]:
         """(the solutions of pose goal ``gid`` the arm holds at rest within its torque limits, |τ| of each

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import Callable, List, Optional
 
 from robodesign.core.errors import InputError
-from robodesign.design.evaluator import Evaluation
+from robodesign.design.evaluator import EVALUATION_RULES, Evaluation
 from robodesign.design.search_space import Candidate
 
 SCHEMA_VERSION = 1
@@ -272,7 +272,10 @@ class RunStorage:
     Given the run's ``problem``, the storage records its fingerprint (``info`` key ``problem:<run id>``)
     with the first evaluation, and ``load()`` refuses to resume the run when the problem's fingerprint
     changed since (the task file, the module set, the cost or the base bounds differ): stored evaluations
-    would no longer be evaluations of this problem.
+    would no longer be evaluations of this problem. Likewise it records the evaluation rules
+    (:data:`~robodesign.design.evaluator.EVALUATION_RULES`, ``info`` key ``rules:<run id>``; a run stored
+    without one was made under rules 1) and refuses a run made under other rules: this robodesign would
+    evaluate its remaining candidates differently, and the resumed run would not be one run.
     """
 
     def __init__(self, db: ExperimentDB, run_id: str, problem=None):
@@ -293,6 +296,13 @@ class RunStorage:
                 raise InputError(f"cannot resume run {self.run_id!r}: its problem changed since its evaluations were "
                                  "stored (the task file, module set, cost or base bounds differ); start a new results "
                                  "folder", file=str(self.db.path))
+            rules = int(self.db.info(f"rules:{self.run_id}") or 1)
+            if rules != EVALUATION_RULES:
+                raise InputError(f"cannot resume run {self.run_id!r}: its evaluations were made under evaluation rules "
+                                 f"{rules}, this robodesign evaluates under rules {EVALUATION_RULES} (it would evaluate "
+                                 "the remaining candidates differently; docs/experiments.md, \"Stopping and resuming\"); "
+                                 "start a new results folder, or finish the run with the robodesign that began it",
+                                 file=str(self.db.path))
         for k, r in enumerate(rows):
             if r["idx"] != k:
                 raise RuntimeError(f"run {self.run_id!r}: stored evaluations are not contiguous (index {r['idx']} "
@@ -308,6 +318,7 @@ class RunStorage:
     def append(self, index: int, evaluation: Evaluation) -> None:
         if index == 0 and self.fingerprint is not None:
             self.db.set_info(f"problem:{self.run_id}", self.fingerprint)
+            self.db.set_info(f"rules:{self.run_id}", str(EVALUATION_RULES))
         self.db.insert(self.run_id, index, evaluation, self.wall())
         if self.on_append is not None:
             self.on_append(index, evaluation)
