@@ -3,6 +3,10 @@ first IK solution before any goal's others, and the static torque decided goal b
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python experiments/bench_ik_probe.py --a CHECKOUT_A --b CHECKOUT_B \
         [--parts families,random,ptp3] [--tasks 5] [--seeds 0,1] [--budget 30s] [--ptp3-seeds 20] [--out DIR]
+        [--a-solve KEY=VALUE,...] [--b-solve KEY=VALUE,...]
+
+``--a-solve``/``--b-solve``: solve settings of that side's evaluations besides the evaluator's defaults (e.g.
+``plan_time=0.5``; numbers are read as numbers), so one checkout can be compared with itself under other settings.
 
 Every job runs in a process of its own with its checkout's src/ first on the path (kernels warmed up first), one
 job at a time, A and B in turn (B first on every other job). Each finished job is appended to ``DIR/jobs.jsonl``
@@ -40,7 +44,7 @@ def run_job(job: dict) -> dict:
     """One job in this process (its checkout's src/ is already first on the path)."""
     import numpy as np
 
-    from robodesign.design.evaluator import Evaluator, EvaluatorSpec
+    from robodesign.design.evaluator import Evaluator, EvaluatorSpec, evaluation_settings
     from robodesign.design.optimize import optimize
     from robodesign.design.problem import Problem
     from robodesign.design.solve import warm_up
@@ -59,15 +63,16 @@ def run_job(job: dict) -> dict:
     else:
         problem = Problem.build(job["task"], "robodesign_arm", "cyc")
     t = time.process_time()
+    settings = evaluation_settings(**job.get("solve", {}))
     if job["part"] == "random":
         rng = np.random.default_rng(0)
-        ev = Evaluator(EvaluatorSpec(problem, seed=0))
+        ev = Evaluator(EvaluatorSpec(problem, settings=settings, seed=0))
         for i in range(RANDOM):
             record(i, ev.evaluate(problem.space.random_candidate(rng)), None)
         best = None
     else:
         budget = "600evals" if job["part"] == "ptp3" else job["budget"]
-        r = optimize(problem, "genetic", budget, seed=job["seed"], on_evaluation=record)
+        r = optimize(problem, "genetic", budget, seed=job["seed"], on_evaluation=record, settings=settings)
         best = r.best.cost if r.best is not None and r.best.feasible else None
     cpu = time.process_time() - t
     return {**job, "evals": sum(map(len, each.values())), "cpu": cpu, "feasible": feasible[0], "best": best,
@@ -116,7 +121,8 @@ def run_all(args, out: Path) -> list:
             if key(job, side) in done:
                 continue
             src = args.a if side == "a" else args.b
-            p = subprocess.run([sys.executable, __file__, "--worker", json.dumps(job), "--src", src],
+            solve = _overrides(args.a_solve if side == "a" else args.b_solve)
+            p = subprocess.run([sys.executable, __file__, "--worker", json.dumps({**job, "solve": solve}), "--src", src],
                                capture_output=True, text=True)
             lines = [x for x in p.stdout.splitlines() if x.startswith("RESULT ")]
             if p.returncode != 0 or not lines:
@@ -130,12 +136,28 @@ def run_all(args, out: Path) -> list:
     return list(done.values())
 
 
+def _overrides(text: str) -> dict:
+    """``"plan_time=0.5,ik_restarts=100"`` → {"plan_time": 0.5, "ik_restarts": 100}."""
+    out = {}
+    for item in filter(None, (x.strip() for x in (text or "").split(","))):
+        k, _, v = item.partition("=")
+        try:
+            out[k.strip()] = json.loads(v)
+        except json.JSONDecodeError:
+            out[k.strip()] = v.strip()
+    return out
+
+
 def _median(xs) -> str:
     return f"{statistics.median(xs):.1f}" if xs else "-"
 
 
 def summary(rows: list) -> str:
     lines = []
+    for side in ("a", "b"):
+        solve = next((r.get("solve") for r in rows if r["side"] == side and r.get("solve")), None)
+        if solve:
+            lines += [f"Side {side.upper()}'s solve settings besides the evaluator's defaults: {solve}", ""]
     by = defaultdict(list)
     for r in rows:
         by[(r["part"], r["family"], r["side"])].append(r)
@@ -198,6 +220,8 @@ def main() -> None:
     ap.add_argument("--budget", default="30s")
     ap.add_argument("--ptp3-seeds", type=int, default=20)
     ap.add_argument("--out", type=Path, default=HERE.parent / "docs" / "results" / "issue25_round15" / "probe")
+    ap.add_argument("--a-solve", default="", help="solve settings of side A's evaluations, KEY=VALUE,...")
+    ap.add_argument("--b-solve", default="", help="solve settings of side B's evaluations, KEY=VALUE,...")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     ap.add_argument("--src", help=argparse.SUPPRESS)
     args = ap.parse_args()

@@ -203,3 +203,24 @@ def test_killed_run_copied_without_its_wal_resumes_exactly_and_an_older_copy_is_
     err = capsys.readouterr().err
     assert (f"holds only {len(alone)} evaluations, but meta.json records 80 stored evaluations (its -wal file is "
             "gone") in err, err
+
+
+def test_a_run_made_under_other_evaluation_rules_is_refused(finished, tmp_path, capsys):
+    """Results of an older robodesign (no rules recorded: rules 1) with a run left unfinished: --resume stops with
+    exit 2, names the database and the rules, prints no traceback and leaves the database as it was."""
+    src, expected = finished
+    out = tmp_path / "res"
+    shutil.copytree(src, out)
+    db = out / "evaluations.sqlite"
+    con = sqlite3.connect(db)
+    with con:
+        con.execute("DELETE FROM info WHERE key LIKE 'rules:%'")
+        con.execute("UPDATE runs SET status='running' WHERE seed = 1")
+    con.close()
+    before = rows(db)
+    code = main(["run", "--resume", str(out), "--progress", "none", "--no-report"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert str(db) in err and "made under evaluation rules 1, this robodesign evaluates under rules" in err, err
+    assert "Traceback" not in err
+    assert rows(db) == before == expected
