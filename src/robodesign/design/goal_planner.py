@@ -206,9 +206,8 @@ class GoalPlanner:
         solution), computed once."""
         hit = self._held.get(gid)
         if hit is None:
-            r = self.robot
-            limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
-            taus = [np.abs(r.gravity_torque(q)) for q in self.ik[gid]]
+            limit = self._rest_limit()
+            taus = [np.abs(self.robot.gravity_torque(q)) for q in self.ik[gid]]
             hit = self._held[gid] = ([q for q, tau in zip(self.ik[gid], taus) if np.all(tau <= limit)], taus)
         return hit
 
@@ -219,9 +218,14 @@ class GoalPlanner:
         eefs = [mid for mid in self.robot.assembly.module_ids if ms[mid].kind == "eef"]
         return tool_block(self.task, ms[eefs[0]]) if len(eefs) == 1 else None
 
+    def _rest_limit(self) -> np.ndarray:
+        """The torque each joint may spend holding a pose at rest: its limit (the Coulomb term vanishes, σ(0) = 0)."""
+        r = self.robot
+        return r.tau_max - r.friction_coulomb * 0
+
     def filter_static_torque(self) -> None:
         r = self.robot
-        limit = r.tau_max - r.friction_coulomb * 0  # at rest the Coulomb term vanishes (σ(0) = 0)
+        limit = self._rest_limit()
         for gid in list(self.ik):
             ok, taus = self._holdable(gid)
             if not ok:

@@ -296,7 +296,8 @@ class RunStorage:
                 raise InputError(f"cannot resume run {self.run_id!r}: its problem changed since its evaluations were "
                                  "stored (the task file, module set, cost or base bounds differ); start a new results "
                                  "folder", file=str(self.db.path))
-            rules = int(self.db.info(f"rules:{self.run_id}") or 1)
+            stored_rules = self.db.info(f"rules:{self.run_id}") or "1"
+            rules = int(stored_rules) if stored_rules.isdigit() else stored_rules   # (a damaged record: not ours)
             if rules != EVALUATION_RULES:
                 raise InputError(f"cannot resume run {self.run_id!r}: its evaluations were made under evaluation rules "
                                  f"{rules}, this robodesign evaluates under rules {EVALUATION_RULES} (it would evaluate "
